@@ -1,0 +1,3 @@
+from pickplace_cli.cli import main
+
+main()

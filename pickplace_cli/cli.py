@@ -1,0 +1,284 @@
+"""Command-line interface: parse → call the library → render. The only module that prints or exits.
+
+Exit codes: 0 success · 1 invalid input (profile, table, values) · 2 usage error ·
+3 a limit is exceeded · 4 a point of the move is unreachable / outside the workspace.
+
+Heavy modules (numpy, scipy, pydantic, rich) are imported inside the commands so that ``--help`` and
+``--version`` stay fast.
+"""
+
+from __future__ import annotations
+
+import functools
+import sys
+from enum import Enum
+from typing import Callable, Optional
+
+import typer
+
+from . import __version__
+
+app = typer.Typer(
+    name="pickplace",
+    help=(
+        "Plan smooth, fast pick-and-place moves for high-speed robots and write the sampled joint "
+        "trajectories (SI units: m, s, rad). Exit codes: 0 ok, 1 invalid input, 2 usage error, "
+        "3 limit exceeded, 4 unreachable point."
+    ),
+    no_args_is_help=True,
+    add_completion=True,
+    pretty_exceptions_enable=False,
+    context_settings={"help_option_names": ["-h", "--help"]},
+)
+
+
+class OutputFormat(str, Enum):
+    csv = "csv"
+    json = "json"
+
+
+class MethodName(str, Enum):
+    """Mirror of pickplace_cli.methods.Method (kept here so --help needs no numpy)."""
+
+    bspline = "bspline"
+
+
+def _err(message: str) -> None:
+    sys.stderr.write(f"pickplace: error: {message}\n")
+
+
+def _handle_errors(fn: Callable) -> Callable:
+    """Turn the library's typed errors into one line on stderr and the documented exit code."""
+
+    @functools.wraps(fn)
+    def wrapper(*args, **kwargs):
+        from .errors import PickplaceError
+
+        try:
+            return fn(*args, **kwargs)
+        except PickplaceError as exc:
+            _err(str(exc))
+            raise typer.Exit(exc.exit_code) from None
+        except KeyboardInterrupt:
+            _err("interrupted; no output file was changed")
+            raise typer.Exit(130) from None
+        except BrokenPipeError:
+            # the reader went away (e.g. `| head`): not an error of ours
+            try:
+                sys.stdout = None  # type: ignore[assignment]
+            finally:
+                raise typer.Exit(0) from None
+
+    return wrapper
+
+
+def _version_callback(value: bool) -> None:
+    if value:
+        typer.echo(f"pickplace {__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _root(
+    version: bool = typer.Option(
+        False, "--version", callback=_version_callback, is_eager=True, help="Print the version and exit."
+    ),
+) -> None:
+    """pickplace: smooth pick-and-place trajectories (Li 2018 quintic B-splines) checked for a robot."""
+
+
+def _parse_point(name: str, text: str):
+    from .errors import TaskError
+
+    parts = [p.strip() for p in text.split(",")]
+    if len(parts) != 3 or not all(parts):
+        raise TaskError(f"{name} = {text!r}: give three coordinates X,Y,Z in metres, e.g. -0.1525,0,-0.8")
+    try:
+        values = [float(p) for p in parts]
+    except ValueError:
+        raise TaskError(f"{name} = {text!r}: every coordinate must be a number in metres") from None
+    import math
+
+    if not all(math.isfinite(v) for v in values):
+        raise TaskError(f"{name} = {text!r}: every coordinate must be a finite number (no NaN or inf)")
+    return values
+
+
+def _finite(name: str, value: Optional[float], rule: str = "> 0") -> Optional[float]:
+    import math
+
+    from .errors import TaskError
+
+    if value is None:
+        return None
+    if not math.isfinite(value) or (rule == "> 0" and value <= 0):
+        raise TaskError(f"{name} = {value!r}: must be a finite number {rule}")
+    return value
+
+
+@app.command()
+@_handle_errors
+def plan(
+    from_: str = typer.Option(..., "--from", help="Pick point X,Y,Z in m (base frame), e.g. -0.1525,0,-0.8."),
+    to: str = typer.Option(..., "--to", help="Place point X,Y,Z in m (base frame)."),
+    profile: Optional[str] = typer.Option(
+        None, "--profile", "-p", help="Profile YAML file, or the name of a shipped profile. [default: gantry]"
+    ),
+    height: Optional[float] = typer.Option(
+        None, "--height", help="Clearance h in m of the path's midpoint above the higher end point. [default: profile]"
+    ),
+    eta: Optional[float] = typer.Option(
+        None, "--eta", help="Lift-off/set-down ratio η, 0 < η < 1 (dimensionless). [default: profile]"
+    ),
+    method: MethodName = typer.Option(MethodName.bspline, "--method", "-m", help="Planning method."),
+    k1: Optional[float] = typer.Option(None, "--k1", help="B-spline time-ratio factor k1 = τ8/τ9 (overrides the table)."),
+    k2: Optional[float] = typer.Option(None, "--k2", help="B-spline time-ratio factor k2 = τ7/τ8 (overrides the table)."),
+    table: Optional[str] = typer.Option(None, "--table", help="λ → (k1, k2) table CSV. [default: shipped table]"),
+    time: str = typer.Option(
+        "auto", "--time", "-t", help="Duration of the move: 'auto' (from the profile's capacity, Li 2018 Eq. 26) or seconds."
+    ),
+    rate: Optional[float] = typer.Option(None, "--rate", help="Samples per second in Hz. [default: profile]"),
+    fmt: OutputFormat = typer.Option(OutputFormat.csv, "--format", "-f", help="Output format."),
+    output: str = typer.Option("-", "--output", "-o", help="Output file ('-' = stdout). Written atomically."),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="No summary on stderr (errors are still printed)."),
+) -> None:
+    """Plan one move and write the sampled trajectory (CSV columns t[s], x[m] … jz[m/s^3], q<i>, qd<i>, qdd<i>)."""
+    from .errors import TaskError
+    from .planner import PlanOptions
+    from .planner import plan as run_plan
+    from .profile import load_profile
+    from .task import Task
+
+    p_from = _parse_point("from", from_)
+    p_to = _parse_point("to", to)
+    _finite("height", height)
+    _finite("rate", rate)
+    for name, k in (("k1", k1), ("k2", k2)):
+        if k is not None and not (0 < k < 1):
+            raise TaskError(f"{name} = {k!r}: time-ratio factors must lie strictly between 0 and 1")
+    if eta is not None and not (0 < eta < 1):
+        raise TaskError(f"eta = {eta!r}: the lift-off/set-down ratio η must lie strictly between 0 and 1")
+    prof = load_profile(profile)
+    task = Task(
+        p_from,
+        p_to,
+        height if height is not None else prof.planning.height,
+        eta if eta is not None else prof.planning.eta,
+    )
+    params: dict = {}
+    if method == MethodName.bspline:
+        params = {"k1": k1, "k2": k2, "table": table}
+    result = run_plan(task, prof, PlanOptions(method=method.value, method_params=params, time=time, rate=rate))
+    _write_plan(result, fmt, output)
+    if not quiet:
+        _print_summary(result)
+
+
+def _write_plan(result, fmt: OutputFormat, output: str) -> None:
+    from .export import atomic_output
+
+    if fmt == OutputFormat.csv:
+        from .export.csv import write_csv as writer
+    else:
+        from .export.json import write_json as writer
+    with atomic_output(output) as stream:
+        writer(result, stream)
+
+
+def _print_summary(result) -> None:
+    s = result.summary()
+    d = result.duration
+    par = result.parameters
+    ks = f"k1 = {par['k1']:.4f}, k2 = {par['k2']:.4f} ({par['k_source']})" if "k1" in par else ""
+    bounds = f"v {d.t_velocity:.4f} s, a {d.t_acceleration:.4f} s" + (f", j {d.t_jerk:.4f} s" if d.t_jerk else "")
+    sys.stderr.write(
+        f"{s['method']}: b = {s['b_m']:.4g} m, h = {s['height_m']:.4g} m, λ = {s['lambda']:.4g}, η = {s['eta']:g}; {ks}\n"
+        f"duration T = {d.seconds:.4f} s ({d.mode}; Eq. 26 bounds: {bounds}; binding: {d.binding}); "
+        f"{s['samples']} samples\n"
+        f"peaks |v| = {s['peak_speed_m_s']:.4g} m/s, |a| = {s['peak_acceleration_m_s2']:.4g} m/s², "
+        f"|j| = {s['peak_jerk_m_s3']:.4g} m/s³\n"
+    )
+
+
+def _parse_weights(text: str) -> tuple[float, float]:
+    from .errors import TableError
+
+    try:
+        wa, wj = (float(x) for x in text.split(","))
+    except ValueError:
+        raise TableError(f"weights = {text!r}: give two numbers WA,WJ with WA + WJ = 1, e.g. 0.5,0.5") from None
+    return wa, wj
+
+
+@app.command("build-table")
+@_handle_errors
+def build_table_cmd(
+    lambda_min: float = typer.Option(1.0, "--lambda-min", help="Smallest width/height ratio λ = b/h."),
+    lambda_max: float = typer.Option(40.0, "--lambda-max", help="Largest λ."),
+    lambda_step: float = typer.Option(0.5, "--lambda-step", help="Step of the λ grid."),
+    eta: float = typer.Option(0.5, "--eta", help="Lift-off/set-down ratio η, 0 < η < 1."),
+    weights: str = typer.Option("0.5,0.5", "--weights", help="Weights WA,WJ of F_a and F_j in F (Li 2018 Eq. 22); WA + WJ = 1."),
+    grid_step: float = typer.Option(0.01, "--grid-step", help="Step of the coarse (k1, k2) search grid."),
+    fit_min: float = typer.Option(5.0, "--fit-min", help="Fit the Eq. 23 cubic on rows with λ ≥ this (no cubic follows λ < 5)."),
+    workers: int = typer.Option(0, "--workers", "-j", help="Worker processes (0 = all cores)."),
+    output: str = typer.Option("-", "--output", "-o", help="Output CSV ('-' = stdout). Written atomically."),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar."),
+) -> None:
+    """Compute the optimal (k1*, k2*) of the B-spline method for a grid of λ, with the Eq. 23 cubic fit."""
+    import os
+
+    from .errors import TableError
+    from .table import TableSettings, build_table, format_table, lambda_grid
+
+    if not (0 < eta < 1):
+        raise TableError(f"eta = {eta!r}: the lift-off/set-down ratio η must lie strictly between 0 and 1")
+    settings = TableSettings(eta=eta, weights=_parse_weights(weights), grid_step=grid_step)
+    lams = lambda_grid(lambda_min, lambda_max, lambda_step)
+    if workers < 0:
+        raise TableError(f"workers = {workers}: must be 0 (all cores) or a positive number")
+    n_workers = workers or os.cpu_count() or 1
+    if quiet:
+        table = build_table(lams, settings, workers=n_workers)
+    else:
+        from rich.console import Console
+        from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+
+        with Progress(
+            TextColumn("[progress.description]{task.description}"),
+            BarColumn(),
+            TextColumn("{task.completed}/{task.total}"),
+            TimeElapsedColumn(),
+            TimeRemainingColumn(),
+            console=Console(stderr=True),
+            transient=False,
+        ) as progress:
+            bar = progress.add_task(f"optimising k1, k2 for {len(lams)} λ", total=None)
+
+            def tick(done: int, total: int) -> None:
+                progress.update(bar, completed=done, total=total)
+
+            table = build_table(lams, settings, progress=tick, workers=n_workers)
+    from .export import atomic_output
+
+    extra = {
+        "lambda_grid": f"{lambda_min:g}..{lambda_max:g} step {lambda_step:g} ({len(lams)} rows)",
+        "optimiser": "coarse grid + bounded Nelder-Mead from each grid local optimum within basin_margin; exact peaks",
+        "fit_lambda_min": fit_min,
+    }
+    with atomic_output(output) as stream:
+        stream.write(format_table(table, __version__, extra))
+    if not quiet:
+        g1, g2, res = table.fit(fit_min)
+        sys.stderr.write(
+            f"{len(lams)} rows; cubic fit (Eq. 23) on λ ≥ {fit_min:g}: max |residual| {res:.3g}; "
+            f"k1 = {g1[0]:.4g} + {g1[1]:.4g} λ + {g1[2]:.4g} λ² + {g1[3]:.4g} λ³\n"
+        )
+
+
+def main() -> None:
+    """Console-script entry point."""
+    app()
+
+
+if __name__ == "__main__":  # pragma: no cover
+    main()

@@ -1,0 +1,68 @@
+"""Writers: one module per format. Data goes to a stream or, atomically, to a file.
+
+``atomic_output(path)`` writes to a temporary file in the target's directory and renames it over the
+target only when the writer finished: a failed or interrupted run leaves the old file (or none), never a
+truncated one.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import tempfile
+from contextlib import contextmanager
+from pathlib import Path
+from typing import IO, Iterator
+
+import numpy as np
+
+from ..errors import ExportError
+
+#: format of every float in text exports: fixed, deterministic, round-trips ~1e-12 relative
+FLOAT_FORMAT = "%.12g"
+
+
+@contextmanager
+def atomic_output(path: str | Path | None, binary: bool = False) -> Iterator[IO]:
+    """Yield a stream: stdout for None or '-', else a temp file renamed onto ``path`` on success."""
+    if path is None or str(path) == "-":
+        stream = sys.stdout.buffer if binary else sys.stdout
+        yield stream
+        stream.flush()
+        return
+    target = Path(path)
+    directory = target.parent if str(target.parent) else Path(".")
+    if not directory.is_dir():
+        raise ExportError(f"output {target}: directory {directory} does not exist")
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=directory)
+    except OSError as exc:
+        raise ExportError(f"output {target}: cannot create a file in {directory}: {exc.strerror}") from None
+    try:
+        with os.fdopen(fd, "wb" if binary else "w", newline="" if not binary else None, encoding=None if binary else "utf-8") as fh:
+            yield fh
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, target)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except FileNotFoundError:
+            pass
+        raise
+
+
+def plan_columns(plan) -> tuple[list[str], np.ndarray]:
+    """Column names (with units) and the (N, n_columns) data of a plan's sampled trajectory."""
+    jt = plan.joint
+    names = ["t[s]"]
+    names += [f"{c}[m]" for c in "xyz"]
+    names += [f"v{c}[m/s]" for c in "xyz"]
+    names += [f"a{c}[m/s^2]" for c in "xyz"]
+    names += [f"j{c}[m/s^3]" for c in "xyz"]
+    blocks = [plan.t[:, None], plan.p, plan.v, plan.a, plan.j]
+    for i, unit in enumerate(jt.units):
+        k = i + 1
+        names += [f"q{k}[{unit}]", f"qd{k}[{unit}/s]", f"qdd{k}[{unit}/s^2]"]
+        blocks += [jt.q[:, i : i + 1], jt.qd[:, i : i + 1], jt.qdd[:, i : i + 1]]
+    return names, np.hstack(blocks)

@@ -1,0 +1,197 @@
+"""Robot/workcell profiles: YAML validated by pydantic (unknown keys rejected, SI units everywhere).
+
+``load_profile(path)`` returns a frozen :class:`Profile`; every problem is a :class:`ProfileError` with a
+one-line message ``FILE:LINE: FIELD = VALUE: RULE``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated, Any, Literal, Union
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+
+from .errors import ProfileError
+
+DEFAULT_PROFILE = "gantry"
+
+
+class _Model(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+
+
+class GantryAxis(_Model):
+    """One Cartesian axis of a gantry; joint q_i is the tool coordinate along that axis."""
+
+    name: Literal["x", "y", "z"] = Field(description="Cartesian axis this joint drives")
+    travel: tuple[float, float] = Field(description="Joint travel [min, max] in m (base frame)")
+    mass: float = Field(default=0.0, ge=0.0, description="Mass moved by this axis in kg")
+
+    @model_validator(mode="after")
+    def _travel_ordered(self) -> "GantryAxis":
+        if not self.travel[0] < self.travel[1]:
+            raise ValueError(f"travel must be [min, max] with min < max, got {list(self.travel)}")
+        return self
+
+
+class GantryModel(_Model):
+    """Cartesian gantry: joints are x, y, z (identity kinematics)."""
+
+    kind: Literal["gantry"]
+    axes: tuple[GantryAxis, GantryAxis, GantryAxis] = Field(description="The x, y and z axes, in that order")
+
+    @model_validator(mode="after")
+    def _xyz(self) -> "GantryModel":
+        names = [a.name for a in self.axes]
+        if names != ["x", "y", "z"]:
+            raise ValueError(f"axes must be x, y, z in that order, got {names}")
+        return self
+
+
+RobotModel = Annotated[Union[GantryModel], Field(discriminator="kind")]
+
+
+class Capacity(_Model):
+    """Cartesian movement capacity of the tool over the task workspace [Li2018, Eq. (24)–(25)]."""
+
+    velocity: float = Field(gt=0, description="[v]: allowed tool speed in m/s")
+    acceleration: float = Field(gt=0, description="[a]: allowed tool acceleration norm in m/s²")
+    jerk: float | None = Field(default=None, gt=0, description="[j]: allowed tool jerk norm in m/s³ (optional)")
+
+
+class Planning(_Model):
+    """Defaults for ``pickplace plan`` (each can be overridden on the command line)."""
+
+    height: float = Field(gt=0, description="Clearance of the path's midpoint above the higher end point, in m")
+    eta: float = Field(default=0.5, gt=0, lt=1, description="Lift-off/set-down ratio η (dimensionless, 0 < η < 1)")
+    rate: float = Field(default=1000.0, gt=0, le=1e6, description="Output sample rate in Hz")
+
+
+class Profile(_Model):
+    """A robot and its workcell."""
+
+    name: str = Field(min_length=1, description="Short name of the profile")
+    description: str = Field(default="", description="Free text: robot, sources of the numbers")
+    robot: RobotModel
+    capacity: Capacity
+    planning: Planning
+
+
+# --------------------------------------------------------------------------------------------- loading
+
+
+def shipped_profiles() -> dict[str, Path]:
+    """Names → paths of the profiles shipped with the package (``profiles/*.yaml``)."""
+    from .resources import data_dir
+
+    root = data_dir("profiles")
+    return {p.stem: p for p in sorted(root.glob("*.yaml"))}
+
+
+def resolve_profile_path(name_or_path: str | Path | None) -> Path:
+    """A path as given, or the shipped profile of that name (``gantry`` → profiles/gantry.yaml)."""
+    if name_or_path is None:
+        name_or_path = DEFAULT_PROFILE
+    p = Path(name_or_path)
+    if p.exists():
+        return p
+    shipped = shipped_profiles()
+    if str(name_or_path) in shipped:
+        return shipped[str(name_or_path)]
+    names = ", ".join(shipped) or "none"
+    raise ProfileError(f"profile {str(name_or_path)!r}: no such file, and no shipped profile of that name (shipped: {names})")
+
+
+def _yaml_with_lines(text: str, source: str) -> tuple[Any, dict[tuple, int]]:
+    """Parse YAML; return the data and a map from each value's path (keys/indices) to its 1-based line."""
+    import yaml
+
+    loader = yaml.SafeLoader(text)
+    try:
+        node = loader.get_single_node()
+        if node is None:
+            return None, {}
+        data = loader.construct_document(node)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f"{source}:{mark.line + 1}" if mark else source
+        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+        raise ProfileError(f"{where}: not valid YAML: {problem}") from None
+    finally:
+        loader.dispose()
+    lines: dict[tuple, int] = {}
+
+    def walk(n: Any, path: tuple) -> None:
+        lines[path] = n.start_mark.line + 1
+        if isinstance(n, yaml.MappingNode):
+            seen: dict[Any, int] = {}
+            for k, v in n.value:
+                key = k.value
+                if key in seen:
+                    raise ProfileError(
+                        f"{source}:{k.start_mark.line + 1}: duplicate key {key!r} (first at line {seen[key]})"
+                    )
+                seen[key] = k.start_mark.line + 1
+                walk(v, path + (key,))
+        elif isinstance(n, yaml.SequenceNode):
+            for i, v in enumerate(n.value):
+                walk(v, path + (i,))
+
+    walk(node, ())
+    return data, lines
+
+
+def _describe(err: dict, data: Any, lines: dict[tuple, int], source: str) -> str:
+    # pydantic puts the discriminator tag into loc for tagged unions: keep only parts that are real keys
+    real: list = []
+    node = data
+    for part in err.get("loc", ()):
+        if isinstance(node, dict) and part in node:
+            real.append(part)
+            node = node[part]
+        elif isinstance(node, (list, tuple)) and isinstance(part, int) and 0 <= part < len(node):
+            real.append(part)
+            node = node[part]
+        elif isinstance(node, dict) and part not in node and err["type"] in ("missing", "extra_forbidden"):
+            real.append(part)
+            break
+    probe = tuple(real)
+    while probe not in lines and probe:
+        probe = probe[:-1]
+    line = lines.get(probe)
+    where = f"{source}:{line}" if line else source
+    field = ".".join(str(p) for p in real) or "(top level)"
+    msg = err["msg"]
+    if err["type"] == "extra_forbidden":
+        return f"{where}: unknown key {field!r}: not a field of this section (check spelling; keys are case-sensitive)"
+    if err["type"] == "missing":
+        return f"{where}: {field}: required field is missing"
+    value = err.get("input")
+    shown = value if not isinstance(value, (dict, list)) else type(value).__name__
+    return f"{where}: {field} = {shown!r}: {msg}"
+
+
+def parse_profile(text: str, source: str = "<profile>") -> Profile:
+    """Validate profile YAML text (see :func:`load_profile`)."""
+    data, lines = _yaml_with_lines(text, source)
+    if not isinstance(data, dict):
+        raise ProfileError(f"{source}: a profile must be a YAML mapping of keys (name, robot, capacity, planning)")
+    try:
+        return Profile.model_validate(data)
+    except ValidationError as exc:
+        errors = exc.errors()
+        first = _describe(errors[0], data, lines, source)
+        more = f" (and {len(errors) - 1} more problem{'s' if len(errors) > 2 else ''})" if len(errors) > 1 else ""
+        raise ProfileError(first + more) from None
+
+
+def load_profile(name_or_path: str | Path | None = None) -> Profile:
+    """Load and validate a profile from a path or a shipped profile name (default: the default profile)."""
+    path = resolve_profile_path(name_or_path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise ProfileError(f"{path}: cannot read profile: {exc.strerror or exc}") from None
+    except UnicodeDecodeError:
+        raise ProfileError(f"{path}: not a text (UTF-8) file") from None
+    return parse_profile(text, str(path))

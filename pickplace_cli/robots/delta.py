@@ -1,0 +1,443 @@
+"""Clavel Delta robot (3 translational DOF): closed-form kinematics, analytic joint derivatives and a
+lumped-mass inverse dynamics model.
+
+References
+----------
+[Clavel1988]  R. Clavel, "DELTA, a fast robot with parallel geometry", Proc. 18th Int. Symp. on
+              Industrial Robots, 1988.
+[Codourey1998] A. Codourey, "Dynamic modeling of parallel robots for computed-torque control
+              implementation", Int. J. Robotics Research 17(12), 1998, pp. 1325–1336.
+[Su2018]      prototype dimensions used by the tests (R = 0.150, r = 0.051, L = 0.325, l = 0.800 m).
+
+Conventions (SI units: m, rad, s, kg, N, N·m; the tests rely on every line of this list)
+-------------------------------------------------------------------------------------
+* Base frame at the centre of the fixed platform, z up; the workspace lies at z < 0.
+* Arm i = 1, 2, 3 sits at φ_i = 0°, 120°, 240° from +x (arm 1 on +x). Its motor axis is tangential
+  (perpendicular to the radial direction) at distance ``R`` from the centre.
+* q_i = 0: upper arm horizontal, pointing radially outwards; q_i > 0 rotates it DOWNWARDS.
+* Elbow of arm i:            E_i(q_i) = Rz(φ_i) · (R + L cos q_i, 0, −L sin q_i)
+* Platform joint of arm i:   C_i(p)   = p + Rz(φ_i) · (r, 0, 0)
+* Loop closure:              f_i = ‖d_i‖² − l² = 0,  d_i = C_i − E_i  (the forearm vector, elbow → platform)
+* Inverse kinematics returns the knee-OUT branch (elbow outside, the usual working branch); on it
+  d_i · E_i′ > 0 for every arm. Forward kinematics returns the platform *below* the elbows (lower z).
+
+In arm i's own frame (rotate by −φ_i), with (x′, y′, z) = Rz(−φ_i) p and a = x′ − (R − r):
+    d_i = (a − L cos q, y′, z + L sin q),   E′ = (−L sin q, 0, −L cos q),
+    E″ = (−L cos q, 0, L sin q),            E‴ = −E′.
+
+Implementation note: internally every arm-wise quantity is a (3, N) array (axis 0 arm, axis 1 sample) so
+numpy's inner loops run over the long sample axis; public inputs and outputs keep axis 0 = samples.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import ClassVar
+
+import numpy as np
+
+from ..errors import UnreachableError
+
+#: arm angles φ_i [rad]: arm 1 on +x, then 120° and 240°
+PHI = np.deg2rad([0.0, 120.0, 240.0])
+_COS_PHI = np.cos(PHI)[:, None]  # (3, 1): broadcasts against (3, N) arm-major arrays
+_SIN_PHI = np.sin(PHI)[:, None]
+#: rows 0–2 give the radial, rows 3–5 the tangential in-plane component of a vector, per arm
+_ROT = np.concatenate((np.stack((np.cos(PHI), np.sin(PHI)), axis=1), np.stack((-np.sin(PHI), np.cos(PHI)), axis=1)))
+_NEXT = [1, 2, 0]  # arm i+1 (cyclic)
+_NEXT2 = [2, 0, 1]  # arm i+2 (cyclic)
+
+
+def _samples(x: np.ndarray, name: str, width: int = 3) -> np.ndarray:
+    """``x`` as a float (N, width) array, or ValueError saying which argument has which wrong shape."""
+    arr = np.asarray(x, dtype=float)
+    if arr.ndim != 2 or arr.shape[1] != width:
+        raise ValueError(f"{name} must have shape (N, {width}), got {arr.shape}")
+    return arr
+
+
+def _check_positive(obj: object, names: tuple[str, ...]) -> None:
+    for name in names:
+        value = getattr(obj, name)
+        if not (math.isfinite(value) and value > 0.0):
+            raise ValueError(f"{type(obj).__name__}.{name} = {value!r} is not physical: must be finite and > 0")
+
+
+def _check_non_negative(obj: object, names: tuple[str, ...]) -> None:
+    for name in names:
+        value = getattr(obj, name)
+        if not (math.isfinite(value) and value >= 0.0):
+            raise ValueError(f"{type(obj).__name__}.{name} = {value!r} is not physical: must be finite and >= 0")
+
+
+def _local(x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Radial, tangential (each (3, N)) and vertical ((N,)) components of vectors x (N, 3) in each arm's frame."""
+    rt = _ROT @ x[:, :2].T
+    return rt[:3], rt[3:], x[:, 2]
+
+
+class _Arms:
+    """Arm-wise quantities of one (q, p) configuration, each (3, N): cos q, sin q and the forearm vector d in
+    the arm frame (radial dr, tangential dt, vertical dz), D = d·E′ and D2 = d·E″ (see module docstring)."""
+
+    __slots__ = ("c", "s", "dr", "dt", "dz", "D", "D2")
+
+    def __init__(self, L: float, c: np.ndarray, s: np.ndarray, dr: np.ndarray, dt: np.ndarray, dz: np.ndarray):
+        self.c, self.s, self.dr, self.dt, self.dz = c, s, dr, dt, dz
+        self.D = -L * (s * dr + c * dz)
+        self.D2 = L * (s * dz - c * dr)
+
+    def base_frame(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """d in the base frame: (dx, dy, dz), each (3, N)."""
+        return (
+            self.dr * _COS_PHI - self.dt * _SIN_PHI,
+            self.dr * _SIN_PHI + self.dt * _COS_PHI,
+            self.dz,
+        )
+
+
+@dataclass(frozen=True)
+class DeltaRobot:
+    """Clavel Delta robot [Clavel1988] with the lumped-mass dynamic model of [Codourey1998].
+
+    Geometry [m]: ``R`` fixed-platform radius (centre → motor axis), ``r`` moving-platform radius
+    (platform centre → forearm joint line), ``L`` upper-arm length (motor axis → elbow), ``l`` forearm
+    (parallelogram) length.
+
+    Dynamics: ``upper_arm_inertia`` [kg·m²] the upper arm's own inertia about its motor axis;
+    ``upper_arm_mass`` [kg] with its centre of mass ``upper_arm_com`` [m] from the motor axis (used for
+    gravity only, its inertia is in ``upper_arm_inertia``); ``elbow_mass`` [kg] lumped at the elbow;
+    ``forearm_mass`` [kg] of ONE forearm pair; ``plate_mass`` [kg] travelling plate; ``payload`` [kg];
+    ``g`` [m/s²]. Masses default to 0 for kinematics-only use.
+
+    Raises ValueError (naming field, value and rule) for a non-positive/non-finite length or a
+    negative/non-finite mass, inertia, centre-of-mass distance or g.
+    """
+
+    R: float
+    r: float
+    L: float
+    l: float  # noqa: E741 — the forearm length is "l" in every Delta paper
+    upper_arm_inertia: float = 0.0
+    upper_arm_mass: float = 0.0
+    upper_arm_com: float = 0.0
+    elbow_mass: float = 0.0
+    forearm_mass: float = 0.0
+    plate_mass: float = 0.0
+    payload: float = 0.0
+    g: float = 9.80665
+
+    joint_names: ClassVar[tuple[str, ...]] = ("q1", "q2", "q3")
+    joint_units: ClassVar[tuple[str, ...]] = ("rad", "rad", "rad")
+
+    def __post_init__(self) -> None:
+        _check_positive(self, ("R", "r", "L", "l"))
+        _check_non_negative(
+            self,
+            (
+                "upper_arm_inertia",
+                "upper_arm_mass",
+                "upper_arm_com",
+                "elbow_mass",
+                "forearm_mass",
+                "plate_mass",
+                "payload",
+                "g",
+            ),
+        )
+
+    # ------------------------------------------------------------------ lumped-mass parameters
+    @property
+    def arm_inertia(self) -> float:
+        """I_b = I_arm + (m_elbow + ⅔ m_forearm) L² [kg·m²], arm-side inertia per arm [Codourey1998]."""
+        return self.upper_arm_inertia + (self.elbow_mass + 2.0 / 3.0 * self.forearm_mass) * self.L**2
+
+    @property
+    def arm_gravity_moment(self) -> float:
+        """m_ua·L_c + (m_elbow + ⅔ m_forearm)·L [kg·m]: first mass moment of one arm about its motor axis."""
+        return self.upper_arm_mass * self.upper_arm_com + (self.elbow_mass + 2.0 / 3.0 * self.forearm_mass) * self.L
+
+    @property
+    def platform_mass(self) -> float:
+        """m_p = m_plate + m_payload + 3·⅓ m_forearm [kg], the mass lumped on the travelling plate [Codourey1998]."""
+        return self.plate_mass + self.payload + self.forearm_mass
+
+    # ------------------------------------------------------------------ kinematics
+    def _ik(self, p: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(a, y′, K, discriminant, z) of :meth:`inverse_kinematics`, arm-wise (3, N) except z (N,)."""
+        xr, yt, z = _local(p)
+        e = self.R - self.r
+        a = xr - e
+        c0 = (np.sum(p * p, axis=1) + e * e + self.L**2 - self.l**2) / (2.0 * self.L)
+        K = c0 - (e / self.L) * xr  # = (a² + y′² + z² + L² − l²) / (2L)
+        disc = a * a + z * z - K * K
+        return a, yt, K, disc, z
+
+    def reachable(self, p: np.ndarray) -> np.ndarray:
+        """Boolean mask (N,): True where every arm of the knee-out branch can reach p (N, 3) [m]."""
+        p = _samples(p, "p")
+        disc = self._ik(p)[3]
+        return np.all(disc >= 0.0, axis=0) & np.all(np.isfinite(p), axis=1)
+
+    def _solve(self, p: np.ndarray) -> tuple[np.ndarray, _Arms]:
+        """q (3, N) and the arm quantities at p (N, 3); UnreachableError for the first bad sample."""
+        a, yt, K, disc, z = self._ik(p)
+        bad = ~(disc >= 0.0)  # also catches NaN
+        if bad.any():
+            n = int(np.argmax(bad.any(axis=0)))
+            arm = int(np.argmax(bad[:, n]))
+            x, y, zz = p[n]
+            raise UnreachableError(
+                f"Delta: sample {n} at p = ({x:.6g}, {y:.6g}, {zz:.6g}) m is unreachable "
+                f"(arm {arm + 1} cannot close its loop: L = {self.L} m, l = {self.l} m)"
+            )
+        root = np.sqrt(disc)
+        rho2 = a * a + z * z
+        # q = θ − ψ with cos θ = K/ρ, sin θ = −√disc/ρ, cos ψ = a/ρ, sin ψ = z/ρ
+        S = -root * a - K * z  # ρ² sin q
+        C = K * a - root * z  # ρ² cos q
+        q = np.arctan2(S, C)
+        c = C / rho2
+        s = S / rho2
+        arms = _Arms(self.L, c, s, a - self.L * c, yt, z + self.L * s)
+        return q, arms
+
+    def inverse_kinematics(self, p: np.ndarray) -> np.ndarray:
+        """Joint angles q (N, 3) [rad] for platform positions p (N, 3) [m], knee-out branch, closed form.
+
+        Per arm, ‖d_i‖² = l² in the arm frame reads (a − L cos q)² + y′² + (z + L sin q)² = l², i.e.
+
+            a cos q − z sin q = K,      K = (a² + y′² + z² + L² − l²) / (2L).
+
+        With ρ = √(a² + z²), ψ = atan2(z, a) the left side is ρ cos(q + ψ); the knee-out root is
+        q + ψ = θ = atan2(−√(ρ² − K²), K). Expanding cos(θ − ψ), sin(θ − ψ) gives q in (−π, π] directly:
+
+            q = atan2(−√(ρ² − K²)·a − K z,  K a − √(ρ² − K²)·z)
+
+        The minus sign on the root picks sin(q + ψ) < 0, the knee-out branch (d_i · E_i′ = −Lρ sin(q + ψ) > 0).
+        Raises UnreachableError naming the first sample whose discriminant ρ² − K² is negative.
+        """
+        p = _samples(p, "p")
+        return self._solve(p)[0].T.copy()
+
+    def forward_kinematics(self, q: np.ndarray) -> np.ndarray:
+        """Platform positions p (N, 3) [m] for joint angles q (N, 3) [rad], closed form.
+
+        p is the intersection of the three spheres ‖p − S_i‖ = l centred at
+        S_i = E_i − Rz(φ_i)(r, 0, 0) = Rz(φ_i)(R − r + L cos q_i, 0, −L sin q_i) (trilateration): with
+        e_x ∥ S_2 − S_1, e_y in the plane of the centres, e_z = e_x × e_y, d = ‖S_2 − S_1‖,
+        i = e_x·(S_3 − S_1), j = e_y·(S_3 − S_1):
+
+            x = d / 2,  y = (i² + j² − 2 i x) / (2 j),  z = ±√(l² − x² − y²),  p = S_1 + x e_x + y e_y + z e_z
+
+        and the sign that puts the platform below (lower z) is taken. Raises UnreachableError naming the
+        first sample where the spheres do not meet (l² − x² − y² < 0) or the centres are collinear.
+        """
+        q = _samples(q, "q")
+        qt = q.T
+        u = (self.R - self.r) + self.L * np.cos(qt)
+        Sx = u * _COS_PHI
+        Sy = u * _SIN_PHI
+        Sz = -self.L * np.sin(qt)
+        ux, uy, uz = Sx[1] - Sx[0], Sy[1] - Sy[0], Sz[1] - Sz[0]
+        wx, wy, wz = Sx[2] - Sx[0], Sy[2] - Sy[0], Sz[2] - Sz[0]
+        d = np.sqrt(ux * ux + uy * uy + uz * uz)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ux, uy, uz = ux / d, uy / d, uz / d  # e_x
+            i = ux * wx + uy * wy + uz * wz
+            wx, wy, wz = wx - i * ux, wy - i * uy, wz - i * uz
+            j = np.sqrt(wx * wx + wy * wy + wz * wz)
+            wx, wy, wz = wx / j, wy / j, wz / j  # e_y
+            x = 0.5 * d
+            y = (i * i + j * j - 2.0 * i * x) / (2.0 * j)
+        h2 = self.l**2 - x * x - y * y
+        bad = ~((h2 >= 0.0) & (j > 1e-12 * self.l) & (d > 1e-12 * self.l))
+        if bad.any():
+            n = int(np.argmax(bad))
+            q1, q2, q3 = q[n]
+            raise UnreachableError(
+                f"Delta: sample {n} at q = ({q1:.6g}, {q2:.6g}, {q3:.6g}) rad cannot be assembled "
+                f"(the forearm spheres of radius l = {self.l} m do not meet)"
+            )
+        # e_z = e_x × e_y; choose the root with the lower z: sign(h) = −sign(e_z,z)
+        zx = uy * wz - uz * wy
+        zy = uz * wx - ux * wz
+        zz = ux * wy - uy * wx
+        h = np.sqrt(h2)
+        h = np.where(zz > 0.0, -h, h)
+        return np.stack(
+            (
+                Sx[0] + x * ux + y * wx + h * zx,
+                Sy[0] + x * uy + y * wy + h * zy,
+                Sz[0] + x * uz + y * wz + h * zz,
+            ),
+            axis=1,
+        )
+
+    def _arms(self, q: np.ndarray, p: np.ndarray) -> _Arms:
+        """Arm quantities for a given (q, p) pair (q (N, 3), p (N, 3)); no consistency check."""
+        qt = q.T
+        c = np.cos(qt)
+        s = np.sin(qt)
+        xr, yt, z = _local(p)
+        return _Arms(self.L, c, s, xr - (self.R - self.r) - self.L * c, yt, z + self.L * s)
+
+    def constraint_matrices(self, q: np.ndarray, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """A (N, 3, 3) and the diagonal of B (N, 3) of the velocity relation A ṗ = B q̇.
+
+        Differentiating f_i = ‖C_i − E_i(q_i)‖² − l² = 0 gives d_i · ṗ = (d_i · E_i′) q̇_i, so row i of A is
+        d_iᵀ (base frame) [m] and B_ii = d_i · E_i′ [m²/rad]. A is singular at a parallel (type-2)
+        singularity, B at a serial (type-1) one. ``q`` and ``p`` must belong together (p = FK(q)).
+        """
+        q = _samples(q, "q")
+        p = _samples(p, "p")
+        arms = self._arms(q, p)
+        dx, dy, dz = arms.base_frame()
+        return np.stack((dx.T, dy.T, dz.T), axis=-1), arms.D.T.copy()
+
+    def inverse_jacobian(self, q: np.ndarray, p: np.ndarray) -> np.ndarray:
+        """J⁻¹ = B⁻¹A (N, 3, 3) [rad/m]: maps platform velocity to joint velocity, q̇ = J⁻¹ ṗ."""
+        A, B = self.constraint_matrices(q, p)
+        return A / B[:, :, None]
+
+    def jacobian(self, q: np.ndarray, p: np.ndarray) -> np.ndarray:
+        """J = A⁻¹B (N, 3, 3) [m/rad]: maps joint velocity to platform velocity, ṗ = J q̇.
+
+        A⁻¹ by the adjugate: its column i is (d_{i+1} × d_{i+2}) / det A (arm indices cyclic).
+        """
+        q = _samples(q, "q")
+        p = _samples(p, "p")
+        arms = self._arms(q, p)
+        cx, cy, cz, det = self._reciprocal(arms)
+        # column i of A⁻¹ is c_i/det; J = A⁻¹ B scales column i by B_ii
+        k = arms.D / det
+        return np.stack(((cx * k).T, (cy * k).T, (cz * k).T), axis=1)
+
+    @staticmethod
+    def _reciprocal(arms: _Arms) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """c_i = d_{i+1} × d_{i+2} (components (3, N) each) and det A = d_1 · (d_2 × d_3) (N,)."""
+        dx, dy, dz = arms.base_frame()
+        x1, y1, z1 = dx[_NEXT], dy[_NEXT], dz[_NEXT]
+        x2, y2, z2 = dx[_NEXT2], dy[_NEXT2], dz[_NEXT2]
+        cx = y1 * z2 - z1 * y2
+        cy = z1 * x2 - x1 * z2
+        cz = x1 * y2 - y1 * x2
+        det = dx[0] * cx[0] + dy[0] * cy[0] + dz[0] * cz[0]
+        return cx, cy, cz, det
+
+    def joint_motion(
+        self, p: np.ndarray, v: np.ndarray, a: np.ndarray, j: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """q [rad], q̇ [rad/s], q̈ [rad/s²], q⃛ [rad/s³] (each (N, 3)) from p, v, a, j (each (N, 3), SI), analytically.
+
+        Per arm, with d = C − E(q), D = d·E′ (the diagonal of B) and D₂ = d·E″, the time derivatives of
+        f = d·d − l² = 0 are each linear in the highest joint derivative:
+
+            ḟ/2 = d·ḋ = 0,              ḋ = v − E′q̇                  ⇒ q̇ = d·v / D
+            f̈/2 = ḋ·ḋ + d·d̈ = 0,       d̈ = a − E″q̇² − E′q̈           ⇒ q̈ = (ḋ·ḋ + d·a − D₂ q̇²) / D
+            f⃛/2 = 3ḋ·d̈ + d·d⃛ = 0,     d⃛ = j − E‴q̇³ − 3E″q̇q̈ − E′q⃛
+                                                          ⇒ q⃛ = (3ḋ·d̈ + d·j + D q̇³ − 3 D₂ q̇ q̈) / D
+
+        using E‴ = −E′ (so d·E‴ = −D). No finite differences. D → 0 at a serial singularity.
+        """
+        p = _samples(p, "p")
+        v = _samples(v, "v")
+        a = _samples(a, "a")
+        j = _samples(j, "j")
+        q, arms = self._solve(p)
+        L = self.L
+        c, s, dr, dt, dz, D, D2 = arms.c, arms.s, arms.dr, arms.dt, arms.dz, arms.D, arms.D2
+        vr, vt, vz = _local(v)
+        ar, at, az = _local(a)
+        jr, jt, jz = _local(j)
+        qd = (dr * vr + dt * vt + dz * vz) / D
+        # ḋ = v − E′q̇, E′ = (−L s, 0, −L c)
+        Lq = L * qd
+        d1r = vr + s * Lq
+        d1z = vz + c * Lq
+        qdd = (d1r * d1r + vt * vt + d1z * d1z + dr * ar + dt * at + dz * az - D2 * qd * qd) / D
+        # d̈ = a − E″q̇² − E′q̈, E″ = (−L c, 0, L s)
+        Lq2 = Lq * qd
+        Lqq = L * qdd
+        d2r = ar + c * Lq2 + s * Lqq
+        d2z = az - s * Lq2 + c * Lqq
+        qddd = (
+            3.0 * (d1r * d2r + vt * at + d1z * d2z)
+            + dr * jr
+            + dt * jt
+            + dz * jz
+            + qd * (D * qd * qd - 3.0 * D2 * qdd)
+        ) / D
+        return q.T.copy(), qd.T.copy(), qdd.T.copy(), qddd.T.copy()
+
+    def singularity_measure(self, q: np.ndarray, p: np.ndarray) -> np.ndarray:
+        """Dimensionless distance from singularity (N,), in [0, 1]; 0 at a singularity.
+
+            μ = min( min_i |d̂_i · Ê_i′| ,  1/cond₂(Â) )
+
+        * |d̂_i · Ê_i′| = |B_ii| / (l L) is the cosine of the angle between forearm i and the tangent of
+          its elbow circle; it vanishes at a serial (type-1, inverse-kinematic) singularity, where the
+          forearm lies in the plane of the upper arm and the motor axis (arm stretched or folded).
+        * Â = A / l has the unit forearm directions as rows; 1/cond₂(Â) = σ_min/σ_max vanishes at a
+          parallel (type-2, direct-kinematic) singularity, where the three forearms become coplanar.
+          σ² are the eigenvalues of the 3×3 Gram matrix ÂÂᵀ (np.linalg.eigvalsh, batched); absolute
+          accuracy ~eps on σ², so the measure is exact to round-off unless it is itself below ~1e-8.
+        """
+        q = _samples(q, "q")
+        p = _samples(p, "p")
+        arms = self._arms(q, p)
+        serial = np.min(np.abs(arms.D), axis=0) / (self.l * self.L)
+        dx, dy, dz = arms.base_frame()
+        u = np.stack((dx.T, dy.T, dz.T), axis=-1) / self.l  # Â, (N, 3, 3)
+        eig = np.linalg.eigvalsh(u @ u.transpose(0, 2, 1))  # ascending
+        parallel = np.sqrt(np.clip(eig[:, 0], 0.0, None) / eig[:, 2])
+        return np.minimum(serial, parallel)
+
+    # ------------------------------------------------------------------ dynamics
+    def inverse_dynamics(
+        self, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, p: np.ndarray, a: np.ndarray
+    ) -> np.ndarray:
+        """Motor torques (N, 3) [N·m] of the lumped-mass model [Codourey1998], gravity included.
+
+        Each forearm pair's mass is split ⅔ to its elbow and ⅓ to the travelling plate, so the model is
+        three arms of constant inertia I_b (:attr:`arm_inertia`) plus a translating point mass m_p
+        (:attr:`platform_mass`):
+
+            τ = I_b q̈ + τ_g(q) + J⁻ᵀ F,       F = m_p (p̈ + g e_z)
+
+        * τ_g,i = ∂V_arm/∂q_i = −g (m_ua L_c + (m_elbow + ⅔ m_forearm) L) cos q_i, from
+          V_arm = −g·(m_ua L_c + (m_elbow + ⅔ m_forearm) L)·sin q_i (the masses sit at z = −L_c sin q).
+          It is NEGATIVE for a horizontal arm: the motor pulls the arm up, against q > 0 (downwards).
+          (The sign departs from a "+g·…·cos q" shorthand; it is the one consistent with τ·q̇ = dE/dt.)
+        * F is the force the arms exert on the plate; by virtual work τ·q̇ = F·ṗ with q̇ = J⁻¹ṗ,
+          (J⁻¹)ᵀ τ = F. With J⁻¹ = B⁻¹A: τ_i = B_ii λ_i where Aᵀλ = F, solved with the reciprocal basis
+          λ_i = F·(d_{i+1} × d_{i+2}) / det A.
+
+        ``qd`` is accepted for the Robot protocol; the lumped model has no velocity-dependent terms
+        (constant arm inertia, translating plate). ``q`` and ``p`` must belong together (p = FK(q)).
+        Power balance: Σ τ_i q̇_i = d/dt(KE + PE) (:meth:`kinetic_energy`, :meth:`potential_energy`).
+        """
+        q = _samples(q, "q")
+        qdd = _samples(qdd, "qdd")
+        p = _samples(p, "p")
+        a = _samples(a, "a")
+        arms = self._arms(q, p)
+        cx, cy, cz, det = self._reciprocal(arms)
+        mp = self.platform_mass
+        Fx, Fy, Fz = mp * a[:, 0], mp * a[:, 1], mp * (a[:, 2] + self.g)
+        lam = (Fx * cx + Fy * cy + Fz * cz) / det
+        torque = self.arm_inertia * qdd.T - (self.g * self.arm_gravity_moment) * arms.c + arms.D * lam
+        return torque.T.copy()
+
+    def kinetic_energy(self, q: np.ndarray, qd: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """KE (N,) [J] of the lumped model: Σ_i ½ I_b q̇_i² + ½ m_p ‖v‖². (q is unused; kept for symmetry.)"""
+        qd = _samples(qd, "qd")
+        v = _samples(v, "v")
+        return 0.5 * self.arm_inertia * np.sum(qd * qd, axis=1) + 0.5 * self.platform_mass * np.sum(v * v, axis=1)
+
+    def potential_energy(self, q: np.ndarray, p: np.ndarray) -> np.ndarray:
+        """PE (N,) [J], zero at q = 0 and z = 0: −g (m_ua L_c + (m_elbow + ⅔ m_forearm) L) Σ_i sin q_i + m_p g z."""
+        q = _samples(q, "q")
+        p = _samples(p, "p")
+        return -self.g * self.arm_gravity_moment * np.sum(np.sin(q), axis=1) + self.platform_mass * self.g * p[:, 2]

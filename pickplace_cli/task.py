@@ -1,0 +1,94 @@
+"""The move to plan and its local frame [Li2018, Eq. (1)–(2)]."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .errors import TaskError
+
+
+def _vec3(name: str, value) -> np.ndarray:
+    arr = np.asarray(value, dtype=float).reshape(-1)
+    if arr.shape != (3,):
+        raise TaskError(f"{name} = {value!r}: needs three coordinates X,Y,Z in m")
+    if not np.all(np.isfinite(arr)):
+        raise TaskError(f"{name} = {','.join(map(str, arr))}: every coordinate must be a finite number (m)")
+    return arr
+
+
+@dataclass(frozen=True)
+class Task:
+    """A pick-and-place move from ``p_from`` to ``p_to`` (base frame, m).
+
+    ``height`` [m] is the clearance of the path's midpoint P3 above the *higher* of the two end points;
+    ``eta`` is the lift-off/set-down ratio η of [Li2018, Eq. (11)]; ``v_from``/``v_to`` [m/s] are the tool
+    velocities at the ends (zero for a move from rest to rest).
+    """
+
+    p_from: np.ndarray
+    p_to: np.ndarray
+    height: float
+    eta: float = 0.5
+    v_from: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    v_to: np.ndarray = field(default_factory=lambda: np.zeros(3))
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "p_from", _vec3("from", self.p_from))
+        object.__setattr__(self, "p_to", _vec3("to", self.p_to))
+        object.__setattr__(self, "v_from", _vec3("v_from", self.v_from))
+        object.__setattr__(self, "v_to", _vec3("v_to", self.v_to))
+        h = float(self.height)
+        if not (np.isfinite(h) and h > 0):
+            raise TaskError(f"height = {self.height!r}: must be a finite number of metres > 0")
+        e = float(self.eta)
+        if not (np.isfinite(e) and 0 < e < 1):
+            raise TaskError(f"eta = {self.eta!r}: the lift-off/set-down ratio η must lie strictly between 0 and 1")
+        object.__setattr__(self, "height", h)
+        object.__setattr__(self, "eta", e)
+        if np.linalg.norm(self.p_to - self.p_from) < 1e-9:
+            raise TaskError(
+                f"from = to = {','.join(f'{c:g}' for c in self.p_from)}: the end points must differ (by more than 1 nm)"
+            )
+
+    # --- local frame P1-uv [Li2018, Eq. (1)]
+    @property
+    def b(self) -> float:
+        """Horizontal width of the move b [m] (Eq. 2)."""
+        return float(np.hypot(*(self.p_to[:2] - self.p_from[:2])))
+
+    @property
+    def gamma(self) -> float:
+        """Direction of the move in the x-y plane γ [rad] (Eq. 1); 0 for a purely vertical move."""
+        d = self.p_to[:2] - self.p_from[:2]
+        return float(np.arctan2(d[1], d[0])) if self.b > 0 else 0.0
+
+    @property
+    def e_u(self) -> np.ndarray:
+        """Unit vector of the local u axis in the base frame."""
+        g = self.gamma
+        return np.array([np.cos(g), np.sin(g), 0.0])
+
+    @property
+    def lam(self) -> float:
+        """Width/height ratio λ = b/h (Eq. 2), h = clearance above the higher end point."""
+        return self.b / self.height
+
+    @property
+    def z_top(self) -> float:
+        """Height of the path's midpoint P3 [m]."""
+        return max(self.p_from[2], self.p_to[2]) + self.height
+
+    def via_points(self) -> np.ndarray:
+        """P1 … P5 of [Li2018, Eq. (11)] in the base frame, (5, 3) [m].
+
+        With unequal end heights each end lifts off at η of its own rise to P3 (the clearance is measured
+        from the higher end), which reduces to Eq. (11) when z_from = z_to.
+        """
+        p1, p5 = self.p_from, self.p_to
+        zt = self.z_top
+        p2 = p1 + np.array([0.0, 0.0, self.eta * (zt - p1[2])])
+        p4 = p5 + np.array([0.0, 0.0, self.eta * (zt - p5[2])])
+        p3 = np.array([(p1[0] + p5[0]) / 2, (p1[1] + p5[1]) / 2, zt])
+        return np.vstack([p1, p2, p3, p4, p5])

@@ -1,0 +1,106 @@
+"""Value objects of the pipeline: CartesianPath → CartesianTrajectory → JointTrajectory.
+
+One evaluation convention everywhere: ``f(x, order=0)`` returns an ``(N, 3)`` array; axis 0 is samples.
+``order`` is the time derivative: 0 position [m], 1 velocity, 2 acceleration, 3 jerk.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Callable, Mapping
+
+import numpy as np
+
+#: Signature of a path/trajectory evaluator: (x (N,), order) -> (N, 3).
+Evaluator = Callable[[np.ndarray, int], np.ndarray]
+
+
+@dataclass(frozen=True)
+class CartesianPath:
+    """Geometry + motion law on normalised time ``tau`` ∈ [0, 1] (duration T = 1).
+
+    ``path(tau, order)`` gives the ``order``-th derivative with respect to ``tau`` in m/1^order, i.e. the
+    motion of the move when it takes exactly one second. Scaling to a duration T is exact:
+    d^k p/dt^k = path(t/T, k) / T^k.
+
+    ``max_order`` is the highest derivative that exists and is continuous (3 = jerk for every method here).
+    ``peaks`` are the exact maxima of ‖d^k p/dτ^k‖ for k = 1, 2, 3 on τ ∈ [0, 1] (m/1^k), computed by the
+    method itself from its own closed form (not from samples); ``breakpoints`` are the τ where the pieces
+    of the curve join (knots), useful to samplers.
+    """
+
+    evaluate: Evaluator
+    method: str
+    parameters: Mapping[str, Any]
+    peaks: tuple[float, float, float]
+    breakpoints: np.ndarray = field(default_factory=lambda: np.array([0.0, 1.0]))
+    max_order: int = 3
+
+    def __call__(self, tau: np.ndarray, order: int = 0) -> np.ndarray:
+        if not 0 <= order <= self.max_order:
+            raise ValueError(f"order must be in 0..{self.max_order}, got {order}")
+        return self.evaluate(np.atleast_1d(np.asarray(tau, dtype=float)), order)
+
+
+@dataclass(frozen=True)
+class CartesianTrajectory:
+    """A CartesianPath run in ``duration`` seconds: ``traj(t, order)`` in m, m/s, m/s², m/s³."""
+
+    path: CartesianPath
+    duration: float
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.duration) and self.duration > 0):
+            raise ValueError(f"duration must be a finite positive number of seconds, got {self.duration!r}")
+
+    def __call__(self, t: np.ndarray, order: int = 0) -> np.ndarray:
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        return self.path(t / self.duration, order) / self.duration**order
+
+    def peaks(self) -> tuple[float, float, float]:
+        """Exact peaks of |v| [m/s], |a| [m/s²], |j| [m/s³] (scaled from the path's normalised peaks)."""
+        T = self.duration
+        v, a, j = self.path.peaks
+        return v / T, a / T**2, j / T**3
+
+    def sample_times(self, rate: float) -> np.ndarray:
+        """Times from 0 to T inclusive at ``rate`` Hz; the last interval may be shorter so T is always a sample."""
+        if not (np.isfinite(rate) and rate > 0):
+            raise ValueError(f"rate must be a finite positive number of Hz, got {rate!r}")
+        n = int(np.floor(self.duration * rate + 1e-9))
+        t = np.arange(n + 1) / rate
+        if self.duration - t[-1] > 1e-9 / rate:
+            t = np.append(t, self.duration)
+        else:
+            t[-1] = self.duration
+        return t
+
+
+@dataclass(frozen=True)
+class JointTrajectory:
+    """Sampled joint motion: every array is (N, n_joints) with axis 0 = samples at times ``t`` (N,).
+
+    Units are per joint (``units``: "m" for prismatic, "rad" for revolute); derivatives are per second.
+    ``torque`` is joint-side force/torque [N or N·m]; ``None`` when the robot has no dynamic model.
+    """
+
+    t: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray
+    qdd: np.ndarray
+    qddd: np.ndarray
+    names: tuple[str, ...]
+    units: tuple[str, ...]
+    torque: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        n = len(self.t)
+        if np.ndim(self.t) != 1:
+            raise ValueError(f"t must be 1-D, got shape {np.shape(self.t)}")
+        shape = (n, len(self.names))
+        for name in ("q", "qd", "qdd", "qddd", "torque"):
+            arr = getattr(self, name)
+            if arr is not None and np.shape(arr) != shape:
+                raise ValueError(f"{name} must have shape {shape} (samples × joints), got {np.shape(arr)}")
+        if len(self.units) != len(self.names):
+            raise ValueError(f"units ({len(self.units)}) and names ({len(self.names)}) differ in length")
