@@ -15,12 +15,14 @@ from ..trajectory import CartesianPath
 def bspline_curve(task: Task, k1: float, k2: float):
     """The scipy BSpline (11 control points in 3-D, base frame) of [Li2018, Eq. (11)–(16)].
 
-    Equivalent to Eq. (15) r = b·(s_u, λ⁻¹ s_v) mapped by Eq. (1): the control points are solved in the
-    base frame directly (the map is affine, so the spline commutes with it).
+    Equivalent to Eq. (15) r = b·(s_u, λ⁻¹ s_v) mapped by Eq. (1): the control points are solved in base-frame
+    axes directly (the map is affine, so the spline commutes with it). The spline holds the displacement
+    from P1 (add ``task.p_from`` for positions): small coordinates keep the round-off of the cancelling
+    end derivatives (|N‴| ~ 1/τ7³) at the level of the move, not of the robot's base offset.
     """
     knots = li_knots(k1, k2)
     via_tau = knots[[0, 7, 8, 9, 16]]  # τ1 = 0, τ8, τ9, τ10, τ17 = 1 (Eq. 8 with f = 5)
-    q = solve_control_points(knots, via_tau, task.via_points())
+    q = solve_control_points(knots, via_tau, task.via_points() - task.p_from)
     return make_spline(knots, q)
 
 
@@ -43,8 +45,11 @@ def plan_bspline(
     spline = bspline_curve(task, float(k1), float(k2))
     peaks = norm_peaks(spline, (1, 2, 3))
 
+    origin = task.p_from
+
     def evaluate(tau: np.ndarray, order: int) -> np.ndarray:
-        return spline(tau, nu=order)
+        out = spline(tau, nu=order)
+        return out + origin if order == 0 else out
 
     return CartesianPath(
         evaluate=evaluate,
