@@ -145,16 +145,18 @@ def _describe(err: dict, data: Any, lines: dict[tuple, int], source: str) -> str
     # pydantic puts the discriminator tag into loc for tagged unions: keep only parts that are real keys
     real: list = []
     node = data
-    for part in err.get("loc", ()):
+    loc = list(err.get("loc", ()))
+    for n, part in enumerate(loc):
+        last = n == len(loc) - 1
         if isinstance(node, dict) and part in node:
             real.append(part)
             node = node[part]
         elif isinstance(node, (list, tuple)) and isinstance(part, int) and 0 <= part < len(node):
             real.append(part)
             node = node[part]
-        elif isinstance(node, dict) and part not in node and err["type"] in ("missing", "extra_forbidden"):
-            real.append(part)
-            break
+        elif last and isinstance(node, dict):
+            real.append(part)  # a missing or unknown key: name it
+        # else: a union/discriminator tag pydantic inserted into loc; not a key of the document
     probe = tuple(real)
     while probe not in lines and probe:
         probe = probe[:-1]

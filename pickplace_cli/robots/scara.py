@@ -230,9 +230,13 @@ class ScaraRobot:
         by = a[:, 1] + l1 * qd1**2 * s1 + l2 * w12**2 * s12
         qdd1, qdd2 = solve(bx, by)
         a12 = qdd1 + qdd2
-        # 2 J̇ q̈ + J̈ q̇, the (x, y) components
-        kx = -3.0 * l1 * qd1 * qdd1 * c1 + l1 * qd1**3 * s1 - 3.0 * l2 * w12 * a12 * c12 + l2 * w12**3 * s12
-        ky = -3.0 * l1 * qd1 * qdd1 * s1 - l1 * qd1**3 * c1 - 3.0 * l2 * w12 * a12 * s12 - l2 * w12**3 * c12
+        # 2 J̇ q̈ + J̈ q̇ = r1 e1 + t1 e1⊥ + r2 e12 + t2 e12⊥, with e⊥ = (−sin, cos)
+        r1 = -3.0 * l1 * qd1 * qdd1
+        t1 = -l1 * qd1 * qd1 * qd1
+        r2 = -3.0 * l2 * w12 * a12
+        t2 = -l2 * w12 * w12 * w12
+        kx = r1 * c1 - t1 * s1 + r2 * c12 - t2 * s12
+        ky = r1 * s1 + t1 * c1 + r2 * s12 + t2 * c12
         qddd1, qddd2 = solve(j[:, 0] - kx, j[:, 1] - ky)
         qd = np.stack((qd1, qd2, v[:, 2]), axis=1)
         qdd = np.stack((qdd1, qdd2, a[:, 2]), axis=1)

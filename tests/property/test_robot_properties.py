@@ -163,7 +163,10 @@ def test_scara_outside_annulus_raises(elbow, polar, outer):
 
 
 @SETTINGS
-@given(st.sampled_from(["left", "right"]), rows((-np.pi, np.pi), (0.05, 3.09), (-0.3, 0.3), (-5, 5), (-5, 5), (-2, 2), (-80, 80), (-80, 80), (-30, 30)))
+@given(
+    st.sampled_from(["left", "right"]),
+    rows((-np.pi, np.pi), (0.05, 3.09), (-0.3, 0.3), (-5, 5), (-5, 5), (-2, 2), (-80, 80), (-80, 80), (-30, 30)),
+)
 def test_scara_power_identity(elbow, x):
     """τ·q̇ = d/dt(½ q̇ᵀMq̇) + m_t g q̇3 with Ṁ from ∂M/∂q2 in closed form (skew-symmetry of Ṁ − 2C)."""
     robot = SCARAS[elbow]

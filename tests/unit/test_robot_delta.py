@@ -137,7 +137,9 @@ def test_adept_cycle_reachable_and_angles(capsys):
     with capsys.disabled():
         print("\nDelta (Su 2018 dims) Adept-cycle joint angles [deg]:")
         for p, row in zip(ADEPT, deg):
-            print(f"  p = ({p[0]:+.4f}, {p[1]:+.4f}, {p[2]:+.4f}) m  ->  q = ({row[0]:7.3f}, {row[1]:7.3f}, {row[2]:7.3f})")
+            point = ", ".join(f"{x:+.4f}" for x in p)
+            angles = ", ".join(f"{x:7.3f}" for x in row)
+            print(f"  p = ({point}) m  ->  q = ({angles}) deg")
     # the usual motor range of a Delta; exact comparison, the angles are tens of degrees inside it
     assert np.all(deg > -40.0) and np.all(deg < 90.0)
     # FK closes the loop: 1e-12 m is ~1e4 × eps × 1 m, round-off of a dozen operations

@@ -151,10 +151,11 @@ def test_jacobian_matches_finite_differences_of_fk_and_ik():
     q = np.column_stack((rng.uniform(-3, 3, 50), rng.uniform(0.2, 2.9, 50), rng.uniform(-0.2, 0.0, 50)))
     J = LEFT.jacobian(q)
     h = 1e-6  # truncation h²/6·|FK'''| ~ 1e-13, round-off eps/h ~ 1e-10
-    fd = np.stack([(LEFT.forward_kinematics(q + h * e) - LEFT.forward_kinematics(q - h * e)) / (2 * h) for e in np.eye(3)], axis=2)
+    fk, ik = LEFT.forward_kinematics, LEFT.inverse_kinematics
+    fd = np.stack([(fk(q + h * e) - fk(q - h * e)) / (2 * h) for e in np.eye(3)], axis=2)
     assert_rel(J, fd, 1e-6, "J vs FD of FK")  # brief: 1e-6 relative, ~1e4 × the FD error
     p = LEFT.forward_kinematics(q)
-    fdi = np.stack([(LEFT.inverse_kinematics(p + h * e) - LEFT.inverse_kinematics(p - h * e)) / (2 * h) for e in np.eye(3)], axis=2)
+    fdi = np.stack([(ik(p + h * e) - ik(p - h * e)) / (2 * h) for e in np.eye(3)], axis=2)
     assert_rel(np.linalg.inv(J), fdi, 1e-6, "J⁻¹ vs FD of IK")
 
 

@@ -1,0 +1,200 @@
+"""CLI: every command has help; exit codes; one-line errors; atomic outputs; stdout == file bytes."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from pickplace_cli import __version__
+from pickplace_cli.cli import app
+
+runner = CliRunner()
+ADEPT = ["--from", "-0.1525,0,-0.8", "--to", "0.1525,0,-0.8"]
+
+
+def run(*args):
+    return runner.invoke(app, list(args), catch_exceptions=False)
+
+
+@pytest.mark.parametrize("cmd", [[], ["plan"], ["build-table"]])
+def test_help_everywhere(cmd):
+    r = run(*cmd, "--help")
+    assert r.exit_code == 0 and "Usage" in r.stdout
+
+
+def test_version():
+    r = run("--version")
+    assert r.exit_code == 0 and r.stdout.strip() == f"pickplace {__version__}"
+
+
+def test_plan_adept_csv():
+    r = run("plan", *ADEPT)
+    assert r.exit_code == 0, r.stderr
+    rows = list(csv.reader(io.StringIO(r.stdout)))
+    header = rows[0]
+    names = [h.split("[")[0] for h in header]
+    assert names[:13] == ["t", "x", "y", "z", "vx", "vy", "vz", "ax", "ay", "az", "jx", "jy", "jz"]
+    assert names[13:] == ["q1", "qd1", "qdd1", "q2", "qd2", "qdd2", "q3", "qd3", "qdd3"]
+    assert header[1] == "x[m]" and header[7] == "ax[m/s^2]"
+    data = np.array(rows[1:], float)
+    assert data[0, 0] == 0.0
+    t = data[:, 0]
+    assert np.all(np.diff(t) > 0) and np.allclose(np.diff(t)[:-1], 1e-3)
+    np.testing.assert_allclose(data[0, 1:4], [-0.1525, 0, -0.8], atol=1e-12)
+    np.testing.assert_allclose(data[-1, 1:4], [0.1525, 0, -0.8], atol=1e-12)
+    assert "duration T" in r.stderr and "λ = 12.2" in r.stderr
+
+
+def test_last_sample_is_T_and_summary_json():
+    r = run("plan", *ADEPT, "--format", "json", "-q")
+    assert r.exit_code == 0
+    doc = json.loads(r.stdout)
+    T = doc["summary"]["duration_s"]
+    assert doc["samples"]["t[s]"][-1] == pytest.approx(T, abs=1e-12)
+    assert doc["summary"]["binding"] in ("velocity", "acceleration")
+    assert r.stderr == ""
+
+
+def test_explicit_time_rate_k_override():
+    r = run("plan", *ADEPT, "--time", "0.25", "--rate", "200", "--k1", "0.31", "--k2", "0.12", "-q")
+    assert r.exit_code == 0
+    data = np.loadtxt(io.StringIO(r.stdout), delimiter=",", skiprows=1)
+    assert data.shape[0] == 51 and data[-1, 0] == pytest.approx(0.25)
+
+
+def test_stdout_and_file_identical(tmp_path):
+    out = tmp_path / "a.csv"
+    r1 = run("plan", *ADEPT, "-q")
+    r2 = run("plan", *ADEPT, "-q", "-o", str(out))
+    assert r2.exit_code == 0 and r2.stdout == ""
+    assert out.read_text() == r1.stdout
+
+
+def test_height_eta_change_the_path():
+    r = run("plan", *ADEPT, "--height", "0.05", "--eta", "0.4", "--format", "json", "-q")
+    assert r.exit_code == 1 and "built for eta = 0.5" in r.stderr  # the shipped table is for η = 0.5
+    r = run("plan", *ADEPT, "--height", "0.05", "--eta", "0.4", "--k1", "0.4", "--k2", "0.15", "--format", "json", "-q")
+    doc = json.loads(r.stdout)
+    assert max(doc["samples"]["z[m]"]) == pytest.approx(-0.75, abs=1e-6)
+    assert doc["summary"]["eta"] == 0.4 and doc["summary"]["lambda"] == pytest.approx(6.1)
+
+
+BAD = [
+    (["--from", "nan,0,-0.8", "--to", "0.1,0,-0.8"], "from = 'nan,0,-0.8'"),
+    (["--from", "0.1,0,-0.8", "--to", "0.1,0,-0.8"], "end points must differ"),
+    ([*ADEPT, "--height", "0"], "height = 0.0"),
+    ([*ADEPT, "--height", "-0.1"], "height = -0.1"),
+    ([*ADEPT, "--time", "0"], "time = '0'"),
+    ([*ADEPT, "--time", "-1"], "time = '-1'"),
+    ([*ADEPT, "--eta", "0"], "eta = 0.0"),
+    ([*ADEPT, "--eta", "1.2"], "eta = 1.2"),
+    ([*ADEPT, "--rate", "0"], "rate = 0.0"),
+    ([*ADEPT, "--k1", "0.3"], "give both"),
+    ([*ADEPT, "--k1", "1.3", "--k2", "0.1"], "k1 = 1.3"),
+    (["--from", "1,2", "--to", "0.1,0,-0.8"], "three coordinates"),
+    (["--from", "-0.6,0,-0.8", "--to", "0.6,0,-0.8"], "outside the table's range"),
+]
+
+
+@pytest.mark.parametrize("args,msg", BAD)
+def test_bad_input_exit_1_one_line_no_file(tmp_path, args, msg):
+    out = tmp_path / "out.csv"
+    r = run("plan", *args, "-o", str(out))
+    assert r.exit_code == 1
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("pickplace: error: ") and msg in lines[0]
+    assert "Traceback" not in r.stderr
+    assert not out.exists()
+    assert list(tmp_path.iterdir()) == []  # no temp file left either
+
+
+def test_failed_run_keeps_existing_output(tmp_path):
+    out = tmp_path / "keep.csv"
+    out.write_text("precious\n")
+    r = run("plan", *ADEPT, "--time", "-1", "-o", str(out))
+    assert r.exit_code == 1 and out.read_text() == "precious\n"
+
+
+def test_unknown_profile_key(tmp_path):
+    from pickplace_cli.profile import resolve_profile_path
+
+    text = resolve_profile_path("gantry").read_text().replace("  eta: 0.5", "  eta: 0.5\n  speed: 3", 1)
+    prof = tmp_path / "p.yaml"
+    prof.write_text(text)
+    r = run("plan", *ADEPT, "--profile", str(prof))
+    assert r.exit_code == 1
+    line = r.stderr.strip()
+    assert "\n" not in line and f"{prof}:" in line and "unknown key 'planning.speed'" in line
+
+
+@pytest.mark.parametrize(
+    "content,msg",
+    [(None, "no such file"), ("garbage\n1,2\n", "lacks column"), ("lambda,k1,k2\n1,0.2,x\n", "not a number")],
+)
+def test_missing_or_corrupt_table(tmp_path, content, msg):
+    tab = tmp_path / "t.csv"
+    if content is not None:
+        tab.write_text(content)
+    r = run("plan", *ADEPT, "--table", str(tab))
+    assert r.exit_code == 1 and msg in r.stderr and len(r.stderr.strip().splitlines()) == 1
+
+
+def test_usage_error_exit_2():
+    r = runner.invoke(app, ["plan", "--from", "0,0,0"])
+    assert r.exit_code == 2
+
+
+def test_unreachable_exit_4():
+    # the path's top (0.1 + 0.5 m) is above the z travel (0.2 m)
+    r = run("plan", "--from", "0.9,0,0.1", "--to", "0.95,0,0.1", "--height", "0.5", "--k1", "0.3", "--k2", "0.1")
+    assert r.exit_code == 4
+    assert "outside the travel of axis z" in r.stderr and "at t = " in r.stderr
+
+
+def test_build_table_small(tmp_path):
+    out = tmp_path / "t.csv"
+    r = run("build-table", "--lambda-min", "27", "--lambda-max", "28", "--lambda-step", "0.5", "-o", str(out), "-j", "1", "-q")
+    assert r.exit_code == 0, r.stderr
+    from pickplace_cli.table import load_table
+
+    tab = load_table(out)
+    assert tab.lam.tolist() == [27.0, 27.5, 28.0]
+    assert tab.meta["eta"] == 0.5 and "fit_k1" in tab.meta
+    # the plan reads it
+    r2 = run("plan", *ADEPT, "--height", str(0.305 / 27.5), "--table", str(out), "-q")
+    assert r2.exit_code == 0
+
+
+@pytest.mark.parametrize(
+    "args,msg",
+    [
+        (["--weights", "0.5,0.6"], "weights"),
+        (["--weights", "abc"], "weights"),
+        (["--eta", "1"], "eta"),
+        (["--lambda-min", "5", "--lambda-max", "2"], "lambda-max"),
+        (["--lambda-step", "0"], "lambda-step"),
+    ],
+)
+def test_build_table_bad_input(tmp_path, args, msg):
+    out = tmp_path / "t.csv"
+    r = run("build-table", *args, "-o", str(out), "-q")
+    assert r.exit_code == 1 and msg in r.stderr and not out.exists()
+
+
+def test_help_imports_no_heavy_modules():
+    """`pickplace --help` must not import numpy, scipy, pydantic or mcap (fast start-up)."""
+    code = (
+        "import sys; from pickplace_cli.cli import app\n"
+        "try:\n    app(['--help'])\nexcept SystemExit:\n    pass\n"
+        "heavy = [m for m in ('numpy', 'scipy', 'pydantic', 'mcap', 'yaml') if m in sys.modules]\n"
+        "print('HEAVY=' + ','.join(heavy))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip().splitlines()[-1] == "HEAVY="
