@@ -6,8 +6,9 @@ References
 [Clavel1988]  R. Clavel, "DELTA, a fast robot with parallel geometry", Proc. 18th Int. Symp. on
               Industrial Robots, 1988.
 [Codourey1998] A. Codourey, "Dynamic modeling of parallel robots for computed-torque control
-              implementation", Int. J. Robotics Research 17(12), 1998, pp. 1325–1336.
-[Su2018]      prototype dimensions used by the tests (R = 0.150, r = 0.051, L = 0.325, l = 0.800 m).
+              implementation", Int. J. Robotics Research 17(12), 1998.
+[Su2018]      the prototype whose dimensions the tests use (R = 0.150, r = 0.051, L = 0.325, l = 0.800 m),
+              as quoted in the project's task description.
 
 Conventions (SI units: m, rad, s, kg, N, N·m; the tests rely on every line of this list)
 -------------------------------------------------------------------------------------
@@ -216,7 +217,8 @@ class DeltaRobot:
             q = atan2(−√(ρ² − K²)·a − K z,  K a − √(ρ² − K²)·z)
 
         The minus sign on the root picks sin(q + ψ) < 0, the knee-out branch (d_i · E_i′ = −Lρ sin(q + ψ) > 0).
-        Raises UnreachableError naming the first sample whose discriminant ρ² − K² is negative.
+        Raises UnreachableError naming the first sample whose discriminant ρ² − K² is negative. The
+        working mode (platform below the elbows, z < 0) is assumed, as everywhere in this module.
         """
         p = _samples(p, "p")
         return self._solve(p)[0].T.copy()

@@ -3,7 +3,8 @@
 References
 ----------
 [Spong2006] M. W. Spong, S. Hutchinson, M. Vidyasagar, "Robot Modeling and Control", Wiley 2006:
-            §3.3 (planar elbow IK), §4 (velocity Jacobian), §7.4.2 (two-link planar arm dynamics).
+            Ch. 3 (inverse kinematics of the planar elbow arm), Ch. 4 (velocity Jacobian), Ch. 7 (dynamics of
+            the two-link planar elbow manipulator).
 
 Conventions (SI units: m, rad, s, kg, N, N·m)
 ---------------------------------------------
@@ -42,7 +43,7 @@ class Elbow(str, Enum):
 class ScaraRobot:
     """SCARA robot: planar 2R arm (``l1``, ``l2`` [m]) carrying a vertical prismatic axis (``z0`` [m] its zero).
 
-    Dynamics [Spong2006 §7.4.2]: link masses ``m1``, ``m2`` [kg] with centres of mass ``lc1``, ``lc2``
+    Dynamics [Spong2006, Ch. 7]: link masses ``m1``, ``m2`` [kg] with centres of mass ``lc1``, ``lc2``
     [m] from their proximal joint and inertias ``I1``, ``I2`` [kg·m²] about their own centre of mass
     (vertical axis); ``m3`` [kg] quill + tool moved by the z axis; ``payload`` [kg]; ``g`` [m/s²].
     ``elbow`` is "left" or "right" (see :class:`Elbow`). Masses default to 0 for kinematics-only use.
@@ -96,7 +97,7 @@ class ScaraRobot:
         return (rho2 - self.l1**2 - self.l2**2) / (2.0 * self.l1 * self.l2)
 
     def inverse_kinematics(self, p: np.ndarray) -> np.ndarray:
-        """Joints q (N, 3) [rad, rad, m] for tool positions p (N, 3) [m], closed form [Spong2006 §3.3]:
+        """Joints q (N, 3) [rad, rad, m] for tool positions p (N, 3) [m], closed form [Spong2006, Ch. 3]:
 
             cos q2 = (x² + y² − l1² − l2²) / (2 l1 l2),  q2 = atan2(±√(1 − cos² q2), cos q2)  (+ for "left")
             q1 = atan2(y, x) − atan2(l2 sin q2, l1 + l2 cos q2),   q3 = z − z0
@@ -131,8 +132,8 @@ class ScaraRobot:
         y = self.l1 * np.sin(q[:, 0]) + self.l2 * np.sin(q12)
         return np.stack((x, y, self.z0 + q[:, 2]), axis=1)
 
-    def jacobian(self, q: np.ndarray) -> np.ndarray:
-        """J (N, 3, 3), ṗ = J q̇ [Spong2006 §4]:
+    def jacobian(self, q: np.ndarray, p: np.ndarray | None = None) -> np.ndarray:
+        """J (N, 3, 3), ṗ = J q̇ [Spong2006, Ch. 4] (``p`` is unused; the Delta's Jacobian needs it):
 
             [[−l1 s1 − l2 s12, −l2 s12, 0],
              [ l1 c1 + l2 c12,  l2 c12, 0],
@@ -253,7 +254,7 @@ class ScaraRobot:
 
     # ------------------------------------------------------------------ dynamics
     def mass_matrix(self, q: np.ndarray) -> np.ndarray:
-        """M(q) (N, 3, 3) [kg·m², kg] [Spong2006 §7.4.2], carried mass m_t = m3 + payload as a point at l2:
+        """M(q) (N, 3, 3) [kg·m², kg] [Spong2006, Ch. 7], carried mass m_t = m3 + payload as a point at l2:
 
             M11 = m1 lc1² + I1 + m2 (l1² + lc2² + 2 l1 lc2 c2) + I2 + m_t (l1² + l2² + 2 l1 l2 c2)
             M12 = m2 (lc2² + l1 lc2 c2) + I2 + m_t (l2² + l1 l2 c2)
@@ -281,7 +282,7 @@ class ScaraRobot:
     def inverse_dynamics(
         self, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, p: np.ndarray, a: np.ndarray
     ) -> np.ndarray:
-        """Joint torques/force (N, 3) [N·m, N·m, N], gravity included [Spong2006 §7.4.2]:
+        """Joint torques/force (N, 3) [N·m, N·m, N], gravity included [Spong2006, Ch. 7]:
 
             τ1 = M11 q̈1 + M12 q̈2 + h (2 q̇1 q̇2 + q̇2²)
             τ2 = M12 q̈1 + M22 q̈2 − h q̇1²                  h = −(m2 lc2 + m_t l2) l1 sin q2

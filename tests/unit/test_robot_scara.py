@@ -1,4 +1,4 @@
-"""Unit tests of pickplace_cli.robots.scara (serial SCARA, 2-link planar dynamics [Spong2006 §7.4.2]).
+"""Unit tests of pickplace_cli.robots.scara (serial SCARA, 2-link planar dynamics [Spong2006, Ch. 7]).
 
 Every numeric assertion states its tolerance and why.
 """
