@@ -65,7 +65,7 @@ def test_scaling_laws(task, k1, k2, duration, scale):
     tr_big = CartesianTrajectory(path_big, duration)
     for got, ref, n in zip(tr_big.peaks(), tr.peaks(), (1, 2, 3)):
         assert np.isclose(got, ref * scale / duration**n, rtol=1e-9)
-    tau = np.linspace(0, 1, 7)
+    tau = np.linspace(0.02, 0.98, 7)  # interior: the ends are round-off zeros, checked in the rest test
     for r in (1, 2, 3):
         np.testing.assert_allclose(tr_big(tau * duration, r), tr(tau, r) * scale / duration**r, rtol=1e-9, atol=1e-9 * tr.peaks()[r - 1] * scale / duration**r)
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import sys
 from importlib import metadata
 
 import pytest
@@ -16,10 +17,13 @@ def test_data_dirs_hold_the_shipped_files():
 
 
 def test_wheel_contains_package_data():
-    try:
-        dist = metadata.distribution("pickplace-cli")
-    except metadata.PackageNotFoundError:
+    # look in site-packages only: setuptools leaves a pickplace_cli.egg-info in the checkout, which is on
+    # sys.path when tests run from it and would shadow the installed distribution's record
+    site = [p for p in sys.path if p.endswith("site-packages")]
+    dists = [d for d in metadata.distributions(path=site) if d.metadata["Name"] == "pickplace-cli"]
+    if not dists:
         pytest.skip("pickplace-cli is not installed (running from a bare checkout)")
+    dist = dists[0]
     direct = dist.read_text("direct_url.json")
     if direct and json.loads(direct).get("dir_info", {}).get("editable"):
         pytest.skip("editable install: data comes from the checkout")
