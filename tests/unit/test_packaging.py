@@ -30,3 +30,17 @@ def test_wheel_contains_package_data():
     files = {str(f) for f in dist.files or []}
     assert "pickplace_cli/profiles/gantry.yaml" in files
     assert "pickplace_cli/tables/bspline-eta0.5.csv" in files
+
+
+def test_installed_tool_runs_from_any_directory(tmp_path):
+    """Run the package as a user would, from an unrelated directory (so the checkout is not on sys.path):
+    the default profile and table must be found as package data."""
+    import subprocess
+
+    env = {k: v for k, v in __import__("os").environ.items() if k != "PYTHONPATH"}
+    r = subprocess.run(
+        [sys.executable, "-m", "pickplace_cli", "plan", "--from", "-0.1525,0,-0.8", "--to", "0.1525,0,-0.8", "-q"],
+        cwd=tmp_path, capture_output=True, text=True, env=env,
+    )
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.startswith("t[s],x[m]")
