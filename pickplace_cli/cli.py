@@ -122,7 +122,7 @@ def plan(
     from_: str = typer.Option(..., "--from", help="Pick point X,Y,Z in m (base frame), e.g. -0.1525,0,-0.8."),
     to: str = typer.Option(..., "--to", help="Place point X,Y,Z in m (base frame)."),
     profile: Optional[str] = typer.Option(
-        None, "--profile", "-p", help="Profile YAML file, or the name of a shipped profile. [default: gantry]"
+        None, "--profile", "-p", help="Profile YAML file, or the name of a shipped profile. [default: delta-su2018]"
     ),
     height: Optional[float] = typer.Option(
         None, "--height", help="Clearance h in m of the path's midpoint above the higher end point. [default: profile]"
@@ -135,14 +135,27 @@ def plan(
     k2: Optional[float] = typer.Option(None, "--k2", help="B-spline time-ratio factor k2 = τ7/τ8 (overrides the table)."),
     table: Optional[str] = typer.Option(None, "--table", help="λ → (k1, k2) table CSV. [default: shipped table]"),
     time: str = typer.Option(
-        "auto", "--time", "-t", help="Duration of the move: 'auto' (from the profile's capacity, Li 2018 Eq. 26) or seconds."
+        "auto",
+        "--time",
+        "-t",
+        help="Duration of the move in s, or 'auto' (from the profile's Cartesian capacity, Li 2018 Eq. 26), "
+        "or 'fit' (the smallest duration at which every joint and motor limit holds).",
     ),
     rate: Optional[float] = typer.Option(None, "--rate", help="Samples per second in Hz. [default: profile]"),
     fmt: OutputFormat = typer.Option(OutputFormat.csv, "--format", "-f", help="Output format."),
     output: str = typer.Option("-", "--output", "-o", help="Output file ('-' = stdout). Written atomically."),
-    quiet: bool = typer.Option(False, "--quiet", "-q", help="No summary on stderr (errors are still printed)."),
+    report: Optional[str] = typer.Option(None, "--report", help="Also write the limit report as JSON to this file."),
+    report_only: bool = typer.Option(
+        False, "--report-only", help="Exit 0 even when a limit is exceeded (the report still says so)."
+    ),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="No summary or limit table on stderr (errors and violations are still printed)."),
 ) -> None:
-    """Plan one move and write the sampled trajectory (CSV columns t[s], x[m] … jz[m/s^3], q<i>, qd<i>, qdd<i>)."""
+    """Plan one move, check it against the robot's limits, and write the sampled trajectory.
+
+    CSV columns: t[s], x y z [m], vx… [m/s], ax… [m/s^2], jx… [m/s^3], then per joint q<i>, qd<i>, qdd<i>,
+    then torque<i> (joint side, N·m or N), motor_speed<i> [rad/s], motor_torque<i> [N·m].
+    Exit 3 when a limit is exceeded, 4 when a point is unreachable or outside the workcell.
+    """
     from .errors import TaskError
     from .planner import PlanOptions
     from .planner import plan as run_plan
@@ -170,8 +183,15 @@ def plan(
         params = {"k1": k1, "k2": k2, "table": table}
     result = run_plan(task, prof, PlanOptions(method=method.value, method_params=params, time=time, rate=rate))
     _write_plan(result, fmt, output)
+    if report is not None:
+        _write_report(result, report)
     if not quiet:
         _print_summary(result)
+        _print_limit_table(result.report)
+    _print_verdict(result.report, quiet)
+    code = result.report.exit_code()
+    if code and not report_only:
+        raise typer.Exit(code)
 
 
 def _write_plan(result, fmt: OutputFormat, output: str) -> None:
@@ -185,15 +205,68 @@ def _write_plan(result, fmt: OutputFormat, output: str) -> None:
         writer(result, stream)
 
 
+def _write_report(result, path: str) -> None:
+    import json
+
+    from .export import atomic_output
+
+    doc = {"summary": result.summary(), "limits": result.report.as_dict()}
+    with atomic_output(path) as stream:
+        json.dump(doc, stream, indent=2, allow_nan=False, default=float)
+        stream.write("\n")
+
+
+def _fmt(x: float) -> str:
+    return f"{x:.4g}"
+
+
+def _print_limit_table(report) -> None:
+    from rich.console import Console
+    from rich.markup import escape
+    from rich.table import Table
+
+    table = Table(title=None, box=None, pad_edge=False, show_header=True, header_style="bold")
+    for col, just in (("joint", "left"), ("quantity", "left"), ("peak", "right"), ("limit", "right"),
+                      ("use %", "right"), ("t peak [s]", "right"), ("", "left")):
+        table.add_column(col, justify=just)  # type: ignore[arg-type]
+    for r in report.rows:
+        mark = "ok" if r.ok else "[bold red]EXCEEDED[/]"
+        table.add_row(
+            r.joint, escape(f"{r.quantity} [{r.unit}]"), _fmt(r.peak), _fmt(r.limit), f"{100 * r.utilisation:.1f}",
+            "" if r.t_peak is None else f"{r.t_peak:.4f}", mark,
+        )
+    Console(stderr=True, highlight=False, soft_wrap=True).print(table)
+
+
+def _print_verdict(report, quiet: bool) -> None:
+    cycle = (
+        f"cycle: {report.duration:.4f} s one way, {report.round_trip:.4f} s round trip "
+        f"(dwell {report.dwell:g} s), {report.picks_per_minute:.1f} picks/min"
+    )
+    if report.ok:
+        if not quiet:
+            sys.stderr.write(f"verdict: all limits hold; {cycle}\n")
+        return
+    for r in report.violations:
+        when = f" at t = {r.t_peak:.4f} s" if r.t_peak is not None else " over the duty cycle"
+        sys.stderr.write(
+            f"pickplace: limit exceeded: {r.joint} {r.quantity} = {_fmt(r.peak)} {r.unit}{when}; "
+            f"limit {_fmt(r.limit)} {r.unit} (by {_fmt(abs(r.excess))} {r.unit}, {100 * r.utilisation:.1f} %)\n"
+        )
+    if not quiet:
+        sys.stderr.write(f"verdict: {len(report.violations)} limit(s) exceeded; {cycle}\n")
+
+
 def _print_summary(result) -> None:
     s = result.summary()
     d = result.duration
     par = result.parameters
     ks = f"k1 = {par['k1']:.4f}, k2 = {par['k2']:.4f} ({par['k_source']})" if "k1" in par else ""
     bounds = f"v {d.t_velocity:.4f} s, a {d.t_acceleration:.4f} s" + (f", j {d.t_jerk:.4f} s" if d.t_jerk else "")
+    fit = f"; fit {d.t_fit:.4f} s" if d.t_fit is not None else ""
     sys.stderr.write(
-        f"{s['method']}: b = {s['b_m']:.4g} m, h = {s['height_m']:.4g} m, λ = {s['lambda']:.4g}, η = {s['eta']:g}; {ks}\n"
-        f"duration T = {d.seconds:.4f} s ({d.mode}; Eq. 26 bounds: {bounds}; binding: {d.binding}); "
+        f"{s['profile']} / {s['method']}: b = {s['b_m']:.4g} m, h = {s['height_m']:.4g} m, λ = {s['lambda']:.4g}, η = {s['eta']:g}; {ks}\n"
+        f"duration T = {d.seconds:.4f} s ({d.mode}, binding: {d.binding}); auto {d.t_auto:.4f} s (Eq. 26: {bounds}){fit}; "
         f"{s['samples']} samples\n"
         f"peaks |v| = {s['peak_speed_m_s']:.4g} m/s, |a| = {s['peak_acceleration_m_s2']:.4g} m/s², "
         f"|j| = {s['peak_jerk_m_s3']:.4g} m/s³\n"

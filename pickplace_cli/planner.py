@@ -1,7 +1,7 @@
 """plan(task, profile, options) → Plan: the one entry point the CLI and the tests use.
 
-Pipeline [DESIGN §1]: Task + method → CartesianPath → choose_duration → CartesianTrajectory → samples
-→ robot.joint_motion / inverse_dynamics → JointTrajectory.
+Pipeline [DESIGN §1]: Task + method → CartesianPath → MotionModel (robot + joint specs) →
+choose_duration (auto / seconds / fit) → samples → JointTrajectory → check_limits → LimitReport.
 """
 
 from __future__ import annotations
@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 
 from .errors import UnreachableError
+from .limits import LimitReport, MotionModel, check_limits, reach_error
 from .methods import Method, plan_path
 from .profile import Profile
 from .robots import build_robot
@@ -28,6 +29,7 @@ class PlanOptions:
     method_params: dict[str, Any] = field(default_factory=dict)
     time: str | float = "auto"
     rate: float | None = None  # Hz; None → profile.planning.rate
+    fit: bool = True  # also compute the fitted duration (reported next to auto)
 
 
 @dataclass(frozen=True)
@@ -45,16 +47,16 @@ class Plan:
     a: np.ndarray  # (N, 3) m/s²
     j: np.ndarray  # (N, 3) m/s³
     joint: JointTrajectory
+    report: LimitReport
     profile_name: str
 
     def summary(self) -> dict[str, Any]:
         """Scalars for reports and --format json (SI units, keys name the unit)."""
         vpk, apk, jpk = self.cartesian.peaks()
-        T = self.duration.seconds
         return {
             "profile": self.profile_name,
             "method": self.method,
-            "parameters": {k: v for k, v in self.parameters.items()},
+            "parameters": dict(self.parameters),
             "from_m": self.task.p_from.tolist(),
             "to_m": self.task.p_to.tolist(),
             "height_m": self.task.height,
@@ -66,25 +68,58 @@ class Plan:
             "peak_speed_m_s": vpk,
             "peak_acceleration_m_s2": apk,
             "peak_jerk_m_s3": jpk,
-            "cycle_time_one_way_s": T,
+            "cycle_time_one_way_s": self.report.duration,
+            "cycle_time_round_trip_s": self.report.round_trip,
+            "picks_per_minute": self.report.picks_per_minute,
+            "limits_ok": self.report.ok,
         }
 
 
+def motion_model(path, profile: Profile) -> MotionModel:
+    """The path on the profile's robot, with its joint specs, singularity margin and workcell box."""
+    robot = build_robot(profile.robot)
+    margin = getattr(profile.robot, "singularity_margin", None)
+    return MotionModel(path, robot, profile.robot.joint_specs(), margin, profile.workcell.box)
+
+
 def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions()) -> Plan:
-    """Plan ``task`` on ``profile``: path, duration, samples, joint motion."""
+    """Plan ``task`` on ``profile``: path, duration, samples, joint motion, limit report."""
     path = plan_path(task, options.method, **options.method_params)
-    duration = choose_duration(path, profile.capacity, options.time)
-    traj = CartesianTrajectory(path, duration.seconds)
+    model = motion_model(path, profile)
+    dwell = profile.planning.dwell
+    want_fit = options.fit or options.time == "fit"
+    try:
+        duration = choose_duration(path, profile.capacity, options.time, model=model if want_fit else None, dwell=dwell)
+    except UnreachableError as exc:
+        raise reach_error(exc, _fit_grid(path), None) from None
+    T = duration.seconds
+    traj = CartesianTrajectory(path, T)
     rate = options.rate if options.rate is not None else profile.planning.rate
     t = traj.sample_times(rate)
-    p, v, a, j = (traj(t, k) for k in range(4))
-    robot = build_robot(profile.robot)
+    tau = t / T
     try:
-        q, qd, qdd, qddd = robot.joint_motion(p, v, a, j)
+        parts = model.parts(tau)
     except UnreachableError as exc:
-        if exc.index is None:
-            raise
-        raise UnreachableError(f"{exc} at t = {t[exc.index]:.6g} s", index=exc.index) from None
-    torque = robot.inverse_dynamics(q, qd, qdd, p, a)
-    joint = JointTrajectory(t, q, qd, qdd, qddd, robot.joint_names, robot.joint_units, torque)
-    return Plan(task, path.method, dict(path.parameters), duration, traj, t, p, v, a, j, joint, profile.name)
+        raise reach_error(exc, tau, T) from None
+    report = check_limits(model, T, parts=parts, dwell=dwell)
+    robot = model.robot
+    joint = JointTrajectory(
+        t,
+        parts.q,
+        parts.qd1 / T,
+        parts.qdd1 / T**2,
+        parts.qddd1 / T**3,
+        robot.joint_names,
+        robot.joint_units,
+        torque=parts.A / T**2 + parts.G,
+        motor_speed=model.gear * parts.qd1 / T,
+        motor_torque=parts.Am / T**2 + parts.Gm,
+    )
+    p, v, a, j = parts.p, parts.v1 / T, parts.a1 / T**2, parts.j1 / T**3
+    return Plan(task, path.method, dict(path.parameters), duration, traj, t, p, v, a, j, joint, report, profile.name)
+
+
+def _fit_grid(path) -> np.ndarray:
+    from .timing import FIT_SAMPLES
+
+    return np.unique(np.concatenate([np.linspace(0.0, 1.0, FIT_SAMPLES), path.breakpoints]))

@@ -13,11 +13,58 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 
 from .errors import ProfileError
 
-DEFAULT_PROFILE = "gantry"
+DEFAULT_PROFILE = "delta-su2018"
 
 
 class _Model(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+
+
+class JointLimits(_Model):
+    """Kinematic limits of one joint. Units follow the joint: rad (revolute) or m (prismatic)."""
+
+    position: tuple[float, float] | None = Field(
+        default=None, description="Joint range [min, max] in rad or m (None: not limited; gantry: the axis travel)"
+    )
+    velocity: float | None = Field(default=None, gt=0, description="Max |joint velocity| in rad/s or m/s")
+    acceleration: float | None = Field(default=None, gt=0, description="Max |joint acceleration| in rad/s² or m/s²")
+    jerk: float | None = Field(default=None, gt=0, description="Max |joint jerk| in rad/s³ or m/s³ (optional)")
+
+    @model_validator(mode="after")
+    def _ordered(self) -> "JointLimits":
+        if self.position is not None and not self.position[0] < self.position[1]:
+            raise ValueError(f"position must be [min, max] with min < max, got {list(self.position)}")
+        return self
+
+
+class Drive(_Model):
+    """Motor + gearbox of one joint. Motor speed = N·q̇; motor torque = torque/(N·efficiency) + J_rotor·N·q̈."""
+
+    gear_ratio: float = Field(gt=0, description="N: motor angle per joint unit (rad/rad, or rad/m for a linear axis)")
+    efficiency: float = Field(default=1.0, gt=0, le=1, description="Gearbox efficiency (0, 1]")
+    rotor_inertia: float = Field(default=0.0, ge=0, description="Rotor (+ gearbox input) inertia in kg·m², motor side")
+    rated_torque: float | None = Field(default=None, gt=0, description="Continuous (rated) motor torque in N·m; limits the RMS over the duty cycle")
+    peak_torque: float | None = Field(default=None, gt=0, description="Peak motor torque in N·m")
+    max_speed: float | None = Field(default=None, gt=0, description="Max motor speed in rad/s (6000 rpm = 628.3 rad/s)")
+    torque_rate: float | None = Field(default=None, gt=0, description="Max |d(motor torque)/dt| in N·m/s (Yang 2022 Eq. 38)")
+
+
+class JointSpec(_Model):
+    """Limits and drive of one joint."""
+
+    limits: JointLimits = Field(default_factory=JointLimits, description="Kinematic limits (joint side)")
+    drive: Drive | None = Field(default=None, description="Motor and gearbox (None: no motor limits checked)")
+
+
+JointSpecs = Union[JointSpec, list[JointSpec]]
+
+
+def _per_joint(specs: "JointSpec | list[JointSpec]", n: int) -> list[JointSpec]:
+    if isinstance(specs, JointSpec):
+        return [specs] * n
+    if len(specs) != n:
+        raise ValueError(f"joints: give one entry for all joints or exactly {n}, got {len(specs)}")
+    return list(specs)
 
 
 class GantryAxis(_Model):
@@ -26,6 +73,8 @@ class GantryAxis(_Model):
     name: Literal["x", "y", "z"] = Field(description="Cartesian axis this joint drives")
     travel: tuple[float, float] = Field(description="Joint travel [min, max] in m (base frame)")
     mass: float = Field(default=0.0, ge=0.0, description="Mass moved by this axis in kg")
+    limits: JointLimits = Field(default_factory=JointLimits, description="Velocity/acceleration/jerk limits (m/s, m/s², m/s³)")
+    drive: Drive | None = Field(default=None, description="Motor and gearbox; gear_ratio in rad/m (2π / lead)")
 
     @model_validator(mode="after")
     def _travel_ordered(self) -> "GantryAxis":
@@ -35,10 +84,11 @@ class GantryAxis(_Model):
 
 
 class GantryModel(_Model):
-    """Cartesian gantry: joints are x, y, z (identity kinematics)."""
+    """Cartesian gantry: joints are x, y, z (identity kinematics); gravity acts on z."""
 
     kind: Literal["gantry"]
     axes: tuple[GantryAxis, GantryAxis, GantryAxis] = Field(description="The x, y and z axes, in that order")
+    payload: float = Field(default=0.0, ge=0, description="Payload in kg (added to every axis' moved mass)")
 
     @model_validator(mode="after")
     def _xyz(self) -> "GantryModel":
@@ -47,8 +97,102 @@ class GantryModel(_Model):
             raise ValueError(f"axes must be x, y, z in that order, got {names}")
         return self
 
+    def joint_specs(self) -> list[JointSpec]:
+        return [
+            JointSpec(limits=a.limits.model_copy(update={"position": a.travel}), drive=a.drive) for a in self.axes
+        ]
 
-RobotModel = Annotated[Union[GantryModel], Field(discriminator="kind")]
+
+class DeltaGeometry(_Model):
+    R: float = Field(gt=0, description="Fixed platform radius: centre to motor axis, in m")
+    r: float = Field(gt=0, description="Moving platform radius: centre to forearm joint line, in m")
+    L: float = Field(gt=0, description="Upper arm length, motor axis to elbow, in m")
+    l: float = Field(gt=0, description="Forearm (parallelogram) length, elbow to platform, in m")  # noqa: E741
+
+    @model_validator(mode="after")
+    def _physical(self) -> "DeltaGeometry":
+        if not self.l > self.L:
+            raise ValueError(f"forearm l = {self.l} m must be longer than the upper arm L = {self.L} m (Clavel Delta)")
+        if not self.R > self.r:
+            raise ValueError(f"fixed platform R = {self.R} m must be larger than the moving platform r = {self.r} m")
+        return self
+
+
+class DeltaMasses(_Model):
+    upper_arm: float = Field(ge=0, description="Upper arm mass in kg")
+    upper_arm_inertia: float = Field(ge=0, description="Upper arm inertia about the motor axis in kg·m²")
+    upper_arm_com: float = Field(ge=0, description="Distance of the upper arm's centre of mass from the motor axis in m")
+    elbow: float = Field(default=0.0, ge=0, description="Mass lumped at each elbow in kg")
+    forearm_pair: float = Field(ge=0, description="Mass of one forearm pair in kg (2/3 to the elbow, 1/3 to the plate)")
+    plate: float = Field(ge=0, description="Travelling plate mass in kg (tool included)")
+
+
+class DeltaModel(_Model):
+    """Clavel Delta robot, lumped-mass dynamics (Codourey 1998)."""
+
+    kind: Literal["delta"]
+    geometry: DeltaGeometry
+    masses: DeltaMasses
+    payload: float = Field(default=0.0, ge=0, description="Payload in kg")
+    singularity_margin: float = Field(default=0.05, ge=0, lt=1, description="Minimum singularity measure (0 = singular, 1 = best)")
+    joints: JointSpecs = Field(default_factory=JointSpec, description="One joint spec for all three arms, or a list of three")
+
+    def joint_specs(self) -> list[JointSpec]:
+        return _per_joint(self.joints, 3)
+
+    @model_validator(mode="after")
+    def _count(self) -> "DeltaModel":
+        _per_joint(self.joints, 3)
+        return self
+
+
+class ScaraLink(_Model):
+    length: float = Field(gt=0, description="Link length in m")
+    mass: float = Field(default=0.0, ge=0, description="Link mass in kg")
+    com: float = Field(default=0.0, ge=0, description="Centre of mass from the proximal joint in m")
+    inertia: float = Field(default=0.0, ge=0, description="Inertia about its own centre of mass (vertical axis) in kg·m²")
+
+
+class ScaraModel(_Model):
+    """Serial SCARA: two revolute links, a prismatic z axis (q3, m, positive up), tool rotation held fixed."""
+
+    kind: Literal["scara"]
+    link1: ScaraLink
+    link2: ScaraLink
+    elbow: Literal["left", "right"] = Field(default="right", description="Elbow branch: left = q2 > 0 (counter-clockwise seen from above)")
+    z0: float = Field(default=0.0, description="Tool height at q3 = 0 in m (base frame)")
+    z_mass: float = Field(default=0.0, ge=0, description="Mass moved by the z axis (quill + tool) in kg")
+    payload: float = Field(default=0.0, ge=0, description="Payload in kg")
+    singularity_margin: float = Field(default=0.05, ge=0, lt=1, description="Minimum |sin q2| (0 at full stretch or fold)")
+    joints: JointSpecs = Field(default_factory=JointSpec, description="One joint spec for all joints, or a list of three (q1, q2 rad; q3 m)")
+
+    def joint_specs(self) -> list[JointSpec]:
+        return _per_joint(self.joints, 3)
+
+    @model_validator(mode="after")
+    def _count(self) -> "ScaraModel":
+        _per_joint(self.joints, 3)
+        return self
+
+
+RobotModel = Annotated[Union[GantryModel, DeltaModel, ScaraModel], Field(discriminator="kind")]
+
+
+class Box(_Model):
+    """Axis-aligned box in the base frame, m."""
+
+    min: tuple[float, float, float] = Field(description="Lower corner x, y, z in m")
+    max: tuple[float, float, float] = Field(description="Upper corner x, y, z in m")
+
+    @model_validator(mode="after")
+    def _ordered(self) -> "Box":
+        if not all(a < b for a, b in zip(self.min, self.max)):
+            raise ValueError(f"min must be below max on every axis, got min={list(self.min)} max={list(self.max)}")
+        return self
+
+
+class Workcell(_Model):
+    box: Box | None = Field(default=None, description="The tool must stay inside this box (optional)")
 
 
 class Capacity(_Model):
@@ -65,6 +209,7 @@ class Planning(_Model):
     height: float = Field(gt=0, description="Clearance of the path's midpoint above the higher end point, in m")
     eta: float = Field(default=0.5, gt=0, lt=1, description="Lift-off/set-down ratio η (dimensionless, 0 < η < 1)")
     rate: float = Field(default=1000.0, gt=0, le=1e6, description="Output sample rate in Hz")
+    dwell: float = Field(default=0.1, ge=0, description="Dwell at pick and at place in s (duty cycle: move, dwell, move back, dwell)")
 
 
 class Profile(_Model):
@@ -75,6 +220,7 @@ class Profile(_Model):
     robot: RobotModel
     capacity: Capacity
     planning: Planning
+    workcell: Workcell = Field(default_factory=Workcell)
 
 
 # --------------------------------------------------------------------------------------------- loading

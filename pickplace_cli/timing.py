@@ -11,7 +11,7 @@ from .trajectory import CartesianPath
 
 
 @dataclass(frozen=True)
-class Duration:
+class Duration:  # noqa: D101 - documented below
     """The chosen duration T [s] and how it was chosen.
 
     ``auto`` is Eq. (26) extended by jerk: T = max(v̂/[v], √(â/[a]), ∛(ĵ/[j])) where v̂, â, ĵ are the exact
@@ -25,11 +25,18 @@ class Duration:
     t_acceleration: float
     t_jerk: float | None
     binding: str
+    t_fit: float | None = None  # smallest duration at which every motor/joint limit holds (when computed)
+
+    @property
+    def t_auto(self) -> float:
+        return max(self.t_velocity, self.t_acceleration, self.t_jerk or 0.0)
 
     def as_dict(self) -> dict:
         return {
             "duration_s": self.seconds,
             "mode": self.mode,
+            "auto_s": self.t_auto,
+            "fit_s": self.t_fit,
             "auto_bounds_s": {"velocity": self.t_velocity, "acceleration": self.t_acceleration, "jerk": self.t_jerk},
             "binding": self.binding,
         }
@@ -65,12 +72,86 @@ def parse_time(spec: str | float) -> str | float:
     return value
 
 
-def choose_duration(path: CartesianPath, capacity: Capacity, spec: str | float = "auto") -> Duration:
-    """Duration of the move: explicit seconds, or ``auto`` (Eq. 26). ``fit`` needs the robot model."""
+def choose_duration(
+    path: CartesianPath, capacity: Capacity, spec: str | float = "auto", model=None, dwell: float = 0.0
+) -> Duration:
+    """Duration of the move: explicit seconds, ``auto`` (Eq. 26), or ``fit`` (needs ``model``, a
+    :class:`~pickplace_cli.limits.MotionModel`): the smallest T at which every limit holds."""
     spec = parse_time(spec)
     tv, ta, tj, binding = auto_duration(path, capacity)
+    t_auto = max(tv, ta, tj or 0.0)
+    t_fit = None
+    if model is not None:
+        t_fit, fit_binding = fit_duration(model, dwell, start=t_auto)
     if spec == "auto":
-        return Duration(max(tv, ta, tj or 0.0), "auto", tv, ta, tj, binding)
+        return Duration(t_auto, "auto", tv, ta, tj, binding, t_fit)
     if spec == "fit":
-        raise TaskError("time = fit: fitting the duration to motor limits needs a robot with drive limits (not yet available); use auto or seconds")
-    return Duration(float(spec), "given", tv, ta, tj, "given")
+        if model is None:
+            raise TaskError("time = fit: needs the robot model (plan through pickplace_cli.planner.plan)")
+        return Duration(t_fit, "fit", tv, ta, tj, fit_binding, t_fit)  # type: ignore[arg-type]
+    return Duration(float(spec), "given", tv, ta, tj, "given", t_fit)
+
+
+#: normalised samples used by fit_duration (plus the path's breakpoints); sampled peaks of these smooth
+#: functions are within ~1e-6 relative of the true ones, and the result is then verified exactly
+FIT_SAMPLES = 2001
+
+
+def fit_duration(model, dwell: float = 0.0, start: float = 0.1) -> tuple[float, str]:
+    """Smallest T [s] such that every T-dependent limit holds at T and at every longer duration.
+
+    Velocity-type limits scale as 1/T^k (monotone). The peak motor torque max_τ |A_m s + G_m| is convex
+    in s = 1/T², so its feasible set is an interval containing s = 0 when the holding torque fits. So
+    scanning T down from a feasible value and root-finding the first crossing (brentq) gives the true
+    minimum. Position, singularity and workcell limits do not depend on T and are not fitted (the limit
+    report shows them). The result is nudged up until the exact (refined) check passes.
+    Returns (T, the binding quantity "joint quantity").
+    """
+    import numpy as np
+    from scipy.optimize import brentq
+
+    from .errors import NoFeasibleDuration
+    from .limits import check_limits
+
+    tau = np.unique(np.concatenate([np.linspace(0.0, 1.0, FIT_SAMPLES), model.path.breakpoints]))
+    parts = model.parts(tau)
+    meta, _ = model.columns(parts, 1.0)
+    timed = [c for c, m in enumerate(meta) if not (m[1].startswith("position") or m[4] == "reach")]
+    limits = np.array([meta[c][3] for c in timed])
+    rated = np.array([s.drive.rated_torque if s.drive and s.drive.rated_torque else np.inf for s in model.specs])
+
+    def worst(T: float) -> tuple[float, str]:
+        m, data = model.columns(parts, T)
+        util = np.max(data[:, timed], axis=0) / limits if timed else np.zeros(0)
+        rms = model.rms_motor_torque(parts, T, dwell) / rated
+        names = [f"{m[c][0]} {m[c][1]}" for c in timed] + [f"{n} rms motor torque" for n in model.robot.joint_names]
+        allu = np.concatenate([util, rms])
+        k = int(np.argmax(allu)) if allu.size else 0
+        return (float(allu[k]) - 1.0 if allu.size else -1.0), (names[k] if allu.size else "none")
+
+    hi = max(start, 1e-3)
+    while worst(hi)[0] > 0:
+        hi *= 2.0
+        if hi > 1e4:
+            raise NoFeasibleDuration(
+                f"time = fit: no duration up to 1e4 s satisfies {worst(hi)[1]} (the holding torque alone exceeds it?)"
+            )
+    lo = hi
+    while True:
+        cand = lo * 0.85
+        if cand < 1e-4 or worst(cand)[0] > 0:
+            break
+        lo = cand
+    if lo * 0.85 < 1e-4:
+        T = lo
+    else:
+        T = brentq(lambda x: worst(x)[0], lo * 0.85, lo, xtol=1e-12, rtol=1e-10)
+    # the sampled peaks can sit a hair under the continuous ones: nudge up until the exact check passes
+    binding = worst(T * (1 - 1e-9))[1]
+    for _ in range(40):
+        rep = check_limits(model, T, parts=parts, dwell=dwell)
+        bad = [r for r in rep.violations if not (r.quantity.startswith("position") or r.kind == "reach")]
+        if not bad:
+            break
+        T *= 1.0 + 2e-5
+    return float(T), binding

@@ -81,7 +81,9 @@ class JointTrajectory:
     """Sampled joint motion: every array is (N, n_joints) with axis 0 = samples at times ``t`` (N,).
 
     Units are per joint (``units``: "m" for prismatic, "rad" for revolute); derivatives are per second.
-    ``torque`` is joint-side force/torque [N or N·m]; ``None`` when the robot has no dynamic model.
+    ``torque`` is joint-side force/torque [N or N·m] (inverse dynamics, gravity included);
+    ``motor_speed`` [rad/s] = N·q̇ and ``motor_torque`` [N·m] = torque/(N·η) + J_rotor·N·q̈ (joints without a
+    drive: gear 1, efficiency 1, no rotor). ``None`` when not computed.
     """
 
     t: np.ndarray
@@ -92,13 +94,15 @@ class JointTrajectory:
     names: tuple[str, ...]
     units: tuple[str, ...]
     torque: np.ndarray | None = None
+    motor_speed: np.ndarray | None = None
+    motor_torque: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         n = len(self.t)
         if np.ndim(self.t) != 1:
             raise ValueError(f"t must be 1-D, got shape {np.shape(self.t)}")
         shape = (n, len(self.names))
-        for name in ("q", "qd", "qdd", "qddd", "torque"):
+        for name in ("q", "qd", "qdd", "qddd", "torque", "motor_speed", "motor_torque"):
             arr = getattr(self, name)
             if arr is not None and np.shape(arr) != shape:
                 raise ValueError(f"{name} must have shape {shape} (samples × joints), got {np.shape(arr)}")

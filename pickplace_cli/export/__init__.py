@@ -65,4 +65,15 @@ def plan_columns(plan) -> tuple[list[str], np.ndarray]:
         k = i + 1
         names += [f"q{k}[{unit}]", f"qd{k}[{unit}/s]", f"qdd{k}[{unit}/s^2]"]
         blocks += [jt.q[:, i : i + 1], jt.qd[:, i : i + 1], jt.qdd[:, i : i + 1]]
+    for i, unit in enumerate(jt.units):
+        k = i + 1
+        force_unit = "N" if unit == "m" else "N*m"
+        for name, arr, u in (
+            (f"torque{k}", jt.torque, force_unit),
+            (f"motor_speed{k}", jt.motor_speed, "rad/s"),
+            (f"motor_torque{k}", jt.motor_torque, "N*m"),
+        ):
+            if arr is not None:
+                names.append(f"{name}[{u}]")
+                blocks.append(arr[:, i : i + 1])
     return names, np.hstack(blocks)

@@ -12,6 +12,7 @@ from . import FLOAT_FORMAT, plan_columns
 def format_rows(data: np.ndarray, sep: str = ",", newline: str = "\n") -> str:
     """Rows of ``data`` as text with the fixed float format (deterministic)."""
     row_fmt = sep.join([FLOAT_FORMAT] * data.shape[1]) + newline
+    data = data + 0.0  # no "-0" in the output
     return "".join(row_fmt % tuple(r) for r in data.tolist())
 
 

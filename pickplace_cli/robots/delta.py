@@ -191,7 +191,8 @@ class DeltaRobot:
             x, y, zz = p[n]
             raise UnreachableError(
                 f"Delta: sample {n} at p = ({x:.6g}, {y:.6g}, {zz:.6g}) m is unreachable "
-                f"(arm {arm + 1} cannot close its loop: L = {self.L} m, l = {self.l} m)"
+                f"(arm {arm + 1} cannot close its loop: L = {self.L} m, l = {self.l} m)",
+                index=int(n),
             )
         root = np.sqrt(disc)
         rho2 = a * a + z * z
@@ -260,7 +261,8 @@ class DeltaRobot:
             q1, q2, q3 = q[n]
             raise UnreachableError(
                 f"Delta: sample {n} at q = ({q1:.6g}, {q2:.6g}, {q3:.6g}) rad cannot be assembled "
-                f"(the forearm spheres of radius l = {self.l} m do not meet)"
+                f"(the forearm spheres of radius l = {self.l} m do not meet)",
+                index=int(n),
             )
         # e_z = e_x × e_y; choose the root with the lower z: sign(h) = −sign(e_z,z)
         zx = uy * wz - uz * wy

@@ -113,7 +113,8 @@ class ScaraRobot:
             x, y, z = p[n]
             raise UnreachableError(
                 f"SCARA: sample {n} at p = ({x:.6g}, {y:.6g}, {z:.6g}) m is unreachable "
-                f"(radius {math.hypot(x, y):.6g} m outside [{abs(self.l1 - self.l2):.6g}, {self.l1 + self.l2:.6g}] m)"
+                f"(radius {math.hypot(x, y):.6g} m outside [{abs(self.l1 - self.l2):.6g}, {self.l1 + self.l2:.6g}] m)",
+                index=int(n),
             )
         c2 = np.clip(c2, -1.0, 1.0)
         s2 = np.sqrt((1.0 - c2) * (1.0 + c2))

@@ -41,15 +41,17 @@ def test_plan_adept_csv():
     header = rows[0]
     names = [h.split("[")[0] for h in header]
     assert names[:13] == ["t", "x", "y", "z", "vx", "vy", "vz", "ax", "ay", "az", "jx", "jy", "jz"]
-    assert names[13:] == ["q1", "qd1", "qdd1", "q2", "qd2", "qdd2", "q3", "qd3", "qdd3"]
-    assert header[1] == "x[m]" and header[7] == "ax[m/s^2]"
+    assert names[13:22] == ["q1", "qd1", "qdd1", "q2", "qd2", "qdd2", "q3", "qd3", "qdd3"]
+    assert names[22:] == [f"{c}{i}" for i in (1, 2, 3) for c in ("torque", "motor_speed", "motor_torque")]
+    assert header[1] == "x[m]" and header[7] == "ax[m/s^2]" and header[13] == "q1[rad]"
+    assert header[22] == "torque1[N*m]" and header[23] == "motor_speed1[rad/s]"
     data = np.array(rows[1:], float)
     assert data[0, 0] == 0.0
     t = data[:, 0]
     assert np.all(np.diff(t) > 0) and np.allclose(np.diff(t)[:-1], 1e-3)
     np.testing.assert_allclose(data[0, 1:4], [-0.1525, 0, -0.8], atol=1e-12)
     np.testing.assert_allclose(data[-1, 1:4], [0.1525, 0, -0.8], atol=1e-12)
-    assert "duration T" in r.stderr and "λ = 12.2" in r.stderr
+    assert "duration T" in r.stderr and "λ = 12.2" in r.stderr and "verdict: all limits hold" in r.stderr
 
 
 def test_last_sample_is_T_and_summary_json():
@@ -153,7 +155,7 @@ def test_usage_error_exit_2():
 
 def test_unreachable_exit_4():
     # the path's top (0.1 + 0.5 m) is above the z travel (0.2 m)
-    r = run("plan", "--from", "0.9,0,0.1", "--to", "0.95,0,0.1", "--height", "0.5", "--k1", "0.3", "--k2", "0.1")
+    r = run("plan", "-p", "gantry", "--from", "0.9,0,0.1", "--to", "0.95,0,0.1", "--height", "0.5", "--k1", "0.3", "--k2", "0.1")
     assert r.exit_code == 4
     assert "outside the travel of axis z" in r.stderr and "at t = " in r.stderr
 

@@ -1,0 +1,358 @@
+"""Joint motion of a path on a robot, and the limit check (check_limits → LimitReport).
+
+Everything a limit depends on is a function of normalised time τ that scales *exactly* with the duration
+T (for a fixed path):
+
+    q(τ)                       joint position                      (independent of T)
+    q̇ = q̇₁/T,  q̈ = q̈₁/T²,  q⃛ = q⃛₁/T³   (q̇₁ … : the motion at T = 1 s)
+    joint torque  = A(τ)/T² + G(τ)         A: inertial (+ Coriolis, ∝ q̇²) part at T = 1, G: gravity
+    motor torque  = A_m/T² + G_m            A_m = A/(N·η) + J_rotor·N·q̈₁,  G_m = G/(N·η)
+    motor speed   = N·q̇₁/T
+    torque rate   = A_m′/T³ + G_m′/T         (′ = d/dτ, by central differences of the continuous model)
+
+so one evaluation of the model serves every T (``--time fit`` is a 1-D root search, not a re-plan).
+
+Peaks are found on the continuous trajectory: sampled, then refined at the top sample by the vertex of
+the parabola through it and its neighbours; a peak within ``EXACT_BAND`` of its limit is refined exactly by
+golden-section search on the model itself, so the verdict near a limit does not depend on sampling.
+
+The duty cycle (RMS torque): move there, dwell at the place point, move back, dwell at the pick point.
+The move back is the time-reverse of the move (the tool retraces its path): positions and accelerations
+are mirrored in time, velocities change sign, so joint and motor torques — even in q̇, odd terms absent —
+are the forward ones mirrored in time, and ∫τ² is the same both ways. During a dwell the motor holds the
+gravity torque G_m at that end.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .errors import UnreachableError
+from .trajectory import CartesianPath
+
+#: peaks within this fraction of their limit are refined exactly (golden section on the model)
+EXACT_BAND = 0.05
+#: central-difference step in τ for d/dτ of the torques (truncation ~1e-10 relative, round-off ~1e-10)
+DTAU = 1e-5
+
+
+@dataclass(frozen=True)
+class LimitRow:
+    """One checked limit: the peak of a quantity over the move, its limit and where the peak is."""
+
+    joint: str  # "q1" … or "tool"
+    quantity: str
+    unit: str
+    peak: float  # signed for position bounds and the singularity minimum, |·| otherwise
+    limit: float
+    utilisation: float  # peak/limit (position: how far toward the bound, 1 = at it)
+    t_peak: float | None  # s from the start of the move (None for whole-cycle quantities)
+    ok: bool
+    kind: str = "limit"  # "limit" (exit 3) or "reach" (exit 4)
+    bound: str = "upper"  # "upper": peak ≤ limit; "lower": peak ≥ limit
+
+    @property
+    def excess(self) -> float:
+        """By how much the limit is exceeded (same unit; ≤ 0 when ok)."""
+        return self.limit - self.peak if self.bound == "lower" else self.peak - self.limit
+
+    def as_dict(self) -> dict[str, Any]:
+        return {
+            "joint": self.joint, "quantity": self.quantity, "unit": self.unit, "peak": self.peak,
+            "limit": self.limit, "utilisation": self.utilisation, "t_peak_s": self.t_peak, "ok": self.ok,
+            "kind": self.kind, "bound": self.bound, "excess": self.excess,
+        }
+
+
+@dataclass(frozen=True)
+class LimitReport:
+    """Every joint × quantity checked for one move of ``duration`` seconds, with the duty cycle."""
+
+    rows: tuple[LimitRow, ...]
+    duration: float
+    dwell: float
+    notes: tuple[str, ...] = ()
+
+    @property
+    def ok(self) -> bool:
+        return all(r.ok for r in self.rows)
+
+    @property
+    def violations(self) -> tuple[LimitRow, ...]:
+        return tuple(r for r in self.rows if not r.ok)
+
+    @property
+    def round_trip(self) -> float:
+        return 2.0 * (self.duration + self.dwell)
+
+    @property
+    def picks_per_minute(self) -> float:
+        return 60.0 / self.round_trip
+
+    def exit_code(self) -> int:
+        """0 ok · 3 a limit is exceeded · 4 a reach row (singularity, workcell) fails."""
+        bad = self.violations
+        if not bad:
+            return 0
+        return 4 if any(r.kind == "reach" for r in bad) else 3
+
+    def as_dict(self) -> dict[str, Any]:
+        return {
+            "ok": self.ok,
+            "duration_s": self.duration,
+            "dwell_s": self.dwell,
+            "cycle_time_one_way_s": self.duration,
+            "cycle_time_round_trip_s": self.round_trip,
+            "picks_per_minute": self.picks_per_minute,
+            "violations": [r.as_dict() for r in self.violations],
+            "rows": [r.as_dict() for r in self.rows],
+            "notes": list(self.notes),
+        }
+
+
+@dataclass(frozen=True)
+class Parts:
+    """The model evaluated at τ (N,): every array (N, n_joints) unless noted; motion at T = 1 s."""
+
+    tau: np.ndarray
+    p: np.ndarray  # (N, 3) m
+    v1: np.ndarray  # (N, 3)
+    a1: np.ndarray  # (N, 3)
+    j1: np.ndarray  # (N, 3)
+    q: np.ndarray
+    qd1: np.ndarray
+    qdd1: np.ndarray
+    qddd1: np.ndarray
+    A: np.ndarray  # joint torque, inertial part at T = 1
+    G: np.ndarray  # joint torque, gravity part
+    Am: np.ndarray  # motor torque, inertial part at T = 1
+    Gm: np.ndarray  # motor torque, gravity part
+    dAm: np.ndarray | None = None  # d/dτ of Am
+    dGm: np.ndarray | None = None
+    singularity: np.ndarray | None = None  # (N,)
+
+
+@dataclass
+class MotionModel:
+    """A path on a robot with its joint specs: evaluates :class:`Parts` at any τ."""
+
+    path: CartesianPath
+    robot: Any
+    specs: list  # JointSpec per joint
+    singularity_margin: float | None = None
+    box: Any = None  # profile Box or None
+    gear: np.ndarray = field(init=False)
+    eff: np.ndarray = field(init=False)
+    rotor: np.ndarray = field(init=False)
+
+    def __post_init__(self) -> None:
+        n = len(self.robot.joint_names)
+        if len(self.specs) != n:
+            raise ValueError(f"{len(self.specs)} joint specs for {n} joints")
+        drives = [s.drive for s in self.specs]
+        self.gear = np.array([d.gear_ratio if d else 1.0 for d in drives])
+        self.eff = np.array([d.efficiency if d else 1.0 for d in drives])
+        self.rotor = np.array([d.rotor_inertia if d else 0.0 for d in drives])
+
+    # --------------------------------------------------------------------------------- evaluation
+    def _torques(self, tau: np.ndarray):
+        path = self.path
+        p, v, a, j = (path(tau, k) for k in range(4))
+        q, qd, qdd, qddd = self.robot.joint_motion(p, v, a, j)
+        full = self.robot.inverse_dynamics(q, qd, qdd, p, a)
+        zeros = np.zeros_like(q)
+        G = self.robot.inverse_dynamics(q, zeros, zeros, p, np.zeros_like(a))
+        A = full - G
+        Am = A / (self.gear * self.eff) + self.rotor * self.gear * qdd
+        Gm = G / (self.gear * self.eff)
+        return p, v, a, j, q, qd, qdd, qddd, A, G, Am, Gm
+
+    def parts(self, tau: np.ndarray, derivatives: bool = True) -> Parts:
+        """Evaluate at τ; ``derivatives`` adds d/dτ of the motor torques (two more model evaluations)."""
+        tau = np.asarray(tau, float)
+        p, v, a, j, q, qd, qdd, qddd, A, G, Am, Gm = self._torques(tau)
+        dAm = dGm = None
+        if derivatives:
+            hi = self._torques(tau + DTAU)
+            lo = self._torques(tau - DTAU)
+            dAm = (hi[10] - lo[10]) / (2 * DTAU)
+            dGm = (hi[11] - lo[11]) / (2 * DTAU)
+        sing = None
+        if hasattr(self.robot, "singularity_measure"):
+            sing = self.robot.singularity_measure(q, p)
+        return Parts(tau, p, v, a, j, q, qd, qdd, qddd, A, G, Am, Gm, dAm, dGm, sing)
+
+    # ------------------------------------------------------------------------- scaled quantities
+    def columns(self, parts: Parts, T: float) -> tuple[list[tuple], np.ndarray]:
+        """Limited quantities at duration T as columns: (meta list, (N, n_cols) values to maximise).
+
+        meta = (joint, quantity, unit, limit, kind, sign) where the column holds sign·value, so every
+        check is "max of the column ≤ limit" (position min and singularity use sign −1)."""
+        meta: list[tuple] = []
+        cols: list[np.ndarray] = []
+        for i, (name, unit, spec) in enumerate(zip(self.robot.joint_names, self.robot.joint_units, self.specs)):
+            lim, drv = spec.limits, spec.drive
+            if lim.position is not None:
+                meta.append((name, "position max", unit, lim.position[1], "limit", 1.0))
+                cols.append(parts.q[:, i])
+                meta.append((name, "position min", unit, lim.position[0], "limit", -1.0))
+                cols.append(-parts.q[:, i])
+            for qname, arr, k, limit, u in (
+                ("velocity", parts.qd1, 1, lim.velocity, f"{unit}/s"),
+                ("acceleration", parts.qdd1, 2, lim.acceleration, f"{unit}/s^2"),
+                ("jerk", parts.qddd1, 3, lim.jerk, f"{unit}/s^3"),
+            ):
+                if limit is not None:
+                    meta.append((name, qname, u, limit, "limit", 1.0))
+                    cols.append(np.abs(arr[:, i]) / T**k)
+            if drv is not None:
+                if drv.max_speed is not None:
+                    meta.append((name, "motor speed", "rad/s", drv.max_speed, "limit", 1.0))
+                    cols.append(np.abs(self.gear[i] * parts.qd1[:, i]) / T)
+                if drv.peak_torque is not None:
+                    meta.append((name, "motor torque", "N·m", drv.peak_torque, "limit", 1.0))
+                    cols.append(np.abs(parts.Am[:, i] / T**2 + parts.Gm[:, i]))
+                if drv.torque_rate is not None and parts.dAm is not None:
+                    meta.append((name, "motor torque rate", "N·m/s", drv.torque_rate, "limit", 1.0))
+                    cols.append(np.abs(parts.dAm[:, i] / T**3 + parts.dGm[:, i] / T))
+        if self.singularity_margin is not None and parts.singularity is not None:
+            meta.append(("tool", "singularity measure min", "1", self.singularity_margin, "reach", -1.0))
+            cols.append(-parts.singularity)
+        if self.box is not None:
+            for c, axis in enumerate("xyz"):
+                meta.append(("tool", f"workcell {axis} max", "m", self.box.max[c], "reach", 1.0))
+                cols.append(parts.p[:, c])
+                meta.append(("tool", f"workcell {axis} min", "m", self.box.min[c], "reach", -1.0))
+                cols.append(-parts.p[:, c])
+        data = np.column_stack(cols) if cols else np.zeros((len(parts.tau), 0))
+        return meta, data
+
+    def rms_motor_torque(self, parts: Parts, T: float, dwell: float) -> np.ndarray:
+        """RMS motor torque (n,) [N·m] over the duty cycle move–dwell–back–dwell (see module docstring).
+
+        ``parts`` must be on a grid covering τ ∈ [0, 1] (trapezoid rule on it)."""
+        tau = parts.tau
+        tm = parts.Am / T**2 + parts.Gm
+        integral = T * np.trapezoid(tm**2, tau, axis=0)
+        hold = parts.Gm[0] ** 2 + parts.Gm[-1] ** 2
+        return np.sqrt((2 * integral + dwell * hold) / (2 * T + 2 * dwell))
+
+
+def _parabolic_peak(x: np.ndarray, y: np.ndarray, i: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Vertex of the parabola through samples i−1, i, i+1 of each column (falls back to the sample)."""
+    n = len(x)
+    cols = np.arange(y.shape[1])
+    peak = y[i, cols].copy()
+    at = x[i].copy()
+    inner = (i > 0) & (i < n - 1)
+    if np.any(inner):
+        c = cols[inner]
+        k = i[inner]
+        x0, x1, x2 = x[k - 1], x[k], x[k + 1]
+        y0, y1, y2 = y[k - 1, c], y[k, c], y[k + 1, c]
+        d1 = (y1 - y0) / (x1 - x0)
+        d2 = (y2 - y1) / (x2 - x1)
+        curv = (d2 - d1) / (x2 - x0)  # = a of a(x-x1)^2 + ...
+        ok = curv < 0
+        slope = d1 + curv * (x1 - x0)  # derivative at x1
+        xv = np.where(ok, x1 - slope / (2 * np.where(ok, curv, -1.0)), x1)
+        xv = np.clip(xv, x0, x2)
+        yv = np.where(ok, y1 - slope**2 / (4 * np.where(ok, curv, -1.0)), y1)
+        peak[inner] = np.maximum(yv, y1)
+        at[inner] = np.where(yv >= y1, xv, x1)
+    return peak, at
+
+
+def check_limits(
+    model: MotionModel,
+    T: float,
+    tau: np.ndarray | None = None,
+    parts: Parts | None = None,
+    dwell: float = 0.0,
+    rms_parts: Parts | None = None,
+    notes: tuple[str, ...] = (),
+) -> LimitReport:
+    """Check every limit of ``model`` at duration ``T`` [s] → LimitReport.
+
+    ``parts``: the model evaluated on ``tau`` (samples; computed here when None). ``rms_parts``: a grid
+    covering [0, 1] for the RMS integral (defaults to ``parts``).
+    """
+    from .peaks import refine_max
+
+    if parts is None:
+        if tau is None:
+            tau = np.linspace(0.0, 1.0, 1001)
+        parts = model.parts(tau)
+    x = parts.tau
+    meta, data = model.columns(parts, T)
+    rows: list[LimitRow] = []
+    if data.shape[1]:
+        imax = np.argmax(data, axis=0)
+        peak, at = _parabolic_peak(x, data, imax)
+        limits = np.array([m[3] * m[5] for m in meta])  # in column sign convention
+        util_signed = peak / np.where(limits != 0, limits, 1.0)
+        near = np.flatnonzero(np.abs(peak - limits) <= EXACT_BAND * np.maximum(np.abs(limits), 1e-12))
+        if near.size:
+
+            def fun(s: np.ndarray) -> np.ndarray:
+                pr = model.parts(np.clip(s, 0.0, 1.0), derivatives=True)
+                return model.columns(pr, T)[1][:, near]
+
+            exact, exact_at = refine_max(fun, x, data[:, near])
+            peak[near] = np.maximum(exact, peak[near])
+            at[near] = np.where(exact >= peak[near] - 1e-300, exact_at, at[near])
+        del util_signed
+        ranges: dict[tuple[str, str], dict[str, tuple]] = {}
+        for c, (joint, quantity, unit, limit, kind, sign) in enumerate(meta):
+            value = float(sign * peak[c])
+            t_at = float(at[c] * T)
+            if quantity.endswith(" max") or quantity.endswith(" min"):
+                base, side = quantity.rsplit(" ", 1)
+                if base.startswith(("position", "workcell")):
+                    ranges.setdefault((joint, base), {})[side] = (value, float(limit), t_at, unit, kind)
+                    continue
+            if sign < 0:  # a minimum that must stay above the limit (singularity measure)
+                util = limit / value if value > 0 else float("inf")
+                ok = value >= limit
+            else:
+                util = value / limit
+                ok = value <= limit
+            bound = "lower" if sign < 0 else "upper"
+            rows.append(LimitRow(joint, quantity, unit, value, float(limit), float(util), t_at, bool(ok), kind, bound))
+        for (joint, base), sides in ranges.items():
+            rows.append(_range_row(joint, base, sides))
+    # RMS over the duty cycle
+    rp = rms_parts if rms_parts is not None else parts
+    rms = model.rms_motor_torque(rp, T, dwell)
+    for i, (name, spec) in enumerate(zip(model.robot.joint_names, model.specs)):
+        if spec.drive is not None and spec.drive.rated_torque is not None:
+            r = float(rms[i])
+            lim = spec.drive.rated_torque
+            rows.append(LimitRow(name, "rms motor torque", "N·m", r, lim, r / lim, None, r <= lim))
+    order = {name: i for i, name in enumerate(list(model.robot.joint_names) + ["tool"])}
+    rows.sort(key=lambda r: (order.get(r.joint, 99), 0 if r.quantity.startswith("position") else 1))
+    return LimitReport(tuple(rows), T, dwell, notes)
+
+
+def _range_row(joint: str, base: str, sides: dict[str, tuple]) -> LimitRow:
+    """One row for a [min, max] range: the side nearer its bound; utilisation = |x − mid| / half-range."""
+    vmax, hi, tmax, unit, kind = sides["max"]
+    vmin, lo, tmin, _, _ = sides["min"]
+    mid, half = (lo + hi) / 2, (hi - lo) / 2
+    u_hi, u_lo = (vmax - mid) / half, (mid - vmin) / half
+    ok = vmax <= hi + 1e-12 and vmin >= lo - 1e-12
+    if u_hi >= u_lo:
+        return LimitRow(joint, base, unit, vmax, hi, u_hi, tmax, ok, kind, "upper")
+    return LimitRow(joint, base, unit, vmin, lo, u_lo, tmin, ok, kind, "lower")
+
+
+def reach_error(exc: UnreachableError, tau: np.ndarray, T: float | None) -> UnreachableError:
+    """Re-raise an IK failure with the time of the failing sample (or its fraction of the move)."""
+    if exc.index is None:
+        return exc
+    s = float(tau[exc.index])
+    when = f"t = {s * T:.6g} s" if T else f"τ = {s:.4f} of the move"
+    return UnreachableError(f"{exc} at {when}", index=exc.index)
