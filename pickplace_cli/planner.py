@@ -87,20 +87,25 @@ def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions()) -> 
     path = plan_path(task, options.method, **options.method_params)
     model = motion_model(path, profile)
     dwell = profile.planning.dwell
-    want_fit = options.fit or options.time == "fit"
-    try:
-        duration = choose_duration(path, profile.capacity, options.time, model=model if want_fit else None, dwell=dwell)
-    except UnreachableError as exc:
-        raise reach_error(exc, _fit_grid(path), None) from None
-    T = duration.seconds
-    traj = CartesianTrajectory(path, T)
     rate = options.rate if options.rate is not None else profile.planning.rate
-    t = traj.sample_times(rate)
-    tau = t / T
+    # reachability first, on the output samples of the auto (or given) duration, so an error names a time
+    first = choose_duration(path, profile.capacity, "auto" if options.time == "fit" else options.time)
+    t = CartesianTrajectory(path, first.seconds).sample_times(rate)
+    tau = t / first.seconds
     try:
         parts = model.parts(tau)
     except UnreachableError as exc:
-        raise reach_error(exc, tau, T) from None
+        raise reach_error(exc, tau, first.seconds) from None
+    if options.fit or options.time == "fit":
+        duration = choose_duration(path, profile.capacity, options.time, model=model, dwell=dwell)
+    else:
+        duration = first
+    T = duration.seconds
+    traj = CartesianTrajectory(path, T)
+    if T != first.seconds:
+        t = traj.sample_times(rate)
+        tau = t / T
+        parts = model.parts(tau)
     report = check_limits(model, T, parts=parts, dwell=dwell)
     robot = model.robot
     joint = JointTrajectory(
@@ -117,9 +122,3 @@ def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions()) -> 
     )
     p, v, a, j = parts.p, parts.v1 / T, parts.a1 / T**2, parts.j1 / T**3
     return Plan(task, path.method, dict(path.parameters), duration, traj, t, p, v, a, j, joint, report, profile.name)
-
-
-def _fit_grid(path) -> np.ndarray:
-    from .timing import FIT_SAMPLES
-
-    return np.unique(np.concatenate([np.linspace(0.0, 1.0, FIT_SAMPLES), path.breakpoints]))
