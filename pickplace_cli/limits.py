@@ -35,6 +35,14 @@ from .trajectory import CartesianPath
 
 #: peaks within this fraction of their limit are refined exactly (golden section on the model)
 EXACT_BAND = 0.05
+#: the check samples at least this many points of τ ∈ [0, 1] (plus the output samples and the path's
+#: breakpoints), so a peak's refinement does not depend on the output rate
+CHECK_SAMPLES = 1001
+
+
+def check_grid(tau: np.ndarray, breakpoints: np.ndarray) -> np.ndarray:
+    """The τ grid the limit check samples: the output samples ∪ a uniform grid ∪ the breakpoints."""
+    return np.unique(np.concatenate([tau, np.linspace(0.0, 1.0, CHECK_SAMPLES), breakpoints]))
 #: central-difference step in τ for d/dτ of the torques (truncation ~1e-10 relative, round-off ~1e-10)
 DTAU = 1e-5
 
@@ -294,16 +302,22 @@ def check_limits(
         peak, at = _parabolic_peak(x, data, imax)
         limits = np.array([m[3] * m[5] for m in meta])  # in column sign convention
         util_signed = peak / np.where(limits != 0, limits, 1.0)
-        near = np.flatnonzero(np.abs(peak - limits) <= EXACT_BAND * np.maximum(np.abs(limits), 1e-12))
+        # refine exactly every peak near its limit or apparently beyond it (a violation is always confirmed
+        # on the model itself, never taken from an interpolated estimate)
+        near = np.flatnonzero(
+            (np.abs(peak - limits) <= EXACT_BAND * np.maximum(np.abs(limits), 1e-12)) | (peak > limits)
+        )
         if near.size:
 
             def fun(s: np.ndarray) -> np.ndarray:
                 pr = model.parts(np.clip(s, 0.0, 1.0), derivatives=True)
                 return model.columns(pr, T)[1][:, near]
 
+            # the exact value replaces the parabolic estimate (which can overshoot where the curvature
+            # changes between samples, e.g. across a knot); it is never below the sampled maximum
             exact, exact_at = refine_max(fun, x, data[:, near])
-            peak[near] = np.maximum(exact, peak[near])
-            at[near] = np.where(exact >= peak[near] - 1e-300, exact_at, at[near])
+            peak[near] = exact
+            at[near] = exact_at
         del util_signed
         ranges: dict[tuple[str, str], dict[str, tuple]] = {}
         for c, (joint, quantity, unit, limit, kind, sign) in enumerate(meta):

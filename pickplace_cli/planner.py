@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from .errors import UnreachableError
-from .limits import LimitReport, MotionModel, check_limits, reach_error
+from .limits import LimitReport, MotionModel, check_grid, check_limits, reach_error
 from .methods import Method, plan_path
 from .profile import Profile
 from .robots import build_robot
@@ -106,7 +106,8 @@ def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions()) -> 
         t = traj.sample_times(rate)
         tau = t / T
         parts = model.parts(tau)
-    report = check_limits(model, T, parts=parts, dwell=dwell)
+    grid = check_grid(tau, path.breakpoints)
+    report = check_limits(model, T, parts=parts if len(grid) == len(tau) else model.parts(grid), dwell=dwell)
     robot = model.robot
     joint = JointTrajectory(
         t,

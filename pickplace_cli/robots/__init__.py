@@ -53,3 +53,56 @@ def build_robot(model: Any):
         return BUILDERS[model.kind](model)
     except ValueError as exc:
         raise ProfileError(f"robot ({model.kind}): {exc}") from None
+
+
+def radial_reach(robot, specs, z: float, margin: float | None = None, directions: int = 72) -> tuple[float, float, int]:
+    """(inner, outer, n): over the ``n`` of ``directions`` rays from the z axis at height z that reach
+    anything, the radii [m] between which all of them are reachable within the joint position limits and
+    the singularity margin (inner = 0 for a full disc; outer < inner when they share no radius).
+    Scanned on a 1 mm grid along each ray."""
+    import numpy as np
+
+    from ..errors import UnreachableError
+
+    rho = np.linspace(0, 2.0, 2001)
+    inner, outer, count = 0.0, np.inf, 0
+    for a in np.linspace(0, 2 * np.pi, directions, endpoint=False):
+        pts = np.column_stack([rho * np.cos(a), rho * np.sin(a), np.full_like(rho, z)])
+        try:
+            q = robot.inverse_kinematics(pts)
+            ok = np.ones(len(pts), bool)
+            for i, s in enumerate(specs):
+                if s.limits.position is not None:
+                    ok &= (q[:, i] >= s.limits.position[0]) & (q[:, i] <= s.limits.position[1])
+            if margin is not None and hasattr(robot, "singularity_measure"):
+                ok &= robot.singularity_measure(q, pts) >= margin
+        except UnreachableError:
+            ok = np.array([_one_inside(robot, specs, margin, p) for p in pts])
+        good = np.flatnonzero(ok)
+        if good.size == 0:
+            continue
+        count += 1
+        first = good[0]
+        run_end = first
+        while run_end + 1 < len(ok) and ok[run_end + 1]:
+            run_end += 1
+        inner = max(inner, float(rho[first]))
+        outer = min(outer, float(rho[run_end]))
+    return inner, (float(outer) if count else -1.0), count
+
+
+def _one_inside(robot, specs, margin, p) -> bool:
+    import numpy as np
+
+    from ..errors import UnreachableError
+
+    try:
+        q = robot.inverse_kinematics(p[None, :])
+    except UnreachableError:
+        return False
+    for i, s in enumerate(specs):
+        if s.limits.position is not None and not (s.limits.position[0] <= q[0, i] <= s.limits.position[1]):
+            return False
+    if margin is not None and hasattr(robot, "singularity_measure"):
+        return bool(robot.singularity_measure(q, p[None, :])[0] >= margin)
+    return True

@@ -1,0 +1,120 @@
+"""CLI of the limit checks: exit 3 / --report-only / --report JSON, --time fit, check, profile validate/show,
+bad robot input (exit 1 or 4, nothing written)."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+import yaml
+from typer.testing import CliRunner
+
+from pickplace_cli.cli import app
+from pickplace_cli.profile import resolve_profile_path
+
+runner = CliRunner()
+ADEPT = ["--from", "-0.1525,0,-0.8", "--to", "0.1525,0,-0.8"]
+
+
+def run(*args):
+    return runner.invoke(app, list(args), catch_exceptions=False)
+
+
+def test_limit_exceeded_exit_3_and_report(tmp_path):
+    rep = tmp_path / "r.json"
+    out = tmp_path / "o.csv"
+    r = run("plan", *ADEPT, "--time", "0.1", "--report", str(rep), "-o", str(out))
+    assert r.exit_code == 3
+    assert "limit exceeded: q1 motor torque" in r.stderr and "at t = " in r.stderr and "EXCEEDED" in r.stderr
+    doc = json.loads(rep.read_text())
+    assert doc["limits"]["ok"] is False and doc["limits"]["violations"][0]["joint"] == "q1"
+    assert out.exists()  # the trajectory is still written: the verdict is a result, not a failure to plan
+    r2 = run("plan", *ADEPT, "--time", "0.1", "--report-only", "-q")
+    assert r2.exit_code == 0 and "limit exceeded" in r2.stderr
+
+
+def test_time_fit_reports_both(tmp_path):
+    r = run("plan", *ADEPT, "--time", "fit", "--format", "json", "-q")
+    assert r.exit_code == 0
+    s = json.loads(r.stdout)["summary"]
+    assert s["mode"] == "fit" and s["duration_s"] == s["fit_s"] and s["auto_s"] > s["fit_s"]
+    assert s["limits_ok"] is True and s["picks_per_minute"] > 0
+
+
+def test_unreachable_point_exit_4_names_point_and_time(tmp_path):
+    out = tmp_path / "o.csv"
+    r = run("plan", "--from", "1.5,0,-0.8", "--to", "1.6,0,-0.8", "--k1", "0.3", "--k2", "0.1", "-o", str(out))
+    assert r.exit_code == 4
+    line = r.stderr.strip()
+    assert "\n" not in line and "unreachable" in line and "t = 0 s" in line
+    assert not out.exists()
+
+
+def test_scara_elbow_cannot_reach_exit_4():
+    r = run("plan", "-p", "scara-600", "--from", "0.01,0,-0.1", "--to", "0.3,0,-0.1", "--k1", "0.3", "--k2", "0.1")
+    assert r.exit_code == 4 and "SCARA" in r.stderr
+
+
+@pytest.mark.parametrize(
+    "edit,msg",
+    [
+        (("upper_arm: 1.0", "upper_arm: -1.0"), "robot.masses.upper_arm = -1.0"),
+        (("l: 0.800", "l: 0.300"), "must be longer than the upper arm"),
+        (("gear_ratio: 25.0", "gear_ratio: 0"), "gear_ratio = 0"),
+        (("efficiency: 0.9", "efficiency: 1.5"), "efficiency = 1.5"),
+    ],
+)
+def test_non_physical_profile_exit_1(tmp_path, edit, msg):
+    text = resolve_profile_path("delta-su2018").read_text().replace(*edit, 1)
+    prof = tmp_path / "p.yaml"
+    prof.write_text(text)
+    out = tmp_path / "o.csv"
+    r = run("plan", *ADEPT, "-p", str(prof), "-o", str(out))
+    assert r.exit_code == 1 and msg in r.stderr and len(r.stderr.strip().splitlines()) == 1
+    assert not out.exists()
+    v = run("profile", "validate", str(prof))
+    assert v.exit_code == 1 and msg in v.stderr
+
+
+def test_check_own_csv_agrees_with_plan(tmp_path):
+    out = tmp_path / "a.csv"
+    rp = tmp_path / "plan.json"
+    rc = tmp_path / "check.json"
+    assert run("plan", *ADEPT, "-q", "-o", str(out), "--report", str(rp)).exit_code == 0
+    r = run("check", str(out), "--report", str(rc))
+    assert r.exit_code == 0 and "quintic interpolating spline" in r.stderr
+    a = {(x["joint"], x["quantity"]): x["peak"] for x in json.loads(rp.read_text())["limits"]["rows"]}
+    b = {(x["joint"], x["quantity"]): x["peak"] for x in json.loads(rc.read_text())["limits"]["rows"]}
+    for key in a:
+        # torques need a second derivative of the interpolated positions: 1 % (ends of the spline);
+        # positions and speeds agree far better
+        tol = 2e-2 if "rate" in key[1] else 1e-2
+        if key[1].startswith(("position", "workcell")):  # a range row may show either side on a tie
+            assert abs(b[key]) == pytest.approx(abs(a[key]), rel=tol, abs=1e-9), key
+        else:
+            assert b[key] == pytest.approx(a[key], rel=tol, abs=1e-9), key
+
+
+def test_check_catches_a_violation_and_bad_files(tmp_path):
+    out = tmp_path / "a.csv"
+    run("plan", *ADEPT, "-q", "-o", str(out), "--time", "0.1", "--report-only")
+    r = run("check", str(out), "-q")
+    assert r.exit_code == 3 and "q1 motor torque" in r.stderr
+    bad = tmp_path / "bad.csv"
+    bad.write_text("t,q1,q2\n0,1,2\n")
+    r = run("check", str(bad))
+    assert r.exit_code == 1 and "lacks column(s) q3" in r.stderr
+    bad.write_text("t,q1,q2,q3\n" + "".join(f"{i * 0.01},0.3,0.3,0.3\n" for i in (0, 1, 1, 2, 3, 4, 5)))
+    r = run("check", str(bad))
+    assert r.exit_code == 1 and "increase strictly" in r.stderr
+
+
+def test_profile_validate_and_show():
+    r = run("profile", "validate", "scara-600")
+    assert r.exit_code == 0 and r.stdout.startswith("ok: ")
+    r = run("profile", "show")
+    assert r.exit_code == 0
+    assert "travelling mass m_p = 0.8 kg" in r.stdout and "arm inertia I_b = 0.061687" in r.stdout
+    assert "radius 0.000 … " in r.stdout and "[v] = 5 m/s" in r.stdout
+    for cmd in (["check", "--help"], ["profile", "--help"], ["profile", "show", "--help"], ["profile", "validate", "--help"]):
+        assert run(*cmd).exit_code == 0
