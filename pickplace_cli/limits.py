@@ -42,7 +42,9 @@ CHECK_SAMPLES = 1001
 
 def check_grid(tau: np.ndarray, breakpoints: np.ndarray) -> np.ndarray:
     """The τ grid the limit check samples: the output samples ∪ a uniform grid ∪ the breakpoints."""
-    return np.unique(np.concatenate([tau, np.linspace(0.0, 1.0, CHECK_SAMPLES), breakpoints]))
+    grid = np.unique(np.concatenate([tau, np.linspace(0.0, 1.0, CHECK_SAMPLES), breakpoints]))
+    keep = np.concatenate([[True], np.diff(grid) > 1e-9])  # merge near-duplicates (round-off twins)
+    return grid[keep]
 #: central-difference step in τ for d/dτ of the torques (truncation ~1e-10 relative, round-off ~1e-10)
 DTAU = 1e-5
 

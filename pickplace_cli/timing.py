@@ -114,6 +114,7 @@ def fit_duration(model, dwell: float = 0.0, start: float = 0.1) -> tuple[float, 
     from .limits import check_limits
 
     tau = np.unique(np.concatenate([np.linspace(0.0, 1.0, FIT_SAMPLES), model.path.breakpoints]))
+    tau = tau[np.concatenate([[True], np.diff(tau) > 1e-9])]  # merge round-off twins
     parts = model.parts(tau)
     meta, _ = model.columns(parts, 1.0)
     timed = [c for c, m in enumerate(meta) if not (m[1].startswith("position") or m[4] == "reach")]
