@@ -28,6 +28,7 @@ app = typer.Typer(
     no_args_is_help=True,
     add_completion=True,
     pretty_exceptions_enable=False,
+    rich_markup_mode=None,
     context_settings={"help_option_names": ["-h", "--help"]},
 )
 
@@ -146,7 +147,10 @@ def plan(
     output: str = typer.Option("-", "--output", "-o", help="Output file ('-' = stdout). Written atomically."),
     report: Optional[str] = typer.Option(None, "--report", help="Also write the limit report as JSON to this file."),
     report_only: bool = typer.Option(
-        False, "--report-only", help="Exit 0 even when a limit is exceeded (the report still says so)."
+        False,
+        "--report-only",
+        help="Write the trajectory and exit 0 even when a limit is exceeded (the report still says so). "
+        "Without it, a move that breaks a limit is not written.",
     ),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No summary or limit table on stderr (errors and violations are still printed)."),
 ) -> None:
@@ -181,17 +185,21 @@ def plan(
     params: dict = {}
     if method == MethodName.bspline:
         params = {"k1": k1, "k2": k2, "table": table}
+    _check_output_paths(output, report)
     result = run_plan(task, prof, PlanOptions(method=method.value, method_params=params, time=time, rate=rate))
-    _write_plan(result, fmt, output)
+    code = result.report.exit_code()
     if report is not None:
         _write_report(result, report)
     if not quiet:
         _print_summary(result)
         _print_limit_table(result.report)
     _print_verdict(result.report, quiet)
-    code = result.report.exit_code()
     if code and not report_only:
+        sys.stderr.write(
+            "pickplace: trajectory not written (a limit is exceeded); --report-only writes it anyway\n"
+        )
         raise typer.Exit(code)
+    _write_plan(result, fmt, output)
 
 
 def _write_plan(result, fmt: OutputFormat, output: str) -> None:
@@ -203,6 +211,22 @@ def _write_plan(result, fmt: OutputFormat, output: str) -> None:
         from .export.json import write_json as writer
     with atomic_output(output) as stream:
         writer(result, stream)
+
+
+def _check_output_paths(output: str, report: Optional[str]) -> None:
+    """Refuse colliding or impossible outputs before anything is computed or written."""
+    import os
+
+    from .errors import ExportError
+    from .export import check_writable
+
+    check_writable(output)
+    if report is not None:
+        check_writable(report)
+        if report == "-" and output == "-":
+            raise ExportError("report = -: stdout already carries the trajectory; give --report a file or -o a file")
+        if report != "-" and output != "-" and os.path.abspath(report) == os.path.abspath(output):
+            raise ExportError(f"report = {report}: the same file as --output; give them different paths")
 
 
 def _write_report(result, path: str) -> None:

@@ -154,6 +154,7 @@ class MotionModel:
     specs: list  # JointSpec per joint
     singularity_margin: float | None = None
     box: Any = None  # profile Box or None
+    has_drives: bool = field(init=False)
     gear: np.ndarray = field(init=False)
     eff: np.ndarray = field(init=False)
     rotor: np.ndarray = field(init=False)
@@ -163,6 +164,7 @@ class MotionModel:
         if len(self.specs) != n:
             raise ValueError(f"{len(self.specs)} joint specs for {n} joints")
         drives = [s.drive for s in self.specs]
+        self.has_drives = all(d is not None for d in drives)
         self.gear = np.array([d.gear_ratio if d else 1.0 for d in drives])
         self.eff = np.array([d.efficiency if d else 1.0 for d in drives])
         self.rotor = np.array([d.rotor_inertia if d else 0.0 for d in drives])
@@ -206,9 +208,10 @@ class MotionModel:
         for i, (name, unit, spec) in enumerate(zip(self.robot.joint_names, self.robot.joint_units, self.specs)):
             lim, drv = spec.limits, spec.drive
             if lim.position is not None:
-                meta.append((name, "position max", unit, lim.position[1], "limit", 1.0))
+                # a joint range is part of the reachable workspace: no duration fixes it (exit 4)
+                meta.append((name, "position max", unit, lim.position[1], "reach", 1.0))
                 cols.append(parts.q[:, i])
-                meta.append((name, "position min", unit, lim.position[0], "limit", -1.0))
+                meta.append((name, "position min", unit, lim.position[0], "reach", -1.0))
                 cols.append(-parts.q[:, i])
             for qname, arr, k, limit, u in (
                 ("velocity", parts.qd1, 1, lim.velocity, f"{unit}/s"),

@@ -118,8 +118,8 @@ def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions()) -> 
         robot.joint_names,
         robot.joint_units,
         torque=parts.A / T**2 + parts.G,
-        motor_speed=model.gear * parts.qd1 / T,
-        motor_torque=parts.Am / T**2 + parts.Gm,
+        motor_speed=model.gear * parts.qd1 / T if model.has_drives else None,
+        motor_torque=parts.Am / T**2 + parts.Gm if model.has_drives else None,
     )
     p, v, a, j = parts.p, parts.v1 / T, parts.a1 / T**2, parts.j1 / T**3
     return Plan(task, path.method, dict(path.parameters), duration, traj, t, p, v, a, j, joint, report, profile.name)

@@ -315,8 +315,10 @@ def _describe(err: dict, data: Any, lines: dict[tuple, int], source: str) -> str
     if err["type"] == "missing":
         return f"{where}: {field}: required field is missing"
     value = err.get("input")
-    shown = value if not isinstance(value, (dict, list)) else type(value).__name__
-    return f"{where}: {field} = {shown!r}: {msg}"
+    msg = msg.removeprefix("Value error, ")
+    if isinstance(value, (dict, list)):
+        return f"{where}: {field}: {msg}"
+    return f"{where}: {field} = {value!r}: {msg}"
 
 
 def parse_profile(text: str, source: str = "<profile>") -> Profile:

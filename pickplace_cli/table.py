@@ -456,11 +456,12 @@ def parse_table(text: str, source: str = "<table>") -> Table:
         rows.append(TableRow(*(vals.get(c, nan) for c in COLUMNS)))
     if header is None or not rows:
         raise TableError(f"{source}: no table rows (expected a header '{','.join(COLUMNS)}' and data)")
-    if "eta" in meta:
-        try:
-            meta["eta"] = float(meta["eta"])
-        except ValueError:
-            raise TableError(f"{source}: eta = {meta['eta']!r} in the header is not a number") from None
+    if "eta" not in meta:
+        raise TableError(f"{source}: no '# eta: VALUE' header line: the table must say which η it was built for")
+    try:
+        meta["eta"] = float(meta["eta"])
+    except ValueError:
+        raise TableError(f"{source}: eta = {meta['eta']!r} in the header is not a number") from None
     return Table(tuple(rows), meta=meta, source=source)
 
 

@@ -80,7 +80,7 @@ def choose_duration(
     spec = parse_time(spec)
     tv, ta, tj, binding = auto_duration(path, capacity)
     t_auto = max(tv, ta, tj or 0.0)
-    t_fit = None
+    t_fit = fit_binding = None
     if model is not None:
         t_fit, fit_binding = fit_duration(model, dwell, start=t_auto)
     if spec == "auto":
@@ -88,6 +88,11 @@ def choose_duration(
     if spec == "fit":
         if model is None:
             raise TaskError("time = fit: needs the robot model (plan through pickplace_cli.planner.plan)")
+        if t_fit is None:
+            raise TaskError(
+                "time = fit: the profile sets no velocity, acceleration, jerk or motor limit that depends on the "
+                "duration; add joint limits or drives, or use --time auto / seconds"
+            )
         return Duration(t_fit, "fit", tv, ta, tj, fit_binding, t_fit)  # type: ignore[arg-type]
     return Duration(float(spec), "given", tv, ta, tj, "given", t_fit)
 
@@ -97,7 +102,7 @@ def choose_duration(
 FIT_SAMPLES = 2001
 
 
-def fit_duration(model, dwell: float = 0.0, start: float = 0.1) -> tuple[float, str]:
+def fit_duration(model, dwell: float = 0.0, start: float = 0.1) -> tuple[float | None, str | None]:
     """Smallest T [s] such that every T-dependent limit holds at T and at every longer duration.
 
     Velocity-type limits scale as 1/T^k (monotone). The peak motor torque max_τ |A_m s + G_m| is convex
@@ -105,7 +110,7 @@ def fit_duration(model, dwell: float = 0.0, start: float = 0.1) -> tuple[float, 
     scanning T down from a feasible value and root-finding the first crossing (brentq) gives the true
     minimum. Position, singularity and workcell limits do not depend on T and are not fitted (the limit
     report shows them). The result is nudged up until the exact (refined) check passes.
-    Returns (T, the binding quantity "joint quantity").
+    Returns (T, the binding quantity "joint quantity"), or (None, None) when no limit depends on T.
     """
     import numpy as np
     from scipy.optimize import brentq
@@ -120,12 +125,17 @@ def fit_duration(model, dwell: float = 0.0, start: float = 0.1) -> tuple[float, 
     timed = [c for c, m in enumerate(meta) if not (m[1].startswith("position") or m[4] == "reach")]
     limits = np.array([meta[c][3] for c in timed])
     rated = np.array([s.drive.rated_torque if s.drive and s.drive.rated_torque else np.inf for s in model.specs])
+    has_rated = np.isfinite(rated)
+    if not timed and not has_rated.any():
+        return None, None
 
     def worst(T: float) -> tuple[float, str]:
         m, data = model.columns(parts, T)
         util = np.max(data[:, timed], axis=0) / limits if timed else np.zeros(0)
-        rms = model.rms_motor_torque(parts, T, dwell) / rated
-        names = [f"{m[c][0]} {m[c][1]}" for c in timed] + [f"{n} rms motor torque" for n in model.robot.joint_names]
+        rms = (model.rms_motor_torque(parts, T, dwell) / rated)[has_rated]
+        names = [f"{m[c][0]} {m[c][1]}" for c in timed] + [
+            f"{n} rms motor torque" for n, h in zip(model.robot.joint_names, has_rated) if h
+        ]
         allu = np.concatenate([util, rms])
         k = int(np.argmax(allu)) if allu.size else 0
         return (float(allu[k]) - 1.0 if allu.size else -1.0), (names[k] if allu.size else "none")

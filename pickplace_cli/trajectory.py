@@ -69,10 +69,12 @@ class CartesianTrajectory:
             raise ValueError(f"rate must be a finite positive number of Hz, got {rate!r}")
         n = int(np.floor(self.duration * rate + 1e-9))
         t = np.arange(n + 1) / rate
-        if self.duration - t[-1] > 1e-9 / rate:
+        if self.duration - t[-1] > 1e-9 * min(1.0 / rate, self.duration):
             t = np.append(t, self.duration)
         else:
             t[-1] = self.duration
+        if len(t) < 2:  # rate below 1/T: still the two ends
+            t = np.array([0.0, self.duration])
         return t
 
 

@@ -43,6 +43,7 @@ def atomic_output(path: str | Path | None, binary: bool = False) -> Iterator[IO]
             yield fh
             fh.flush()
             os.fsync(fh.fileno())
+        os.chmod(tmp, _mode_for(target))
         os.replace(tmp, target)
     except BaseException:
         try:
@@ -50,6 +51,25 @@ def atomic_output(path: str | Path | None, binary: bool = False) -> Iterator[IO]
         except FileNotFoundError:
             pass
         raise
+
+
+def _mode_for(target: Path) -> int:
+    """The existing file's mode, else what a plain open() would give (0666 less the umask)."""
+    try:
+        return target.stat().st_mode & 0o777
+    except FileNotFoundError:
+        umask = os.umask(0)
+        os.umask(umask)
+        return 0o666 & ~umask
+
+
+def check_writable(path: str | Path | None) -> None:
+    """Fail early (before anything is written) when ``path``'s directory does not exist."""
+    if path is None or str(path) == "-":
+        return
+    directory = Path(path).parent if str(Path(path).parent) else Path(".")
+    if not directory.is_dir():
+        raise ExportError(f"output {path}: directory {directory} does not exist")
 
 
 def plan_columns(plan) -> tuple[list[str], np.ndarray]:

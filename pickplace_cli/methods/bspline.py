@@ -36,6 +36,11 @@ def plan_bspline(
     if k1 is None:
         from ..table import load_table
 
+        if task.b == 0:
+            raise TaskError(
+                "from/to are vertically aligned (b = 0): the k1/k2 table starts at λ = b/h ≥ 1; "
+                "give --k1 and --k2 for a purely vertical move"
+            )
         tab = load_table(table)
         k1, k2 = tab.lookup(task.lam, eta=task.eta)
         source = f"table {tab.source}"

@@ -138,7 +138,7 @@ def test_unknown_profile_key(tmp_path):
 
 @pytest.mark.parametrize(
     "content,msg",
-    [(None, "no such file"), ("garbage\n1,2\n", "lacks column"), ("lambda,k1,k2\n1,0.2,x\n", "not a number")],
+    [(None, "no such file"), ("# eta: 0.5\ngarbage\n1,2\n", "lacks column"), ("lambda,k1,k2\n1,0.2,x\n", "not a number"), ("lambda,k1,k2\n1,0.2,0.1\n2,0.2,0.1\n", "eta")],
 )
 def test_missing_or_corrupt_table(tmp_path, content, msg):
     tab = tmp_path / "t.csv"

@@ -28,9 +28,10 @@ def test_limit_exceeded_exit_3_and_report(tmp_path):
     assert "limit exceeded: q1 motor torque" in r.stderr and "at t = " in r.stderr and "EXCEEDED" in r.stderr
     doc = json.loads(rep.read_text())
     assert doc["limits"]["ok"] is False and doc["limits"]["violations"][0]["joint"] == "q1"
-    assert out.exists()  # the trajectory is still written: the verdict is a result, not a failure to plan
-    r2 = run("plan", *ADEPT, "--time", "0.1", "--report-only", "-q")
-    assert r2.exit_code == 0 and "limit exceeded" in r2.stderr
+    assert not out.exists()  # a move that breaks a limit is not handed on …
+    assert "trajectory not written" in r.stderr
+    r2 = run("plan", *ADEPT, "--time", "0.1", "--report-only", "-q", "-o", str(out))
+    assert r2.exit_code == 0 and "limit exceeded" in r2.stderr and out.exists()  # … unless asked
 
 
 def test_time_fit_reports_both(tmp_path):
@@ -97,7 +98,7 @@ def test_check_own_csv_agrees_with_plan(tmp_path):
 
 def test_check_catches_a_violation_and_bad_files(tmp_path):
     out = tmp_path / "a.csv"
-    run("plan", *ADEPT, "-q", "-o", str(out), "--time", "0.1", "--report-only")
+    assert run("plan", *ADEPT, "-q", "-o", str(out), "--time", "0.1", "--report-only").exit_code == 0
     r = run("check", str(out), "-q")
     assert r.exit_code == 3 and "q1 motor torque" in r.stderr
     bad = tmp_path / "bad.csv"
@@ -118,3 +119,45 @@ def test_profile_validate_and_show():
     assert "radius 0.000 … " in r.stdout and "[v] = 5 m/s" in r.stdout
     for cmd in (["check", "--help"], ["profile", "--help"], ["profile", "show", "--help"], ["profile", "validate", "--help"]):
         assert run(*cmd).exit_code == 0
+
+
+def test_output_path_conflicts_and_modes(tmp_path):
+    import os
+    import stat
+
+    out = tmp_path / "o.csv"
+    r = run("plan", *ADEPT, "-q", "--report", "-")
+    assert r.exit_code == 1 and "stdout already carries" in r.stderr
+    r = run("plan", *ADEPT, "-q", "-o", str(out), "--report", str(out))
+    assert r.exit_code == 1 and not out.exists()
+    r = run("plan", *ADEPT, "-q", "-o", str(out), "--report", str(tmp_path / "nope" / "r.json"))
+    assert r.exit_code == 1 and not out.exists()
+    old = os.umask(0o022)
+    try:
+        assert run("plan", *ADEPT, "-q", "-o", str(out)).exit_code == 0
+    finally:
+        os.umask(old)
+    assert stat.S_IMODE(out.stat().st_mode) == 0o644  # like a plain open(), not mkstemp's 0600
+
+
+def test_gantry_fit_without_limits_is_refused():
+    r = run("plan", "-p", "gantry", *ADEPT, "--time", "fit")
+    assert r.exit_code == 1 and "no velocity, acceleration, jerk or motor limit" in r.stderr
+    r = run("plan", "-p", "gantry", *ADEPT, "-q")
+    assert r.exit_code == 0 and "motor_" not in r.stdout.splitlines()[0]  # no drives → no motor columns
+
+
+def test_joint_range_violation_is_exit_4():
+    r = run("plan", "-p", "scara-600", "--from", "0.35,-0.15,0.1", "--to", "0.35,0.15,0.1", "-q")
+    assert r.exit_code == 4 and "q3 position" in r.stderr
+
+
+def test_vertical_move_message():
+    r = run("plan", "--from", "0,0,-0.8", "--to", "0,0,-0.75")
+    assert r.exit_code == 1 and "vertically aligned" in r.stderr
+
+
+def test_tiny_rate_keeps_both_ends():
+    r = run("plan", *ADEPT, "--rate", "1e-9", "-q", "--time", "0.25")
+    rows = r.stdout.strip().splitlines()[1:]
+    assert [float(x.split(",")[0]) for x in rows] == [0.0, 0.25]

@@ -93,7 +93,8 @@ def test_position_rms_singularity_workcell_limits():
     rep = plan(ADEPT, profile_from(dd), PlanOptions(time=0.2, fit=False)).report
     r = row(rep, "q1", "position")
     # the continuous minimum lies up to ~1e-6 rad below the 1 kHz sampled one (refined between samples)
-    assert not r.ok and r.bound == "lower" and r.excess == pytest.approx(1e-4, abs=1e-6) and rep.exit_code() == 3
+    assert not r.ok and r.bound == "lower" and r.excess == pytest.approx(1e-4, abs=1e-6)
+    assert rep.exit_code() == 4  # a joint range is workspace, not something a longer duration fixes
     assert r.excess >= 1e-4 - 1e-12
     # rms over the duty cycle
     rms = row(BASE.report, "q1", "rms motor torque").peak

@@ -56,15 +56,18 @@ GOOD = "# eta: 0.5\nlambda,k1,k2\n1,0.5,0.4\n2,0.55,0.3\n"
     "text,match",
     [
         ("", "no table rows"),
+        ("lambda,k1,k2\n1,0.5,0.4\n2,0.55,0.3\n", "no '# eta: VALUE' header"),
         ("lambda,k1\n1,0.5\n", "lacks column"),
-        ("lambda,k1,k2\n1,0.5,0.4\n2,abc,0.3\n", r":3: not a number"),
-        ("lambda,k1,k2\n1,0.5,0.4\n2,0.5\n", r":3: 2 values"),
+        ("lambda,k1,k2\n1,0.5,0.4\n2,abc,0.3\n", r":4: not a number"),
+        ("lambda,k1,k2\n1,0.5,0.4\n2,0.5\n", r":4: 2 values"),
         ("lambda,k1,k2\n1,0.5,0.4\n2,1.5,0.3\n", r"k1 = 1.5: must lie strictly between 0 and 1"),
         ("lambda,k1,k2\n2,0.5,0.4\n1,0.5,0.3\n", "increase strictly"),
         ("lambda,k1,k2\n1,nan,0.4\n2,0.5,0.3\n", "finite"),
     ],
 )
 def test_corrupt_tables(text, match):
+    if "eta" not in match and text:
+        text = "# eta: 0.5\n" + text
     with pytest.raises(TableError, match=match):
         T.parse_table(text, "t.csv")
 
