@@ -42,9 +42,40 @@ def bench_inprocess(repeat: int) -> dict:
     times = []
     for _ in range(repeat):
         t0 = time.perf_counter()
-        plan(task, prof, PlanOptions())
+        plan(task, prof, PlanOptions(fit=False))
         times.append(time.perf_counter() - t0)
     return stats(times)
+
+
+def bench_limits(repeat: int) -> tuple[dict, dict, dict]:
+    """Delta: joint mapping + dynamics + limit check of 1,000 samples; --time fit; whole in-process plan."""
+    import numpy as np
+
+    from pickplace_cli.limits import check_limits
+    from pickplace_cli.methods import plan_path
+    from pickplace_cli.planner import PlanOptions, motion_model, plan
+    from pickplace_cli.profile import load_profile
+    from pickplace_cli.task import Task
+    from pickplace_cli.timing import fit_duration
+
+    prof = load_profile("delta-su2018")
+    task = Task(np.array([-0.1525, 0, -0.8]), np.array([0.1525, 0, -0.8]), 0.025, 0.5)
+    path = plan_path(task, "bspline")
+    model = motion_model(path, prof)
+    tau = np.linspace(0, 1, 1000)
+    check_limits(model, 0.2, parts=model.parts(tau), dwell=0.1)
+    t_map, t_fit, t_plan = [], [], []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        check_limits(model, 0.2, parts=model.parts(tau), dwell=0.1)
+        t_map.append(time.perf_counter() - t0)
+        t0 = time.perf_counter()
+        fit_duration(model, 0.1, 0.18)
+        t_fit.append(time.perf_counter() - t0)
+        t0 = time.perf_counter()
+        plan(task, prof, PlanOptions(fit=False))
+        t_plan.append(time.perf_counter() - t0)
+    return stats(t_map), stats(t_fit), stats(t_plan)
 
 
 def bench_cli(args: list[str], repeat: int, stdout_file: bool = False) -> dict:
@@ -80,12 +111,21 @@ def main() -> None:
     }
     results["plan_inprocess_adept_1kHz"] = s = bench_inprocess(max(args.repeat, 50))
     show("plan in-process (Adept, gantry, 1 kHz)", s)
+    m, f, p = bench_limits(max(args.repeat, 30))
+    results["delta_map_dynamics_check_1000"] = m
+    show("Delta: IK + derivatives + dynamics + check, 1000 samples", m)
+    results["delta_time_fit"] = f
+    show("Delta: --time fit (fit_duration)", f)
+    results["delta_plan_inprocess"] = p
+    show("Delta: plan in-process (auto, 1 kHz, no fit)", p)
     results["cli_help"] = s = bench_cli(["--help"], args.repeat)
     show("pickplace --help (wall)", s)
     results["cli_version"] = s = bench_cli(["--version"], args.repeat)
     show("pickplace --version (wall)", s)
     results["cli_plan_adept_csv"] = s = bench_cli(["plan", *ADEPT, "-q"], args.repeat, stdout_file=True)
-    show("pickplace plan Adept > out.csv (wall)", s)
+    show("pickplace plan Adept (Delta) > out.csv (wall)", s)
+    results["cli_plan_adept_gantry_csv"] = s = bench_cli(["plan", "-p", "gantry", *ADEPT, "-q"], args.repeat, stdout_file=True)
+    show("pickplace plan -p gantry Adept > out.csv (wall)", s)
     if args.table:
         for w in (1, os.cpu_count() or 1):
             results[f"build_table_default_workers{w}"] = s = bench_table(w)

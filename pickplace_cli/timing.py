@@ -99,7 +99,7 @@ def choose_duration(
 
 #: normalised samples used by fit_duration (plus the path's breakpoints); sampled peaks of these smooth
 #: functions are within ~1e-6 relative of the true ones, and the result is then verified exactly
-FIT_SAMPLES = 2001
+FIT_SAMPLES = 1001
 
 
 def fit_duration(model, dwell: float = 0.0, start: float = 0.1) -> tuple[float | None, str | None]:
@@ -159,10 +159,11 @@ def fit_duration(model, dwell: float = 0.0, start: float = 0.1) -> tuple[float |
         T = brentq(lambda x: worst(x)[0], lo * 0.85, lo, xtol=1e-12, rtol=1e-10)
     # the sampled peaks can sit a hair under the continuous ones: nudge up until the exact check passes
     binding = worst(T * (1 - 1e-9))[1]
-    for _ in range(40):
+    for _ in range(10):
         rep = check_limits(model, T, parts=parts, dwell=dwell)
-        bad = [r for r in rep.violations if not (r.quantity.startswith("position") or r.kind == "reach")]
+        bad = [r for r in rep.violations if r.kind != "reach"]
         if not bad:
             break
-        T *= 1.0 + 2e-5
+        # every timed quantity falls at least as 1/T, so T·u (u = worst utilisation, ~1 + 1e-6) clears it
+        T *= max(r.utilisation for r in bad) * (1.0 + 1e-9)
     return float(T), binding
