@@ -47,9 +47,3 @@ class NoFeasibleDuration(PickplaceError):
     """``--time fit``: no duration satisfies a limit (e.g. the holding torque alone exceeds the motor's)."""
 
     exit_code = 3
-
-
-class LimitExceeded(PickplaceError):
-    """Raised only by the CLI layer when a limit report is not ok (a result, not a library error)."""
-
-    exit_code = 3

@@ -306,7 +306,6 @@ def check_limits(
         imax = np.argmax(data, axis=0)
         peak, at = _parabolic_peak(x, data, imax)
         limits = np.array([m[3] * m[5] for m in meta])  # in column sign convention
-        util_signed = peak / np.where(limits != 0, limits, 1.0)
         # refine exactly every peak near its limit or apparently beyond it (a violation is always confirmed
         # on the model itself, never taken from an interpolated estimate)
         near = np.flatnonzero(
@@ -323,7 +322,6 @@ def check_limits(
             exact, exact_at = refine_max(fun, x, data[:, near])
             peak[near] = exact
             at[near] = exact_at
-        del util_signed
         ranges: dict[tuple[str, str], dict[str, tuple]] = {}
         for c, (joint, quantity, unit, limit, kind, sign) in enumerate(meta):
             value = float(sign * peak[c])

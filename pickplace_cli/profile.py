@@ -127,7 +127,19 @@ class DeltaMasses(_Model):
     plate: float = Field(ge=0, description="Travelling plate mass in kg (tool included)")
 
 
-class DeltaModel(_Model):
+class _ThreeJoints(_Model):
+    """A robot whose ``joints`` field is one JointSpec for all three joints or a list of three."""
+
+    def joint_specs(self) -> list[JointSpec]:
+        return _per_joint(self.joints, 3)  # type: ignore[attr-defined]
+
+    @model_validator(mode="after")
+    def _count(self) -> "_ThreeJoints":
+        _per_joint(self.joints, 3)  # type: ignore[attr-defined]
+        return self
+
+
+class DeltaModel(_ThreeJoints):
     """Clavel Delta robot, lumped-mass dynamics (Codourey 1998)."""
 
     kind: Literal["delta"]
@@ -137,14 +149,6 @@ class DeltaModel(_Model):
     singularity_margin: float = Field(default=0.05, ge=0, lt=1, description="Minimum singularity measure (0 = singular, 1 = best)")
     joints: JointSpecs = Field(default_factory=JointSpec, description="One joint spec for all three arms, or a list of three")
 
-    def joint_specs(self) -> list[JointSpec]:
-        return _per_joint(self.joints, 3)
-
-    @model_validator(mode="after")
-    def _count(self) -> "DeltaModel":
-        _per_joint(self.joints, 3)
-        return self
-
 
 class ScaraLink(_Model):
     length: float = Field(gt=0, description="Link length in m")
@@ -153,7 +157,7 @@ class ScaraLink(_Model):
     inertia: float = Field(default=0.0, ge=0, description="Inertia about its own centre of mass (vertical axis) in kg·m²")
 
 
-class ScaraModel(_Model):
+class ScaraModel(_ThreeJoints):
     """Serial SCARA: two revolute links, a prismatic z axis (q3, m, positive up), tool rotation held fixed."""
 
     kind: Literal["scara"]
@@ -165,14 +169,6 @@ class ScaraModel(_Model):
     payload: float = Field(default=0.0, ge=0, description="Payload in kg")
     singularity_margin: float = Field(default=0.05, ge=0, lt=1, description="Minimum |sin q2| (0 at full stretch or fold)")
     joints: JointSpecs = Field(default_factory=JointSpec, description="One joint spec for all joints, or a list of three (q1, q2 rad; q3 m)")
-
-    def joint_specs(self) -> list[JointSpec]:
-        return _per_joint(self.joints, 3)
-
-    @model_validator(mode="after")
-    def _count(self) -> "ScaraModel":
-        _per_joint(self.joints, 3)
-        return self
 
 
 RobotModel = Annotated[Union[GantryModel, DeltaModel, ScaraModel], Field(discriminator="kind")]

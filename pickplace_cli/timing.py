@@ -11,7 +11,7 @@ from .trajectory import CartesianPath
 
 
 @dataclass(frozen=True)
-class Duration:  # noqa: D101 - documented below
+class Duration:
     """The chosen duration T [s] and how it was chosen.
 
     ``auto`` is Eq. (26) extended by jerk: T = max(v̂/[v], √(â/[a]), ∛(ĵ/[j])) where v̂, â, ĵ are the exact
