@@ -93,7 +93,7 @@ def normalised_peaks(
 def _sample_taus(knots: np.ndarray, per_piece: int) -> np.ndarray:
     br = np.unique(knots)
     u = np.linspace(0.0, 1.0, per_piece + 1)[:-1]
-    return np.concatenate([br[:-1, None] + (np.diff(br))[:, None] * u[None, :]]).ravel().tolist() + [1.0]
+    return np.append((br[:-1, None] + np.diff(br)[:, None] * u[None, :]).ravel(), 1.0)
 
 
 @dataclass
@@ -124,7 +124,7 @@ def _sample_chunk(args: tuple[np.ndarray, np.ndarray, float, int]) -> tuple[np.n
     jerk = np.empty((len(k1s), m, 2))
     for i, (k1, k2) in enumerate(zip(k1s, k2s)):
         s = _unit_spline(float(k1), float(k2), eta)
-        taus = np.asarray(_sample_taus(s.t, per_piece))
+        taus = _sample_taus(s.t, per_piece)
         acc[i] = s(taus, nu=2)
         jerk[i] = s(taus, nu=3)
     return acc, jerk

@@ -92,8 +92,6 @@ def radial_reach(robot, specs, z: float, margin: float | None = None, directions
 
 
 def _one_inside(robot, specs, margin, p) -> bool:
-    import numpy as np
-
     from ..errors import UnreachableError
 
     try:
