@@ -208,6 +208,18 @@ class Planning(_Model):
     dwell: float = Field(default=0.1, ge=0, description="Dwell at pick and at place in s (duty cycle: move, dwell, move back, dwell)")
 
 
+class Vibration(_Model):
+    """One flexible mode per base-frame axis x, y, z, excited by the tool acceleration (residual vibration:
+    ẍ + 2ζωẋ + ω²x = −a(t), ω = 2π·frequency; see ``pickplace_cli.vibration``)."""
+
+    frequency: tuple[Annotated[float, Field(gt=0)], Annotated[float, Field(gt=0)], Annotated[float, Field(gt=0)]] = Field(
+        description="Natural frequency f_n of the mode along x, y, z in Hz"
+    )
+    damping: tuple[Annotated[float, Field(ge=0, lt=1)], Annotated[float, Field(ge=0, lt=1)], Annotated[float, Field(ge=0, lt=1)]] = Field(
+        description="Damping ratio ζ of the mode along x, y, z (dimensionless, 0 <= ζ < 1)"
+    )
+
+
 class Profile(_Model):
     """A robot and its workcell."""
 
@@ -217,6 +229,7 @@ class Profile(_Model):
     capacity: Capacity
     planning: Planning
     workcell: Workcell = Field(default_factory=Workcell)
+    vibration: Vibration | None = Field(default=None, description="Flexible modes for the residual-vibration estimate (optional)")
 
 
 # --------------------------------------------------------------------------------------------- loading
