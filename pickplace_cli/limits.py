@@ -8,7 +8,7 @@ T (for a fixed path):
     joint torque  = A(τ)/T² + G(τ)         A: inertial (+ Coriolis, ∝ q̇²) part at T = 1, G: gravity
     motor torque  = A_m/T² + G_m            A_m = A/(N·η) + J_rotor·N·q̈₁,  G_m = G/(N·η)
     motor speed   = N·q̇₁/T
-    torque rate   = A_m′/T³ + G_m′/T         (′ = d/dτ, by central differences of the continuous model)
+    torque rate   = A_m′/T³ + G_m′/T         (′ = d/dτ: the robot's analytic torque_rate)
 
 so one evaluation of the model serves every T (``--time fit`` is a 1-D root search, not a re-plan).
 
@@ -170,24 +170,39 @@ class MotionModel:
         self.rotor = np.array([d.rotor_inertia if d else 0.0 for d in drives])
 
     # --------------------------------------------------------------------------------- evaluation
-    def _torques(self, tau: np.ndarray):
+    def _torques(self, tau: np.ndarray, rates: bool = False):
         path = self.path
+        robot = self.robot
         p, v, a, j = (path(tau, k) for k in range(4))
-        q, qd, qdd, qddd = self.robot.joint_motion(p, v, a, j)
-        full = self.robot.inverse_dynamics(q, qd, qdd, p, a)
-        zeros = np.zeros_like(q)
-        G = self.robot.inverse_dynamics(q, zeros, zeros, p, np.zeros_like(a))
-        A = full - G
-        Am = A / (self.gear * self.eff) + self.rotor * self.gear * qdd
-        Gm = G / (self.gear * self.eff)
-        return p, v, a, j, q, qd, qdd, qddd, A, G, Am, Gm
+        q, qd, qdd, qddd = robot.joint_motion(p, v, a, j)
+        dA = dG = None
+        if hasattr(robot, "split_dynamics"):  # one pass over the geometry (Delta)
+            A, G, dA, dG = robot.split_dynamics(q, qd, qdd, qddd, p, v, a, j, rates=rates)
+        else:
+            full = robot.inverse_dynamics(q, qd, qdd, p, a)
+            zeros = np.zeros_like(q)
+            G = robot.inverse_dynamics(q, zeros, zeros, p, np.zeros_like(a))
+            A = full - G
+            if rates:
+                dA, dG = robot.torque_rate(q, qd, qdd, qddd, p, v, a, j)
+        ng = self.gear * self.eff
+        Am = A / ng + self.rotor * self.gear * qdd
+        Gm = G / ng
+        dAm = dGm = None
+        if rates:
+            dAm = dA / ng + self.rotor * self.gear * qddd
+            dGm = dG / ng
+        return p, v, a, j, q, qd, qdd, qddd, A, G, Am, Gm, dAm, dGm
 
     def parts(self, tau: np.ndarray, derivatives: bool = True) -> Parts:
-        """Evaluate at τ; ``derivatives`` adds d/dτ of the motor torques (two more model evaluations)."""
+        """Evaluate at τ; ``derivatives`` adds d/dτ of the motor torques.
+
+        The robot's analytic ``torque_rate`` gives them when it has one; otherwise central differences of
+        the model (step ``DTAU``, two more evaluations)."""
         tau = np.asarray(tau, float)
-        p, v, a, j, q, qd, qdd, qddd, A, G, Am, Gm = self._torques(tau)
-        dAm = dGm = None
-        if derivatives:
+        analytic = derivatives and hasattr(self.robot, "torque_rate")
+        p, v, a, j, q, qd, qdd, qddd, A, G, Am, Gm, dAm, dGm = self._torques(tau, rates=analytic)
+        if derivatives and not analytic:
             hi = self._torques(tau + DTAU)
             lo = self._torques(tau - DTAU)
             dAm = (hi[10] - lo[10]) / (2 * DTAU)

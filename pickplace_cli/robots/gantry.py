@@ -47,3 +47,8 @@ class GantryRobot:
         force = np.asarray(qdd, float) * self.masses
         force[:, 2] += self.masses[2] * self.g
         return force
+
+    def torque_rate(self, q, qd, qdd, qddd, p=None, v=None, a=None, j=None) -> tuple[np.ndarray, np.ndarray]:
+        """(dA, dG) [N/s]: d/dt of the inertial forces m_i q̈_i (= m_i q⃛_i) and of gravity (constant: 0)."""
+        qddd = np.asarray(qddd, float)
+        return qddd * self.masses, np.zeros_like(qddd)

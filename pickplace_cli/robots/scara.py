@@ -302,6 +302,34 @@ class ScaraRobot:
         f3 = self.carried_mass * (qdd[:, 2] + self.g)
         return np.stack((tau1, tau2, f3), axis=1)
 
+    def torque_rate(
+        self, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, qddd: np.ndarray,
+        p: np.ndarray | None = None, v: np.ndarray | None = None, a: np.ndarray | None = None,
+        j: np.ndarray | None = None,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Time derivatives (dA, dG), each (N, 3) [N·m/s, N·m/s, N/s], of the inertial part A (everything but
+        gravity) and the static part G = (0, 0, m_t g) of :meth:`inverse_dynamics`, analytically.
+
+        With k = (m2 lc2 + m_t l2) l1: Ṁ11 = 2 h q̇2, Ṁ12 = h q̇2, Ṁ22 = 0, ḣ = −k cos q2 q̇2; G is constant.
+        """
+        q = _samples(q, "q")
+        qd = _samples(qd, "qd")
+        qdd = _samples(qdd, "qdd")
+        qddd = _samples(qddd, "qddd")
+        M11, M12, M22, h = self._mass_terms(q)
+        k = (self.m2 * self.lc2 + self.carried_mass * self.l2) * self.l1
+        w1, w2 = qd[:, 0], qd[:, 1]
+        a1, a2 = qdd[:, 0], qdd[:, 1]
+        hd = -k * np.cos(q[:, 1]) * w2
+        dM11, dM12 = 2.0 * h * w2, h * w2
+        d1 = (
+            dM11 * a1 + M11 * qddd[:, 0] + dM12 * a2 + M12 * qddd[:, 1]
+            + hd * (2.0 * w1 * w2 + w2 * w2) + h * (2.0 * (a1 * w2 + w1 * a2) + 2.0 * w2 * a2)
+        )
+        d2 = dM12 * a1 + M12 * qddd[:, 0] + M22 * qddd[:, 1] - hd * w1 * w1 - 2.0 * h * w1 * a1
+        d3 = self.carried_mass * qddd[:, 2]
+        return np.stack((d1, d2, d3), axis=1), np.zeros_like(qd)
+
     def kinetic_energy(self, q: np.ndarray, qd: np.ndarray, v: np.ndarray | None = None) -> np.ndarray:
         """KE (N,) [J] = ½ q̇ᵀ M(q) q̇ (z term ½ m_t q̇3² included). ``v`` is unused (symmetry with the Delta)."""
         q = _samples(q, "q")

@@ -192,3 +192,32 @@ def test_report_json_shape():
     d = BASE.report.as_dict()
     assert d["ok"] is True and d["picks_per_minute"] == pytest.approx(60 / (2 * (0.2 + 0.1)))
     assert {"joint", "quantity", "unit", "peak", "limit", "utilisation", "t_peak_s", "ok", "excess"} <= set(d["rows"][0])
+
+
+@pytest.mark.parametrize(
+    "name, task",
+    [
+        ("delta-su2018", ADEPT),
+        ("scara-600", SCARA_MOVE),
+        ("gantry", Task([0.1, 0.1, 0.1], [0.4, 0.3, 0.1], 0.025, 0.5)),
+    ],
+)
+def test_analytic_torque_rate_matches_differences_of_the_model(name, task):
+    """The robots' analytic torque_rate (used by the check) equals d/dτ of the model's motor torques.
+
+    Reference: Richardson-extrapolated central differences of the model itself (steps 1e-4 and 5e-5 in τ,
+    truncation O(h⁴) ~ 1e-12, round-off ~ eps/h ~ 1e-11 relative) — so a 1e-7 relative tolerance can only
+    fail on a wrong formula, not on the reference."""
+    from pickplace_cli.methods import plan_path
+
+    model = motion_model(plan_path(task, "bspline"), profile_from(raw(name)))
+    tau = np.linspace(0.002, 0.998, 301)
+    parts = model.parts(tau)
+
+    def fd(h: float, k: int) -> np.ndarray:
+        return (model._torques(tau + h)[k] - model._torques(tau - h)[k]) / (2 * h)
+
+    for k, got in ((10, parts.dAm), (11, parts.dGm)):
+        ref = (4 * fd(5e-5, k) - fd(1e-4, k)) / 3
+        scale = max(np.max(np.abs(ref)), 1e-300)
+        assert np.max(np.abs(got - ref)) <= 1e-7 * max(scale, np.max(np.abs(parts.dAm))), (name, k)
