@@ -36,6 +36,25 @@ app = typer.Typer(
 class OutputFormat(str, Enum):
     csv = "csv"
     json = "json"
+    mcap = "mcap"
+
+
+class CsvDialectName(str, Enum):
+    """Mirror of pickplace_cli.export.csv.CsvDialect."""
+
+    default = "default"
+    twincat = "twincat"
+    tsv = "tsv"
+
+
+class McapFlavor(str, Enum):
+    ros2 = "ros2"
+    foxglove = "foxglove"
+
+
+class Compression(str, Enum):
+    none = "none"
+    zstd = "zstd"
 
 
 class MethodName(str, Enum):
@@ -117,13 +136,25 @@ def _finite(name: str, value: Optional[float], rule: str = "> 0") -> Optional[fl
     return value
 
 
+def _complete_profile(incomplete: str) -> list[str]:
+    """Shell completion for --profile: the shipped profile names (files complete by the shell)."""
+    try:
+        from .resources import data_dir
+
+        names = sorted(p.stem for p in data_dir("profiles").glob("*.yaml"))
+    except Exception:  # completion must never fail loudly
+        return []
+    return [n for n in names if n.startswith(incomplete)]
+
+
 @app.command()
 @_handle_errors
 def plan(
-    from_: str = typer.Option(..., "--from", help="Pick point X,Y,Z in m (base frame), e.g. -0.1525,0,-0.8."),
-    to: str = typer.Option(..., "--to", help="Place point X,Y,Z in m (base frame)."),
+    from_: Optional[str] = typer.Option(None, "--from", help="Pick point X,Y,Z in m (base frame), e.g. -0.1525,0,-0.8."),
+    to: Optional[str] = typer.Option(None, "--to", help="Place point X,Y,Z in m (base frame)."),
     profile: Optional[str] = typer.Option(
-        None, "--profile", "-p", help="Profile YAML file, or the name of a shipped profile. [default: delta-su2018]"
+        None, "--profile", "-p", help="Profile YAML file, or the name of a shipped profile. [default: delta-su2018]",
+        autocompletion=_complete_profile,
     ),
     height: Optional[float] = typer.Option(
         None, "--height", help="Clearance h in m of the path's midpoint above the higher end point. [default: profile]"
@@ -143,8 +174,26 @@ def plan(
         "or 'fit' (the smallest duration at which every joint and motor limit holds).",
     ),
     rate: Optional[float] = typer.Option(None, "--rate", help="Samples per second in Hz. [default: profile]"),
+    batch: Optional[str] = typer.Option(
+        None, "--batch", help="Plan many moves from a CSV ('-' = stdin): columns from_x,from_y,from_z,to_x,to_y,to_z "
+        "[m], optional height [m], eta, v_from_x.. v_to_z [m/s], time [s|auto|fit]. Output gets a move column."
+    ),
+    fail_fast: bool = typer.Option(False, "--fail-fast", help="With --batch: stop at the first row that fails."),
+    round_trip: bool = typer.Option(
+        False, "--round-trip", help="Write there, dwell, back, dwell (the profile's dwell in s) as one trajectory."
+    ),
     fmt: OutputFormat = typer.Option(OutputFormat.csv, "--format", "-f", help="Output format."),
-    output: str = typer.Option("-", "--output", "-o", help="Output file ('-' = stdout). Written atomically."),
+    csv_dialect: CsvDialectName = typer.Option(
+        CsvDialectName.default, "--csv-dialect",
+        help="CSV flavour: default (',' LF, header), twincat (';' CRLF, header), tsv (tab, no header).",
+    ),
+    mcap_flavor: McapFlavor = typer.Option(
+        McapFlavor.ros2, "--mcap-flavor", help="MCAP: ros2 (CDR, ROS 2 messages) or foxglove (JSON, Foxglove schemas)."
+    ),
+    compression: Compression = typer.Option(Compression.none, "--compression", help="MCAP chunk compression."),
+    output: Optional[str] = typer.Option(
+        None, "--output", "-o", help="Output file ('-' = stdout, the default without --json). Written atomically."
+    ),
     report: Optional[str] = typer.Option(None, "--report", help="Also write the limit report as JSON to this file."),
     report_only: bool = typer.Option(
         False,
@@ -152,22 +201,23 @@ def plan(
         help="Write the trajectory and exit 0 even when a limit is exceeded (the report still says so). "
         "Without it, a move that breaks a limit is not written.",
     ),
-    quiet: bool = typer.Option(False, "--quiet", "-q", help="No summary or limit table on stderr (errors and violations are still printed)."),
+    json_summary: bool = typer.Option(
+        False, "--json", help="Print a JSON summary (durations in s, cycle time, picks/min, verdict) on stdout "
+        "instead of the trajectory (one line per row with --batch); the trajectory then goes only to -o FILE.",
+    ),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="Nothing on stderr but errors and exceeded limits."),
 ) -> None:
-    """Plan one move, check it against the robot's limits, and write the sampled trajectory.
+    """Plan one move (or a round trip, or a batch), check it against the robot's limits, write the samples.
 
     CSV columns: t[s], x y z [m], vx… [m/s], ax… [m/s^2], jx… [m/s^3], then per joint q<i>, qd<i>, qdd<i>,
-    then torque<i> (joint side, N·m or N), motor_speed<i> [rad/s], motor_torque<i> [N·m].
-    Exit 3 when a limit is exceeded, 4 when a point is unreachable or outside the workcell.
+    then torque<i> (joint side, N·m or N), motor_speed<i> [rad/s], motor_torque<i> [N·m]; a batch or round
+    trip adds a leading move column. Exit 3 when a limit is exceeded, 4 when a point is unreachable or
+    outside the workcell, 1 for invalid input; a batch exits with the highest code of its rows.
     """
     from .errors import TaskError
     from .planner import PlanOptions
-    from .planner import plan as run_plan
     from .profile import load_profile
-    from .task import Task
 
-    p_from = _parse_point("from", from_)
-    p_to = _parse_point("to", to)
     _finite("height", height)
     _finite("rate", rate)
     for name, k in (("k1", k1), ("k2", k2)):
@@ -175,42 +225,214 @@ def plan(
             raise TaskError(f"{name} = {k!r}: time-ratio factors must lie strictly between 0 and 1")
     if eta is not None and not (0 < eta < 1):
         raise TaskError(f"eta = {eta!r}: the lift-off/set-down ratio η must lie strictly between 0 and 1")
+    if batch is not None and (from_ is not None or to is not None):
+        raise TaskError("batch: --batch takes the moves from the file; do not also give --from/--to")
+    if batch is None and (from_ is None or to is None):
+        raise TaskError(f"{'to' if from_ is not None else 'from'}: give both --from X,Y,Z and --to X,Y,Z in m (or --batch FILE)")
+    if batch is not None and round_trip:
+        raise TaskError("round-trip: not available with --batch (give each leg as a row)")
+    if fail_fast and batch is None:
+        raise TaskError("fail-fast: only means something with --batch")
+    if json_summary and output == "-":
+        raise TaskError("output = -: with --json stdout carries the summary; give -o a file for the trajectory")
+    if output is None and not json_summary:
+        output = "-"
+    _check_output_paths(output, report)
     prof = load_profile(profile)
-    task = Task(
-        p_from,
-        p_to,
-        height if height is not None else prof.planning.height,
-        eta if eta is not None else prof.planning.eta,
-    )
     params: dict = {}
     if method == MethodName.bspline:
         params = {"k1": k1, "k2": k2, "table": table}
-    _check_output_paths(output, report)
-    result = run_plan(task, prof, PlanOptions(method=method.value, method_params=params, time=time, rate=rate))
-    code = result.report.exit_code()
+    writer = _writer(fmt, csv_dialect, mcap_flavor, compression)
+    if batch is not None:
+        options = PlanOptions(method=method.value, method_params=params, time=time, rate=rate, fit=time == "fit")
+        _plan_batch(batch, prof, options, height, eta, fail_fast, writer, output, report, report_only, json_summary, quiet)
+        return
+    from .task import Task
+
+    p_from = _parse_point("from", from_)
+    p_to = _parse_point("to", to)
+    h = height if height is not None else prof.planning.height
+    e = eta if eta is not None else prof.planning.eta
+    options = PlanOptions(method=method.value, method_params=params, time=time, rate=rate)
+    legs = [_run_plan(Task(p_from, p_to, h, e), prof, options)]
+    if round_trip:
+        legs.append(_run_plan(Task(p_to, p_from, h, e), prof, options))
+    for i, leg in enumerate(legs):
+        if not quiet:
+            if round_trip:
+                sys.stderr.write(f"--- move {i + 1} ({'there' if i == 0 else 'back'}) ---\n")
+            _print_summary(leg)
+            _print_limit_table(leg.report)
+        _print_verdict(leg.report, quiet, with_cycle=not round_trip)
+    code = max(leg.report.exit_code() for leg in legs)
+    dwell = prof.planning.dwell
+    cycle = sum(leg.report.duration for leg in legs) + len(legs) * dwell if round_trip else legs[0].report.round_trip
+    if round_trip and not quiet:
+        sys.stderr.write(
+            f"round trip: {legs[0].report.duration:.4f} s + {legs[1].report.duration:.4f} s + 2 × {dwell:g} s dwell "
+            f"= {cycle:.4f} s, {60.0 / cycle:.1f} picks/min; {'all limits hold' if code == 0 else 'LIMITS EXCEEDED'}\n"
+        )
     if report is not None:
-        _write_report(result, report)
-    if not quiet:
-        _print_summary(result)
-        _print_limit_table(result.report)
-    _print_verdict(result.report, quiet)
+        _write_report(legs, report)
+    if json_summary:
+        _emit_json(_json_summary(legs, cycle, code))
     if code and not report_only:
         sys.stderr.write(
             "pickplace: trajectory not written (a limit is exceeded); --report-only writes it anyway\n"
         )
         raise typer.Exit(code)
-    _write_plan(result, fmt, output)
+    if output is not None:
+        if round_trip:
+            from .timeline import round_trip as make_round_trip
+
+            rate_hz = rate if rate is not None else prof.planning.rate
+            samples = make_round_trip(legs[0], legs[1], dwell, rate_hz)
+        else:
+            samples = legs[0]
+        writer(samples, output)
 
 
-def _write_plan(result, fmt: OutputFormat, output: str) -> None:
-    from .export import atomic_output
+def _run_plan(task, prof, options):
+    from .planner import plan as run_plan
 
-    if fmt == OutputFormat.csv:
-        from .export.csv import write_csv as writer
+    return run_plan(task, prof, options)
+
+
+def _writer(fmt, dialect, flavor, compression) -> Callable:
+    """A function (samples, output path) that writes atomically in the chosen format."""
+    from .errors import ExportError
+
+    if fmt != OutputFormat.mcap and compression != Compression.none:
+        raise ExportError(f"compression = {compression.value}: only MCAP output is compressed (--format mcap)")
+    if fmt != OutputFormat.csv and dialect != CsvDialectName.default:
+        raise ExportError(f"csv-dialect = {dialect.value}: only applies to --format csv")
+
+    def write(samples, output: str) -> None:
+        from .export import atomic_output
+
+        if fmt == OutputFormat.csv:
+            from .export.csv import write_csv
+
+            with atomic_output(output) as stream:
+                write_csv(samples, stream, dialect=dialect.value)
+        elif fmt == OutputFormat.json:
+            from .export.json import write_json
+
+            with atomic_output(output) as stream:
+                write_json(samples, stream)
+        else:
+            from .export.mcap import write_mcap
+
+            with atomic_output(output, binary=True) as stream:
+                write_mcap(samples, stream, flavor=flavor.value,
+                           compression=None if compression == Compression.none else compression.value)
+
+    write.one_timeline = fmt == OutputFormat.mcap  # type: ignore[attr-defined]
+    return write
+
+
+def _json_summary(legs, cycle: float, code: int) -> dict:
+    """The --json document: per-move summaries plus the cycle and the verdict."""
+    moves = []
+    for leg in legs:
+        s = leg.summary()
+        s["violations"] = [r.as_dict() for r in leg.report.violations]
+        moves.append(s)
+    doc = dict(moves[0]) if len(moves) == 1 else {"moves": moves}
+    doc.update({
+        "cycle_time_s": cycle,
+        "picks_per_minute": 60.0 / cycle,
+        "limits_ok": code == 0,
+        "exit_code": code,
+    })
+    return doc
+
+
+def _emit_json(doc: dict) -> None:
+    import json
+
+    sys.stdout.write(json.dumps(doc, allow_nan=False, default=float) + "\n")
+    sys.stdout.flush()
+
+
+def _plan_batch(source, prof, options, height, eta, fail_fast, writer, output, report, report_only, json_summary, quiet) -> None:
+    """--batch: plan every row, report failures by row number, write the good ones, exit with the worst code."""
+    from .batch import plan_rows, read_batch
+    from .errors import TaskError
+
+    name = "stdin" if source == "-" else source
+    if source == "-":
+        rows, bad = read_batch(sys.stdin, name)
     else:
-        from .export.json import write_json as writer
-    with atomic_output(output) as stream:
-        writer(result, stream)
+        try:
+            with open(source, encoding="utf-8", newline="") as fh:
+                rows, bad = read_batch(fh, name)
+        except OSError as exc:
+            raise TaskError(f"batch = {source}: cannot read it: {exc.strerror}") from None
+    for b in bad:
+        sys.stderr.write(f"pickplace: {b.error}\n")
+    first_bad = min((b.row for b in bad), default=None)
+    if fail_fast and first_bad is not None:
+        rows = [r for r in rows if r.row < first_bad]
+        bad = [b for b in bad if b.row == first_bad]
+    total = len(rows) + len(bad)
+    results = {b.row: b for b in bad}
+    progress = None
+    if not quiet and total >= 50 and sys.stderr.isatty():
+        from rich.console import Console
+        from rich.progress import Progress
+
+        progress = Progress(console=Console(stderr=True), transient=True)
+        progress.start()
+        bar = progress.add_task(f"planning {total} moves", total=len(rows))
+    try:
+        for res in plan_rows(rows, prof, options, height, eta, fail_fast, name):
+            results[res.row] = res
+            if progress is not None:
+                progress.advance(bar)
+            if res.error is not None:
+                sys.stderr.write(f"pickplace: {res.error}\n")
+                if fail_fast:
+                    break
+    finally:
+        if progress is not None:
+            progress.stop()
+    ordered = [results[k] for k in sorted(results)]
+    if fail_fast:
+        stop = next((r.row for r in ordered if r.code), None)
+        if stop is not None:
+            ordered = [r for r in ordered if r.row <= stop]
+    codes = [r.code for r in ordered]
+    worst = max(codes, default=0)
+    planned = [r for r in ordered if r.plan is not None and (r.code == 0 or report_only)]
+    if json_summary:
+        for r in ordered:
+            doc: dict = {"row": r.row, "exit_code": r.code, "error": r.error}
+            if r.plan is not None:
+                doc.update(r.plan.summary())
+                doc["violations"] = [v.as_dict() for v in r.plan.report.violations]
+            _emit_json(doc)
+    if report is not None:
+        _write_report([r.plan for r in ordered if r.plan is not None], report, rows=[r.row for r in ordered if r.plan is not None])
+    if not quiet:
+        n_ok = sum(1 for c in codes if c == 0)
+        sys.stderr.write(
+            f"batch: {len(ordered)} rows, {n_ok} ok, {len(ordered) - n_ok} failed"
+            + (f" (first failing row {next(r.row for r in ordered if r.code)})" if worst else "")
+            + (f"; {len(planned)} written" if output is not None else "") + "\n"
+        )
+    if output is not None and planned:
+        from .timeline import concatenate
+
+        # CSV/JSON: each move keeps its own time (the move column tells them apart); MCAP: one timeline,
+        # moves one dwell apart
+        samples = concatenate([r.plan for r in planned], [r.row for r in planned],
+                              restart_time=not writer.one_timeline, gap=prof.planning.dwell)
+        writer(samples, output)
+    elif output is not None and not planned:
+        sys.stderr.write("pickplace: no row could be written\n")
+    if worst and not (report_only and all(c == 3 for c in codes if c)):
+        raise typer.Exit(worst)
 
 
 def _check_output_paths(output: str, report: Optional[str]) -> None:
@@ -229,12 +451,18 @@ def _check_output_paths(output: str, report: Optional[str]) -> None:
             raise ExportError(f"report = {report}: the same file as --output; give them different paths")
 
 
-def _write_report(result, path: str) -> None:
+def _write_report(results, path: str, rows: Optional[list] = None) -> None:
+    """--report: summary and limit rows of one plan, or of every move (a round trip, a batch)."""
     import json
 
     from .export import atomic_output
 
-    doc = {"summary": result.summary(), "limits": result.report.as_dict()}
+    results = list(results) if isinstance(results, (list, tuple)) else [results]
+    docs = [{"summary": r.summary(), "limits": r.report.as_dict()} for r in results]
+    if rows is not None:
+        for d, n in zip(docs, rows):
+            d["row"] = n
+    doc = docs[0] if len(docs) == 1 and rows is None else {"moves": docs}
     with atomic_output(path) as stream:
         json.dump(doc, stream, indent=2, allow_nan=False, default=float)
         stream.write("\n")
@@ -262,11 +490,13 @@ def _print_limit_table(report) -> None:
     Console(stderr=True, highlight=False, soft_wrap=True).print(table)
 
 
-def _print_verdict(report, quiet: bool) -> None:
+def _print_verdict(report, quiet: bool, with_cycle: bool = True) -> None:
     cycle = (
         f"cycle: {report.duration:.4f} s one way, {report.round_trip:.4f} s round trip "
         f"(dwell {report.dwell:g} s), {report.picks_per_minute:.1f} picks/min"
     )
+    if not with_cycle:
+        cycle = f"move {report.duration:.4f} s"
     if report.ok:
         if not quiet:
             sys.stderr.write(f"verdict: all limits hold; {cycle}\n")
@@ -498,6 +728,179 @@ def build_table_cmd(
             f"{len(lams)} rows; cubic fit (Eq. 23) on λ ≥ {fit_min:g}: max |residual| {res:.3g}; "
             f"k1 = {g1[0]:.4g} + {g1[1]:.4g} λ + {g1[2]:.4g} λ² + {g1[3]:.4g} λ³\n"
         )
+
+
+class CompareFormat(str, Enum):
+    table = "table"
+    csv = "csv"
+    json = "json"
+
+
+def _task_from_options(from_: str, to: str, profile: Optional[str], height: Optional[float], eta: Optional[float]):
+    """(profile, task) from the shared move options of compare and plot (one-line errors)."""
+    from .errors import TaskError
+    from .profile import load_profile
+    from .task import Task
+
+    p_from = _parse_point("from", from_)
+    p_to = _parse_point("to", to)
+    _finite("height", height)
+    if eta is not None and not (0 < eta < 1):
+        raise TaskError(f"eta = {eta!r}: the lift-off/set-down ratio η must lie strictly between 0 and 1")
+    prof = load_profile(profile)
+    task = Task(p_from, p_to, height if height is not None else prof.planning.height,
+                eta if eta is not None else prof.planning.eta)
+    return prof, task
+
+
+def _opt(x, fmt: str = "{:.4g}", scale: float = 1.0) -> str:
+    return "–" if x is None else fmt.format(x * scale)
+
+
+def _print_comparison(comparison) -> None:
+    """One column per method, one row per quantity (fits a terminal with every method of the registry)."""
+    from rich.console import Console
+    from rich.markup import escape
+    from rich.table import Table
+
+    rows = [r for r in comparison.rows if r.ok]
+
+    def geo(attr):
+        return lambda r: _opt(getattr(r.geometry, attr))
+
+    def vib(attr):
+        return lambda r: _opt(None if r.vibration is None else getattr(r.vibration, attr))
+
+    lines = [
+        ("duration T [s]", lambda r: f"{r.duration:.4f} ({r.duration_mode})"),
+        ("auto (true peaks) [s]", lambda r: _opt(r.auto, "{:.4f}")),
+        ("fit (motor limits) [s]", lambda r: _opt(r.fit, "{:.4f}")),
+        ("paper formula [s]", lambda r: _opt(r.paper_duration, "{:.4f}")),
+        ("v_max (b = 1, T = 1)", lambda r: _opt(r.v_norm)),
+        ("a_max (b = 1, T = 1)", lambda r: _opt(r.a_norm)),
+        ("j_max (b = 1, T = 1)", lambda r: _opt(r.j_norm)),
+        ("peak |v| [m/s]", lambda r: _opt(r.peak_speed)),
+        ("peak |a| [m/s²]", lambda r: _opt(r.peak_acceleration)),
+        ("peak |j| [m/s³]", lambda r: _opt(r.peak_jerk)),
+        ("peak joint torque", lambda r: f"{r.joint_torque_peak:.4g} {r.joint_torque_unit}"),
+        ("motor torque use %", lambda r: _opt(r.motor_torque_use, "{:.1f}", 100)),
+        ("torque rate use %", lambda r: _opt(r.torque_rate_use, "{:.1f}", 100)),
+        ("limits", lambda r: "ok" if r.limits_ok else "EXCEEDED"),
+        ("max height above ends [m]", geo("max_height")),
+        ("overshoot of h [m]", geo("overshoot")),
+        ("backward drift [m]", geo("drift_back")),
+        ("past the target [m]", geo("drift_forward")),
+        ("continuity", lambda r: r.continuity.label),
+        ("residual vibration [m]", vib("max_amplitude")),
+        ("residual acceleration [m/s²]", vib("max_acceleration_amplitude")),
+    ]
+    table = Table(box=None, pad_edge=False, show_header=True, header_style="bold")
+    table.add_column("quantity", justify="left")
+    for r in rows:
+        table.add_column(escape(r.method), justify="right")
+    for name, fn in lines:
+        table.add_row(escape(name), *(escape(fn(r)) for r in rows))
+    t = comparison.task
+    out = Console(stderr=True, highlight=False, soft_wrap=True)
+    out.print(escape(
+        f"{comparison.profile_name}: b = {t.b:.4g} m, h = {t.height:.4g} m, λ = {t.lam:.4g}, η = {t.eta:g}; "
+        f"duration: {comparison.time}"
+    ))
+    out.print(table)
+    for r in comparison.rows:
+        for note in r.notes:
+            sys.stderr.write(f"{r.method}: {note}\n")
+        if r.ok and not r.limits_ok:
+            sys.stderr.write(f"{r.method}: a limit is exceeded at T = {r.duration:.4f} s ({r.worst_limit})\n")
+
+
+@app.command()
+@_handle_errors
+def compare(
+    from_: str = typer.Option(..., "--from", help="Pick point X,Y,Z in m (base frame)."),
+    to: str = typer.Option(..., "--to", help="Place point X,Y,Z in m (base frame)."),
+    methods: str = typer.Option("all", "--methods", "-m", help="'all' or method names separated by commas."),
+    profile: Optional[str] = typer.Option(None, "--profile", "-p", help="Profile YAML file or shipped name. [default: delta-su2018]"),
+    height: Optional[float] = typer.Option(None, "--height", help="Clearance h in m above the higher end point. [default: profile]"),
+    eta: Optional[float] = typer.Option(None, "--eta", help="Lift-off/set-down ratio η, 0 < η < 1. [default: profile]"),
+    time: str = typer.Option("auto", "--time", "-t", help="Duration for the peaks and torques: 'auto', 'fit' or seconds."),
+    fmt: CompareFormat = typer.Option(CompareFormat.table, "--format", "-f", help="table (stderr only), csv or json (stdout or -o)."),
+    output: str = typer.Option("-", "--output", "-o", help="Output file for csv/json ('-' = stdout). Written atomically."),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="No table on stderr with csv/json (errors still print)."),
+) -> None:
+    """Compare every planning method on one move: durations (auto, fit, the paper's formula), normalised
+    and true peaks, joint torque and torque-rate use, height, overshoot, drift, continuity class, residual
+    vibration. Exit 0 when at least one method planned (limits exceeded are shown, not fatal); otherwise
+    the first method's error code.
+    """
+    from .compare import compare_methods, write_compare_csv, write_compare_json
+    from .errors import ExportError
+    from .export import atomic_output, check_writable
+
+    if fmt == CompareFormat.table and output != "-":
+        raise ExportError(f"output = {output}: --format table prints to stderr; use --format csv or json to write a file")
+    check_writable(output)
+    prof, task = _task_from_options(from_, to, profile, height, eta)
+    result = compare_methods(task, prof, methods, time=time)
+    for r in result.rows:
+        if not r.ok:
+            sys.stderr.write(f"pickplace: method {r.method}: {r.error}\n")
+    if not result.ok_rows:
+        _err("no method could plan this move")
+        raise typer.Exit(result.rows[0].exit_code or 1)
+    if fmt == CompareFormat.table or not quiet:
+        _print_comparison(result)
+    if fmt != CompareFormat.table:
+        writer = write_compare_csv if fmt == CompareFormat.csv else write_compare_json
+        with atomic_output(output) as stream:
+            writer(result, stream)
+
+
+@app.command()
+@_handle_errors
+def plot(
+    from_: str = typer.Option(..., "--from", help="Pick point X,Y,Z in m (base frame)."),
+    to: str = typer.Option(..., "--to", help="Place point X,Y,Z in m (base frame)."),
+    output: str = typer.Option(..., "--output", "-o", help="Figure file (.png or .svg), written atomically; '-' = stdout with --format."),
+    methods: str = typer.Option("all", "--methods", "-m", help="'all' or method names separated by commas."),
+    profile: Optional[str] = typer.Option(None, "--profile", "-p", help="Profile YAML file or shipped name. [default: delta-su2018]"),
+    height: Optional[float] = typer.Option(None, "--height", help="Clearance h in m above the higher end point. [default: profile]"),
+    eta: Optional[float] = typer.Option(None, "--eta", help="Lift-off/set-down ratio η, 0 < η < 1. [default: profile]"),
+    time: str = typer.Option("auto", "--time", "-t", help="Duration of each method's move: 'auto', 'fit' or seconds."),
+    normalised: bool = typer.Option(False, "--normalised", help="Plot with b = 1 and T = 1 against τ (like Li 2018 Fig. 5)."),
+    fmt: Optional[str] = typer.Option(None, "--format", "-f", help="png or svg. [default: from the file's suffix]"),
+) -> None:
+    """Draw the path in the vertical plane (u along the move, z) and |v|, |a|, |j| against time for one or
+    several methods (PNG or SVG; needs the optional extra: pip install 'pickplace-cli[plot]')."""
+    from .compare import parse_methods
+    from .errors import PickplaceError
+    from .export import atomic_output, check_writable
+    from .export.plot import PlotMove, plot_format, require_matplotlib, write_plot
+    from .planner import PlanOptions
+    from .planner import plan as run_plan
+    from .timing import parse_time
+
+    require_matplotlib()
+    kind = plot_format(output, fmt)
+    check_writable(output)
+    prof, task = _task_from_options(from_, to, profile, height, eta)
+    spec = parse_time(time)
+    moves = []
+    first_error = None
+    for m in parse_methods(methods):
+        try:
+            res = run_plan(task, prof, PlanOptions(method=m, time=spec, fit=spec == "fit"))
+        except PickplaceError as exc:
+            sys.stderr.write(f"pickplace: method {m.value}: {exc}\n")
+            first_error = first_error or exc
+            continue
+        moves.append(PlotMove(f"{m.value} (T = {res.duration.seconds:.4f} s)", res.cartesian, task))
+    if not moves:
+        _err("no method could plan this move")
+        raise typer.Exit(first_error.exit_code if first_error else 1)
+    title = f"{prof.name}: b = {task.b:.4g} m, h = {task.height:.4g} m, λ = {task.lam:.4g}"
+    with atomic_output(output, binary=True) as stream:
+        write_plot(moves, stream, kind, normalised, title)
 
 
 def main() -> None:

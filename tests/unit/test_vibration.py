@@ -14,7 +14,7 @@ from pickplace_cli.task import Task
 from pickplace_cli.trajectory import CartesianTrajectory
 from tests.conftest import ADEPT_FROM, ADEPT_TO
 
-F = np.array([18.0, 18.0, 25.0])  # Hz (the shipped Delta's estimates)
+F = np.array([18.0, 18.0, 25.0])  # Hz (Delta-like estimates)
 Z = np.array([0.03, 0.03, 0.03])
 
 
