@@ -61,6 +61,10 @@ class MethodName(str, Enum):
     """Mirror of pickplace_cli.methods.Method (kept here so --help needs no numpy)."""
 
     bspline = "bspline"
+    ph = "ph"
+    superposition = "superposition"
+    lame = "lame"
+    piecewise_poly = "piecewise-poly"
 
 
 def _err(message: str) -> None:
@@ -105,6 +109,13 @@ def _root(
     ),
 ) -> None:
     """pickplace: smooth pick-and-place trajectories (Li 2018 quintic B-splines) checked for a robot."""
+
+
+def _usage(message: str) -> None:
+    """A usage error (exit 2), reported by click like any other misuse of the options."""
+    import click
+
+    raise click.UsageError(message)
 
 
 def _parse_point(name: str, text: str):
@@ -226,15 +237,15 @@ def plan(
     if eta is not None and not (0 < eta < 1):
         raise TaskError(f"eta = {eta!r}: the lift-off/set-down ratio η must lie strictly between 0 and 1")
     if batch is not None and (from_ is not None or to is not None):
-        raise TaskError("batch: --batch takes the moves from the file; do not also give --from/--to")
+        _usage("--batch takes the moves from the file; do not also give --from/--to")
     if batch is None and (from_ is None or to is None):
-        raise TaskError(f"{'to' if from_ is not None else 'from'}: give both --from X,Y,Z and --to X,Y,Z in m (or --batch FILE)")
+        _usage(f"missing --{'to' if from_ is not None else 'from'}: give both --from X,Y,Z and --to X,Y,Z in m (or --batch FILE)")
     if batch is not None and round_trip:
-        raise TaskError("round-trip: not available with --batch (give each leg as a row)")
+        _usage("--round-trip is not available with --batch (give each leg as a row)")
     if fail_fast and batch is None:
-        raise TaskError("fail-fast: only means something with --batch")
+        _usage("--fail-fast only applies to --batch")
     if json_summary and output == "-":
-        raise TaskError("output = -: with --json stdout carries the summary; give -o a file for the trajectory")
+        _usage("-o -: with --json stdout carries the summary; give -o a file for the trajectory")
     if output is None and not json_summary:
         output = "-"
     _check_output_paths(output, report)

@@ -13,6 +13,10 @@ class Method(str, Enum):
     """Names accepted by ``--method``."""
 
     bspline = "bspline"
+    ph = "ph"
+    superposition = "superposition"
+    lame = "lame"
+    piecewise_poly = "piecewise-poly"
 
 
 def _bspline(task: Task, **params: Any) -> CartesianPath:
@@ -21,9 +25,37 @@ def _bspline(task: Task, **params: Any) -> CartesianPath:
     return plan_bspline(task, **params)
 
 
+def _ph(task: Task, **params: Any) -> CartesianPath:
+    from .ph import plan_ph
+
+    return plan_ph(task, **params)
+
+
+def _superposition(task: Task, **params: Any) -> CartesianPath:
+    from .superposition import plan_superposition
+
+    return plan_superposition(task, **params)
+
+
+def _lame(task: Task, **params: Any) -> CartesianPath:
+    from .lame import plan_lame
+
+    return plan_lame(task, **params)
+
+
+def _piecewise_poly(task: Task, **params: Any) -> CartesianPath:
+    from .piecewise_poly import plan_piecewise_poly
+
+    return plan_piecewise_poly(task, **params)
+
+
 #: method → planner(task, **params) -> CartesianPath (imports of the method modules stay lazy)
 PLANNERS: dict[Method, Callable[..., CartesianPath]] = {
     Method.bspline: _bspline,
+    Method.ph: _ph,
+    Method.superposition: _superposition,
+    Method.lame: _lame,
+    Method.piecewise_poly: _piecewise_poly,
 }
 
 
