@@ -143,19 +143,23 @@ def path_length(h: float, w: float, m: float, r: float) -> float:
     return 2 * (h - m) + 2 * ph_length(*ph_coefficients(m, r)) + w - 2 * r
 
 
-def cycle_time_eq22(h: float, w: float, a_max: float, m: float | None = None, r: float | None = None) -> float:
+def cycle_time_eq22(h, w, a_max, m=None, r=None):
     """The paper's cycle time T = sqrt(10(2h + w + 4/34·ψ)/(√3 a_max)) [Su2018, Eq. (22)] (s).
 
     ψ = ζ − α + sqrt(0.5(β − αζ)), α = sqrt(m² + r² + 70mr), β = m² + r² + 36mr, ζ = m + r; defaults m = h,
     r = w/2. It bounds only the tangential acceleration of the 3-4-5 law (peak 10/√3·l_all/T²).
+    Vectorised: h, w (m), a_max (m/s²), m, r may be arrays (float for scalars). β − αζ ≥ 0 in exact
+    arithmetic; a round-off negative (at m = 0 or r = 0) is clipped to 0.
     """
-    m = h if m is None else m
-    r = w / 2 if r is None else r
-    alpha = math.sqrt(m * m + r * r + 70 * m * r)
+    h, w = np.asarray(h, float), np.asarray(w, float)
+    m = h if m is None else np.asarray(m, float)
+    r = w / 2 if r is None else np.asarray(r, float)
+    alpha = np.sqrt(m * m + r * r + 70 * m * r)
     beta = m * m + r * r + 36 * m * r
     zeta = m + r
-    psi = zeta - alpha + math.sqrt(max(0.5 * (beta - alpha * zeta), 0.0))
-    return math.sqrt(10 * (2 * h + w + 4 / 34 * psi) / (math.sqrt(3) * a_max))
+    psi = zeta - alpha + np.sqrt(np.maximum(0.5 * (beta - alpha * zeta), 0.0))
+    t = np.sqrt(10 * (2 * h + w + 4 / 34 * psi) / (math.sqrt(3) * np.asarray(a_max, float)))
+    return float(t) if t.ndim == 0 else t
 
 
 def _corner_params(task: Task, m: float | None, r: float | None) -> tuple[float, float, float, float, float, float]:

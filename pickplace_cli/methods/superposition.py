@@ -41,29 +41,35 @@ from ._motion import AxisLaws, Placement, local_endpoints, to_cartesian
 _K = math.sqrt(10.0 / math.sqrt(3.0))
 
 
-def axis_time(distance: float, a_max: float) -> float:
+def _out(x):
+    x = np.asarray(x, float)
+    return float(x) if x.ndim == 0 else x
+
+
+def axis_time(distance, a_max):
     """Duration (s) of a 3-4-5 move over ``distance`` (m) whose acceleration peak is a_max (m/s²)."""
-    return _K * math.sqrt(distance / a_max)
+    return _out(_K * np.sqrt(np.asarray(distance, float) / a_max))
 
 
-def cycle_time_eq26(h: float, w: float, a_max: float) -> float:
-    """T = sqrt(10w/(√3 a_max)) + sqrt(10h/(√3 a_max)) for h ≤ w [Su2018, Eq. (26)] (s)."""
-    return axis_time(w, a_max) + axis_time(h, a_max)
+def cycle_time_eq26(h, w, a_max):
+    """T = sqrt(10w/(√3 a_max)) + sqrt(10h/(√3 a_max)) for h ≤ w [Su2018, Eq. (26)] (s); vectorised."""
+    return _out(np.asarray(axis_time(w, a_max)) + axis_time(h, a_max))
 
 
-def cycle_time_eq27(h: float, w: float, a_max: float) -> float:
-    """T = 2·sqrt(10h/(√3 a_max)) for h > w [Su2018, Eq. (27)] (s)."""
-    return 2.0 * axis_time(h, a_max)
+def cycle_time_eq27(h, w, a_max):
+    """T = 2·sqrt(10h/(√3 a_max)) for h > w [Su2018, Eq. (27)] (s); vectorised."""
+    return _out(2.0 * np.asarray(axis_time(h, a_max)))
 
 
-def cycle_time(h: float, w: float, a_max: float) -> float:
-    """The paper's cycle time of the superposition method: Eq. (26) if h ≤ w, else Eq. (27) (s)."""
-    return cycle_time_eq26(h, w, a_max) if h <= w else cycle_time_eq27(h, w, a_max)
+def cycle_time(h, w, a_max):
+    """The paper's cycle time of the superposition method: Eq. (26) if h ≤ w, else Eq. (27) (s); vectorised."""
+    h, w = np.asarray(h, float), np.asarray(w, float)
+    return _out(np.where(h <= w, cycle_time_eq26(h, w, a_max), cycle_time_eq27(h, w, a_max)))
 
 
 def schedule(h1: float, w: float, h2: float, a_max: float = 1.0) -> dict[str, float]:
     """Start times and durations (s) of the rise, the horizontal move and the descent, and the total T."""
-    t1, t2, t3 = axis_time(h1, a_max), axis_time(w, a_max), axis_time(h2, a_max)
+    t1, t2, t3 = (_K * math.sqrt(d / a_max) for d in (h1, w, h2))
     start_u = t1 - min(t1, t2) / 2.0
     start_down = start_u + t2 - min(t2, t3) / 2.0
     return {"T1": t1, "T2": t2, "T3": t3, "start_u": start_u, "start_down": start_down, "T": start_down + t3}
