@@ -112,10 +112,8 @@ def _root(
 
 
 def _usage(message: str) -> None:
-    """A usage error (exit 2), reported by click like any other misuse of the options."""
-    import click
-
-    raise click.UsageError(message)
+    """A usage error (exit 2), reported like any other misuse of the options."""
+    raise typer.BadParameter(message)
 
 
 def _parse_point(name: str, text: str):

@@ -42,9 +42,25 @@ CHECK_SAMPLES = 1001
 
 def check_grid(tau: np.ndarray, breakpoints: np.ndarray) -> np.ndarray:
     """The τ grid the limit check samples: the output samples ∪ a uniform grid ∪ the breakpoints."""
-    grid = np.unique(np.concatenate([tau, np.linspace(0.0, 1.0, CHECK_SAMPLES), breakpoints]))
-    keep = np.concatenate([[True], np.diff(grid) > 1e-9])  # merge near-duplicates (round-off twins)
-    return grid[keep]
+    return check_grid_index(tau, breakpoints)[0]
+
+
+def check_grid_index(tau: np.ndarray, breakpoints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`check_grid` and the index of every output sample ``tau`` (sorted) in it.
+
+    Extra points within 1e-9 of an output sample or of each other (round-off twins) are dropped, so
+    every output sample is in the grid exactly."""
+    tau = np.asarray(tau, float)
+    extra = np.unique(np.concatenate([np.linspace(0.0, 1.0, CHECK_SAMPLES), breakpoints]))
+    extra = extra[np.concatenate([[True], np.diff(extra) > 1e-9])]
+    pos = np.clip(np.searchsorted(tau, extra), 1, len(tau) - 1) if len(tau) > 1 else np.zeros(len(extra), int)
+    near = np.minimum(np.abs(extra - tau[pos - 1 if len(tau) > 1 else 0]), np.abs(extra - tau[pos]))
+    grid = np.concatenate([tau, extra[near > 1e-9]])
+    order = np.argsort(grid, kind="stable")
+    grid = grid[order]
+    index = np.empty(len(grid), int)
+    index[order] = np.arange(len(grid))
+    return grid, index[: len(tau)]
 #: central-difference step in τ for d/dτ of the torques (truncation ~1e-10 relative, round-off ~1e-10)
 DTAU = 1e-5
 
@@ -143,6 +159,14 @@ class Parts:
     dAm: np.ndarray | None = None  # d/dτ of Am
     dGm: np.ndarray | None = None
     singularity: np.ndarray | None = None  # (N,)
+
+
+def take_parts(parts: Parts, index: np.ndarray) -> Parts:
+    """The samples ``index`` of ``parts`` (every per-sample array indexed)."""
+    from dataclasses import fields
+
+    return Parts(**{f.name: (None if getattr(parts, f.name) is None else getattr(parts, f.name)[index])
+                    for f in fields(Parts)})
 
 
 @dataclass

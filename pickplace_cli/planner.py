@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from .errors import UnreachableError
-from .limits import LimitReport, MotionModel, check_grid, check_limits, reach_error
+from .limits import LimitReport, MotionModel, check_grid_index, check_limits, reach_error, take_parts
 from .methods import Method, plan_path
 from .profile import Profile
 from .robots import build_robot
@@ -90,12 +90,14 @@ def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions()) -> 
     rate = options.rate if options.rate is not None else profile.planning.rate
     # reachability first, on the output samples of the auto (or given) duration, so an error names a time
     first = choose_duration(path, profile.capacity, "auto" if options.time == "fit" else options.time)
+    # one evaluation of the model on the check grid (output samples ∪ a dense uniform grid ∪ knots)
     t = CartesianTrajectory(path, first.seconds).sample_times(rate)
     tau = t / first.seconds
+    grid, index = check_grid_index(tau, path.breakpoints)
     try:
-        parts = model.parts(tau)
+        grid_parts = model.parts(grid)
     except UnreachableError as exc:
-        raise reach_error(exc, tau, first.seconds) from None
+        raise reach_error(exc, grid, first.seconds) from None
     if options.fit or options.time == "fit":
         duration = choose_duration(path, profile.capacity, options.time, model=model, dwell=dwell)
     else:
@@ -105,9 +107,10 @@ def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions()) -> 
     if T != first.seconds:
         t = traj.sample_times(rate)
         tau = t / T
-        parts = model.parts(tau)
-    grid = check_grid(tau, path.breakpoints)
-    report = check_limits(model, T, parts=parts if len(grid) == len(tau) else model.parts(grid), dwell=dwell)
+        grid, index = check_grid_index(tau, path.breakpoints)
+        grid_parts = model.parts(grid)
+    parts = take_parts(grid_parts, index)
+    report = check_limits(model, T, parts=grid_parts, dwell=dwell)
     robot = model.robot
     joint = JointTrajectory(
         t,

@@ -1,4 +1,4 @@
-"""JSON export: the plan's summary plus every column as an array (units in the column names)."""
+"""JSON export: the summary (or one per move) plus every column as an array (units in the column names)."""
 
 from __future__ import annotations
 
@@ -8,12 +8,21 @@ from typing import IO
 from . import plan_columns
 
 
-def write_json(plan, stream: IO[str]) -> None:
-    names, data = plan_columns(plan)
-    doc = {
-        "summary": plan.summary(),
-        "columns": names,
-        "samples": {n: [float(f"{x:.12g}") for x in data[:, i]] for i, n in enumerate(names)},
-    }
+def write_json(samples, stream: IO[str]) -> None:
+    """``samples``: a Plan (``summary``: its summary) or a Timeline (``summaries``: one per move, and a
+    ``move[-]`` column)."""
+    names, data = plan_columns(samples)
+    columns = {n: [float(f"{x:.12g}") for x in data[:, i]] for i, n in enumerate(names)}
+    move = getattr(samples, "move", None)
+    doc: dict = {}
+    if hasattr(samples, "summary"):
+        doc["summary"] = samples.summary()
+    else:
+        doc["summaries"] = list(samples.summaries)
+    if move is not None:
+        names = ["move[-]", *names]
+        columns = {"move[-]": [int(m) for m in move], **columns}
+    doc["columns"] = names
+    doc["samples"] = columns
     json.dump(doc, stream, allow_nan=False)
     stream.write("\n")
