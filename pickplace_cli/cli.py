@@ -378,14 +378,20 @@ def _plan_batch(source, prof, options, height, eta, fail_fast, writer, output, r
                 rows, bad = read_batch(fh, name)
         except OSError as exc:
             raise TaskError(f"batch = {source}: cannot read it: {exc.strerror}") from None
-    for b in bad:
-        sys.stderr.write(f"pickplace: {b.error}\n")
     first_bad = min((b.row for b in bad), default=None)
     if fail_fast and first_bad is not None:
         rows = [r for r in rows if r.row < first_bad]
         bad = [b for b in bad if b.row == first_bad]
     total = len(rows) + len(bad)
-    results = {b.row: b for b in bad}
+    results: dict = {}
+    pending = sorted(bad, key=lambda b: b.row)  # parse errors, reported in row order as planning passes them
+
+    def flush(upto: float) -> None:
+        while pending and pending[0].row < upto:
+            b = pending.pop(0)
+            results[b.row] = b
+            sys.stderr.write(f"pickplace: {b.error}\n")
+
     progress = None
     if not quiet and total >= 50 and sys.stderr.isatty():
         from rich.console import Console
@@ -394,18 +400,23 @@ def _plan_batch(source, prof, options, height, eta, fail_fast, writer, output, r
         progress = Progress(console=Console(stderr=True), transient=True)
         progress.start()
         bar = progress.add_task(f"planning {total} moves", total=len(rows))
+    stopped = False
     try:
         for res in plan_rows(rows, prof, options, height, eta, fail_fast, name):
+            flush(res.row)
             results[res.row] = res
             if progress is not None:
                 progress.advance(bar)
             if res.error is not None:
                 sys.stderr.write(f"pickplace: {res.error}\n")
                 if fail_fast:
+                    stopped = True
                     break
     finally:
         if progress is not None:
             progress.stop()
+    if not stopped:
+        flush(float("inf"))
     ordered = [results[k] for k in sorted(results)]
     if fail_fast:
         stop = next((r.row for r in ordered if r.code), None)

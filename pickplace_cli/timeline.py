@@ -117,8 +117,10 @@ def round_trip(there, back, dwell: float, rate: float) -> Timeline:
         segs.append(Segment(m, "move", t0, t0 + T))
         t0 += T
         if dwell > 0:
-            steps = np.arange(1, int(np.floor(dwell * rate + 1e-9)) + 1) / rate
-            if steps.size == 0 or dwell - steps[-1] > 1e-9 / rate:
+            # samples in (0, dwell): the next move's first sample is at the dwell's end; the final dwell also
+            # gets its end, so the cycle lasts exactly 2T + 2·dwell
+            steps = np.arange(1, int(np.ceil(dwell * rate - 1e-9))) / rate
+            if m == 2:
                 steps = np.append(steps, dwell)
             pieces.append(_hold(plan, True, t0 + steps))
             moves.append(m)

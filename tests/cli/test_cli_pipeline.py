@@ -1,0 +1,190 @@
+"""Pipelines: --batch (row numbers, per-row errors, --fail-fast, worst exit code), --round-trip, --json,
+usage errors, shell completion. Values are compared with the in-memory plan to the printed precision."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from pickplace_cli.batch import read_batch_text
+from pickplace_cli.cli import app
+from pickplace_cli.planner import PlanOptions, plan
+from pickplace_cli.profile import load_profile
+from pickplace_cli.task import Task
+
+runner = CliRunner()
+ADEPT = ["--from", "-0.1525,0,-0.8", "--to", "0.1525,0,-0.8"]
+
+BATCH = """from_x,from_y,from_z,to_x,to_y,to_z,height,time
+-0.1525,0,-0.8,0.1525,0,-0.8,,
+0.1,0.1,-0.8,-0.1,-0.1,-0.8,0.03,0.2
+# a comment line, skipped
+0,0,-0.8,3,0,-0.8,,
+0,0,-0.8,0.1,0,-0.8,,0.01
+1,2,x,4,5,6,,
+-0.1525,0,-0.8,0.1525,0,-0.8,,fit
+"""
+
+
+def run(*args, input=None):
+    return runner.invoke(app, list(args), input=input, catch_exceptions=False)
+
+
+def parse(text: str) -> tuple[list[str], np.ndarray]:
+    rows = list(csv.reader(io.StringIO(text)))
+    return rows[0], np.array(rows[1:], float)
+
+
+def test_batch_reports_rows_plans_the_rest_and_exits_with_the_worst(tmp_path):
+    src = tmp_path / "moves.csv"
+    src.write_text(BATCH)
+    out = tmp_path / "out.csv"
+    r = run("plan", "--batch", str(src), "-o", str(out))
+    # row 3: λ out of the table (1), row 4: 10 ms is far too fast (3), row 5: not a number (1)
+    assert r.exit_code == 3
+    err = r.stderr
+    assert f"row 3 ({src}:5)" in err and "outside the table's range" in err
+    assert f"row 4 ({src}:6): limit exceeded" in err
+    assert f"row 5 ({src}:7): from_z = 'x': not a number" in err
+    assert "batch: 6 rows, 3 ok, 3 failed (first failing row 3); 3 written" in err
+    header, data = parse(out.read_text())
+    assert header[0] == "move[-]" and header[1] == "t[s]"
+    assert sorted(set(data[:, 0].astype(int))) == [1, 2, 6]
+    # each move keeps its own time from 0 s; row 2 was given 0.2 s
+    for move in (1, 2, 6):
+        t = data[data[:, 0] == move, 1]
+        assert t[0] == 0.0 and np.all(np.diff(t) > 0)
+    assert data[data[:, 0] == 2, 1][-1] == pytest.approx(0.2, abs=1e-12)
+    # move 1 equals the single plan to the printed precision (12 significant digits)
+    prof = load_profile("delta-su2018")
+    single = plan(Task([-0.1525, 0, -0.8], [0.1525, 0, -0.8], 0.025, 0.5), prof, PlanOptions(fit=False))
+    m1 = data[data[:, 0] == 1, 1:]
+    assert m1.shape[0] == len(single.t)
+    np.testing.assert_allclose(m1[:, 0], single.t, rtol=1e-11, atol=1e-15)
+    np.testing.assert_allclose(m1[:, 1:4], single.p, rtol=1e-11, atol=1e-14)
+    np.testing.assert_allclose(m1[:, 13], single.joint.q[:, 0], rtol=1e-11, atol=1e-14)
+
+
+def test_batch_fail_fast_stops_at_the_first_failing_row_from_stdin(tmp_path):
+    out = tmp_path / "out.csv"
+    r = run("plan", "--batch", "-", "--fail-fast", "-o", str(out), input=BATCH)
+    assert r.exit_code == 1
+    assert "row 3 (stdin:5)" in r.stderr and "row 4" not in r.stderr and "row 5" not in r.stderr
+    _, data = parse(out.read_text())
+    assert sorted(set(data[:, 0].astype(int))) == [1, 2]
+
+
+def test_batch_json_lines_one_per_row():
+    r = run("plan", "--batch", "-", "--json", "-q", input=BATCH)
+    assert r.exit_code == 3
+    docs = [json.loads(line) for line in r.stdout.splitlines()]
+    assert [d["row"] for d in docs] == [1, 2, 3, 4, 5, 6]
+    assert [d["exit_code"] for d in docs] == [0, 0, 1, 3, 1, 0]
+    assert docs[1]["duration_s"] == pytest.approx(0.2)
+    assert docs[5]["mode"] == "fit" and docs[5]["duration_s"] == pytest.approx(docs[5]["fit_s"])
+    assert docs[3]["violations"] and docs[3]["limits_ok"] is False
+
+
+def test_batch_report_only_writes_limit_rows_but_not_broken_ones(tmp_path):
+    text = "from_x,from_y,from_z,to_x,to_y,to_z,time\n-0.1525,0,-0.8,0.1525,0,-0.8,0.05\n0.1,0,-0.8,0.2,0,-0.8,\n"
+    out = tmp_path / "o.csv"
+    r = run("plan", "--batch", "-", "--report-only", "-o", str(out), input=text)
+    assert r.exit_code == 0 and "row 1" in r.stderr and "limit exceeded" in r.stderr
+    _, data = parse(out.read_text())
+    assert sorted(set(data[:, 0].astype(int))) == [1, 2]
+
+
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        ("from_x,from_y,from_z,to_x,to_y\n", "column 'to_z' is missing"),
+        ("from_x,from_y,from_z,to_x,to_y,to_z,speed\n", "column 'speed' is not known"),
+        ("", "no header row"),
+    ],
+)
+def test_batch_bad_header_is_one_line_exit_1(text, message):
+    r = run("plan", "--batch", "-", input=text)
+    assert r.exit_code == 1
+    assert message in r.stderr and len(r.stderr.strip().splitlines()) == 1
+
+
+def test_batch_row_cell_count():
+    rows, bad = read_batch_text("from_x,from_y,from_z,to_x,to_y,to_z\n1,2,3\n")
+    assert not rows and bad[0].row == 1 and "has 3 cells, the header has 6" in bad[0].error
+
+
+def test_round_trip_is_one_cycle_with_dwells():
+    r = run("plan", *ADEPT, "--round-trip", "-q")
+    assert r.exit_code == 0, r.stderr
+    header, data = parse(r.stdout)
+    assert header[0] == "move[-]"
+    t, x = data[:, 1], data[:, 2]
+    prof = load_profile("delta-su2018")
+    dwell = prof.planning.dwell
+    single = plan(Task([-0.1525, 0, -0.8], [0.1525, 0, -0.8], 0.025, 0.5), prof)
+    T = single.duration.seconds
+    assert np.all(np.diff(t) > 0)
+    assert t[-1] == pytest.approx(2 * T + 2 * dwell, abs=1e-12)
+    # at rest at the place point during the first dwell, back at the pick point at the end
+    during = (t > T + 1e-9) & (t < T + dwell - 1e-9)
+    assert during.any() and np.allclose(x[during], 0.1525, atol=1e-12)
+    assert np.allclose(data[during, 5:14], 0.0)  # v, a, j = 0
+    assert x[-1] == pytest.approx(-0.1525, abs=1e-12)
+    assert set(data[:, 0].astype(int)) == {1, 2}
+
+
+def test_round_trip_json_summary_counts_both_legs():
+    r = run("plan", *ADEPT, "--round-trip", "--json", "-q")
+    assert r.exit_code == 0
+    doc = json.loads(r.stdout)
+    legs = doc["moves"]
+    assert len(legs) == 2
+    cycle = legs[0]["duration_s"] + legs[1]["duration_s"] + 2 * 0.1
+    assert doc["cycle_time_s"] == pytest.approx(cycle) and doc["picks_per_minute"] == pytest.approx(60 / cycle)
+
+
+def test_json_summary_on_stdout_trajectory_only_to_a_file(tmp_path):
+    r = run("plan", *ADEPT, "--json")
+    assert r.exit_code == 0
+    doc = json.loads(r.stdout)  # stdout is only the JSON document
+    assert doc["limits_ok"] is True and doc["exit_code"] == 0
+    assert doc["cycle_time_s"] == pytest.approx(2 * (doc["duration_s"] + 0.1))
+    out = tmp_path / "t.csv"
+    r = run("plan", *ADEPT, "--json", "-o", str(out))
+    assert r.exit_code == 0 and out.read_text().startswith("t[s],")
+
+
+@pytest.mark.parametrize(
+    "args",
+    [
+        ["--to", "0,0,-0.8"],
+        ["--batch", "x.csv", *ADEPT],
+        ["--batch", "x.csv", "--round-trip"],
+        [*ADEPT, "--fail-fast"],
+        [*ADEPT, "--json", "-o", "-"],
+    ],
+)
+def test_usage_errors_exit_2(args):
+    r = run("plan", *args)
+    assert r.exit_code == 2
+
+
+def test_format_options_that_do_not_apply_are_refused():
+    r = run("plan", *ADEPT, "--compression", "zstd")
+    assert r.exit_code == 1 and "only MCAP output is compressed" in r.stderr
+    r = run("plan", *ADEPT, "--format", "json", "--csv-dialect", "tsv")
+    assert r.exit_code == 1 and "only applies to --format csv" in r.stderr
+
+
+def test_shell_completion_script_and_profile_names():
+    r = run("--show-completion", "bash")
+    assert r.exit_code == 0 and "complete" in r.stdout and "pickplace" in r.stdout.lower()
+    from pickplace_cli.cli import _complete_profile
+
+    assert set(_complete_profile("")) >= {"delta-su2018", "scara-600", "gantry"}
+    assert _complete_profile("sc") == ["scara-600"]
