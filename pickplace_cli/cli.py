@@ -821,7 +821,12 @@ def _print_comparison(comparison) -> None:
     for name, fn in lines:
         table.add_row(escape(name), *(escape(fn(r)) for r in rows))
     t = comparison.task
+    # wide enough for every column (a pipe gets rich's 80 columns otherwise, and the names would be cut)
+    cells = [[name] + [fn(r) for r in rows] for name, fn in lines]
+    need = sum(max(len(c[i]) for c in cells + [["quantity"] + [r.method for r in rows]]) + 2 for i in range(len(rows) + 1))
     out = Console(stderr=True, highlight=False, soft_wrap=True)
+    if out.width < need:
+        out = Console(stderr=True, highlight=False, soft_wrap=True, width=need)
     out.print(escape(
         f"{comparison.profile_name}: b = {t.b:.4g} m, h = {t.height:.4g} m, λ = {t.lam:.4g}, η = {t.eta:g}; "
         f"duration: {comparison.time}"
