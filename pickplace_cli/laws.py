@@ -27,6 +27,10 @@ import numpy as np
 from .errors import TaskError
 
 
+#: relative distance from a law's ends under which :meth:`MotionLaw.over` snaps to the end
+_SNAP = 1e-12
+
+
 @dataclass(frozen=True)
 class MotionLaw:
     """A polynomial rise s(u) = Σ c_k u^k on [0, 1] with s(0) = 0, s(1) = 1 (rest outside [0, 1]).
@@ -90,11 +94,16 @@ class MotionLaw:
         """The law run from ``start`` for ``duration`` (same units as t): d^order/dt^order of s((t − start)/duration).
 
         ``duration`` = 0 is a step at ``start`` (value 0 before, 1 from ``start`` on; derivatives 0).
+        A u = (t − start)/duration within 1e-12 of 0 or 1 counts as the end itself, so a law placed to end
+        at τ = 1 by ``start + duration`` (which round-off may leave at 1 − 1e-16) still shows its one-sided
+        value at τ = 1 rather than the rest beyond it.
         """
         t = np.asarray(t, dtype=float)
         if duration <= 0.0:
             return (t >= start).astype(float) if order == 0 else np.zeros_like(t)
-        return self((t - start) / duration, order) / duration**order
+        u = (t - start) / duration
+        u = np.where(np.abs(u - 1.0) <= _SNAP, 1.0, np.where(np.abs(u) <= _SNAP, 0.0, u))
+        return self(u, order) / duration**order
 
     def piece_polynomials(self, start: float, duration: float, origin: float) -> np.polynomial.Polynomial:
         """s((t − start)/duration) as a Polynomial in x = t − origin (for exact piecewise peaks)."""

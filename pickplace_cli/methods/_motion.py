@@ -265,8 +265,9 @@ class AxisLaws:
             for p in ax:
                 if p.amplitude != 0.0:
                     pts.update((p.start, p.start + p.duration))
-        b = np.array(sorted(x for x in pts if 0.0 <= x <= 1.0))
-        return b[np.concatenate([[True], np.diff(b) > 1e-14])]
+        # round-off twins of 0, 1 or of each other (a law ending where the next starts) merge; 0 and 1 stay exact
+        b = np.array(sorted(0.0 if x < 1e-12 else 1.0 if x > 1 - 1e-12 else x for x in pts if -1e-12 <= x <= 1 + 1e-12))
+        return b[np.concatenate([[True], np.diff(b) > 1e-12])]
 
     def __call__(self, tau: np.ndarray, order: int = 0) -> np.ndarray:
         tau = np.asarray(tau, float)
@@ -291,9 +292,9 @@ class AxisLaws:
                 for pl in ax:
                     if pl.amplitude == 0.0:
                         continue
-                    if pl.duration > 0 and pl.start <= lo + 1e-15 and pl.start + pl.duration >= hi - 1e-15:
+                    if pl.duration > 0 and pl.start <= lo + 1e-12 and pl.start + pl.duration >= hi - 1e-12:
                         p = p + pl.amplitude * pl.law.piece_polynomials(pl.start, pl.duration, lo)
-                    elif pl.start + max(pl.duration, 0.0) <= lo + 1e-15:
+                    elif pl.start + max(pl.duration, 0.0) <= lo + 1e-12:
                         p = p + pl.amplitude
                 row.append(p.deriv(order) if order else p)
             polys.append(row)
