@@ -695,15 +695,28 @@ def build_table_cmd(
     weights: str = typer.Option("0.5,0.5", "--weights", help="Weights WA,WJ of F_a and F_j in F (Li 2018 Eq. 22); WA + WJ = 1."),
     grid_step: float = typer.Option(0.01, "--grid-step", help="Step of the coarse (k1, k2) search grid."),
     fit_min: float = typer.Option(5.0, "--fit-min", help="Fit the Eq. 23 cubic on rows with λ ≥ this (no cubic follows λ < 5)."),
-    workers: int = typer.Option(0, "--workers", "-j", help="Worker processes (0 = all cores)."),
+    workers: int = typer.Option(0, "--workers", "-j", help="Local worker processes (0 = all cores; 1 = in this process)."),
+    scheduler: Optional[str] = typer.Option(
+        None, "--scheduler", metavar="tcp://HOST:PORT",
+        help="Run the rows on this Dask distributed scheduler instead of local processes (extra pickplace-cli[dask]).",
+    ),
+    resume: bool = typer.Option(
+        False, "--resume",
+        help="Continue an interrupted build from OUTPUT.partial.jsonl (rows already finished are not recomputed; needs -o FILE).",
+    ),
     output: str = typer.Option("-", "--output", "-o", help="Output CSV ('-' = stdout). Written atomically."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar."),
 ) -> None:
-    """Compute the optimal (k1*, k2*) of the B-spline method for a grid of λ, with the Eq. 23 cubic fit."""
+    """Compute the optimal (k1*, k2*) of the B-spline method for a grid of λ, with the Eq. 23 cubic fit.
+
+    With -o FILE, finished rows are also appended to FILE.partial.jsonl as they complete; after Ctrl-C
+    or a kill, rerun the same command with --resume. The table replaces FILE only when it is complete.
+    """
+    import contextlib
     import os
 
     from .errors import TableError
-    from .table import TableSettings, build_table, format_table, lambda_grid
+    from .table import TableSettings, checkpoint_path, format_table, lambda_grid, run_build
 
     if not (0 < eta < 1):
         raise TableError(f"eta = {eta!r}: the lift-off/set-down ratio η must lie strictly between 0 and 1")
@@ -711,41 +724,70 @@ def build_table_cmd(
     lams = lambda_grid(lambda_min, lambda_max, lambda_step)
     if workers < 0:
         raise TableError(f"workers = {workers}: must be 0 (all cores) or a positive number")
+    to_file = output != "-"
+    if resume and not to_file:
+        raise TableError("--resume: needs -o FILE (the partial results live in FILE.partial.jsonl)")
+    if to_file:
+        from .export import check_writable
+
+        check_writable(output)
+    ckpt = checkpoint_path(output) if to_file else None
     n_workers = workers or os.cpu_count() or 1
-    if quiet:
-        table = build_table(lams, settings, workers=n_workers)
-    else:
-        from rich.console import Console
-        from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
-        with Progress(
-            TextColumn("[progress.description]{task.description}"),
-            BarColumn(),
-            TextColumn("{task.completed}/{task.total}"),
-            TimeElapsedColumn(),
-            TimeRemainingColumn(),
-            console=Console(stderr=True),
-            transient=False,
-        ) as progress:
-            bar = progress.add_task(f"optimising k1, k2 for {len(lams)} λ", total=None)
+    with contextlib.ExitStack() as stack:
+        executor = None
+        if scheduler:
+            from .parallel import dask_executor
 
-            def tick(done: int, total: int) -> None:
-                progress.update(bar, completed=done, total=total)
+            executor, n_workers = stack.enter_context(dask_executor(scheduler))
+        tick = None
+        if not quiet:
+            from rich.console import Console
+            from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
-            table = build_table(lams, settings, progress=tick, workers=n_workers)
+            progress = stack.enter_context(Progress(
+                TextColumn("[progress.description]{task.description}"),
+                BarColumn(),
+                TextColumn("{task.completed}/{task.total} λ"),
+                TimeElapsedColumn(),
+                TimeRemainingColumn(),
+                console=Console(stderr=True),
+                transient=False,
+            ))
+            engine = f"Dask {scheduler}" if scheduler else (f"{n_workers} processes" if n_workers > 1 else "1 process")
+            bar = progress.add_task(f"optimising k1, k2 ({engine})", total=len(lams))
+
+            def tick(n_done: int, total: int) -> None:
+                progress.update(bar, completed=n_done, total=total)
+
+        try:
+            table, report = run_build(
+                lams, settings, progress=tick, workers=n_workers, executor=executor, checkpoint=ckpt, resume=resume
+            )
+        except KeyboardInterrupt:
+            saved = _checkpointed_rows(ckpt, settings)
+            if saved:
+                sys.stderr.write(
+                    f"pickplace: {saved} of {len(lams)} rows are saved in {ckpt}; "
+                    "run the same command with --resume to continue\n"
+                )
+            raise
     from .export import atomic_output
 
     extra = {
         "lambda_grid": f"{lambda_min:g}..{lambda_max:g} step {lambda_step:g} ({len(lams)} rows)",
-        "optimiser": "coarse grid + bounded Nelder-Mead from each grid local optimum within basin_margin; exact peaks",
+        "optimiser": "coarse grid + bounded Nelder-Mead from each grid local optimum within basin_margin (one per basin); exact peaks",
         "fit_lambda_min": fit_min,
     }
     with atomic_output(output) as stream:
         stream.write(format_table(table, __version__, extra))
+    if ckpt is not None:
+        ckpt.unlink(missing_ok=True)  # the table is in place: the partial results are no longer needed
     if not quiet:
         g1, g2, res = table.fit(fit_min)
+        resumed = f"; {report.resumed} rows resumed from {ckpt}, {report.computed} computed" if report.resumed else ""
         sys.stderr.write(
-            f"{len(lams)} rows; cubic fit (Eq. 23) on λ ≥ {fit_min:g}: max |residual| {res:.3g}; "
+            f"{len(lams)} rows{resumed}; cubic fit (Eq. 23) on λ ≥ {fit_min:g}: max |residual| {res:.3g}; "
             f"k1 = {g1[0]:.4g} + {g1[1]:.4g} λ + {g1[2]:.4g} λ² + {g1[3]:.4g} λ³\n"
         )
 
@@ -926,6 +968,17 @@ def plot(
     title = f"{prof.name}: b = {task.b:.4g} m, h = {task.height:.4g} m, λ = {task.lam:.4g}"
     with atomic_output(output, binary=True) as stream:
         write_plot(moves, stream, kind, normalised, title)
+
+
+def _checkpointed_rows(ckpt, settings) -> int:
+    """Rows saved in a build-table checkpoint (0 when there is none or it cannot be read)."""
+    from .errors import PickplaceError
+    from .table import read_checkpoint
+
+    try:
+        return len(read_checkpoint(ckpt, settings)) if ckpt is not None else 0
+    except PickplaceError:
+        return 0
 
 
 def main() -> None:

@@ -8,31 +8,50 @@ The optimisation is global, not a single gradient run (F has a kink where two je
 two local maxima at small λ, and min a_max is only approached as k2 → 0):
 
 1. Coarse stage, shared by every λ: s_u and s_v do not depend on λ — only the scale 1/λ of the v axis
-   does — so the acceleration and jerk of both axes are sampled once per (k1, k2) on a grid (step
-   ``grid_step``, plus the row k2 = ``k2_floor``), and each λ's a_max, j_max, F on the whole grid are
-   array reductions.
-2. Refinement: from the best grid points (several distinct local optima for F) a bounded Nelder–Mead
-   on the exact objective (peaks from the piecewise-polynomial roots, not samples) polishes each;
-   the best refined value wins. min a_max is taken as the infimum over k2 ≥ ``k2_floor`` (it is reached
-   only in the limit k2 → 0 [Li2018, Sec. 3.1]; at 1e-4 it is within ~1e-5 relative of the limit).
+   does — so the squared acceleration and jerk components of both axes are sampled once per (k1, k2) on
+   a grid (step ``grid_step``, plus the row k2 = ``k2_floor``), and each λ's a_max, j_max, F on the
+   whole grid are array reductions.
+2. Refinement: from the best grid points (distinct local optima of the sampled objective) a bounded
+   Nelder–Mead on the exact objective (peaks from the piecewise-polynomial roots, not samples) polishes
+   each; the best refined value wins. A start from which the exact objective falls monotonically to an
+   optimum already found is in that optimum's basin and is not refined again. min a_max is taken as the
+   infimum over k2 ≥ ``k2_floor`` (it is reached only in the limit k2 → 0 [Li2018, Sec. 3.1]; at 1e-4 it
+   is within ~1e-5 relative of the limit).
+
+Speed: the optimiser evaluates the exact peaks of the unit path a few hundred times per λ, so the build
+uses a batched closed form of that path (:func:`unit_pieces`) instead of scipy's ``BSpline``: the path is
+symmetric about τ = 1/2 (s_u antisymmetric, s_v symmetric: the knots of Eq. (14) and the via points of
+Eq. (11) are), so its three pieces on [0, 1/2] are solved from four conditions per axis. A test checks it
+against the scipy path of :func:`normalised_peaks`. Rows are independent of each other, so the build
+splits λ into chunks for any ``concurrent.futures.Executor`` (a local process pool or a Dask cluster)
+and can resume from a checkpoint of finished rows.
 """
 
 from __future__ import annotations
 
 import csv
+import functools
+import hashlib
 import io
+import json
 import math
+import os
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Callable, Sequence
+from typing import TYPE_CHECKING, Callable, Sequence
 
 import numpy as np
 
 from .errors import TableError
 
+if TYPE_CHECKING:  # pragma: no cover
+    from concurrent.futures import Executor
+
 COLUMNS = ("lambda", "k1", "k2", "a_max", "j_max", "v_max", "F", "a_min", "j_min")
 DEFAULT_TABLE = "bspline-eta0.5.csv"
 FIT_LAMBDA_MIN = 5.0
+#: bump when a change of the optimiser can change rows: a checkpoint of another version is not resumed
+ALGORITHM_VERSION = 2
 
 #: Li 2018 Table 2: g_{i,j} of k_i* = Σ_j g_{i,j} λ^j (Eq. 23)
 LI2018_TABLE2 = (
@@ -90,23 +109,171 @@ def normalised_peaks(
     return tuple(ppoly_norm_peak(*piece_coefficients(s, r, derivs))[0] for r in orders)
 
 
-def _sample_taus(knots: np.ndarray, per_piece: int) -> np.ndarray:
-    br = np.unique(knots)
-    u = np.linspace(0.0, 1.0, per_piece + 1)[:-1]
-    return np.append((br[:-1, None] + np.diff(br)[:, None] * u[None, :]).ravel(), 1.0)
+# ---------------------------------------------------------------------- unit path, batched closed form
+
+_NC = 6  # Taylor coefficients of a quintic piece (lowest power first)
+#: Taylor shift by h: new coefficient i = Σ_k C(k, i) h^(k−i) c_k
+_SHIFT = np.array([[math.comb(k, i) for k in range(_NC)] for i in range(_NC)], float)
+_EXP = np.array([[max(k - i, 0) for k in range(_NC)] for i in range(_NC)], float)
+#: r-th derivative at x: Σ_k k!/(k−r)! x^(k−r) c_k; row r also gives coefficient k−r of the derivative
+_DROW = np.array([[math.perm(k, r) for k in range(_NC)] for r in range(_NC)], float)
+#: condition rows (0 = value at τ = k1/2, 1 + r = r-th derivative at τ = 1/2) per axis: s_u antisymmetric
+#: about the midpoint (s_u'' = s_u'''' = 0 there), s_v symmetric (s_v' = s_v''' = 0)
+_CONDITIONS = np.array([[0, 1, 3, 5], [0, 1, 2, 4]])
 
 
-@dataclass
+@functools.lru_cache(maxsize=None)
+def _anti_diagonal(k: int) -> np.ndarray:
+    """(k², 2k−1) 0/1 matrix summing c_i c_j into the coefficient of power i + j."""
+    s = np.zeros((k * k, 2 * k - 1))
+    i, j = np.divmod(np.arange(k * k), k)
+    s[np.arange(k * k), i + j] = 1.0
+    return s
+
+
+def unit_pieces(k1: np.ndarray | float, k2: np.ndarray | float, eta: float) -> tuple[np.ndarray, np.ndarray]:
+    """The unit path (s_u, s_v) of [Li2018, Eq. (16)] on τ ∈ [0, 1/2], for a batch of (k1, k2).
+
+    Returns ``h`` (N, 3), the lengths of the pieces [0, τ7], [τ7, τ8], [τ8, 1/2] (τ7 = k1 k2/2, τ8 = k1/2,
+    Eq. 14), and ``coef`` (N, 3, 2, 6), the Taylor coefficients (lowest power first, in x = τ − piece
+    start) of s_u and s_v on each. The second half mirrors the first: s_u(1 − τ) = 1 − s_u(τ),
+    s_v(1 − τ) = s_v(τ) (the knots and via points are symmetric, and the spline is unique).
+
+    The same spline as :func:`pickplace_cli.bspline.solve_control_points` builds, in another basis.
+    Piece 0 starts at rest (value 0; first three derivatives 0: Eq. 9), so it is c4 x⁴ + c5 x⁵, written in
+    terms of the third and fourth derivatives d3, d4 at τ7 (bounded as k2 → 0, where c4, c5 are not);
+    piece 1 continues it C⁴ with a free fifth coefficient d5, piece 2 likewise with g2. The four unknowns
+    (d3, d4, d5, g2) of each axis come from the via point at τ8 and the value plus two symmetry
+    conditions at τ = 1/2 (Eq. 8, 11): one batched 4×4 solve. Agrees with the scipy path to ~1e-13
+    relative for k1 ∈ [0.05, 0.95]; near the corners k1 → 0 or 1 of the box (never near an optimum) the
+    solve loses digits (1e-7 at k1 = 0.001).
+    """
+    k1 = np.atleast_1d(np.asarray(k1, dtype=float))
+    k2 = np.atleast_1d(np.asarray(k2, dtype=float))
+    n = k1.size
+    a = 0.5 * k1 * k2
+    c = 0.5 * k1
+    h = np.stack([a, c - a, 0.5 - c], axis=1)
+    # pieces 0 and 1 as M @ z, z = (d3, d4, d5, g2), entries powers of a (start value s(0) = 0)
+    m = np.empty((n, 3, _NC, 4))
+    m[:, :2] = ((a[:, None] ** _A_POWERS) @ _A_TERMS).reshape(n, 2, _NC, 4)
+    m[:, 2] = (_SHIFT * h[:, 1, None, None] ** _EXP) @ m[:, 1]  # piece 2 continues piece 1 (C⁴) …
+    m[:, 2, 5, 3] += 1.0  # … plus its own fifth coefficient g2
+    rows = np.empty((n, 6, 4))
+    rows[:, 0] = m[:, 2, 0]  # value at τ8
+    rows[:, 1:] = (_DROW[:5] * h[:, 2, None, None] ** _EXP[:5]) @ m[:, 2]  # derivatives 0..4 at τ = 1/2
+    rhs = np.broadcast_to(_rhs(eta), (n, 2, 4, 1))
+    z = np.linalg.solve(rows[:, _CONDITIONS], rhs)  # (N, 2 axes, 4, 1)
+    return h, (m[:, :, None] @ z[:, None])[..., 0]
+
+
+@functools.lru_cache(maxsize=8)
+def _rhs(eta: float) -> np.ndarray:
+    """Right-hand sides of the conditions: s_u(τ8) = 0, s_u(1/2) = 1/2; s_v(τ8) = η, s_v(1/2) = 1."""
+    return np.array([[0.0, 0.5, 0.0, 0.0], [eta, 1.0, 0.0, 0.0]])[:, :, None]
+
+
+def _piece_terms() -> tuple[np.ndarray, np.ndarray]:
+    """Pieces 0 and 1 of the unit path as Σ_p a^p C_p (a = τ7): piece 0 = c4 x⁴ + c5 x⁵ with
+    c4 = d3/(2a) − d4 and c5 = (4a d4 − d3)/(10a²) (so that its third and fourth derivatives at a are
+    6 d3 and 24 d4); piece 1 holds its Taylor coefficients at a (0.4a³d3 − 0.6a⁴d4, 1.5a²d3 − 2a³d4,
+    2a d3 − 2a² d4) and d3, d4, d5."""
+    powers = np.arange(-2, 5)
+    terms = np.zeros((len(powers), 2, _NC, 4))
+
+    def put(piece: int, coef: int, unknown: int, power: int, value: float) -> None:
+        terms[power + 2, piece, coef, unknown] = value
+
+    put(0, 4, 0, -1, 0.5), put(0, 4, 1, 0, -1.0), put(0, 5, 0, -2, -0.1), put(0, 5, 1, -1, 0.4)
+    put(1, 0, 0, 3, 0.4), put(1, 0, 1, 4, -0.6), put(1, 1, 0, 2, 1.5), put(1, 1, 1, 3, -2.0)
+    put(1, 2, 0, 1, 2.0), put(1, 2, 1, 2, -2.0)
+    put(1, 3, 0, 0, 1.0), put(1, 4, 1, 0, 1.0), put(1, 5, 2, 0, 1.0)
+    return powers.astype(float), terms.reshape(len(powers), -1)
+
+
+_A_POWERS, _A_TERMS = _piece_terms()
+
+
+@functools.lru_cache(maxsize=None)
+def _peak_plan(orders: tuple[int, ...]) -> tuple:
+    """Constants of :func:`unit_peaks` for one tuple of derivative orders (built once)."""
+    k = _NC - min(orders)  # coefficients of the highest-degree derivative
+    m = 2 * k - 2  # coefficients of the derivative of its square
+    companion = np.zeros((m - 1, m - 1))
+    companion[np.arange(1, m - 1), np.arange(m - 2)] = 1.0
+    shifts = tuple(2 * (r - min(orders)) for r in orders)  # x^z brings order r to the common degree
+    return k, m, np.arange(1.0, m + 1), np.arange(2 * k - 1), companion, shifts, _anti_diagonal(k)
+
+
+def unit_peaks(h: np.ndarray, coef: np.ndarray, lam: float, orders: tuple[int, ...] = (1, 2, 3)) -> np.ndarray:
+    """(N, len(orders)) exact max over τ ∈ [0, 1] of ‖(s_u^(r), s_v^(r)/λ)‖ for the pieces of
+    :func:`unit_pieces` (Eq. 17–19 with b = 1, T = 1; the symmetric half is enough).
+
+    On each piece ‖·‖² is a polynomial; its maximum is at an end or at a real root of its derivative.
+    The roots are eigenvalues of companion matrices, all pieces and orders in one batched call (a
+    lower-degree derivative is multiplied by a power of x: extra roots at x = 0, an end that is a
+    candidate anyway). Every candidate is clipped into its piece and the square norm is evaluated there:
+    a complex root's real part is then just another point of the piece, never above the maximum, so no
+    test for real roots is needed. (Written for small N, where numpy's per-call cost dominates: the
+    optimiser calls it with one point a few hundred times per λ.)"""
+    n = h.shape[0]
+    nr = len(orders)
+    k, m, ramp, expo, companion, shifts, ads = _peak_plan(tuple(orders))
+    d = np.zeros((nr, n, 3, 2, k))
+    for i, r in enumerate(orders):
+        d[i, ..., : _NC - r] = coef[..., r:] * _DROW[r, r:]
+    d[..., 1, :] *= 1.0 / lam
+    sq = (d[..., :, None] * d[..., None, :]).sum(axis=3).reshape(nr, n, 3, k * k) @ ads  # lowest power first
+    ds = sq[..., 1:] * ramp  # derivative, lowest power first
+    hf = np.zeros_like(ds)  # highest power first, times x^z
+    for i, z in enumerate(shifts):
+        hf[i, ..., : m - z] = ds[i, ..., m - z - 1 :: -1]
+    hf = hf.reshape(-1, m)
+    hh = h.ravel() if nr == 1 else np.concatenate([h.ravel()] * nr)
+    lead = hf[:, 0]
+    full = np.abs(lead) > 1e-12 * np.abs(hf).max(axis=1)
+    comp = np.empty((hf.shape[0], m - 1, m - 1))
+    comp[:] = companion
+    x = np.empty((hf.shape[0], m + 1))
+    x[:, 0] = 0.0
+    x[:, 1] = hh
+    if full.all():
+        comp[:, 0, :] = hf[:, 1:] / -lead[:, None]
+        x[:, 2:] = np.minimum(np.maximum(np.linalg.eigvals(comp).real, 0.0), hh[:, None])
+    else:  # the degree drops (rare): numpy's roots for those rows
+        comp[:, 0, :] = hf[:, 1:] / -np.where(full, lead, 1.0)[:, None]
+        x[:, 2:] = np.minimum(np.maximum(np.linalg.eigvals(comp).real, 0.0), hh[:, None])
+        for i in np.flatnonzero(~full):
+            v = np.roots(hf[i]).real if np.any(hf[i]) else np.zeros(0)
+            x[i, 2:] = 0.0
+            x[i, 2 : 2 + v.size] = np.minimum(np.maximum(v, 0.0), hh[i])
+    vals = ((x[..., None] ** expo) @ sq.reshape(-1, 2 * k - 1, 1)).reshape(nr, n, -1)
+    return np.sqrt(np.maximum(vals.max(axis=2), 0.0)).T
+
+
+def fast_peaks(k1, k2, lam: float, eta: float = 0.5, orders: tuple[int, ...] = (1, 2, 3)) -> np.ndarray:
+    """Exact normalised peaks (N, len(orders)) for arrays of (k1, k2): :func:`normalised_peaks`, batched."""
+    return unit_peaks(*unit_pieces(k1, k2, eta), lam, orders)
+
+
+# ------------------------------------------------------------------------------------------ coarse grid
+
+
+@dataclass(frozen=True)
 class _Coarse:
     k1: np.ndarray  # (G,)
     k2: np.ndarray  # (G,)
-    acc: np.ndarray  # (G, M, 2) sampled s_u'', s_v''
-    jerk: np.ndarray  # (G, M, 2)
+    shape: tuple[int, int]
+    acc_u2: np.ndarray  # (G, M) sampled s_u''², s_v''², s_u'''², s_v'''²
+    acc_v2: np.ndarray
+    jerk_u2: np.ndarray
+    jerk_v2: np.ndarray
 
     def peaks(self, lam: float) -> tuple[np.ndarray, np.ndarray]:
-        scale = np.array([1.0, 1.0 / lam])
-        a = np.sqrt(np.max(np.sum((self.acc * scale) ** 2, axis=2), axis=1))
-        j = np.sqrt(np.max(np.sum((self.jerk * scale) ** 2, axis=2), axis=1))
+        """Sampled a_max, j_max on the whole grid at λ (the v axis scales by 1/λ: Eq. 17)."""
+        s = 1.0 / (lam * lam)
+        a = np.sqrt(np.max(self.acc_u2 + s * self.acc_v2, axis=1))
+        j = np.sqrt(np.max(self.jerk_u2 + s * self.jerk_v2, axis=1))
         return a, j
 
 
@@ -117,17 +284,24 @@ def _coarse_grid(settings: TableSettings) -> tuple[np.ndarray, np.ndarray]:
     return k1.ravel(), k2.ravel()
 
 
-def _sample_chunk(args: tuple[np.ndarray, np.ndarray, float, int]) -> tuple[np.ndarray, np.ndarray]:
-    k1s, k2s, eta, per_piece = args
-    m = 6 * per_piece + 1
-    acc = np.empty((len(k1s), m, 2))
-    jerk = np.empty((len(k1s), m, 2))
-    for i, (k1, k2) in enumerate(zip(k1s, k2s)):
-        s = _unit_spline(float(k1), float(k2), eta)
-        taus = _sample_taus(s.t, per_piece)
-        acc[i] = s(taus, nu=2)
-        jerk[i] = s(taus, nu=3)
-    return acc, jerk
+@functools.lru_cache(maxsize=2)
+def _coarse_for(settings: TableSettings) -> _Coarse:
+    """The coarse stage for ``settings`` (computed once per process: a worker builds its own copy, which
+    is cheaper than shipping the arrays)."""
+    k1, k2 = _coarse_grid(settings)
+    h, coef = unit_pieces(k1, k2, settings.eta)
+    u = np.linspace(0.0, 1.0, settings.samples_per_piece + 1)  # both ends: the mirror half is covered
+    x = h[:, :, None] * u  # (G, 3, S)
+    comps = []
+    for r in (2, 3):
+        d = coef[..., r:] * _DROW[r, r:]  # (G, 3, 2, k)
+        val = np.zeros((len(k1), 3, 2, u.size))
+        for p in range(d.shape[-1] - 1, -1, -1):
+            val = val * x[:, :, None, :] + d[..., p, None]
+        val = np.moveaxis(val, 2, 1).reshape(len(k1), 2, -1)
+        comps += [val[:, 0] ** 2, val[:, 1] ** 2]
+    n1 = len(np.unique(k1))
+    return _Coarse(k1, k2, (n1, len(k1) // n1), *comps)
 
 
 # ------------------------------------------------------------------------------------------- optimiser
@@ -146,11 +320,31 @@ class TableRow:
     j_min: float
 
 
-def _minimise(fun: Callable[[float, float], float], starts: Sequence[tuple[float, float]], lo2: float, xatol: float):
+def _same_basin(fun_batch: Callable[[np.ndarray, np.ndarray], np.ndarray], start, optimum, points: int = 9) -> bool:
+    """True when ``fun`` falls monotonically along the segment from ``start`` to a found ``optimum``:
+    then a local search from ``start`` ends in that optimum's basin and need not run. (Two separate
+    optima have a barrier between them, so the test fails and both are refined; it is conservative.)"""
+    t = np.linspace(0.0, 1.0, points)
+    k1 = start[0] + t * (optimum[0] - start[0])
+    k2 = start[1] + t * (optimum[1] - start[1])
+    vals = fun_batch(k1, k2)
+    return bool(np.all(np.diff(vals) <= 1e-12 * np.max(np.abs(vals))))
+
+
+def _minimise(
+    fun: Callable[[float, float], float],
+    fun_batch: Callable[[np.ndarray, np.ndarray], np.ndarray],
+    starts: Sequence[tuple[float, float]],
+    lo2: float,
+    xatol: float,
+):
+    """Bounded Nelder–Mead (scipy) from each start not already in a found optimum's basin; the best."""
     from scipy.optimize import minimize
 
-    best = None
+    found: list[tuple[float, float, float]] = []
     for k1, k2 in starts:
+        if any(_same_basin(fun_batch, (k1, k2), (x1, x2)) for x1, x2, _ in found):
+            continue
         res = minimize(
             lambda x: fun(float(x[0]), float(x[1])),
             x0=np.array([k1, k2]),
@@ -159,10 +353,8 @@ def _minimise(fun: Callable[[float, float], float], starts: Sequence[tuple[float
             options={"xatol": xatol, "fatol": 1e-10, "maxiter": 2000,
                      "initial_simplex": np.array([[k1, k2], [k1 + 0.01, k2], [k1, k2 + 0.01]])},
         )
-        if best is None or res.fun < best.fun:
-            best = res
-    assert best is not None
-    return float(best.x[0]), float(best.x[1]), float(best.fun)
+        found.append((float(res.x[0]), float(res.x[1]), float(res.fun)))
+    return min(found, key=lambda r: r[2])
 
 
 def _minimise_on_floor(fun: Callable[[float, float], float], k1_starts: Sequence[float], k2: float, xatol: float) -> float:
@@ -189,7 +381,7 @@ def _local_optima(values: np.ndarray, shape: tuple[int, int], count: int) -> lis
             if di or dj:
                 is_min &= v <= pad[1 + di : 1 + di + shape[0], 1 + dj : 1 + dj + shape[1]]
     idx = np.flatnonzero(is_min.ravel())
-    idx = idx[np.argsort(values[idx])][:count]
+    idx = idx[np.argsort(values[idx], kind="stable")][:count]
     if idx.size == 0:
         idx = np.array([int(np.argmin(values))])
     return [int(i) for i in idx]
@@ -200,29 +392,34 @@ def optimise_lambda(lam: float, coarse: _Coarse, settings: TableSettings) -> Tab
     eta = settings.eta
     wa, wj = settings.weights
     lo2 = settings.k2_floor
-    shape = (len(np.unique(coarse.k1)), len(coarse.k1) // len(np.unique(coarse.k1)))
     a_grid, j_grid = coarse.peaks(lam)
     cache: dict[tuple[float, float], tuple[float, float]] = {}
+
+    def batch(orders: tuple[int, ...]) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
+        return lambda k1, k2: unit_peaks(*unit_pieces(k1, k2, eta), lam, orders)
+
+    a_batch, j_batch, aj_batch = batch((2,)), batch((3,)), batch((2, 3))
+
+    def a_only(k1: float, k2: float) -> float:
+        return float(a_batch(k1, k2)[0, 0])
+
+    def j_only(k1: float, k2: float) -> float:
+        return float(j_batch(k1, k2)[0, 0])
 
     def peaks(k1: float, k2: float) -> tuple[float, float]:
         """Exact (a_max, j_max) at (k1, k2), memoised (F's refinement revisits points)."""
         key = (k1, k2)
         if key not in cache:
-            cache[key] = normalised_peaks(k1, k2, lam, eta, (2, 3))  # type: ignore[assignment]
+            a, j = aj_batch(k1, k2)[0]
+            cache[key] = (float(a), float(j))
         return cache[key]
-
-    def a_only(k1: float, k2: float) -> float:
-        return normalised_peaks(k1, k2, lam, eta, (2,))[0]
-
-    def j_only(k1: float, k2: float) -> float:
-        return normalised_peaks(k1, k2, lam, eta, (3,))[0]
 
     def starts(values: np.ndarray) -> list[tuple[float, float]]:
         """Grid local minima whose sampled value is within ``basin_margin`` of the best one.
 
         Samples under-estimate a peak by well under 1 % at ``samples_per_piece`` = 16, so a basin whose
         sampled value is more than a few per cent worse cannot hold the global optimum."""
-        idx = _local_optima(values, shape, settings.refine_candidates)
+        idx = _local_optima(values, coarse.shape, settings.refine_candidates)
         best = values[idx[0]]
         keep = [i for i in idx if values[i] <= best + settings.basin_margin * abs(best)]
         return [(float(coarse.k1[i]), float(coarse.k2[i])) for i in keep]
@@ -234,19 +431,28 @@ def optimise_lambda(lam: float, coarse: _Coarse, settings: TableSettings) -> Tab
         # the infimum of a_max lies at k2 → 0 [Li2018, Sec. 3.1]: a 1-D bounded search along k2 = k2_floor
         a_min = _minimise_on_floor(a_only, [k1 for k1, _ in a_starts], lo2, xatol)
     else:
-        _, _, a_min = _minimise(a_only, a_starts, lo2, xatol)
-    _, _, j_min = _minimise(j_only, starts(j_grid), lo2, xatol)
+        _, _, a_min = _minimise(a_only, lambda x, y: a_batch(x, y)[:, 0], a_starts, lo2, xatol)
+    _, _, j_min = _minimise(j_only, lambda x, y: j_batch(x, y)[:, 0], starts(j_grid), lo2, xatol)
 
     def neg_f(k1: float, k2: float) -> float:
         a, j = peaks(k1, k2)
         return -(wa * a_min / a + wj * j_min / j)
 
+    def neg_f_batch(k1: np.ndarray, k2: np.ndarray) -> np.ndarray:
+        aj = aj_batch(k1, k2)
+        return -(wa * a_min / aj[:, 0] + wj * j_min / aj[:, 1])
+
     f_grid = -(wa * a_min / a_grid + wj * j_min / j_grid)
     # F may have two local maxima (small λ): refine every grid local maximum near the best
-    k1, k2, nf = _minimise(neg_f, starts(f_grid), lo2, xatol)
-    v, a, j = normalised_peaks(k1, k2, lam, eta)
+    k1, k2, nf = _minimise(neg_f, neg_f_batch, starts(f_grid), lo2, xatol)
+    v, a, j = (float(x) for x in fast_peaks(k1, k2, lam, eta)[0])
     return TableRow(lam, k1, k2, a, j, v, -nf, a_min, j_min)
 
+
+def _optimise_chunk(lams: Sequence[float], settings: TableSettings) -> list[TableRow]:
+    """One task of a parallel build: the rows of ``lams`` (module level, so executors can pickle it)."""
+    coarse = _coarse_for(settings)
+    return [optimise_lambda(float(lam), coarse, settings) for lam in lams]
 
 
 # ------------------------------------------------------------------------------------------------ table
@@ -332,56 +538,201 @@ def lambda_grid(lam_min: float, lam_max: float, step: float) -> np.ndarray:
     return np.round(grid, 12)
 
 
+
+
+def settings_key(settings: TableSettings) -> str:
+    """A short hash of everything that determines a row besides λ (settings and optimiser version)."""
+    blob = json.dumps({"algorithm": ALGORITHM_VERSION, **asdict(settings)}, sort_keys=True)
+    return hashlib.sha256(blob.encode()).hexdigest()[:16]
+
+
+def checkpoint_path(output: str | Path) -> Path:
+    """Where a build writing ``output`` keeps its finished rows: ``OUTPUT.partial.jsonl`` beside it."""
+    p = Path(output)
+    return p.with_name(p.name + ".partial.jsonl")
+
+
+def read_checkpoint(path: Path, settings: TableSettings) -> dict[float, TableRow]:
+    """Rows of a checkpoint written by :func:`run_build` for the same settings, keyed by λ.
+
+    TableError when the file belongs to other settings (a different grid, η, weights or optimiser
+    version would give other rows). A last line cut short by a kill is ignored."""
+    key = settings_key(settings)
+    rows: dict[float, TableRow] = {}
+    try:
+        lines = path.read_text(encoding="utf-8").splitlines()
+    except FileNotFoundError:
+        return rows
+    except (OSError, UnicodeDecodeError) as exc:
+        raise TableError(f"checkpoint {path}: cannot read: {exc}") from None
+    if not lines:
+        return rows
+    try:
+        head = json.loads(lines[0])
+    except json.JSONDecodeError:
+        head = {}
+    if not isinstance(head, dict) or head.get("checkpoint") != "pickplace build-table":
+        raise TableError(f"checkpoint {path}: line 1 is not a pickplace build-table checkpoint header; delete the file")
+    if head.get("settings_key") != key:
+        raise TableError(
+            f"checkpoint {path}: settings_key = {head.get('settings_key')}: it was written for other settings "
+            f"({head.get('settings')}), this build has {key}; run without --resume to start over"
+        )
+    for lineno, line in enumerate(lines[1:], 2):
+        try:
+            rec = json.loads(line)
+            row = TableRow(*(float(rec[c]) for c in COLUMNS))
+        except (json.JSONDecodeError, KeyError, TypeError, ValueError):
+            if lineno == len(lines):
+                break  # cut short by a kill while writing
+            raise TableError(f"checkpoint {path}:{lineno}: not a table row; delete the file") from None
+        rows[row.lam] = row
+    return rows
+
+
+class _Checkpoint:
+    """Appends finished rows to the checkpoint file, flushed and synced per batch of rows."""
+
+    def __init__(self, path: Path, settings: TableSettings, append: bool) -> None:
+        self.path = path
+        try:
+            self.fh = open(path, "a" if append else "w", encoding="utf-8")
+        except OSError as exc:
+            raise TableError(f"checkpoint {path}: cannot write: {exc.strerror}") from None
+        if not append or self.fh.tell() == 0:
+            head = {"checkpoint": "pickplace build-table", "settings_key": settings_key(settings),
+                    "settings": asdict(settings), "algorithm": ALGORITHM_VERSION}
+            self.fh.write(json.dumps(head, sort_keys=True) + "\n")
+            self._sync()
+
+    def add(self, rows: Sequence[TableRow]) -> None:
+        for r in rows:  # floats as repr: they read back bit for bit
+            self.fh.write(json.dumps(dict(zip(COLUMNS, (r.lam, r.k1, r.k2, r.a_max, r.j_max, r.v_max, r.F, r.a_min, r.j_min)))) + "\n")
+        self._sync()
+
+    def _sync(self) -> None:
+        self.fh.flush()
+        os.fsync(self.fh.fileno())
+
+    def close(self) -> None:
+        self.fh.close()
+
+
+@dataclass(frozen=True)
+class BuildReport:
+    """What a build did: rows in the table, rows computed now, rows taken from a checkpoint."""
+
+    rows: int
+    computed: int
+    resumed: int
+    tasks: int
+    checkpoint: Path | None = None
+
+
+def _chunks(lams: Sequence[float], n_tasks: int) -> list[tuple[float, ...]]:
+    """Split λ into ``n_tasks`` interleaved chunks (λ0, λn, λ2n …): costs vary smoothly with λ, so each
+    chunk gets a fair share of the expensive small-λ rows."""
+    n_tasks = max(1, min(n_tasks, len(lams)))
+    return [tuple(lams[i::n_tasks]) for i in range(n_tasks) if lams[i::n_tasks]]
+
+
+def _ignore_sigint() -> None:  # pragma: no cover - runs in the worker processes
+    """Pool workers leave Ctrl-C to the parent, which checkpoints and shuts the pool down."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def run_build(
+    lams: Sequence[float],
+    settings: TableSettings = TableSettings(),
+    *,
+    progress: Callable[[int, int], None] | None = None,
+    workers: int = 1,
+    executor: Executor | None = None,
+    checkpoint: str | Path | None = None,
+    resume: bool = False,
+) -> tuple[Table, BuildReport]:
+    """Optimal (k1*, k2*) for every λ in ``lams`` (see the module docstring for the method).
+
+    * ``workers`` > 1: a local process pool; ``executor``: any ``concurrent.futures.Executor`` instead
+      (e.g. ``distributed.Client(address).get_executor()``; ``workers`` then sets how many chunks).
+      λ is split into about 8 chunks per worker, so each task carries several rows and the per-task
+      overhead (a pickled tuple of floats and a few rows back) stays small; each worker process computes
+      the coarse grid once. Rows do not depend on each other or on the chunking: any engine and any
+      number of workers give the same table as the sequential build.
+    * ``checkpoint``: a file to which finished rows are appended (and synced) as their chunks finish;
+      with ``resume`` its rows for the same settings (:func:`settings_key`) are reused, not recomputed.
+      The caller deletes it once the table is safely written.
+    * ``progress(done, total)`` is called as rows finish (total = number of λ).
+    """
+    lams = [float(x) for x in lams]
+    if not lams:
+        raise TableError("lambda grid: no values to build")
+    done_rows: dict[float, TableRow] = {}
+    ckpt_path = Path(checkpoint) if checkpoint is not None else None
+    if ckpt_path is not None and resume:
+        saved = read_checkpoint(ckpt_path, settings)
+        done_rows = {lam: saved[lam] for lam in lams if lam in saved}
+    todo = [lam for lam in lams if lam not in done_rows]
+    resumed = len(done_rows)
+    total = len(lams)
+    if progress:
+        progress(resumed, total)
+
+    parallel = executor is not None or workers > 1
+    chunks = _chunks(todo, 8 * max(workers, 1) if parallel else len(todo))
+    writer = _Checkpoint(ckpt_path, settings, append=resume) if ckpt_path is not None else None
+    pool = None
+    futures: list = []
+    try:
+        if todo and parallel:
+            from concurrent.futures import as_completed
+
+            if executor is None:
+                from concurrent.futures import ProcessPoolExecutor
+
+                executor = pool = ProcessPoolExecutor(max_workers=workers, initializer=_ignore_sigint)
+            futures = [executor.submit(_optimise_chunk, chunk, settings) for chunk in chunks]
+            for fut in as_completed(futures):
+                rows = fut.result()
+                _finish(rows, done_rows, writer, progress, total)
+        else:
+            coarse = _coarse_for(settings) if todo else None
+            for chunk in chunks:
+                rows = [optimise_lambda(lam, coarse, settings) for lam in chunk]  # type: ignore[arg-type]
+                _finish(rows, done_rows, writer, progress, total)
+    finally:
+        for fut in futures:  # after an error or Ctrl-C: drop what has not started (a no-op when done)
+            fut.cancel()
+        if pool is not None:
+            pool.shutdown(wait=True, cancel_futures=True)
+        if writer is not None:
+            writer.close()
+    meta = {"method": "bspline", **{k: v for k, v in asdict(settings).items()}}
+    meta["weights"] = list(settings.weights)
+    table = Table(tuple(done_rows[lam] for lam in lams), meta=meta)
+    return table, BuildReport(len(lams), len(todo), resumed, len(chunks) if todo else 0, ckpt_path)
+
+
+def _finish(rows, done_rows, writer, progress, total) -> None:
+    for r in rows:
+        done_rows[r.lam] = r
+    if writer is not None:
+        writer.add(rows)
+    if progress:
+        progress(len(done_rows), total)
+
+
 def build_table(
     lams: Sequence[float],
     settings: TableSettings = TableSettings(),
     progress: Callable[[int, int], None] | None = None,
     workers: int = 1,
+    executor: Executor | None = None,
 ) -> Table:
-    """Optimal (k1*, k2*) for every λ in ``lams`` (see the module docstring for the method).
-
-    ``progress(done, total)`` is called as work finishes (total = coarse chunks + λ values).
-    ``workers`` > 1 uses a process pool (results are identical to the sequential build).
-    """
-    from concurrent.futures import ProcessPoolExecutor
-
-    lams = [float(x) for x in lams]
-    k1, k2 = _coarse_grid(settings)
-    n_chunks = max(8, 4 * workers)
-    chunks = [(a, b, settings.eta, settings.samples_per_piece) for a, b in zip(np.array_split(k1, n_chunks), np.array_split(k2, n_chunks))]
-    total = len(chunks) + len(lams)
-    done = 0
-
-    def tick() -> None:
-        nonlocal done
-        done += 1
-        if progress:
-            progress(done, total)
-
-    pool = ProcessPoolExecutor(max_workers=workers) if workers > 1 else None
-    try:
-        mapper = pool.map if pool else map
-        parts = []
-        for part in mapper(_sample_chunk, chunks):
-            parts.append(part)
-            tick()
-        coarse = _Coarse(k1, k2, np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts]))
-        rows = []
-        if pool:
-            futs = [pool.submit(optimise_lambda, lam, coarse, settings) for lam in lams]
-            for fut in futs:
-                rows.append(fut.result())
-                tick()
-        else:
-            for lam in lams:
-                rows.append(optimise_lambda(lam, coarse, settings))
-                tick()
-    finally:
-        if pool:
-            pool.shutdown(cancel_futures=True)
-    meta = {"method": "bspline", **{k: v for k, v in asdict(settings).items()}}
-    meta["weights"] = list(settings.weights)
-    return Table(tuple(rows), meta=meta)
+    """Optimal (k1*, k2*) for every λ in ``lams``: :func:`run_build` without a checkpoint."""
+    return run_build(lams, settings, progress=progress, workers=workers, executor=executor)[0]
 
 
 # ------------------------------------------------------------------------------------------------- I/O

@@ -102,3 +102,74 @@ def test_settings_validation():
         T.TableSettings(weights=(0.5, 0.6))
     with pytest.raises(TableError, match="eta"):
         T.TableSettings(eta=1.0)
+
+
+# ------------------------------------------------------------------ fast closed-form path vs scipy BSpline
+
+
+def test_fast_peaks_match_scipy_reference_inside_the_box():
+    """The build's batched closed form (unit_pieces + unit_peaks) against the scipy BSpline path of
+    normalised_peaks, which shares no code with it, at 300 random (k1, k2, λ) with k1 in [0.05, 0.95]
+    (every optimum lies in [0.18, 0.6]) and k2 down to the floor 1e-4. Tolerance 2e-9 relative: both are
+    exact up to round-off, and where the optima lie we measure ~1e-13; the closed form loses digits
+    towards small k1 (3e-10 at k1 = 0.05, k2 = 0.99, checked against a 50-digit mpmath solve), and
+    scipy's own peak root sometimes ~7e-11."""
+    rng = np.random.default_rng(7)
+    k1 = rng.uniform(0.05, 0.95, 300)
+    k2 = np.where(rng.random(300) < 0.2, 1e-4, rng.uniform(1e-4, 0.95, 300))
+    lam = rng.uniform(0.5, 60.0, 300)
+    for a, b, l in zip(k1, k2, lam):
+        fast = T.fast_peaks(a, b, l, 0.5)[0]
+        ref = np.array(T.normalised_peaks(a, b, l, 0.5))
+        np.testing.assert_allclose(fast, ref, rtol=2e-9, err_msg=f"k1={a}, k2={b}, lam={l}")
+    # batched = one at a time, and η other than 0.5
+    batch = T.fast_peaks(k1[:20], k2[:20], 12.0, 0.3)
+    one = np.array([T.normalised_peaks(a, b, 12.0, 0.3) for a, b in zip(k1[:20], k2[:20])])
+    np.testing.assert_allclose(batch, one, rtol=2e-9)
+
+
+def test_fast_peaks_near_the_corners_of_the_box():
+    """Towards k1 → 0 the closed form loses digits: its Taylor coefficients at τ8 = k1/2 grow like
+    (1/k1)^r and cancel along the long piece to τ = 1/2. Against a 50-digit mpmath solve we measure
+    9.2e-6 relative at (k1, k2) = (1e-3, 0.99), 1.1e-8 at k1 = 0.01, 1e-10 at k1 = 0.999 (scipy: 4e-13).
+    Tolerance 5e-5. The optimiser never goes there: F is tiny at the corners, no refinement starts
+    there, and the coarse grid only ranks those points (values ~1e5 where the optima have ~10)."""
+    for a in (1e-3, 0.01, 0.999):
+        for b in (1e-4, 1e-3, 0.5, 0.99):
+            np.testing.assert_allclose(T.fast_peaks(a, b, 5.0)[0], T.normalised_peaks(a, b, 5.0), rtol=5e-5)
+
+
+def test_unit_pieces_are_the_li2018_spline():
+    """Position and derivatives 1–5 of the closed-form pieces equal scipy's BSpline of Eq. (16) at
+    random τ on both halves (the second by the mirror symmetry the closed form relies on). 1e-9 of the
+    derivative's scale: high derivatives are ~1e4 at k2 = 0.05 and carry that many ulps."""
+    rng = np.random.default_rng(3)
+    for a, b in ((0.31, 0.12), (0.55, 0.4), (0.2, 0.05), (0.45, 1e-4)):
+        h, coef = T.unit_pieces(a, b, 0.5)
+        spline = T._unit_spline(a, b, 0.5)
+        starts = np.concatenate(([0.0], np.cumsum(h[0])))
+        for tau in rng.uniform(0, 1, 25):
+            mirror = tau > 0.5
+            t = 1.0 - tau if mirror else tau
+            j = min(int(np.searchsorted(starts, t, side="right")) - 1, 2)
+            x = t - starts[j]
+            for r in range(6):
+                P = np.polynomial.polynomial
+                val = np.array([P.polyval(x, P.polyder(coef[0, j, d], r)) for d in range(2)])
+                ref = spline(tau, nu=r)
+                if mirror:  # s_u(τ) = 1 − s_u(1 − τ), s_v(τ) = s_v(1 − τ)
+                    val = val * (-1.0) ** r
+                    val[0] = 1.0 - val[0] if r == 0 else -val[0]
+                scale = np.max(np.abs(spline(np.linspace(0, 1, 201), nu=r))) + 1e-300
+                np.testing.assert_allclose(val, ref, atol=1e-9 * scale, err_msg=f"k=({a},{b}) tau={tau} r={r}")
+
+
+def test_coarse_samples_under_estimate_exact_peaks_slightly():
+    """The coarse stage's sampled peaks never exceed the exact peaks and stay within 1 % of them (16
+    samples per piece: the reason ``basin_margin`` is 3 %)."""
+    coarse = T._coarse_for(T.TableSettings(grid_step=0.1))
+    for lam in (1.0, 12.0, 40.0):
+        a_s, j_s = coarse.peaks(lam)
+        exact = T.fast_peaks(coarse.k1, coarse.k2, lam, 0.5, (2, 3))
+        assert np.all(a_s <= exact[:, 0] * (1 + 1e-12)) and np.all(j_s <= exact[:, 1] * (1 + 1e-12))
+        assert np.all(a_s >= 0.99 * exact[:, 0]) and np.all(j_s >= 0.99 * exact[:, 1])

@@ -1,0 +1,213 @@
+"""table.run_build as an engine: process pool and Dask give the sequential result, chunking, checkpoints,
+resume after SIGKILL / Ctrl-C without recomputing finished rows, and never a half-written table."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from pickplace_cli import table as T
+from pickplace_cli.errors import TableError
+
+LAMS = [1.0, 1.5, 7.0, 28.0, 40.0]  # both F maxima at λ = 1, the a_min-on-the-floor case, large λ
+
+
+@pytest.fixture(scope="module")
+def sequential():
+    return T.build_table(LAMS, T.TableSettings())
+
+
+def test_process_pool_equals_sequential(sequential):
+    """Rows do not depend on each other or on the chunking: bit-identical with 2 processes."""
+    table, report = T.run_build(LAMS, T.TableSettings(), workers=2)
+    assert table.rows == sequential.rows
+    assert report.computed == len(LAMS) and report.tasks == len(LAMS)  # 8 chunks per worker, capped by λ
+
+
+def test_chunks_interleave_and_cover_every_lambda_once():
+    lams = [float(x) for x in range(1, 80)]
+    chunks = T._chunks(lams, 16)
+    assert len(chunks) == 16 and sorted(x for c in chunks for x in c) == lams
+    assert chunks[0][:3] == (1.0, 17.0, 33.0)  # interleaved: every chunk gets some small-λ rows
+    assert max(map(len, chunks)) - min(map(len, chunks)) <= 1
+    assert T._chunks(lams[:3], 16) == [(1.0,), (2.0,), (3.0,)]
+
+
+def test_progress_counts_rows():
+    seen = []
+    T.run_build(LAMS[:2], T.TableSettings(), progress=lambda d, t: seen.append((d, t)))
+    assert seen == [(0, 2), (1, 2), (2, 2)]
+
+
+def test_dask_local_cluster_equals_local(sequential):
+    """The same build through Dask's concurrent.futures executor on a LocalCluster (threads, so the
+    test stays fast; a real cluster runs the same tasks in worker processes)."""
+    distributed = pytest.importorskip("distributed")
+    from pickplace_cli.parallel import dask_executor
+
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=False, dashboard_address=None) as cluster:
+        with dask_executor(cluster.scheduler_address) as (executor, threads):
+            assert threads == 2
+            table, report = T.run_build(LAMS, T.TableSettings(), workers=threads, executor=executor)
+    assert table.rows == sequential.rows
+    assert report.computed == len(LAMS)
+
+
+def test_dask_unreachable_scheduler_is_one_line():
+    pytest.importorskip("distributed")
+    from pickplace_cli.parallel import dask_executor
+
+    with pytest.raises(TableError, match=r"^scheduler = tcp://127.0.0.1:9: cannot reach the Dask scheduler within 0.5 s") as exc:
+        with dask_executor("tcp://127.0.0.1:9", timeout=0.5):
+            pass  # pragma: no cover
+    assert "\n" not in str(exc.value)
+
+
+def test_dask_not_installed(monkeypatch):
+    from pickplace_cli.parallel import dask_executor
+
+    monkeypatch.setitem(sys.modules, "distributed", None)  # import distributed → ImportError
+    with pytest.raises(TableError, match=r"Dask is not installed; install the extra: pip install 'pickplace-cli\[dask\]'"):
+        with dask_executor("tcp://127.0.0.1:8786"):
+            pass  # pragma: no cover
+
+
+# ------------------------------------------------------------------------------------------ checkpoints
+
+
+def _count_optimise_calls(monkeypatch) -> list[float]:
+    calls: list[float] = []
+    real = T.optimise_lambda
+
+    def counting(lam, coarse, settings):
+        calls.append(lam)
+        return real(lam, coarse, settings)
+
+    monkeypatch.setattr(T, "optimise_lambda", counting)
+    return calls
+
+
+def test_checkpoint_round_trip_and_resume_skips_finished_rows(tmp_path, monkeypatch, sequential):
+    ckpt = tmp_path / "t.csv.partial.jsonl"
+    T.run_build(LAMS[:2], T.TableSettings(), checkpoint=ckpt)
+    saved = T.read_checkpoint(ckpt, T.TableSettings())
+    assert [saved[x] for x in LAMS[:2]] == list(sequential.rows[:2])  # floats read back bit for bit
+    calls = _count_optimise_calls(monkeypatch)
+    table, report = T.run_build(LAMS, T.TableSettings(), checkpoint=ckpt, resume=True)
+    assert calls == LAMS[2:]
+    assert (report.resumed, report.computed) == (2, 3)
+    assert table.rows == sequential.rows
+    assert set(T.read_checkpoint(ckpt, T.TableSettings())) == set(LAMS)  # new rows appended
+
+
+def test_resume_refuses_a_checkpoint_of_other_settings(tmp_path):
+    ckpt = tmp_path / "t.csv.partial.jsonl"
+    T.run_build([27.5, 28.0], T.TableSettings(), checkpoint=ckpt)
+    with pytest.raises(TableError, match=r"written for other settings .*run without --resume"):
+        T.run_build([28.0], T.TableSettings(grid_step=0.02), checkpoint=ckpt, resume=True)
+    with pytest.raises(TableError, match="other settings"):
+        T.run_build([28.0], T.TableSettings(weights=(0.4, 0.6)), checkpoint=ckpt, resume=True)
+    # without --resume the old file is simply replaced
+    T.run_build([27.5, 28.0], T.TableSettings(grid_step=0.02), checkpoint=ckpt)
+    assert json.loads(ckpt.read_text().splitlines()[0])["settings"]["grid_step"] == 0.02
+
+
+def test_checkpoint_with_a_cut_last_line_and_corrupt_files(tmp_path, sequential):
+    ckpt = tmp_path / "c.partial.jsonl"
+    T.run_build(LAMS[:2], T.TableSettings(), checkpoint=ckpt)
+    text = ckpt.read_text()
+    ckpt.write_text(text[:-40])  # killed while writing the last row
+    assert list(T.read_checkpoint(ckpt, T.TableSettings())) == [LAMS[0]]
+    lines = text.splitlines()
+    ckpt.write_text("\n".join([lines[0], "garbage", lines[2]]) + "\n")
+    with pytest.raises(TableError, match=r"c.partial.jsonl:2: not a table row"):
+        T.read_checkpoint(ckpt, T.TableSettings())
+    ckpt.write_text("lambda,k1\n")
+    with pytest.raises(TableError, match="not a pickplace build-table checkpoint header"):
+        T.read_checkpoint(ckpt, T.TableSettings())
+
+
+GRID = ["--lambda-min", "1", "--lambda-max", "12", "--lambda-step", "0.5"]  # 23 rows, ~1.5 s of work
+
+
+def _start_build(out: Path, *extra: str) -> subprocess.Popen:
+    cmd = [sys.executable, "-m", "pickplace_cli", "build-table", *GRID, "-q", "-o", str(out), *extra]
+    return subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+
+
+def _wait_for_rows(proc: subprocess.Popen, ckpt: Path, rows: int, timeout: float = 60.0) -> int:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        n = len(ckpt.read_text().splitlines()) - 1 if ckpt.exists() else 0
+        if n >= rows:
+            return n
+        assert proc.poll() is None, f"the build ended before it could be interrupted: {proc.communicate()}"
+        time.sleep(0.01)
+    raise AssertionError("no checkpointed rows in time")  # pragma: no cover
+
+
+@pytest.mark.slow
+def test_sigkill_then_resume_recomputes_only_missing_rows(tmp_path, monkeypatch):
+    """Kill -9 a sequential build after a few rows are checkpointed: the good table already at OUT is
+    untouched, the checkpoint holds the finished rows; --resume computes only the others and writes the
+    same bytes as a clean build, then removes the checkpoint."""
+    from typer.testing import CliRunner
+
+    from pickplace_cli.cli import app
+
+    out = tmp_path / "table.csv"
+    out.write_text("a good old table\n")
+    ckpt = T.checkpoint_path(out)
+    proc = _start_build(out, "-j", "1")
+    _wait_for_rows(proc, ckpt, 3)
+    proc.kill()
+    proc.wait()
+    assert out.read_text() == "a good old table\n"
+    assert not [p for p in tmp_path.iterdir() if p.name.endswith(".tmp")]
+    saved = T.read_checkpoint(ckpt, T.TableSettings())
+    assert 3 <= len(saved) < 23
+
+    calls = _count_optimise_calls(monkeypatch)
+    res = CliRunner().invoke(app, ["build-table", *GRID, "-j", "1", "--resume", "-o", str(out)])
+    assert res.exit_code == 0, res.output
+    assert f"{len(saved)} rows resumed from {ckpt}, {23 - len(saved)} computed" in res.output
+    assert len(calls) == 23 - len(saved) and not set(calls) & set(saved)
+    assert not ckpt.exists()
+
+    clean = tmp_path / "clean.csv"
+    res = CliRunner().invoke(app, ["build-table", *GRID, "-j", "1", "-q", "-o", str(clean)])
+    assert res.exit_code == 0
+    assert out.read_bytes() == clean.read_bytes()
+
+
+@pytest.mark.slow
+def test_ctrl_c_with_worker_pool_saves_rows_and_exits_130(tmp_path):
+    """Ctrl-C (SIGINT to the whole process group, as a terminal sends it) during a 2-process build:
+    exit 130, one line telling how to resume, the checkpoint is kept, no output file appears."""
+    out = tmp_path / "t.csv"
+    proc = _start_build(out, "-j", "2")
+    _wait_for_rows(proc, T.checkpoint_path(out), 1)
+    os.killpg(proc.pid, signal.SIGINT)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err
+    assert "run the same command with --resume to continue" in err
+    assert "Traceback" not in err
+    assert not out.exists()
+    assert len(T.read_checkpoint(T.checkpoint_path(out), T.TableSettings())) >= 1
+
+
+def test_cli_resume_needs_an_output_file():
+    from typer.testing import CliRunner
+
+    from pickplace_cli.cli import app
+
+    res = CliRunner().invoke(app, ["build-table", "--resume", "-q"])
+    assert res.exit_code == 1
+    assert "--resume: needs -o FILE" in res.output
