@@ -1,23 +1,93 @@
-"""CSV export: one header row of ``name[unit]`` columns, then one row per sample from t = 0 to T."""
+"""CSV export: one row per sample from t = 0 to T, in one of three dialects.
+
+==========  =========  ===========  =======  ===========================================================
+dialect     separator  line end     header   for
+==========  =========  ===========  =======  ===========================================================
+default     ``,``      LF           yes      spreadsheets, pandas, ``pickplace check``
+twincat     ``;``      CRLF         yes      Beckhoff TwinCAT / Windows PLC tools (header line also CRLF)
+tsv         tab        LF           no       position tables read by motion controllers (numbers only)
+==========  =========  ===========  =======  ===========================================================
+
+Columns (see :func:`pickplace_cli.export.plan_columns`): ``t[s]``, tool ``x y z [m]``, ``vx… [m/s]``,
+``ax… [m/s^2]``, ``jx… [m/s^3]``, per joint ``q<i> qd<i> qdd<i>`` and, when computed, ``torque<i>``,
+``motor_speed<i>``, ``motor_torque<i>``. A batch (samples with a ``move`` array) gets a leading
+``move[-]`` column: the 0-based move index, printed as an integer. Floats use ``%.12g``; the decimal
+separator is always ``.``.
+"""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+from enum import Enum
 from typing import IO
 
 import numpy as np
 
+from ..errors import ExportError
 from . import FLOAT_FORMAT, plan_columns
 
+#: header name of the move index column of a batch (dimensionless index)
+MOVE_COLUMN = "move[-]"
 
-def format_rows(data: np.ndarray, sep: str = ",", newline: str = "\n") -> str:
-    """Rows of ``data`` as text with the fixed float format (deterministic)."""
-    row_fmt = sep.join([FLOAT_FORMAT] * data.shape[1]) + newline
+
+class CsvDialect(str, Enum):
+    default = "default"
+    twincat = "twincat"
+    tsv = "tsv"
+
+
+@dataclass(frozen=True)
+class DialectSpec:
+    sep: str
+    newline: str
+    header: bool
+
+
+DIALECTS: dict[CsvDialect, DialectSpec] = {
+    CsvDialect.default: DialectSpec(",", "\n", True),
+    CsvDialect.twincat: DialectSpec(";", "\r\n", True),
+    CsvDialect.tsv: DialectSpec("\t", "\n", False),
+}
+
+
+def dialect_spec(dialect: CsvDialect | str) -> DialectSpec:
+    """Separator, line end and header flag of ``dialect``; ExportError for an unknown name."""
+    try:
+        return DIALECTS[CsvDialect(dialect)]
+    except ValueError:
+        raise ExportError(f"csv dialect = {dialect!r}: must be one of {', '.join(d.value for d in CsvDialect)}") from None
+
+
+def format_rows(data: np.ndarray, sep: str = ",", newline: str = "\n", int_columns: int = 0) -> str:
+    """Rows of ``data`` as text with the fixed float format (deterministic); the first ``int_columns``
+    columns are printed as integers."""
+    fmts = ["%d"] * int_columns + [FLOAT_FORMAT] * (data.shape[1] - int_columns)
+    row_fmt = sep.join(fmts) + newline
     data = data + 0.0  # no "-0" in the output
     return "".join(row_fmt % tuple(r) for r in data.tolist())
 
 
-def write_csv(plan, stream: IO[str]) -> None:
-    """Write the plan's samples: t, x, y, z, vx…, ax…, jx…, then q<i>, qd<i>, qdd<i> per joint."""
-    names, data = plan_columns(plan)
-    stream.write(",".join(names) + "\n")
-    stream.write(format_rows(data))
+def csv_columns(samples) -> tuple[list[str], np.ndarray, int]:
+    """Column names, data (N, n_columns) and the number of leading integer columns (1 with ``move``)."""
+    names, data = plan_columns(samples)
+    move = getattr(samples, "move", None)
+    if move is None:
+        return names, data, 0
+    move = np.asarray(move)
+    if move.shape != (data.shape[0],):
+        raise ExportError(f"move: shape {move.shape} must be ({data.shape[0]},), one move index per sample")
+    if move.size and not np.array_equal(move, np.round(move)):
+        raise ExportError("move: indices must be whole numbers")
+    return [MOVE_COLUMN, *names], np.hstack([move.astype(float)[:, None], data]), 1
+
+
+def write_csv(samples, stream: IO[str], dialect: CsvDialect | str = CsvDialect.default) -> None:
+    """Write the samples: [move,] t, x, y, z, vx…, ax…, jx…, then q<i>, qd<i>, qdd<i> per joint, torques.
+
+    ``stream`` is a text stream opened with ``newline=""`` (as :func:`~pickplace_cli.export.atomic_output`
+    does) so that the dialect's line ends are written unchanged."""
+    spec = dialect_spec(dialect)
+    names, data, n_int = csv_columns(samples)
+    if spec.header:
+        stream.write(spec.sep.join(names) + spec.newline)
+    stream.write(format_rows(data, spec.sep, spec.newline, n_int))
