@@ -19,6 +19,7 @@ derivative is D/d^k · s^(k).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from enum import Enum
 
@@ -43,12 +44,15 @@ class MotionLaw:
     name: str
     coefficients: tuple[float, ...]
     _derivs: tuple = field(init=False, repr=False, compare=False)
+    _horner: tuple = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         p = np.polynomial.Polynomial(self.coefficients)
         if abs(p(0.0)) > 1e-12 or abs(p(1.0) - 1.0) > 1e-12:
             raise ValueError(f"law {self.name}: s(0) must be 0 and s(1) must be 1, got {p(0.0)}, {p(1.0)}")
         object.__setattr__(self, "_derivs", tuple(p.deriv(k) for k in range(p.degree() + 2)))
+        # Horner tables (highest power first) for the fast path of __call__
+        object.__setattr__(self, "_horner", tuple(tuple(d.coef[::-1].tolist()) for d in self._derivs))
 
     @property
     def degree(self) -> int:
@@ -63,7 +67,13 @@ class MotionLaw:
     def __call__(self, u: np.ndarray | float, order: int = 0) -> np.ndarray:
         """d^order s/du^order at u (array); at rest outside [0, 1]."""
         u = np.asarray(u, dtype=float)
-        inside = self.polynomial(order)(np.clip(u, 0.0, 1.0))
+        if order < 0:
+            raise ValueError(f"order must be ≥ 0, got {order}")
+        coef = self._horner[min(order, len(self._horner) - 1)]
+        x = np.minimum(np.maximum(u, 0.0), 1.0)
+        inside = np.full_like(x, coef[0])
+        for c in coef[1:]:
+            inside = inside * x + c
         if order == 0:
             return np.where(u <= 0.0, 0.0, np.where(u >= 1.0, 1.0, inside))
         return np.where((u < 0.0) | (u > 1.0), 0.0, inside)
@@ -105,12 +115,26 @@ class MotionLaw:
         u = np.where(np.abs(u - 1.0) <= _SNAP, 1.0, np.where(np.abs(u) <= _SNAP, 0.0, u))
         return self(u, order) / duration**order
 
-    def piece_polynomials(self, start: float, duration: float, origin: float) -> np.polynomial.Polynomial:
-        """s((t − start)/duration) as a Polynomial in x = t − origin (for exact piecewise peaks)."""
+    def piece_coefficients(self, start: float, duration: float, origin: float) -> np.ndarray:
+        """Ascending power coefficients of s((t − start)/duration) in x = t − origin (exact piecewise peaks).
+
+        Taylor expansion about u0 = (origin − start)/duration: c_k = s^(k)(u0)/(k!·duration^k), exact for a
+        polynomial law (the polynomial itself, not its restriction to [0, 1]).
+        """
         if duration <= 0.0:
             raise ValueError(f"duration must be > 0, got {duration}")
-        lin = np.polynomial.Polynomial([(origin - start) / duration, 1.0 / duration])
-        return self.polynomial(0)(lin)
+        u0 = (origin - start) / duration
+        out = np.empty(self.degree + 1)
+        for k in range(self.degree + 1):
+            val = 0.0
+            for c in self._horner[k]:
+                val = val * u0 + c
+            out[k] = val / (math.factorial(k) * duration**k)
+        return out
+
+    def piece_polynomials(self, start: float, duration: float, origin: float) -> np.polynomial.Polynomial:
+        """s((t − start)/duration) as a Polynomial in x = t − origin (see :meth:`piece_coefficients`)."""
+        return np.polynomial.Polynomial(self.piece_coefficients(start, duration, origin))
 
 
 #: 3-4-5 polynomial [Su2018, Eq. (19)]

@@ -27,10 +27,15 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from ..laws import MotionLaw
-from ..peaks import ppoly_norm_peak, refine_max
+from ..peaks import ppoly_norm_peak
 from ..task import Task
 from ..trajectory import CartesianPath
 
+#: equally spaced arc-length nodes of the quintic Hermite start for the inverse g(s) of a curve piece
+HERMITE_NODES = 1025
+#: interpolation error (fraction of the parameter range) below which no Newton polish is needed: a few
+#: units of round-off
+HERMITE_TOL = 1e-14
 #: Newton/bisection stopping rule for the arc-length inverse: |Δg| ≤ this × max(|g|, initial bracket),
 #: i.e. a few units in the last place (Newton converges quadratically, so the step before was ~1e-8)
 _INV_TOL = 4 * np.finfo(float).eps
@@ -130,17 +135,67 @@ class ParametricPiece:
         raise NotImplementedError
 
     def _build_table(self, n: int = 129) -> None:
+        """Tables for the inverse g(s): a coarse (g, s(g)) table, then g, g′, g″ at HERMITE_NODES equally
+        spaced s (g′ = 1/σ, g″ = −σ′/σ³, exact), so :meth:`param` starts Newton from a quintic Hermite
+        interpolant that is already at round-off for smooth pieces (one Newton step confirms it)."""
         g = np.linspace(self.g0, self.g1, n)
         self._table = (g, self.arclength(g))
+        sn = np.linspace(0.0, self.length, HERMITE_NODES)
+        gn = self._param_from_table(sn)
+        _, P1, P2, _ = self.curve(gn)
+        sig = np.linalg.norm(P1, axis=1)
+        sig1 = np.einsum("ij,ij->i", P1, P2) / sig
+        self._hermite = (self.length / (HERMITE_NODES - 1), gn, 1.0 / sig, -sig1 / sig**3)
+        # self-check at the midpoints between nodes (where interpolation is worst): the cheapest polish
+        # that reaches round-off there is used for every call
+        mid = 0.5 * (sn[1:] + sn[:-1])
+        self._polish = True
+        exact = self._param_from_table(mid)
+        tol = HERMITE_TOL * (self.g1 - self.g0)
+        for mode in ("none", "newton", "bracketed"):
+            self._polish = mode
+            if mode == "bracketed" or np.max(np.abs(self.param(mid) - exact)) <= tol:
+                break
 
-    def param(self, s: np.ndarray) -> np.ndarray:
-        """g with arclength(g) = s, for s ∈ [0, length] (clipped)."""
+    def _param_from_table(self, s: np.ndarray) -> np.ndarray:
         gt, st = self._table
-        s = np.clip(np.asarray(s, float), 0.0, self.length)
         k = np.clip(np.searchsorted(st, s, side="right") - 1, 0, len(gt) - 2)
         lo, hi = gt[k], gt[k + 1]
         x0 = lo + (s - st[k]) / np.maximum(st[k + 1] - st[k], 1e-300) * (hi - lo)
         return invert_monotone(self.arclength, self.speed, s, lo, hi, x0)
+
+    def param(self, s: np.ndarray) -> np.ndarray:
+        """g with arclength(g) = s, for s ∈ [0, length] (clipped): the quintic Hermite interpolant, polished as
+        the build-time check (at the midpoints between nodes) found necessary to reach round-off: not at
+        all, by one Newton step, or by bracketed Newton iterations (extreme aspect ratios)."""
+        s = np.minimum(np.maximum(np.asarray(s, float), 0.0), self.length)
+        g = self._interpolate(s)
+        if self._polish == "newton":  # one step from an interpolant good to ≲ 1e-8: quadratic → round-off
+            g = np.minimum(np.maximum(g - (self.arclength(g) - s) / self.speed(g), self.g0), self.g1)
+        elif self._polish == "bracketed":  # Newton with bisection inside the bracket of the two nodes
+            step, gn = self._hermite[:2]
+            k = np.minimum((s / step).astype(int), len(gn) - 2)
+            g = invert_monotone(self.arclength, self.speed, s, gn[k], gn[k + 1], g)
+        return g
+
+    def _interpolate(self, s: np.ndarray) -> np.ndarray:
+        step, gn, d1, d2 = self._hermite
+        x = s / step
+        k = np.minimum(x.astype(int), len(gn) - 2)
+        t = x - k
+        t2 = t * t
+        t3 = t2 * t
+        t4 = t3 * t
+        t5 = t4 * t
+        h01 = 10 * t3 - 15 * t4 + 6 * t5
+        g0, g1 = gn[k], gn[k + 1]
+        x0 = (
+            g0 * (1 - h01)
+            + g1 * h01
+            + step * (d1[k] * (t - 6 * t3 + 8 * t4 - 3 * t5) + d1[k + 1] * (-4 * t3 + 7 * t4 - 3 * t5))
+            + step * step * 0.5 * (d2[k] * (t2 - 3 * t3 + 3 * t4 - t5) + d2[k + 1] * (t3 - 2 * t4 + t5))
+        )
+        return x0
 
     def at_length(self, s: np.ndarray) -> tuple[np.ndarray, ...]:
         g = self.param(s)
@@ -215,22 +270,26 @@ class ArcLengthPath:
         return self.derivatives(tau, order)[order]
 
 
-#: dense samples for the arc-length methods' peak search (plus the joins and both sides of each);
-#: each local maximum of the samples is then refined by golden-section search (peaks.refine_max)
+#: dense samples for the arc-length methods' peak search (plus the joins and both sides of each)
 PEAK_SAMPLES = 2001
-#: golden-section iterations per candidate: the bracket 2/(PEAK_SAMPLES − 1) shrinks to 1e-3·0.618²⁴ ≈ 1e-8,
-#: so a smooth maximum (relative curvature f″/f ≲ 1e4 per unit τ², far above any path here) is off by
-#: ≲ 1e4·(1e-8)²/2 ≈ 1e-12 relative
-REFINE_ITERATIONS = 24
+#: local maxima refined per derivative order, and the zoom of the refinement: each round evaluates
+#: ZOOM_POINTS equally spaced points across the current bracket and keeps the two intervals around the
+#: best one, so the bracket shrinks by (ZOOM_POINTS − 1)/2 per round: 2/2000 → 1e-3·10⁻⁶ = 1e-9 after 6
+#: rounds, where a smooth maximum (relative curvature |f″/f| ≲ 1e6 per unit τ²) is off by ≲ 1e-12
+PEAK_CANDIDATES = 4
+ZOOM_POINTS = 21
+ZOOM_ROUNDS = 6
 
 
 def sampled_peaks(fun: Callable[[np.ndarray, int], list[np.ndarray]], breakpoints: np.ndarray) -> tuple[float, float, float]:
-    """True maxima of ‖x′‖, ‖x″‖, ‖x‴‖ over τ ∈ [0, 1] for a piecewise-smooth curve.
+    """True maxima of ‖x′‖, ‖x″‖, ‖x‴‖ over τ ∈ [0, 1] for a piecewise-smooth curve (``fun(tau, 3)`` gives
+    [x, x′, x″, x‴]).
 
     Samples PEAK_SAMPLES points plus every breakpoint and τ ± 1e-11 on both sides of it (so a one-sided
-    limit at a jump of the jerk is seen), then refines every local maximum by golden-section search.
-    Golden section (REFINE_ITERATIONS) leaves a bracket of ~1e-8 in τ, so a smooth maximum is found to
-    ~1e-12 relative and a one-sided limit to ~1e-11·|d/dτ|, i.e. ~1e-9 relative or better.
+    limit at a jump of the jerk is seen), then zooms into the PEAK_CANDIDATES best local maxima of each
+    order (all brackets of all orders in one evaluation per round). The result never falls below the best
+    sample, and every value it returns is a value of the function; a smooth maximum is found to ~1e-12
+    relative, a one-sided limit at a jump to ~1e-11·|d/dτ| (the breakpoint samples).
     """
     bp = np.asarray(breakpoints, float)
     tau = np.unique(np.concatenate([np.linspace(0.0, 1.0, PEAK_SAMPLES), bp, np.clip(bp - 1e-11, 0, 1), np.clip(bp + 1e-11, 0, 1)]))
@@ -239,8 +298,32 @@ def sampled_peaks(fun: Callable[[np.ndarray, int], list[np.ndarray]], breakpoint
         d = fun(t, 3)
         return np.column_stack([np.linalg.norm(d[k], axis=1) for k in (1, 2, 3)])
 
-    peak, _ = refine_max(norms, tau, norms(tau), max_candidates=4, iterations=REFINE_ITERATIONS)
-    return float(peak[0]), float(peak[1]), float(peak[2])
+    y = norms(tau)
+    best = y.max(axis=0)
+    n = len(tau)
+    lo_l, hi_l, col_l = [], [], []
+    for c in range(3):
+        yc = y[:, c]
+        left = np.concatenate([[-np.inf], yc[:-1]])
+        right = np.concatenate([yc[1:], [-np.inf]])
+        idx = np.flatnonzero((yc >= left) & (yc >= right))
+        idx = idx[np.argsort(yc[idx])[::-1][:PEAK_CANDIDATES]]
+        lo_l.append(tau[np.maximum(idx - 1, 0)])
+        hi_l.append(tau[np.minimum(idx + 1, n - 1)])
+        col_l.append(np.full(idx.size, c))
+    lo, hi, col = np.concatenate(lo_l), np.concatenate(hi_l), np.concatenate(col_l)
+    frac = np.linspace(0.0, 1.0, ZOOM_POINTS)
+    for _ in range(ZOOM_ROUNDS):
+        grid = lo[:, None] + (hi - lo)[:, None] * frac[None, :]  # (brackets, ZOOM_POINTS)
+        vals = norms(grid.ravel()).reshape(grid.shape + (3,))[np.arange(len(col)), :, col]
+        k = np.argmax(vals, axis=1)
+        for c in range(3):
+            sel = col == c
+            if sel.any():
+                best[c] = max(best[c], float(vals[sel].max()))
+        lo = grid[np.arange(len(k)), np.maximum(k - 1, 0)]
+        hi = grid[np.arange(len(k)), np.minimum(k + 1, ZOOM_POINTS - 1)]
+    return float(best[0]), float(best[1]), float(best[2])
 
 
 @dataclass(frozen=True)
@@ -283,28 +366,23 @@ class AxisLaws:
     def piece_coefficients(self, order: int) -> tuple[np.ndarray, np.ndarray]:
         """(breaks, coef) of the ``order``-th derivative for :func:`~pickplace_cli.peaks.ppoly_norm_peak`."""
         br = self.breakpoints()
-        polys = []
+        deg = max((pl.law.degree for ax in self.axes for pl in ax), default=0)
+        pos = np.zeros((len(br) - 1, 2, deg + 1))  # ascending powers of (τ − br[i])
         for i in range(len(br) - 1):
             lo, hi = br[i], br[i + 1]
-            row = []
-            for ax in self.axes:
-                p = np.polynomial.Polynomial([0.0])
+            for a, ax in enumerate(self.axes):
                 for pl in ax:
                     if pl.amplitude == 0.0:
                         continue
                     if pl.duration > 0 and pl.start <= lo + 1e-12 and pl.start + pl.duration >= hi - 1e-12:
-                        p = p + pl.amplitude * pl.law.piece_polynomials(pl.start, pl.duration, lo)
+                        c = pl.law.piece_coefficients(pl.start, pl.duration, lo)
+                        pos[i, a, : c.size] += pl.amplitude * c
                     elif pl.start + max(pl.duration, 0.0) <= lo + 1e-12:
-                        p = p + pl.amplitude
-                row.append(p.deriv(order) if order else p)
-            polys.append(row)
-        deg = max(len(p.coef) for row in polys for p in row)
-        coef = np.zeros((len(polys), 2, deg))
-        for i, row in enumerate(polys):
-            for a, p in enumerate(row):
-                c = p.coef[::-1]  # highest power first
-                coef[i, a, deg - len(c):] = c
-        return br, coef
+                        pos[i, a, 0] += pl.amplitude
+        coef = pos
+        for _ in range(order):  # differentiate: c_k → k·c_k at power k − 1
+            coef = coef[:, :, 1:] * np.arange(1, coef.shape[2])
+        return br, coef[:, :, ::-1].copy()  # highest power first
 
     def exact_peaks(self) -> tuple[float, float, float]:
         """Exact max of ‖x^(k)‖, k = 1, 2, 3, on the polynomial pieces (one-sided limits included)."""
@@ -326,22 +404,33 @@ def local_endpoints(task: Task) -> tuple[float, float, float]:
 
 def to_cartesian(
     task: Task,
-    local: Callable[[np.ndarray, int], np.ndarray],
+    local: Any,
     method: str,
     parameters: dict[str, Any],
     peaks: tuple[float, float, float],
     breakpoints: np.ndarray,
 ) -> CartesianPath:
-    """CartesianPath from a local motion ``local(tau, order) -> (N, 2)`` in (u, v):
-    base = p_from + u·e_u + v·e_z [Li2018, Eq. (1)]."""
+    """CartesianPath from a local motion in (u, v) — an :class:`ArcLengthPath` or :class:`AxisLaws`, i.e.
+    anything with ``derivatives(tau, 3) -> [x, x′, x″, x‴]`` — mapped by base = p_from + u·e_u + v·e_z
+    [Li2018, Eq. (1)].
+
+    The pipeline asks for orders 0…3 at the same τ one after another (robot models, limit refinement);
+    the arc-length methods compute all four in one pass (one arc-length inversion), so the last τ and its
+    four derivatives are kept and reused when the next call passes an equal τ array.
+    """
     e_u = task.e_u
     e_z = np.array([0.0, 0.0, 1.0])
     origin = task.p_from.copy()
+    memo: list = [None]  # one entry (τ, [p, p′, p″, p‴]), replaced in one assignment (thread-safe reads)
 
     def evaluate(tau: np.ndarray, order: int) -> np.ndarray:
-        x = local(tau, order)
-        out = x[:, :1] * e_u + x[:, 1:2] * e_z
-        return out + origin if order == 0 else out
+        entry = memo[0]
+        if entry is None or entry[0].shape != tau.shape or not np.array_equal(entry[0], tau):
+            out = [x[:, :1] * e_u + x[:, 1:2] * e_z for x in local.derivatives(tau, 3)]
+            out[0] += origin
+            entry = (tau.copy(), out)
+            memo[0] = entry
+        return entry[1][order].copy()
 
     return CartesianPath(
         evaluate=evaluate,
