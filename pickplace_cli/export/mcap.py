@@ -2,8 +2,8 @@
 
 Input is duck-typed (a :class:`~pickplace_cli.planner.Plan` or a batch/round-trip timeline): ``t`` (N,) s;
 ``p, v, a, j`` (N, 3) in m, m/s, m/s², m/s³; ``joint`` a :class:`~pickplace_cli.trajectory.JointTrajectory`;
-optional ``move`` (N,) int = 0-based move index per sample (absent or None: one move). ``t`` must not
-decrease.
+optional ``move`` (N,) int = the move number of each sample (absent or None: one move); each run of
+equal numbers is one move. ``t`` must not decrease.
 
 Time base. Every message's log time (and header stamp) is ``EPOCH_NS + round(t · 1e9)`` ns: the sample
 time of the trajectory plus a fixed, documented epoch offset (2024-01-01T00:00:00Z), never the wall clock,

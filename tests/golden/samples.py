@@ -81,6 +81,73 @@ def delta_batch() -> Timeline:
     return timeline([delta_plan(), delta_plan(back=True), delta_plan()], dwell=0.1)
 
 
+# ------------------------------------------------------------------- frozen inputs for the golden files
+# Golden files test the *formats*, so their input must not move when the planner or the shipped table
+# changes: closed-form samples (a quintic rest-to-rest blend and simple joint functions) and a small
+# closed-form table. Values are exact up to a few ulp on any platform.
+
+
+@dataclass(frozen=True)
+class Synthetic:
+    t: np.ndarray
+    p: np.ndarray
+    v: np.ndarray
+    a: np.ndarray
+    j: np.ndarray
+    joint: JointTrajectory
+    move: np.ndarray | None = None
+
+
+def synthetic(n: int = 21, duration: float = 0.2, drives: bool = True, start=(-0.15, 0.0, -0.8),
+              end=(0.15, 0.05, -0.78), t0: float = 0.0, move: int | None = None) -> Synthetic:
+    """A rest-to-rest quintic blend s(u) = 10u³ − 15u⁴ + 6u⁵ between two points, joints q = f(p)."""
+    T = duration
+    t = np.linspace(0.0, T, n)
+    u = t / T
+    s = [10 * u**3 - 15 * u**4 + 6 * u**5, (30 * u**2 - 60 * u**3 + 30 * u**4) / T,
+         (60 * u - 180 * u**2 + 120 * u**3) / T**2, (60 - 360 * u + 360 * u**2) / T**3]
+    d = np.asarray(end, float) - np.asarray(start, float)
+    p = np.asarray(start, float) + s[0][:, None] * d
+    v, a, j = (sk[:, None] * d for sk in s[1:])
+    q = np.column_stack([np.arctan2(p[:, 1], p[:, 0] + 1.0), 0.5 * np.sin(3 * p[:, 0]), p[:, 2] + 0.9])
+    qd = np.column_stack([np.gradient(q[:, k], t) for k in range(3)])
+    qdd = np.column_stack([np.gradient(qd[:, k], t) for k in range(3)])
+    qddd = np.column_stack([np.gradient(qdd[:, k], t) for k in range(3)])
+    torque = np.column_stack([2.0 * qdd[:, 0] - 1.5, 0.8 * qdd[:, 1] + 0.3 * qd[:, 1], 40.0 * (qdd[:, 2] + 9.81)])
+    gear = np.array([25.0, 25.0, 10.0])
+    jt = JointTrajectory(t + t0, q, qd, qdd, qddd, ("q1", "q2", "q3"), ("rad", "rad", "m"), torque=torque,
+                         motor_speed=gear * qd if drives else None,
+                         motor_torque=torque / (gear * 0.9) + 1.5e-4 * gear * qdd if drives else None)
+    mv = None if move is None else np.full(n, move)
+    return Synthetic(t + t0, p, v, a, j, jt, mv)
+
+
+def synthetic_batch() -> Synthetic:
+    """Two synthetic moves (numbered 1 and 2, like batch rows), the second 0.1 s after the first."""
+    one = synthetic(move=1)
+    two = synthetic(start=(0.15, 0.05, -0.78), end=(-0.15, 0.0, -0.8), t0=0.3, move=2)
+    cat = lambda name: np.concatenate([getattr(one, name), getattr(two, name)])  # noqa: E731
+    jcat = lambda name: np.concatenate([getattr(one.joint, name), getattr(two.joint, name)])  # noqa: E731
+    jt = JointTrajectory(cat("t"), jcat("q"), jcat("qd"), jcat("qdd"), jcat("qddd"), one.joint.names, one.joint.units,
+                         torque=jcat("torque"), motor_speed=jcat("motor_speed"), motor_torque=jcat("motor_torque"))
+    return Synthetic(cat("t"), cat("p"), cat("v"), cat("a"), cat("j"), jt, cat("move"))
+
+
+def synthetic_table():
+    """A 12-row table of closed-form values (non-uniform λ grid, small k2 with an exponent literal)."""
+    from pickplace_cli.table import Table, TableRow
+
+    lams = [1.0, 1.5, 2.0, 3.0, 5.0, 7.5, 10.0, 12.5, 15.0, 20.0, 30.0, 40.0]
+    rows = []
+    for lam in lams:
+        k1 = 0.579 - 1.99e-2 * lam + 5.09e-4 * lam**2 - 4.91e-6 * lam**3
+        k2 = 0.218 - 1.09e-2 * lam + 4.15e-4 * lam**2 - 5.41e-6 * lam**3 if lam < 40 else 1.5e-5
+        a_max, j_max = 8.0 + 1.0 / lam, 80.0 + 10.0 / lam
+        rows.append(TableRow(lam, k1, k2, a_max, j_max, 2.0 + 0.3 / lam, 0.93, a_max - 0.5, j_max - 1.0))
+    meta = {"eta": 0.5, "weights": [0.5, 0.5], "method": "bspline", "grid_step": 0.01, "tool_version": "golden"}
+    return Table(tuple(rows), meta=meta, source="/anywhere/golden-table.csv")
+
+
 # ------------------------------------------------------------------------------------------- readers
 
 

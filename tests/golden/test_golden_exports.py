@@ -4,10 +4,14 @@ Decoded content: MCAP → header, schemas, channels, metadata and every message 
 JSON by json) with its log/publish time and sequence; CSV/TSV → separator, line ends, header and the
 numbers; Structured Text and JSON tables → the text with every number compared numerically.
 
-Numeric tolerance: rtol 1e-9 with atol 1e-9 (in the unit of the value). The plans are deterministic,
-but their last bits may differ across numpy/scipy/BLAS builds (root finders, linear solves), so bytes
-are not compared; a real change of a value (a wrong column, a changed formula) is far above 1e-9.
-Non-numeric content (names, units, schemas, topics, times in ns, counts) must match exactly.
+Inputs are frozen closed-form samples and a closed-form table (``tests/golden/samples.py``), so the
+golden files test the formats and do not move when the planner or the shipped table changes (the unit
+tests compare the exports of real plans with their in-memory values).
+
+Numeric tolerance: rtol 1e-9 with atol 1e-9 (in the unit of the value): the closed-form inputs may
+differ in the last bits across numpy/libm builds (sin, arctan2), so bytes are not compared; a real
+change (a wrong column, a changed formula) is far above 1e-9. Non-numeric content (names, units,
+schemas, topics, times in ns, counts) must match exactly.
 """
 
 from __future__ import annotations
@@ -25,15 +29,10 @@ from pickplace_cli.export.csv import write_csv
 from pickplace_cli.export.mcap import mcap_bytes
 from pickplace_cli.export.table_json import format_table_json
 from pickplace_cli.export.table_st import format_table_st
-from pickplace_cli.table import load_table
-from tests.golden.samples import delta_plan, gantry_plan, timeline
+from tests.golden.samples import synthetic, synthetic_batch, synthetic_table
 
 DATA = Path(__file__).parent / "data"
 RTOL = ATOL = 1e-9
-
-
-def golden_batch():
-    return timeline([delta_plan(rate=100), delta_plan(rate=100, back=True)], dwell=0.1)
 
 
 def plain(obj):
@@ -125,18 +124,18 @@ def csv_bytes(samples, dialect: str) -> bytes:
 
 
 CASES = {
-    "plan_ros2.mcap": lambda: mcap_bytes(delta_plan(rate=100)),
-    "batch_ros2.mcap": lambda: mcap_bytes(golden_batch()),
-    "gantry_ros2_zstd.mcap": lambda: mcap_bytes(gantry_plan(), compression="zstd"),
-    "plan_foxglove.mcap": lambda: mcap_bytes(delta_plan(rate=100), flavor="foxglove"),
-    "batch_foxglove.mcap": lambda: mcap_bytes(golden_batch(), flavor="foxglove"),
-    "plan_default.csv": lambda: csv_bytes(delta_plan(rate=100), "default"),
-    "plan_twincat.csv": lambda: csv_bytes(delta_plan(rate=100), "twincat"),
-    "plan.tsv": lambda: csv_bytes(delta_plan(rate=100), "tsv"),
-    "batch_default.csv": lambda: csv_bytes(golden_batch(), "default"),
-    "gantry_twincat.csv": lambda: csv_bytes(gantry_plan(), "twincat"),
-    "table.st": lambda: format_table_st(load_table(), "GOLDEN").encode(),
-    "table.json": lambda: format_table_json(load_table(), "GOLDEN").encode(),
+    "plan_ros2.mcap": lambda: mcap_bytes(synthetic()),
+    "batch_ros2.mcap": lambda: mcap_bytes(synthetic_batch()),
+    "nodrives_ros2_zstd.mcap": lambda: mcap_bytes(synthetic(drives=False), compression="zstd"),
+    "plan_foxglove.mcap": lambda: mcap_bytes(synthetic(), flavor="foxglove"),
+    "batch_foxglove.mcap": lambda: mcap_bytes(synthetic_batch(), flavor="foxglove"),
+    "plan_default.csv": lambda: csv_bytes(synthetic(), "default"),
+    "plan_twincat.csv": lambda: csv_bytes(synthetic(), "twincat"),
+    "plan.tsv": lambda: csv_bytes(synthetic(), "tsv"),
+    "batch_default.csv": lambda: csv_bytes(synthetic_batch(), "default"),
+    "nodrives_twincat.csv": lambda: csv_bytes(synthetic(drives=False), "twincat"),
+    "table.st": lambda: format_table_st(synthetic_table(), "GOLDEN").encode(),
+    "table.json": lambda: format_table_json(synthetic_table(), "GOLDEN").encode(),
 }
 
 
@@ -152,13 +151,13 @@ def test_golden(name, update_golden, tmp_path):
 
 def test_decoded_comparison_can_fail(tmp_path):
     """The decoded comparison sees a changed value, a changed name and a changed line end."""
-    base = decode_mcap(mcap_bytes(delta_plan(rate=100)), tmp_path)
+    base = decode_mcap(mcap_bytes(synthetic()), tmp_path)
     changed = json.loads(json.dumps(base))
     k = next(i for i, m in enumerate(changed["messages"]) if m[0] == "/joint_states" and i > 10)
     changed["decoded"][k]["position"][1] += 1e-6
     with pytest.raises(AssertionError):
         assert_same(changed, base)
-    text = csv_bytes(delta_plan(rate=100), "twincat").decode()
+    text = csv_bytes(synthetic(), "twincat").decode()
     with pytest.raises(AssertionError):
         assert_same(decode_text(text.replace("\r\n", "\n")), decode_text(text))
     with pytest.raises(AssertionError):
