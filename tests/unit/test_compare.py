@@ -261,7 +261,8 @@ def test_measured_continuity_matches_each_methods_claim(method):
     """The numerical class equals what the method declares (``continuity``), and the measured jerk jumps
     sit exactly where it says (``jerk_jumps_at``, to 1e-9: the bisection/probe resolution) — the check is
     independent of the declaration (test_declared_continuity_is_read_but_not_trusted)."""
-    path = plan_path(ADEPT, method)
+    # through the planner, which knows how to build every method (also one whose path depends on T)
+    path = plan(ADEPT, load_profile("gantry"), PlanOptions(method=method, fit=False)).cartesian.path
     c = cmp.continuity(path)
     declared = path.parameters.get("continuity", 3 if method == Method.bspline else None)
     # a method without a declared class is held to what every method here guarantees: v and a continuous
