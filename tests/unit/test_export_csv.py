@@ -121,3 +121,25 @@ def test_twincat_line_ends_survive_atomic_output(tmp_path):
         write_csv(delta_plan(), fh, CsvDialect.twincat)
     raw = target.read_bytes()
     assert raw == text_of(delta_plan(), "twincat").encode() and raw.count(b"\r\n") == len(delta_plan().t) + 1
+
+
+@pytest.mark.parametrize("dialect", ["default", "twincat", "tsv"])
+def test_batch_written_one_plan_at_a_time(dialect):
+    """csv_header(move=True) + csv_rows(plan, move=k) for each plan == write_csv of the batch's samples."""
+    from pickplace_cli.export.csv import csv_header, csv_rows, dialect_spec
+
+    plans = [delta_plan(), delta_plan(back=True)]
+    spec = dialect_spec(dialect)
+    streamed = csv_header(plans[0], dialect, move=True) + "".join(csv_rows(pl, dialect, move=k + 7) for k, pl in enumerate(plans))
+    # the same samples as one batch object whose t restarts per move (as a CSV batch does)
+    b = delta_batch()
+    n0 = len(plans[0].t)
+    same = type(b)(np.concatenate([pl.t for pl in plans]), np.vstack([pl.p for pl in plans]), np.vstack([pl.v for pl in plans]),
+                   np.vstack([pl.a for pl in plans]), np.vstack([pl.j for pl in plans]),
+                   type(b.joint)(np.concatenate([pl.t for pl in plans]), *(np.vstack([getattr(pl.joint, f) for pl in plans]) for f in ("q", "qd", "qdd", "qddd")),
+                                 plans[0].joint.names, plans[0].joint.units,
+                                 **{f: np.vstack([getattr(pl.joint, f) for pl in plans]) for f in ("torque", "motor_speed", "motor_torque")}),
+                   np.array([7] * n0 + [8] * len(plans[1].t)))
+    assert streamed == text_of(same, dialect)
+    assert csv_header(plans[0], dialect, move=False) == (spec.sep.join(plan_columns(plans[0])[0]) + spec.newline if spec.header else "")
+    assert csv_header(delta_batch(), dialect, move=False) == csv_header(plans[0], dialect)
