@@ -321,7 +321,9 @@ def fit_workspace(
     ``step`` [m]: how much h is lowered per step; ``min_height`` [m]: the lowest h tried; ``adjust_points``:
     move a pick/place point outside the workspace by the APF (otherwise refuse: UnreachableError, exit 4);
     ``margin`` [m]: the APF's δ; ``max_shift`` [m]: farther than this the part cannot be picked
-    (UnreachableError). Raises UnreachableError when no h ≥ ``min_height`` keeps the path inside.
+    (UnreachableError). Raises UnreachableError when no h ≥ ``min_height`` keeps the path inside; the
+    error of the method itself when the requested move cannot be planned at all (e.g. TableError).
+    ``method_params`` go to the planner (a method whose path depends on the duration needs it there).
     """
     from .limits import MotionModel, check_grid, check_limits
     from .methods import plan_path
@@ -360,6 +362,8 @@ def fit_workspace(
         try:
             path = plan_path(t, method, **params)
         except PickplaceError as exc:
+            if t is base:
+                raise  # the requested move itself cannot be planned: not a workspace problem
             return None, f"cannot plan at h = {t.height:.4g} m: {exc}"
         grid = check_grid(np.array([0.0, 1.0]), path.breakpoints)
         P = path(grid, 0)
@@ -382,8 +386,6 @@ def fit_workspace(
     path, first = outside(base)
     if first is None:
         return WorkspaceFit(task, base, path, str(getattr(method, "value", method)), None, 0, tuple(adjustments))
-    if path is None:  # the requested move itself cannot be planned: not a workspace problem
-        raise UnreachableError(first)
     k = 0
     reason = first
     while True:

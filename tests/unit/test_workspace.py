@@ -169,3 +169,11 @@ def test_every_method_can_be_fitted(delta, method):
         pytest.skip(f"{method.value}: {exc}")
     fit = fit_workspace(task, delta, method)
     assert fit.path.method == method.value and fit.task.height <= 0.05 and fit.steps >= 30
+
+
+def test_a_move_that_cannot_be_planned_keeps_its_own_error(delta):
+    """λ = 60 is outside the B-spline table: TableError (exit 1), not a workspace verdict."""
+    from pickplace_cli.errors import TableError
+
+    with pytest.raises(TableError, match="lambda = b/h = 60"):
+        fit_workspace(Task([-0.15, 0, -0.8], [0.15, 0, -0.8], 0.005), delta)
