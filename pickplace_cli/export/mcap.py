@@ -280,10 +280,18 @@ def _check(samples) -> None:
         arr = np.asarray(getattr(samples, name))
         if arr.shape != (len(t), 3):
             raise ExportError(f"{name}: shape {arr.shape} must be ({len(t)}, 3)")
-    for name, arr in (("t", t), ("p", samples.p), ("q", samples.joint.q)):
-        bad = np.flatnonzero(~np.all(np.isfinite(np.reshape(arr, (len(t), -1))), axis=1))
+    jt = samples.joint
+    arrays = [("t", t), ("p", samples.p), ("v", samples.v), ("a", samples.a), ("j", samples.j)]
+    arrays += [(name, getattr(jt, name)) for name in ("q", "qd", "qdd", "torque", "motor_speed", "motor_torque")]
+    for name, arr in arrays:
+        if arr is None:
+            continue
+        arr = np.asarray(arr, dtype=float)
+        if arr.shape[0] != len(t):
+            raise ExportError(f"{name}: {arr.shape[0]} samples, t has {len(t)}")
+        bad = np.flatnonzero(~np.all(np.isfinite(arr.reshape(len(t), -1)), axis=1))
         if bad.size:
-            raise ExportError(f"{name}: not finite at sample {int(bad[0])}: MCAP needs finite values")
+            raise ExportError(f"{name}: not finite at sample {int(bad[0])} (t = {t[bad[0]]:.9g} s): MCAP needs finite values")
     back = np.flatnonzero(np.diff(t) < 0)
     if back.size:
         i = int(back[0]) + 1

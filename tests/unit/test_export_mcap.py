@@ -363,3 +363,15 @@ def test_errors():
     bad = type(batch)(batch.t[::-1].copy(), batch.p, batch.v, batch.a, batch.j, batch.joint, batch.move)
     with pytest.raises(ExportError, match="back in time"):
         mcap_bytes(bad)
+
+
+def test_non_finite_value_is_refused():
+    from dataclasses import replace
+
+    pl = delta_plan()
+    torque = pl.joint.torque.copy()
+    torque[7, 1] = np.nan
+    bad = replace(pl, joint=replace(pl.joint, torque=torque))
+    for flavor in ("ros2", "foxglove"):
+        with pytest.raises(ExportError, match=r"torque: not finite at sample 7"):
+            mcap_bytes(bad, flavor=flavor)
