@@ -685,6 +685,12 @@ def _parse_weights(text: str) -> tuple[float, float]:
     return wa, wj
 
 
+class TableFormat(str, Enum):
+    csv = "csv"
+    json = "json"
+    st = "st"
+
+
 @app.command("build-table")
 @_handle_errors
 def build_table_cmd(
@@ -704,7 +710,11 @@ def build_table_cmd(
         False, "--resume",
         help="Continue an interrupted build from OUTPUT.partial.jsonl (rows already finished are not recomputed; needs -o FILE).",
     ),
-    output: str = typer.Option("-", "--output", "-o", help="Output CSV ('-' = stdout). Written atomically."),
+    output: str = typer.Option("-", "--output", "-o", help="Output file ('-' = stdout). Written atomically."),
+    table_format: TableFormat = typer.Option(
+        TableFormat.csv, "--format", "-f",
+        help="csv (the table file plan --table reads), json, or st (IEC 61131-3 Structured Text with a look-up function).",
+    ),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar."),
 ) -> None:
     """Compute the optimal (k1*, k2*) of the B-spline method for a grid of λ, with the Eq. 23 cubic fit.
@@ -779,8 +789,15 @@ def build_table_cmd(
         "optimiser": "coarse grid + bounded Nelder-Mead from each grid local optimum within basin_margin (one per basin); exact peaks",
         "fit_lambda_min": fit_min,
     }
+    if table_format is TableFormat.json:
+        from .export.table_json import format_table_json as formatter
+    elif table_format is TableFormat.st:
+        from .export.table_st import format_table_st as formatter
+    else:
+        formatter = format_table
+    text = formatter(table, __version__, extra)
     with atomic_output(output) as stream:
-        stream.write(format_table(table, __version__, extra))
+        stream.write(text)
     if ckpt is not None:
         ckpt.unlink(missing_ok=True)  # the table is in place: the partial results are no longer needed
     if not quiet:

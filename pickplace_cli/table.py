@@ -516,8 +516,9 @@ class Table:
             sel = np.ones_like(sel)
         lam = self.lam[sel]
         k1, k2 = self.column("k1")[sel], self.column("k2")[sel]
-        g1 = np.polynomial.polynomial.polyfit(lam, k1, degree)
-        g2 = np.polynomial.polynomial.polyfit(lam, k2, degree)
+        deg = min(degree, len(lam) - 1)  # a tiny table gets a lower-degree fit (zero higher coefficients)
+        g1 = np.pad(np.polynomial.polynomial.polyfit(lam, k1, deg), (0, degree - deg))
+        g2 = np.pad(np.polynomial.polynomial.polyfit(lam, k2, deg), (0, degree - deg))
         res = max(
             np.max(np.abs(np.polynomial.polynomial.polyval(lam, g1) - k1)),
             np.max(np.abs(np.polynomial.polynomial.polyval(lam, g2) - k2)),

@@ -211,3 +211,37 @@ def test_cli_resume_needs_an_output_file():
     res = CliRunner().invoke(app, ["build-table", "--resume", "-q"])
     assert res.exit_code == 1
     assert "--resume: needs -o FILE" in res.output
+
+
+@pytest.mark.parametrize("fmt", ["csv", "json", "st"])
+def test_cli_build_table_formats(tmp_path, fmt):
+    """--format picks the writer (export.table_json / table_st); the rows are the built ones."""
+    from typer.testing import CliRunner
+
+    from pickplace_cli.cli import app
+
+    out = tmp_path / f"t.{fmt}"
+    res = CliRunner().invoke(app, ["build-table", "--lambda-min", "27.5", "--lambda-max", "28", "-j", "1", "-q", "-f", fmt, "-o", str(out)])
+    assert res.exit_code == 0, res.output
+    text = out.read_text()
+    ref = T.build_table([27.5, 28.0])
+    if fmt == "csv":
+        assert T.parse_table(text, "t.csv").rows == tuple(
+            T.TableRow(*(float(f"{x:.10g}") for x in (r.lam, r.k1, r.k2, r.a_max, r.j_max, r.v_max, r.F, r.a_min, r.j_min)))
+            for r in ref.rows)
+    elif fmt == "json":
+        assert json.loads(text)["rows"]["k1"] == [r.k1 for r in ref.rows]
+    else:
+        assert "FUNCTION F_PickplaceK" in text and "PP_TABLE_K1" in text
+    assert not T.checkpoint_path(out).exists()
+
+
+def test_fit_of_a_tiny_table_has_a_lower_degree():
+    """Fewer rows than a cubic needs: the fit drops to the degree the rows allow (higher g = 0), no warning."""
+    import warnings
+
+    tab = T.Table(tuple(T.TableRow(lam, 0.3 + 0.01 * lam, 0.1, *[float("nan")] * 6) for lam in (27.0, 27.5, 28.0)), {"eta": 0.5})
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        g1, g2, res = tab.fit(5.0)
+    assert g1 == pytest.approx([0.3, 0.01, 0.0, 0.0], abs=1e-9) and g1[3] == 0.0 and res < 1e-12
