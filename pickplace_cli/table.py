@@ -153,7 +153,8 @@ def unit_pieces(k1: np.ndarray | float, k2: np.ndarray | float, eta: float) -> t
     n = k1.size
     a = 0.5 * k1 * k2
     c = 0.5 * k1
-    h = np.stack([a, c - a, 0.5 - c], axis=1)
+    h = np.empty((n, 3))
+    h[:, 0], h[:, 1], h[:, 2] = a, c - a, 0.5 - c
     # pieces 0 and 1 as M @ z, z = (d3, d4, d5, g2), entries powers of a (start value s(0) = 0)
     m = np.empty((n, 3, _NC, 4))
     m[:, :2] = ((a[:, None] ** _A_POWERS) @ _A_TERMS).reshape(n, 2, _NC, 4)
@@ -162,8 +163,7 @@ def unit_pieces(k1: np.ndarray | float, k2: np.ndarray | float, eta: float) -> t
     rows = np.empty((n, 6, 4))
     rows[:, 0] = m[:, 2, 0]  # value at τ8
     rows[:, 1:] = (_DROW[:5] * h[:, 2, None, None] ** _EXP[:5]) @ m[:, 2]  # derivatives 0..4 at τ = 1/2
-    rhs = np.broadcast_to(_rhs(eta), (n, 2, 4, 1))
-    z = np.linalg.solve(rows[:, _CONDITIONS], rhs)  # (N, 2 axes, 4, 1)
+    z = np.linalg.solve(rows[:, _CONDITIONS], _rhs(eta))  # (N, 2 axes, 4, 1); the rhs broadcasts
     return h, (m[:, :, None] @ z[:, None])[..., 0]
 
 
