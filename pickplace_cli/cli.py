@@ -175,6 +175,10 @@ def plan(
     k1: Optional[float] = typer.Option(None, "--k1", help="B-spline time-ratio factor k1 = τ8/τ9 (overrides the table)."),
     k2: Optional[float] = typer.Option(None, "--k2", help="B-spline time-ratio factor k2 = τ7/τ8 (overrides the table)."),
     table: Optional[str] = typer.Option(None, "--table", help="λ → (k1, k2) table CSV. [default: shipped table]"),
+    param: Optional[list[str]] = typer.Option(
+        None, "--param", help="A method parameter NAME=VALUE (repeatable): ph m=, r= (corner extents in m); "
+        "lame m= (exponent, >= 3); piecewise-poly ratio= (τv/τu). [default: the paper's values]",
+    ),
     time: str = typer.Option(
         "auto",
         "--time",
@@ -214,6 +218,17 @@ def plan(
         False, "--json", help="Print a JSON summary (durations in s, cycle time, picks/min, verdict) on stdout "
         "instead of the trajectory (one line per row with --batch); the trajectory then goes only to -o FILE.",
     ),
+    fit_ws: bool = typer.Option(
+        False, "--fit-workspace", help="If the path leaves the workcell box or the reachable set, lower the height "
+        "in 1 mm steps until it fits (Su 2018 Sec. II.E) and say what changed."
+    ),
+    adjust_points: bool = typer.Option(
+        False, "--adjust-points", help="With --fit-workspace: move a pick/place point that lies outside to the nearest "
+        "inside point by Su 2018's potential field (Eq. 25), and report the distance. Never done silently."
+    ),
+    max_shift: float = typer.Option(
+        0.01, "--max-shift", help="With --adjust-points: the largest allowed move of a point in m (farther: exit 4)."
+    ),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="Nothing on stderr but errors and exceeded limits."),
 ) -> None:
     """Plan one move (or a round trip, or a batch), check it against the robot's limits, write the samples.
@@ -248,10 +263,14 @@ def plan(
         output = "-"
     _check_output_paths(output, report)
     prof = load_profile(profile)
-    params: dict = {}
+    params: dict = _parse_params(param or [])
     if method == MethodName.bspline:
-        params = {"k1": k1, "k2": k2, "table": table}
+        params.update({"k1": k1, "k2": k2, "table": table})
+    elif k1 is not None or k2 is not None or table is not None:
+        _usage(f"--k1/--k2/--table belong to --method bspline, not {method.value}")
     writer = _writer(fmt, csv_dialect, mcap_flavor, compression)
+    if batch is not None and fit_ws:
+        _usage("--fit-workspace is not available with --batch")
     if batch is not None:
         options = PlanOptions(method=method.value, method_params=params, time=time, rate=rate, fit=time == "fit")
         _plan_batch(batch, prof, options, height, eta, fail_fast, writer, output, report, report_only, json_summary, quiet)
@@ -263,9 +282,21 @@ def plan(
     h = height if height is not None else prof.planning.height
     e = eta if eta is not None else prof.planning.eta
     options = PlanOptions(method=method.value, method_params=params, time=time, rate=rate)
-    legs = [_run_plan(Task(p_from, p_to, h, e), prof, options)]
+    task = Task(p_from, p_to, h, e)
+    workspace_fit = None
+    if fit_ws:
+        from .workspace import fit_workspace
+
+        _finite("max-shift", max_shift)
+        workspace_fit = fit_workspace(task, prof, method.value, params, adjust_points=adjust_points, max_shift=max_shift)
+        for line in workspace_fit.changes():
+            sys.stderr.write(f"pickplace: {line}\n")
+        task = workspace_fit.task
+    elif adjust_points:
+        _usage("--adjust-points only applies with --fit-workspace")
+    legs = [_run_plan(task, prof, options)]
     if round_trip:
-        legs.append(_run_plan(Task(p_to, p_from, h, e), prof, options))
+        legs.append(_run_plan(Task(task.p_to, task.p_from, task.height, task.eta), prof, options))
     for i, leg in enumerate(legs):
         if not quiet:
             if round_trip:
@@ -284,7 +315,10 @@ def plan(
     if report is not None:
         _write_report(legs, report)
     if json_summary:
-        _emit_json(_json_summary(legs, cycle, code))
+        doc = _json_summary(legs, cycle, code)
+        if workspace_fit is not None:
+            doc["workspace_fit"] = workspace_fit.as_dict()
+        _emit_json(doc)
     if code and not report_only:
         sys.stderr.write(
             "pickplace: trajectory not written (a limit is exceeded); --report-only writes it anyway\n"
@@ -299,6 +333,30 @@ def plan(
         else:
             samples = legs[0]
         writer(samples, output)
+
+
+def _parse_params(items: list[str]) -> dict:
+    """--param NAME=VALUE items → {name: float}; one-line TaskError for a malformed item."""
+    import math
+
+    from .errors import TaskError
+
+    out: dict = {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        name = name.strip()
+        if not sep or not name:
+            raise TaskError(f"param = {item!r}: write NAME=VALUE, e.g. --param m=0.025")
+        try:
+            x = float(value)
+        except ValueError:
+            raise TaskError(f"param {name} = {value!r}: not a number") from None
+        if not math.isfinite(x):
+            raise TaskError(f"param {name} = {value!r}: must be finite")
+        if name in out:
+            raise TaskError(f"param {name}: given twice")
+        out[name] = x
+    return out
 
 
 def _run_plan(task, prof, options):

@@ -5,6 +5,7 @@ from __future__ import annotations
 from enum import Enum
 from typing import Any, Callable
 
+from ..errors import TaskError
 from ..task import Task
 from ..trajectory import CartesianPath
 
@@ -60,5 +61,17 @@ PLANNERS: dict[Method, Callable[..., CartesianPath]] = {
 
 
 def plan_path(task: Task, method: Method | str = Method.bspline, **params: Any) -> CartesianPath:
-    """Geometry + motion law of ``task`` by ``method`` (normalised time τ ∈ [0, 1])."""
-    return PLANNERS[Method(method)](task, **params)
+    """Geometry + motion law of ``task`` by ``method`` (normalised time τ ∈ [0, 1]).
+
+    A parameter the method does not take is a TaskError naming it (not a TypeError)."""
+    m = Method(method)
+    try:
+        return PLANNERS[m](task, **params)
+    except TypeError as exc:
+        text = str(exc)
+        if "unexpected keyword argument" not in text:
+            raise
+        name = text.rsplit("argument", 1)[-1].strip(" '\"")
+        raise TaskError(
+            f"param {name} = {params.get(name)!r}: method {m.value} has no parameter {name!r} (see README, Methods)"
+        ) from None

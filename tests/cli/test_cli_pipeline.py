@@ -188,3 +188,37 @@ def test_shell_completion_script_and_profile_names():
 
     assert set(_complete_profile("")) >= {"delta-su2018", "scara-600", "gantry"}
     assert _complete_profile("sc") == ["scara-600"]
+
+
+def test_method_parameters_by_name():
+    r = run("plan", *ADEPT, "--method", "ph", "--param", "m=0.02", "--param", "r=0.1", "--json", "--report-only", "-q")
+    assert r.exit_code == 0
+    par = json.loads(r.stdout)["parameters"]
+    assert par["m"] == pytest.approx(0.02) and par["r"] == pytest.approx(0.1)
+    r = run("plan", *ADEPT, "--method", "ph", "--param", "q=1")
+    assert r.exit_code == 1 and "method ph has no parameter 'q'" in r.stderr
+    r = run("plan", *ADEPT, "--param", "m")
+    assert r.exit_code == 1 and "write NAME=VALUE" in r.stderr
+    r = run("plan", *ADEPT, "--method", "ph", "--k1", "0.3", "--k2", "0.1")
+    assert r.exit_code == 2
+
+
+def test_fit_workspace_lowers_the_height_and_says_so():
+    # 0.3 m up would cross the workcell's top (z = -0.55 m): refused without, lowered with --fit-workspace
+    r = run("plan", *ADEPT, "--height", "0.3", "-q")
+    assert r.exit_code == 4 and "workcell z" in r.stderr
+    r = run("plan", *ADEPT, "--height", "0.3", "--fit-workspace", "--json", "-q")
+    assert r.exit_code == 0, r.stderr
+    assert "height lowered from 0.3 m to" in r.stderr
+    doc = json.loads(r.stdout)
+    assert doc["height_m"] < 0.3 and doc["limits_ok"] and "workspace_fit" in doc
+
+
+def test_a_point_outside_is_refused_and_adjusted_only_when_asked():
+    far = ["--from", "-0.7,0,-0.8", "--to", "0.1525,0,-0.8"]
+    r = run("plan", *far, "--fit-workspace", "-q")
+    assert r.exit_code == 4 and "--adjust-points" in r.stderr and r.stdout == ""
+    r = run("plan", *far, "--fit-workspace", "--adjust-points", "-q")
+    assert r.exit_code == 4 and "more than max_shift" in r.stderr  # 0.13 m is too far to move a part
+    r = run("plan", *ADEPT, "--adjust-points")
+    assert r.exit_code == 2
