@@ -192,6 +192,10 @@ def plan(
         "[m], optional height [m], eta, v_from_x.. v_to_z [m/s], time [s|auto|fit]. Output gets a move column."
     ),
     fail_fast: bool = typer.Option(False, "--fail-fast", help="With --batch: stop at the first row that fails."),
+    workers: int = typer.Option(
+        0, "--workers", "-j", help="With --batch: planner processes (0 = all cores for 100 rows or more, else 1). "
+        "Results are the same and in row order whatever the number."
+    ),
     round_trip: bool = typer.Option(
         False, "--round-trip", help="Write there, dwell, back, dwell (the profile's dwell in s) as one trajectory."
     ),
@@ -273,7 +277,10 @@ def plan(
         _usage("--fit-workspace is not available with --batch")
     if batch is not None:
         options = PlanOptions(method=method.value, method_params=params, time=time, rate=rate, fit=time == "fit")
-        _plan_batch(batch, prof, options, height, eta, fail_fast, writer, output, report, report_only, json_summary, quiet)
+        if workers < 0:
+            raise TaskError(f"workers = {workers}: must be 0 (automatic) or a positive number of processes")
+        _plan_batch(batch, prof, options, height, eta, fail_fast, writer, output, report, report_only, json_summary,
+                    quiet, workers)
         return
     from .task import Task
 
@@ -422,9 +429,12 @@ def _emit_json(doc: dict) -> None:
     sys.stdout.flush()
 
 
-def _plan_batch(source, prof, options, height, eta, fail_fast, writer, output, report, report_only, json_summary, quiet) -> None:
+def _plan_batch(source, prof, options, height, eta, fail_fast, writer, output, report, report_only, json_summary,
+                quiet, workers: int = 1) -> None:
     """--batch: plan every row, report failures by row number, write the good ones, exit with the worst code."""
-    from .batch import plan_rows, read_batch
+    import os
+
+    from .batch import plan_rows_parallel, read_batch
     from .errors import TaskError
 
     name = "stdin" if source == "-" else source
@@ -460,7 +470,8 @@ def _plan_batch(source, prof, options, height, eta, fail_fast, writer, output, r
         bar = progress.add_task(f"planning {total} moves", total=len(rows))
     stopped = False
     try:
-        for res in plan_rows(rows, prof, options, height, eta, fail_fast, name):
+        n_workers = workers or ((os.cpu_count() or 1) if len(rows) >= 100 else 1)
+        for res in plan_rows_parallel(rows, prof, options, height, eta, fail_fast, name, workers=n_workers):
             flush(res.row)
             results[res.row] = res
             if progress is not None:

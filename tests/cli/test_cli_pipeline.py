@@ -222,3 +222,20 @@ def test_a_point_outside_is_refused_and_adjusted_only_when_asked():
     assert r.exit_code == 4 and "more than max_shift" in r.stderr  # 0.13 m is too far to move a part
     r = run("plan", *ADEPT, "--adjust-points")
     assert r.exit_code == 2
+
+
+def test_batch_on_two_processes_writes_the_same_bytes(tmp_path):
+    rng = np.random.default_rng(3)
+    lines = ["from_x,from_y,from_z,to_x,to_y,to_z"]
+    for i in range(60):
+        a, b = rng.uniform(-0.2, 0.2, 2), rng.uniform(-0.2, 0.2, 2)
+        lines.append(f"{a[0]:.4f},{a[1]:.4f},-0.8,{b[0]:.4f},{b[1]:.4f},-0.8" if i != 30 else "0,0,-0.8,9,0,-0.8")
+    src = tmp_path / "m.csv"
+    src.write_text("\n".join(lines) + "\n")
+    outs = []
+    for j in ("1", "2"):
+        out = tmp_path / f"o{j}.csv"
+        r = run("plan", "--batch", str(src), "-j", j, "-o", str(out), "-q")
+        assert r.exit_code in (1, 4) and "row 31" in r.stderr  # 9 m away: out of the table / unreachable
+        outs.append(out.read_bytes())
+    assert outs[0] == outs[1] and len(outs[0]) > 0
