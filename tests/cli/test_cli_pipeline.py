@@ -236,6 +236,6 @@ def test_batch_on_two_processes_writes_the_same_bytes(tmp_path):
     for j in ("1", "2"):
         out = tmp_path / f"o{j}.csv"
         r = run("plan", "--batch", str(src), "-j", j, "-o", str(out), "-q")
-        assert r.exit_code in (1, 4) and "row 31" in r.stderr  # 9 m away: out of the table / unreachable
+        assert r.exit_code in (1, 3, 4) and "row 31 " in r.stderr  # 9 m away: out of the table; others may break limits
         outs.append(out.read_bytes())
     assert outs[0] == outs[1] and len(outs[0]) > 0
