@@ -833,6 +833,7 @@ def load_table(path: str | Path | None = None) -> Table:
         raise TableError(f"table {p}: no such file (build one with `pickplace build-table -o {p}`)") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise TableError(f"table {p}: cannot read: {exc}") from None
-    table = parse_table(text, str(p))
+    # the shipped table is named, not located: outputs (JSON summaries) must not depend on the checkout path
+    table = parse_table(text, f"{DEFAULT_TABLE} (shipped)" if path is None else str(p))
     _CACHE[key] = table
     return table
