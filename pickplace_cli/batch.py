@@ -41,6 +41,7 @@ class RowResult:
     plan: Any = None
     error: str | None = None
     code: int = 0
+    text: str | None = None  # the plan's CSV rows, when formatted in a worker (see plan_rows_parallel)
 
 
 def read_batch(stream: IO[str], source: str = "batch") -> tuple[list[BatchRow], list[RowResult]]:
@@ -157,20 +158,30 @@ class PlanRecord:
 
 
 def _plan_chunk(args) -> list[RowResult]:
-    """Worker: plan a chunk of rows (no fail-fast inside a chunk; the parent stops in order)."""
-    rows, profile, options, height, eta, source = args
-    return [
-        RowResult(r.row, None if r.plan is None else PlanRecord.of(r.plan), r.error, r.code)
-        for r in plan_rows(rows, profile, options, height, eta, False, source)
-    ]
+    """Worker: plan a chunk of rows (no fail-fast inside a chunk; the parent stops in order). With a CSV
+    dialect, the rows of every plan that will be written are formatted here too (formatting costs as much
+    as planning, so it is worth spreading)."""
+    rows, profile, options, height, eta, source, csv_dialect, format_failed = args
+    out = []
+    for r in plan_rows(rows, profile, options, height, eta, False, source):
+        text = None
+        if csv_dialect is not None and r.plan is not None and (r.code == 0 or format_failed):
+            from .export.csv import csv_rows
+
+            text = csv_rows(r.plan, csv_dialect, move=r.row)
+        out.append(RowResult(r.row, None if r.plan is None else PlanRecord.of(r.plan), r.error, r.code, text))
+    return out
 
 
 def plan_rows_parallel(
     rows: list[BatchRow], profile, options, height: float | None = None, eta: float | None = None,
     fail_fast: bool = False, source: str = "batch", workers: int = 2, chunk: int = 25,
+    csv_dialect: str | None = None, format_failed: bool = False,
 ) -> Iterator[RowResult]:
     """:func:`plan_rows` on ``workers`` processes, chunks of ``chunk`` rows, results in row order (the
-    plans come back as :class:`PlanRecord`). The same numbers as the sequential planner (same code)."""
+    plans come back as :class:`PlanRecord`). The same numbers as the sequential planner (same code).
+    ``csv_dialect``: also format each written plan's CSV rows in the worker (``RowResult.text``; rows whose
+    limits fail only when ``format_failed``)."""
     from concurrent.futures import ProcessPoolExecutor
 
     if workers <= 1 or len(rows) <= chunk:
@@ -178,7 +189,10 @@ def plan_rows_parallel(
         return
     chunks = [rows[i : i + chunk] for i in range(0, len(rows), chunk)]
     with ProcessPoolExecutor(max_workers=workers) as pool:
-        futures = [pool.submit(_plan_chunk, (c, profile, options, height, eta, source)) for c in chunks]
+        futures = [
+            pool.submit(_plan_chunk, (c, profile, options, height, eta, source, csv_dialect, format_failed))
+            for c in chunks
+        ]
         try:
             for fut in futures:
                 for res in fut.result():

@@ -402,6 +402,7 @@ def _writer(fmt, dialect, flavor, compression) -> Callable:
                            compression=None if compression == Compression.none else compression.value)
 
     write.one_timeline = fmt == OutputFormat.mcap  # type: ignore[attr-defined]
+    write.csv_dialect = dialect.value if fmt == OutputFormat.csv else None  # type: ignore[attr-defined]
     return write
 
 
@@ -471,7 +472,9 @@ def _plan_batch(source, prof, options, height, eta, fail_fast, writer, output, r
     stopped = False
     try:
         n_workers = workers or ((os.cpu_count() or 1) if len(rows) >= 100 else 1)
-        for res in plan_rows_parallel(rows, prof, options, height, eta, fail_fast, name, workers=n_workers):
+        csv_dialect = writer.csv_dialect if output is not None else None
+        for res in plan_rows_parallel(rows, prof, options, height, eta, fail_fast, name, workers=n_workers,
+                                      csv_dialect=csv_dialect, format_failed=report_only):
             flush(res.row)
             results[res.row] = res
             if progress is not None:
@@ -510,7 +513,16 @@ def _plan_batch(source, prof, options, height, eta, fail_fast, writer, output, r
             + (f" (first failing row {next(r.row for r in ordered if r.code)})" if worst else "")
             + (f"; {len(planned)} written" if output is not None else "") + "\n"
         )
-    if output is not None and planned:
+    if output is not None and planned and writer.csv_dialect is not None:
+        # CSV: header, then each plan's rows (formatted by the workers when there are several)
+        from .export import atomic_output
+        from .export.csv import csv_header, csv_rows
+
+        with atomic_output(output) as stream:
+            stream.write(csv_header(planned[0].plan, writer.csv_dialect, move=True))
+            for r in planned:
+                stream.write(r.text if r.text is not None else csv_rows(r.plan, writer.csv_dialect, move=r.row))
+    elif output is not None and planned:
         from .timeline import concatenate
 
         # CSV/JSON: each move keeps its own time (the move column tells them apart); MCAP: one timeline,
