@@ -51,7 +51,7 @@ COLUMNS = ("lambda", "k1", "k2", "a_max", "j_max", "v_max", "F", "a_min", "j_min
 DEFAULT_TABLE = "bspline-eta0.5.csv"
 FIT_LAMBDA_MIN = 5.0
 #: bump when a change of the optimiser can change rows: a checkpoint of another version is not resumed
-ALGORITHM_VERSION = 2
+ALGORITHM_VERSION = 3
 
 #: Li 2018 Table 2: g_{i,j} of k_i* = Σ_j g_{i,j} λ^j (Eq. 23)
 LI2018_TABLE2 = (
@@ -338,7 +338,10 @@ def _minimise(
     lo2: float,
     xatol: float,
 ):
-    """Bounded Nelder–Mead (scipy) from each start not already in a found optimum's basin; the best."""
+    """Bounded Nelder–Mead (scipy) from each start not already in a found optimum's basin; the best.
+
+    Stops when the simplex is within ``xatol`` and its values within 1e-10 relative of the objective's
+    value at the start (F ≈ 1, but j_max ≈ 100: an absolute tolerance would ask j for 1e-12)."""
     from scipy.optimize import minimize
 
     found: list[tuple[float, float, float]] = []
@@ -350,7 +353,7 @@ def _minimise(
             x0=np.array([k1, k2]),
             method="Nelder-Mead",
             bounds=[(1e-3, 1 - 1e-3), (lo2, 1 - 1e-3)],
-            options={"xatol": xatol, "fatol": 1e-10, "maxiter": 2000,
+            options={"xatol": xatol, "fatol": 1e-10 * abs(fun(k1, k2)), "maxiter": 2000,
                      "initial_simplex": np.array([[k1, k2], [k1 + 0.01, k2], [k1, k2 + 0.01]])},
         )
         found.append((float(res.x[0]), float(res.x[1]), float(res.fun)))
