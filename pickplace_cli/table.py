@@ -600,6 +600,8 @@ class _Checkpoint:
     def __init__(self, path: Path, settings: TableSettings, append: bool) -> None:
         self.path = path
         try:
+            if append and path.exists():
+                _drop_cut_line(path)
             self.fh = open(path, "a" if append else "w", encoding="utf-8")
         except OSError as exc:
             raise TableError(f"checkpoint {path}: cannot write: {exc.strerror}") from None
@@ -620,6 +622,14 @@ class _Checkpoint:
 
     def close(self) -> None:
         self.fh.close()
+
+
+def _drop_cut_line(path: Path) -> None:
+    """Truncate a last line cut short by a kill (no newline), so appended rows start on a line of their own."""
+    with open(path, "rb+") as fh:
+        data = fh.read()
+        if data and not data.endswith(b"\n"):
+            fh.truncate(data.rfind(b"\n") + 1)
 
 
 @dataclass(frozen=True)

@@ -125,6 +125,9 @@ def test_checkpoint_with_a_cut_last_line_and_corrupt_files(tmp_path, sequential)
     text = ckpt.read_text()
     ckpt.write_text(text[:-40])  # killed while writing the last row
     assert list(T.read_checkpoint(ckpt, T.TableSettings())) == [LAMS[0]]
+    table, report = T.run_build(LAMS[:2], T.TableSettings(), checkpoint=ckpt, resume=True)  # appends after the cut
+    assert (report.resumed, report.computed) == (1, 1) and table.rows == sequential.rows[:2]
+    assert list(T.read_checkpoint(ckpt, T.TableSettings())) == LAMS[:2]
     lines = text.splitlines()
     ckpt.write_text("\n".join([lines[0], "garbage", lines[2]]) + "\n")
     with pytest.raises(TableError, match=r"c.partial.jsonl:2: not a table row"):
