@@ -305,7 +305,7 @@ def test_json_table(shipped):
     assert doc["units"]["lambda"] == "-" and doc["units"]["a_max"] == "m/s^2"
     g1, g2, res = shipped.fit(5.0)
     assert doc["fit"]["k1"] == g1.tolist() and doc["fit"]["max_residual"] == res
-    assert doc["provenance"]["source"] == "bspline-eta0.5.csv" and doc["provenance"]["exported_by"] == "pickplace TEST"
+    assert doc["provenance"]["source"] == "bspline-eta0.5.csv (shipped)" and doc["provenance"]["exported_by"] == "pickplace TEST"
     assert text == format_table_json(shipped, "TEST") and text.endswith("}\n")
     buf = io.StringIO()
     write_table_json(shipped, buf, "TEST")
