@@ -29,6 +29,19 @@ def li_knots(k1: float, k2: float) -> np.ndarray:
     )
 
 
+def yang_knots(tau6: float, tau7: float, tau9: float, tau10: float) -> np.ndarray:
+    """The 17 normalised knots of [Yang2022, Eq. (23), (33)]: four free knots, τ8 = 1/2 (t8 = T/2).
+
+    The paper's 1-based "τ_i, i = 1 … 17" of Eq. (33) is the 0-based index of Eq. (23) (t0 … t5 = 0,
+    t11 … t16 = T); the array index here is that 0-based index.
+    """
+    if not (0.0 < tau6 < tau7 < 0.5 < tau9 < tau10 < 1.0):
+        raise ValueError(
+            f"need 0 < τ6 < τ7 < 0.5 < τ9 < τ10 < 1 [Yang2022, Eq. (36)], got {tau6!r}, {tau7!r}, {tau9!r}, {tau10!r}"
+        )
+    return np.array([0.0] * 6 + [tau6, tau7, 0.5, tau9, tau10] + [1.0] * 6)
+
+
 def basis_matrix(knots: np.ndarray, x: np.ndarray, order: int = 0) -> np.ndarray:
     """(len(x), n) matrix of the ``order``-th derivative of every basis function N_{i,5} at x."""
     return _basis_spline(knots)(np.asarray(x, float), nu=order)
@@ -128,3 +141,113 @@ def norm_peaks(spline, orders: tuple[int, ...] = (1, 2, 3)) -> tuple[float, ...]
     breaks = np.unique(spline.t)
     derivs = _left_derivatives(spline, breaks)
     return tuple(ppoly_norm_peak(*piece_coefficients(spline, r, derivs))[0] for r in orders)
+
+
+# ------------------------------------------------------------------------------- batched (many knot vectors)
+#
+# The conveyor-tracking optimiser [Yang2022] evaluates hundreds of knot vectors per solve. scipy's BSpline
+# holds one knot vector per object, so a Python loop over them costs ~60 µs each; the functions below do
+# the same arithmetic for a whole batch in one numpy pass. They follow the paper's own formulas: the
+# Cox–de Boor recursion [Yang2022, Eq. (2)–(3)] and the control points of the derivative splines
+# [Yang2022, Eq. (12)–(14)]; tests compare them with scipy's BSpline.
+
+
+def batch_basis(
+    knots: np.ndarray, x: np.ndarray, span: np.ndarray, degree: int = DEGREE, all_degrees: bool = False
+) -> np.ndarray | list[np.ndarray]:
+    """The degree + 1 non-zero B-spline basis functions at each point, for a batch of knot vectors.
+
+    ``knots`` (P, K); ``x`` (P, M) the points; ``span`` (P, M) or (M,) the knot span s of each point
+    (t_s ≤ x ≤ t_{s+1}, t_s < t_{s+1}), given rather than searched so that a point on a knot (or at τ = 1)
+    is evaluated on the piece the caller means. Returns (P, M, degree + 1): [..., r] = N_{s−degree+r, degree}(x)
+    (with ``all_degrees`` the list of these arrays for degrees 0 … ``degree``: the recursion passes through
+    them). The Cox–de Boor recursion [Yang2022, Eq. (2)–(3)] restricted to the non-zero functions (Piegl &
+    Tiller, The NURBS Book, Algorithm A2.2).
+    """
+    t = np.asarray(knots, float)
+    x = np.asarray(x, float)
+    span = np.broadcast_to(np.asarray(span), x.shape)
+    rows = np.arange(t.shape[0])[:, None, None]
+    lo = t[rows, span[..., None] + 1 - np.arange(1, degree + 1)]  # t_{s+1−j}, j = 1 … degree
+    hi = t[rows, span[..., None] + np.arange(1, degree + 1)]  # t_{s+j}
+    left = [None] + list(np.moveaxis(x[..., None] - lo, -1, 0))
+    right = [None] + list(np.moveaxis(hi - x[..., None], -1, 0))
+    n = [np.ones_like(x)]
+    out = [np.ones_like(x)[..., None]]
+    for j in range(1, degree + 1):
+        saved = 0.0
+        nxt = []
+        for r in range(j):
+            temp = n[r] / (right[r + 1] + left[j - r])
+            nxt.append(saved + right[r + 1] * temp)
+            saved = left[j - r] * temp
+        nxt.append(saved)
+        n = nxt
+        if all_degrees:
+            out.append(np.stack(n, axis=-1))
+    return out if all_degrees else np.stack(n, axis=-1)
+
+
+def batch_combine(values: np.ndarray, span: np.ndarray, coef: np.ndarray, shift: int) -> np.ndarray:
+    """Σ_r values[..., r] · coef[p, s − deg + r − shift] for basis values from :func:`batch_basis`.
+
+    ``coef`` (P, n_c, d) are control points whose i-th multiplies N_{i+shift, deg} (``shift`` = r for the
+    r-th derivative spline of Eq. (9)–(11)); returns (P, M, d).
+    """
+    P, M, k = values.shape
+    idx = np.broadcast_to(np.asarray(span), (P, M))[..., None] - (k - 1) + np.arange(k) - shift
+    rows = np.arange(P)[:, None, None]
+    return np.einsum("pmr,pmrd->pmd", values, coef[rows, idx])
+
+
+def derivative_control_points(knots: np.ndarray, q: np.ndarray, order: int = 3) -> list[np.ndarray]:
+    """Control points of the derivative splines [Yang2022, Eq. (12)–(14)], batched.
+
+    ``knots`` (P, K), ``q`` (P, n, d) → [Q, Q_V, Q_A, Q_J][: order + 1], Q_r of shape (P, n − r, d).
+    The r-th derivative is Σ_i Q_r[i] N_{i+r, 5−r} on the same knot vector (Eq. 9–11).
+    """
+    t = np.asarray(knots, float)
+    out = [np.asarray(q, float)]
+    n = out[0].shape[1]
+    for r in range(1, order + 1):
+        prev = out[-1]
+        m = n - r
+        i = np.arange(m)
+        den = t[:, i + DEGREE + 1] - t[:, i + r]  # t_{i+p+1} − t_{i+r}
+        out.append((DEGREE + 1 - r) / den[:, :, None] * (prev[:, 1:] - prev[:, :-1]))
+    return out
+
+
+def batch_end_control_points(knots: np.ndarray, p0: np.ndarray, d0: np.ndarray, at_end: bool = False) -> np.ndarray:
+    """The four control points fixed at a clamped end by position and (s′, s″, s‴) there, batched.
+
+    ``knots`` (P, K); ``p0`` (P, d) the end point; ``d0`` (P, 3, d) its first three derivatives. Inverts
+    Eq. (12)–(15) of [Yang2022] step by step (the boundary rows are triangular in Q_0 … Q_3): returns
+    (P, 4, d) = Q_0 … Q_3, or Q_{n−4} … Q_{n−1} (in that order) when ``at_end``.
+    """
+    t = np.asarray(knots, float)
+    K = t.shape[1]
+    p0 = np.asarray(p0, float)
+    d0 = np.asarray(d0, float)
+    if not at_end:
+        # Q_{r,0} = d0[r−1];  Q_{r−1,i+1} = Q_{r−1,i} + Q_{r,i}·(t_{i+p+1} − t_{i+r})/(p + 1 − r)
+        v0, a0, j0 = d0[:, 0], d0[:, 1], d0[:, 2]
+        gap = lambda i, r: (t[:, i + DEGREE + 1] - t[:, i + r])[:, None] / (DEGREE + 1 - r)  # noqa: E731
+        qa1 = a0 + j0 * gap(0, 3)
+        qv1 = v0 + a0 * gap(0, 2)
+        qv2 = qv1 + qa1 * gap(1, 2)
+        q1 = p0 + v0 * gap(0, 1)
+        q2 = q1 + qv1 * gap(1, 1)
+        q3 = q2 + qv2 * gap(2, 1)
+        return np.stack([p0, q1, q2, q3], axis=1)
+    # mirror image: with n control points the last derivative control points are Q_{r, n−1−r}
+    n = K - DEGREE - 1
+    v1, a1, j1 = d0[:, 0], d0[:, 1], d0[:, 2]
+    gap = lambda i, r: (t[:, i + DEGREE + 1] - t[:, i + r])[:, None] / (DEGREE + 1 - r)  # noqa: E731
+    qa7 = a1 - j1 * gap(n - 4, 3)
+    qv8 = v1 - a1 * gap(n - 3, 2)
+    qv7 = qv8 - qa7 * gap(n - 4, 2)
+    q9 = p0 - v1 * gap(n - 2, 1)
+    q8 = q9 - qv8 * gap(n - 3, 1)
+    q7 = q8 - qv7 * gap(n - 4, 1)
+    return np.stack([q7, q8, q9, p0], axis=1)

@@ -13,11 +13,11 @@ import numpy as np
 
 from .errors import UnreachableError
 from .limits import LimitReport, MotionModel, check_grid_index, check_limits, reach_error, take_parts
-from .methods import Method, plan_path
+from .methods import Method, depends_on_duration, path_factory, plan_path
 from .profile import Profile
 from .robots import build_robot
 from .task import Task
-from .timing import Duration, choose_duration
+from .timing import Duration, choose_duration, choose_duration_for
 from .trajectory import CartesianTrajectory, JointTrajectory
 
 
@@ -29,7 +29,8 @@ class PlanOptions:
     method_params: dict[str, Any] = field(default_factory=dict)
     time: str | float = "auto"
     rate: float | None = None  # Hz; None → profile.planning.rate
-    fit: bool = True  # also compute the fitted duration (reported next to auto)
+    fit: bool = True  # also compute the fitted duration (reported next to auto); for a method whose path
+    # depends on the duration (bspline-vel) only with time="fit": each trial duration re-plans the path
 
 
 @dataclass(frozen=True)
@@ -84,12 +85,19 @@ def motion_model(path, profile: Profile) -> MotionModel:
 
 def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions()) -> Plan:
     """Plan ``task`` on ``profile``: path, duration, samples, joint motion, limit report."""
-    path = plan_path(task, options.method, **options.method_params)
-    model = motion_model(path, profile)
     dwell = profile.planning.dwell
     rate = options.rate if options.rate is not None else profile.planning.rate
+    first_spec = "auto" if options.time == "fit" else options.time
+    factory = None
+    if depends_on_duration(options.method):  # the path is planned for a duration (e.g. conveyor tracking)
+        factory = path_factory(task, options.method, **options.method_params)
+        first, path = choose_duration_for(factory, profile.capacity, first_spec)
+    else:
+        path = plan_path(task, options.method, **options.method_params)
+    model = motion_model(path, profile)
     # reachability first, on the output samples of the auto (or given) duration, so an error names a time
-    first = choose_duration(path, profile.capacity, "auto" if options.time == "fit" else options.time)
+    if factory is None:
+        first = choose_duration(path, profile.capacity, first_spec)
     # one evaluation of the model on the check grid (output samples ∪ a dense uniform grid ∪ knots)
     t = CartesianTrajectory(path, first.seconds).sample_times(rate)
     tau = t / first.seconds
@@ -98,7 +106,13 @@ def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions()) -> 
         grid_parts = model.parts(grid)
     except UnreachableError as exc:
         raise reach_error(exc, grid, first.seconds) from None
-    if options.fit or options.time == "fit":
+    if factory is not None and options.time == "fit":
+        duration, path = choose_duration_for(
+            factory, profile.capacity, "fit", model_of=lambda p: motion_model(p, profile), dwell=dwell,
+            start=first.seconds,
+        )
+        model = motion_model(path, profile)
+    elif factory is None and (options.fit or options.time == "fit"):
         duration = choose_duration(path, profile.capacity, options.time, model=model, dwell=dwell)
     else:
         duration = first
@@ -108,7 +122,10 @@ def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions()) -> 
         t = traj.sample_times(rate)
         tau = t / T
         grid, index = check_grid_index(tau, path.breakpoints)
-        grid_parts = model.parts(grid)
+        try:
+            grid_parts = model.parts(grid)
+        except UnreachableError as exc:  # a path planned for another duration can take another route
+            raise reach_error(exc, grid, T) from None
     parts = take_parts(grid_parts, index)
     report = check_limits(model, T, parts=grid_parts, dwell=dwell)
     robot = model.robot

@@ -102,21 +102,12 @@ def choose_duration(
 FIT_SAMPLES = 1001
 
 
-def fit_duration(model, dwell: float = 0.0, start: float = 0.1) -> tuple[float | None, str | None]:
-    """Smallest T [s] such that every T-dependent limit holds at T and at every longer duration.
-
-    Velocity-type limits scale as 1/T^k (monotone). The peak motor torque max_τ |A_m s + G_m| is convex
-    in s = 1/T², so its feasible set is an interval containing s = 0 when the holding torque fits. So
-    scanning T down from a feasible value and root-finding the first crossing (brentq) gives the true
-    minimum. Position, singularity and workcell limits do not depend on T and are not fitted (the limit
-    report shows them). The result is nudged up until the exact (refined) check passes.
-    Returns (T, the binding quantity "joint quantity"), or (None, None) when no limit depends on T.
-    """
+def _worst_utilisation(model, dwell: float = 0.0):
+    """(worst, parts) for a fixed ``model``: worst(T) = (max utilisation − 1 over every T-dependent limit at
+    duration T, its name), from one evaluation of the model (``parts``); None when no limit depends on T."""
     import numpy as np
-    from scipy.optimize import brentq
 
-    from .errors import NoFeasibleDuration
-    from .limits import _parabolic_peak, check_limits
+    from .limits import _parabolic_peak
 
     tau = np.unique(np.concatenate([np.linspace(0.0, 1.0, FIT_SAMPLES), model.path.breakpoints]))
     tau = tau[np.concatenate([[True], np.diff(tau) > 1e-9])]  # merge round-off twins
@@ -127,7 +118,7 @@ def fit_duration(model, dwell: float = 0.0, start: float = 0.1) -> tuple[float |
     rated = np.array([s.drive.rated_torque if s.drive and s.drive.rated_torque else np.inf for s in model.specs])
     has_rated = np.isfinite(rated)
     if not timed and not has_rated.any():
-        return None, None
+        return None
 
     def worst(T: float) -> tuple[float, str]:
         m, data = model.columns(parts, T)
@@ -143,6 +134,29 @@ def fit_duration(model, dwell: float = 0.0, start: float = 0.1) -> tuple[float |
         allu = np.concatenate([util, rms])
         k = int(np.argmax(allu)) if allu.size else 0
         return (float(allu[k]) - 1.0 if allu.size else -1.0), (names[k] if allu.size else "none")
+
+    return worst, parts
+
+
+def fit_duration(model, dwell: float = 0.0, start: float = 0.1) -> tuple[float | None, str | None]:
+    """Smallest T [s] such that every T-dependent limit holds at T and at every longer duration.
+
+    Velocity-type limits scale as 1/T^k (monotone). The peak motor torque max_τ |A_m s + G_m| is convex
+    in s = 1/T², so its feasible set is an interval containing s = 0 when the holding torque fits. So
+    scanning T down from a feasible value and root-finding the first crossing (brentq) gives the true
+    minimum. Position, singularity and workcell limits do not depend on T and are not fitted (the limit
+    report shows them). The result is nudged up until the exact (refined) check passes.
+    Returns (T, the binding quantity "joint quantity"), or (None, None) when no limit depends on T.
+    """
+    from scipy.optimize import brentq
+
+    from .errors import NoFeasibleDuration
+    from .limits import check_limits
+
+    found = _worst_utilisation(model, dwell)
+    if found is None:
+        return None, None
+    worst, parts = found
 
     hi = max(start, 1e-3)
     while worst(hi)[0] > 0:
@@ -173,3 +187,124 @@ def fit_duration(model, dwell: float = 0.0, start: float = 0.1) -> tuple[float |
         # every timed quantity falls at least as 1/T, so T·u (u = worst utilisation, ~1 + 1e-6) clears it
         T *= max(r.utilisation for r in bad) * (1.0 + 1e-9)
     return float(T), binding
+
+
+# ------------------------------------------------------------------ paths that depend on the duration
+#
+# A method such as bspline-vel (conveyor tracking, Yang 2022) builds a different normalised path for every
+# duration T (its end velocities enter as v·T and its shape is re-optimised at T), so the exact T-scaling
+# used above does not hold: each trial duration needs its own path. ``factory(T)`` gives that path.
+
+
+def _smallest_feasible(g, start: float, factor: float, rtol: float, what: str) -> float:
+    """Smallest T with g(T) ≤ 0 reached by scanning from ``start`` (down while feasible, up while not) in
+    steps of ``factor`` and root-finding the crossing (brentq): every scanned T above it is feasible."""
+    from scipy.optimize import brentq
+
+    from .errors import NoFeasibleDuration
+
+    T = float(start)
+    if g(T) > 0:
+        while g(T) > 0:
+            lo, T = T, T / factor
+            if T > 1e4:
+                raise NoFeasibleDuration(f"time = {what}: no duration up to 1e4 s satisfies the limits")
+        hi = T
+    else:
+        hi = T
+        while True:
+            lo = hi * factor
+            if lo < 1e-4:
+                return hi
+            if g(lo) > 0:
+                break
+            hi = lo
+    return float(brentq(g, lo, hi, rtol=rtol, xtol=1e-12))
+
+
+def choose_duration_for(
+    factory, capacity: Capacity, spec: str | float = "auto", model_of=None, dwell: float = 0.0, start: float | None = None
+) -> tuple[Duration, CartesianPath]:
+    """Duration and path for a method whose path depends on the duration: ``factory(T)`` → CartesianPath
+    planned for T [s]. Returns (Duration, the path at that duration).
+
+    * seconds: the path at T; the auto bounds shown are those of that path.
+    * ``auto``: the smallest T at which the path planned for T meets the capacity, T ≥ max(v̂(T)/[v],
+      √(â(T)/[a]), ∛(ĵ(T)/[j])) (Eq. 26 with the shape at T); a few fixed-point steps give the start.
+    * ``fit`` (needs ``model_of(path)`` → MotionModel): the smallest T at which every joint and motor limit
+      holds with the shape optimal at T [Yang2022, Eq. (38)]. Scanned down from ``start`` (default: auto)
+      and root-found; the shape changes with T, so feasibility is established at every scanned T and at
+      the result (verified by the exact check), not proven for all longer T as for a fixed path.
+    """
+    spec = parse_time(spec)
+
+    def bounds(T: float):
+        path = factory(T)
+        return path, auto_duration(path, capacity)
+
+    if isinstance(spec, float):
+        path, (tv, ta, tj, _) = bounds(spec)
+        return Duration(spec, "given", tv, ta, tj, "given", None), path
+
+    def excess(T: float) -> float:
+        tv, ta, tj, _ = bounds(T)[1]
+        return max(tv, ta, tj or 0.0) / T - 1.0
+
+    if start is None:
+        T = 0.2
+        for _ in range(3):  # fixed-point steps T ← T_auto(path(T)): a good start for the scan
+            tv, ta, tj, _ = bounds(T)[1]
+            T = max(tv, ta, tj or 0.0)
+        t_auto = _smallest_feasible(excess, T * (1 + 1e-3), 0.95, 1e-8, "auto")
+        for _ in range(20):  # land on the feasible side of the root
+            if excess(t_auto) <= 1e-12:
+                break
+            t_auto *= 1 + max(excess(t_auto), 1e-12)
+    else:
+        t_auto = float(start)
+    if spec == "auto" and start is None:
+        final = getattr(factory, "final", None)  # a factory that continued from a nearby T confirms it
+        if final is not None and not final(t_auto)[1]:
+            return choose_duration_for(factory, capacity, spec, model_of, dwell, start)  # a better branch
+    path, (tv, ta, tj, binding) = bounds(t_auto)
+    if spec == "auto":
+        return Duration(t_auto, "auto", tv, ta, tj, binding, None), path
+    if model_of is None:
+        raise TaskError("time = fit: needs the robot model (plan through pickplace_cli.planner.plan)")
+    t_fit, fit_binding, path = fit_duration_for(factory, model_of, dwell, start=t_auto)
+    final = getattr(factory, "final", None)
+    if final is not None and not final(t_fit)[1]:
+        t_fit, fit_binding, path = fit_duration_for(factory, model_of, dwell, start=t_auto)
+    if t_fit is None:
+        raise TaskError(
+            "time = fit: the profile sets no velocity, acceleration, jerk or motor limit that depends on the "
+            "duration; add joint limits or drives, or use --time auto / seconds"
+        )
+    tv, ta, tj, _ = auto_duration(path, capacity)
+    return Duration(t_fit, "fit", tv, ta, tj, fit_binding, t_fit), path
+
+
+def fit_duration_for(factory, model_of, dwell: float = 0.0, start: float = 0.1, rtol: float = 1e-7):
+    """(T, binding, path): the smallest T [s] at which every T-dependent limit holds on the path planned
+    for T [Yang2022, Eq. (38)] (see :func:`choose_duration_for`); (None, None, path) when no limit depends
+    on T. Each trial T plans its own path and evaluates the model once on it."""
+    from .limits import check_limits
+
+    def worst(T: float):
+        found = _worst_utilisation(model_of(factory(T)), dwell)
+        return None if found is None else found[0](T)
+
+    if worst(start) is None:
+        return None, None, factory(start)
+    T = _smallest_feasible(lambda x: worst(x)[0], start, 0.85, rtol, "fit")
+    # sampled peaks sit a hair under the continuous ones: nudge up until the exact check passes
+    T *= 1.0 + 1e-7
+    for _ in range(10):
+        model = model_of(factory(T))
+        rep = check_limits(model, T, dwell=dwell)
+        bad = [r for r in rep.violations if r.kind != "reach"]
+        if not bad:
+            break
+        T *= max(r.utilisation for r in bad) * (1.0 + 1e-9)
+    binding = worst(T * (1 - 1e-9))[1]
+    return float(T), binding, factory(T)

@@ -18,6 +18,7 @@ class Method(str, Enum):
     superposition = "superposition"
     lame = "lame"
     piecewise_poly = "piecewise-poly"
+    bspline_vel = "bspline-vel"
 
 
 def _bspline(task: Task, **params: Any) -> CartesianPath:
@@ -50,6 +51,44 @@ def _piecewise_poly(task: Task, **params: Any) -> CartesianPath:
     return plan_piecewise_poly(task, **params)
 
 
+def _bspline_vel(task: Task, duration: float | None = None, **params: Any) -> CartesianPath:
+    if duration is None:
+        raise TaskError(
+            "method bspline-vel: its path depends on the duration (the end velocities enter as v·T); "
+            "give duration=SECONDS, or plan through pickplace_cli.planner.plan (--time auto|fit|SECONDS)"
+        )
+    from .bspline_vel import plan_bspline_vel
+
+    return plan_bspline_vel(task, duration, **params)
+
+
+def _bspline_vel_factory(task: Task, **params: Any) -> Callable[[float], CartesianPath]:
+    from .bspline_vel import PathFactory
+
+    return PathFactory(task, **params)
+
+
+#: methods whose normalised path depends on the duration T: method → factory(task, **params), a callable
+#: T [s] → CartesianPath planned for T (the planner's duration selection calls it at each trial T)
+PATH_FACTORIES: dict[Method, Callable[..., Callable[[float], CartesianPath]]] = {
+    Method.bspline_vel: _bspline_vel_factory,
+}
+
+
+def depends_on_duration(method: Method | str) -> bool:
+    """True when the method's path must be planned for a given duration (see ``PATH_FACTORIES``)."""
+    return Method(method) in PATH_FACTORIES
+
+
+def path_factory(task: Task, method: Method | str, **params: Any) -> Callable[[float], CartesianPath]:
+    """T [s] → CartesianPath of ``task`` by ``method`` (the same path for every T when it does not depend on T)."""
+    m = Method(method)
+    if m in PATH_FACTORIES:
+        return PATH_FACTORIES[m](task, **params)
+    path = plan_path(task, m, **params)
+    return lambda duration: path
+
+
 #: method → planner(task, **params) -> CartesianPath (imports of the method modules stay lazy)
 PLANNERS: dict[Method, Callable[..., CartesianPath]] = {
     Method.bspline: _bspline,
@@ -57,6 +96,7 @@ PLANNERS: dict[Method, Callable[..., CartesianPath]] = {
     Method.superposition: _superposition,
     Method.lame: _lame,
     Method.piecewise_poly: _piecewise_poly,
+    Method.bspline_vel: _bspline_vel,
 }
 
 

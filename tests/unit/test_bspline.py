@@ -121,3 +121,88 @@ def test_exact_peaks_bound_dense_samples(k1, k2):
         sampled = np.linalg.norm(s(x, nu=r), axis=1).max()
         assert peak >= sampled * (1 - 1e-12)
         assert peak == pytest.approx(sampled, rel=1e-6)
+
+
+# ----------------------------------------------------------------- batched machinery (conveyor tracking)
+
+
+def _random_knots(rng, count):
+    """Clamped 17-knot vectors with four random free knots around τ8 = 1/2 (Yang 2022 Eq. 23)."""
+    from pickplace_cli.bspline import yang_knots
+
+    out = []
+    for _ in range(count):
+        t6, t7 = np.sort(rng.uniform(0.01, 0.49, 2))
+        t9, t10 = np.sort(rng.uniform(0.51, 0.99, 2))
+        out.append(yang_knots(t6, t7, t9, t10))
+    return np.array(out)
+
+
+def test_yang_knots_eq23():
+    from pickplace_cli.bspline import yang_knots
+
+    t = yang_knots(0.01, 0.21, 0.79, 0.99)
+    assert t.shape == (17,) and t[8] == 0.5 and np.all(t[:6] == 0) and np.all(t[11:] == 1)
+    with pytest.raises(ValueError):
+        yang_knots(0.2, 0.1, 0.79, 0.99)  # τ6 > τ7 breaks Eq. 36
+    with pytest.raises(ValueError):
+        yang_knots(0.01, 0.21, 0.79, 1.0)
+
+
+def test_batch_basis_matches_scipy_every_degree():
+    """The batched Cox-de Boor (NURBS book A2.2) equals scipy's basis of each degree, to 1e-13 (round-off
+    of a degree-5 recursion on O(1) values), on knot spans, their ends and τ = 1."""
+    from scipy.interpolate import BSpline
+
+    from pickplace_cli.bspline import batch_basis
+
+    rng = np.random.default_rng(3)
+    knots = _random_knots(rng, 5)
+    span = np.array([5, 6, 7, 8, 9, 10, 10, 7])
+    u = np.array([0.3, 0.0, 1.0, 0.5, 0.9, 0.2, 1.0, 0.7])
+    x = knots[:, span] + u * (knots[:, span + 1] - knots[:, span])
+    got = batch_basis(knots, x, span, 5, all_degrees=True)
+    for p, t in enumerate(knots):
+        for deg in range(6):
+            inner = t[5 - deg : len(t) - 5 + deg]  # the same knots with multiplicity deg + 1 at the ends
+            n = len(inner) - deg - 1
+            ref = BSpline(inner, np.eye(n), deg, extrapolate=True)(x[p])
+            for m, s in enumerate(span):
+                if deg == 0 and u[m] in (0.0, 1.0):
+                    continue  # degree 0 jumps at a knot: A2.2 takes the caller's span, scipy the next one
+                cols = np.arange(s - deg, s + 1) - (5 - deg)
+                np.testing.assert_allclose(got[deg][p, m], ref[m, cols], atol=1e-13)
+                assert abs(ref[m].sum() - 1.0) < 1e-12
+
+
+def test_end_and_derivative_control_points_match_the_general_solve():
+    """Eq. 12-15 inverted step by step (batch_end_control_points) gives the same control points as the
+    general solve with boundary rows (solve_control_points), for arbitrary v, a, j at both ends; the
+    derivative control points (Eq. 12-14) reproduce scipy's derivatives."""
+    from pickplace_cli.bspline import (
+        batch_end_control_points,
+        derivative_control_points,
+        make_spline,
+        solve_control_points,
+    )
+
+    rng = np.random.default_rng(4)
+    knots = _random_knots(rng, 3)
+    for t in knots:
+        via = rng.normal(size=(5, 3))
+        start, end = rng.normal(size=(3, 3)), rng.normal(size=(3, 3))
+        q = solve_control_points(t, t[[0, 7, 8, 9, 16]], via, start, end)
+        q0 = batch_end_control_points(t[None], via[None, 0], start[None])[0]
+        q1 = batch_end_control_points(t[None], via[None, 4], end[None], at_end=True)[0]
+        # the general solve is a 4x4 triangular solve per end: agreement to round-off (~1e-12 relative)
+        np.testing.assert_allclose(q0, q[:4], rtol=1e-10, atol=1e-12)
+        np.testing.assert_allclose(q1, q[-4:], rtol=1e-10, atol=1e-12)
+        s = make_spline(t, q)
+        ctrl = derivative_control_points(t[None], q[None], 5)
+        x = np.linspace(0.0, 1.0, 37)
+        from scipy.interpolate import BSpline
+
+        for r in range(1, 6):
+            # the r-th derivative spline has degree 5 − r on the same knots: Σ Q_r[i] N_{i+r, 5−r}
+            ds = BSpline(t[r:len(t) - r], ctrl[r][0], 5 - r, extrapolate=True)
+            np.testing.assert_allclose(ds(x), s(x, nu=r), rtol=1e-9, atol=1e-9 * np.abs(s(x, nu=r)).max())

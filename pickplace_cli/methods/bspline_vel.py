@@ -1,0 +1,860 @@
+"""Velocity-constrained quintic B-spline for conveyor tracking [Yang2022, Sec. 2.2–2.3].
+
+The gripper leaves the pick point with the pick conveyor's velocity v0 and arrives at the place point
+with the place conveyor's velocity v1 (accelerations and jerks zero at both ends, Eq. 24). The path is
+the quintic B-spline of Eq. (29) through five path points (Eq. 25–28):
+
+    s1 = s1′ + v0·λ1·T,   s2 = s2′ + (v0 − v1)/2·λ2·T,   s3 = s3′ − v1·λ3·T
+
+where s1′ … s3′ are the lift-off, apex and set-down points of the rest-to-rest move (Eq. 28; the task's
+``via_points``, which reduce to Eq. 28 for equal end heights), on the 17 knots of Eq. (23) with
+t8 = T/2 and free knots τ6, τ7, τ9, τ10 (normalised, Eq. 33). The seven shape parameters
+p = (τ6, τ7, τ9, τ10, λ1, λ2, λ3) come from the two-stage problem of Eq. (37): first the minima of
+a_max and j_max (Eq. 34–35) each on its own, then the maximum of F = min a_max / a_max + min j_max / j_max.
+
+**The path depends on the duration T.** In normalised time τ = t/T the end velocity is v·T and the offsets
+are v·λ·T, so a path is built *for* a given T (:func:`plan_bspline_vel` takes ``duration``) and is only
+valid when run in that time; :func:`path_factory` gives T → CartesianPath for duration selection.
+
+**Dimensionless groups.** Dividing all lengths by the horizontal width b of the move, the optimum depends
+only on h/b, η, and v0·T/b, v1·T/b resolved along the move (e_u), across it (e_z × e_u) and vertically.
+:func:`groups` computes them; the table of :mod:`pickplace_cli.table_vel` is built over them.
+
+**How the optimum is found (exact solve).** Each peak is a maximum over τ, so each stage is solved in
+epigraph form (minimise t subject to ‖a(τ_k; p)‖² ≤ t at sample points that move with the knots,
+``samples_per_piece`` per knot span) by SLSQP, with Jacobians from central differences evaluated as one
+batch. Starts: the paper's initial guess and the best points of a quasi-random sample of the
+feasible set (a Kronecker sequence), all evaluated in one vectorised pass. The final peaks are the exact maxima of the piecewise
+polynomials (``bspline.norm_peaks``), not samples. A test compares with scipy's differential_evolution.
+
+Departures from the paper, and its slips (all documented in README):
+
+* **Boundary margin.** min a_max is approached at the boundary of the open set of Eq. (36) (τ6 → 0,
+  τ10 → 1), where it is not attained, so min a_max — and with it F — depends on how close to the
+  boundary one goes. ``VelSettings.margin`` (default 0.01, the distance of the paper's initial guess
+  τ6 = 0.01, τ10 = 0.99 from the boundary) is kept between consecutive knots 0 < τ6 < τ7 < ½ < τ9 < τ10 < 1.
+  λ_i ∈ [0, 1] is taken closed (no conditioning problem at its ends, and the optimum can sit on them).
+* **Degenerate λ.** λ2 has no effect when v0 = v1 (the offset (v0 − v1)/2 vanishes) — the case of the
+  paper's own example — and λ1 (λ3) none when v0 = 0 (v1 = 0). Such a λ is dropped from the
+  optimisation and held at the paper's initial value (0.21, 0.50, 0.21); ``lambda_free`` says which.
+* **B is 11×1.** The text after Eq. (18) says "B is 6 × 1": B = [B1; B2] stacks f + 1 = 5 path points and
+  6 boundary values, so it is 11 × 1 (= n + 1, matching the 11 control points).
+* **Convexity.** The paper argues F is convex and that a single fmincon run finds the global optimum. For
+  fixed knots a_max and j_max are convex in λ (a maximum of norms of affine functions), but not jointly
+  with the knots, and F is a sum of ratios; hence the multi-start.
+* The θ column of Eq. (28) (tool rotation) is not planned: the robots here are 3-DOF.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from typing import Any, Callable
+
+import numpy as np
+
+from ..bspline import (
+    batch_basis,
+    batch_combine,
+    batch_end_control_points,
+    derivative_control_points,
+    make_spline,
+    norm_peaks,
+    yang_knots,
+)
+from ..errors import TaskError
+from ..task import Task
+from ..trajectory import CartesianPath
+
+#: the paper's initial guess (τ6, τ7, τ9, τ10, λ1, λ2, λ3) [Yang2022, Sec. 2.3.1]
+PAPER_INITIAL = (0.01, 0.21, 0.79, 0.99, 0.21, 0.50, 0.21)
+PARAM_NAMES = ("tau6", "tau7", "tau9", "tau10", "lambda1", "lambda2", "lambda3")
+#: a velocity (in units of the move's length scale, after ×T) below this is zero: its λ is degenerate
+_ZERO = 1e-12
+
+
+@dataclass(frozen=True)
+class VelSettings:
+    """Settings of the exact solve (recorded in results and table headers).
+
+    ``margin``: minimum gap kept between consecutive knots 0, τ6, τ7, ½, τ9, τ10, 1 (Eq. 36 is an open set;
+    min a_max is approached at its boundary, so this choice sets min a_max and F).
+    ``samples_per_piece``: points per knot span of the epigraph constraints (final peaks are exact).
+    ``starts``: quasi-random (Kronecker sequence) candidates evaluated in the coarse stage; ``refine`` (``refine_F``): local
+    SLSQP runs for each minimum (for F) from the best distinct candidates (the paper's initial guess is
+    always a candidate).
+    """
+
+    margin: float = 0.01
+    samples_per_piece: int = 8
+    starts: int = 256
+    refine: int = 1
+    refine_F: int = 2
+    ftol: float = 1e-9
+    screen_ftol: float = 1e-5
+    screen_maxiter: int = 100
+    radius: float = 0.05
+    maxiter: int = 100
+
+    def __post_init__(self) -> None:
+        if not (0.0 < self.margin <= 0.1):
+            raise TaskError(f"margin = {self.margin!r}: the knot margin must lie in (0, 0.1]")
+        if self.samples_per_piece < 4 or self.refine < 1 or self.starts < 1:
+            raise TaskError("samples_per_piece >= 4, refine >= 1 and starts >= 1 are required")
+
+
+# ------------------------------------------------------------------------------------------ the problem
+
+
+@dataclass(frozen=True)
+class VelProblem:
+    """The normalised problem of one move at one duration: lengths divided by ``scale`` [m], τ ∈ [0, 1].
+
+    ``base`` (5, 3): s0, s1′, s2′, s3′, s4 of Eq. (28) relative to s0; ``offset`` (3, 3): the directions
+    multiplied by λ1, λ2, λ3 in Eq. (25)–(27), i.e. v0·T, (v0 − v1)·T/2, −v1·T; ``v_start``, ``v_end``
+    (3,): the end velocities in normalised time, v0·T and v1·T (all divided by ``scale``).
+    """
+
+    base: np.ndarray
+    offset: np.ndarray
+    v_start: np.ndarray
+    v_end: np.ndarray
+    scale: float
+
+    @property
+    def lambda_free(self) -> tuple[bool, bool, bool]:
+        """Which λ_i changes the path (a zero offset direction makes its λ degenerate)."""
+        return tuple(bool(np.linalg.norm(o) > _ZERO) for o in self.offset)  # type: ignore[return-value]
+
+
+def make_problem(task: Task, duration: float) -> VelProblem:
+    """The normalised problem of ``task`` run in ``duration`` seconds [Yang2022, Eq. (24)–(28)]."""
+    T = float(duration)
+    if not (math.isfinite(T) and T > 0):
+        raise TaskError(f"duration = {duration!r}: must be a finite number of seconds > 0")
+    scale = float(np.linalg.norm(task.p_to - task.p_from))
+    base = (task.via_points() - task.p_from) / scale
+    v0 = task.v_from * T / scale
+    v1 = task.v_to * T / scale
+    offset = np.vstack([v0, (v0 - v1) / 2.0, -v1])
+    return VelProblem(base, offset, v0, v1, scale)
+
+
+def groups(task: Task, duration: float) -> dict[str, float]:
+    """The dimensionless groups the optimum depends on: h/b, η, and v·T/b resolved along the move (e_u),
+    across it (e_z × e_u, to the left) and vertically, for both ends."""
+    b = task.b
+    if b <= 0:
+        raise TaskError("from/to are vertically aligned (b = 0): the groups v·T/b and h/b need a horizontal move")
+    eu = task.e_u
+    ec = np.array([-eu[1], eu[0], 0.0])
+    ez = np.array([0.0, 0.0, 1.0])
+    out = {"h_over_b": task.height / b, "eta": task.eta}
+    for name, v in (("v0", task.v_from), ("v1", task.v_to)):
+        w = v * duration / b
+        out[f"{name}_along"] = float(w @ eu)
+        out[f"{name}_across"] = float(w @ ec)
+        out[f"{name}_vertical"] = float(w @ ez)
+    out["dz_over_b"] = float((task.p_to[2] - task.p_from[2]) / b)
+    return out
+
+
+def task_from_groups(g: dict[str, float], b: float = 1.0, duration: float = 1.0) -> Task:
+    """A canonical task with the given groups: from the origin along +x, width ``b`` [m], in ``duration``."""
+    v0 = np.array([g["v0_along"], g["v0_across"], g.get("v0_vertical", 0.0)]) * b / duration
+    v1 = np.array([g["v1_along"], g["v1_across"], g.get("v1_vertical", 0.0)]) * b / duration
+    return Task(
+        np.zeros(3), np.array([b, 0.0, g.get("dz_over_b", 0.0) * b]), g["h_over_b"] * b, g["eta"], v0, v1
+    )
+
+
+# -------------------------------------------------------------------------------- batched evaluation
+
+
+_VIA_SPAN = np.array([7, 8, 9])  # τ7, ½, τ9 evaluated on the span they open (the basis is C⁴ there)
+_SPANS = np.arange(5, 11)  # the six non-empty knot spans [t5, t6] … [t10, t11]
+
+
+class _Evaluator:
+    """Acceleration and jerk of many parameter vectors at once (normalised units), at sample points given
+    as (knot span k = 0 … 5, fraction u ∈ [0, 1] of it) — so the samples move with the knots."""
+
+    def __init__(self, prob: VelProblem) -> None:
+        self.prob = prob
+        self.count = 0  # parameter vectors evaluated (for the benchmark)
+
+    @staticmethod
+    def knots(p: np.ndarray) -> np.ndarray:
+        P = p.shape[0]
+        k = np.empty((P, 17))
+        k[:, :6] = 0.0
+        k[:, 6], k[:, 7], k[:, 8], k[:, 9], k[:, 10] = p[:, 0], p[:, 1], 0.5, p[:, 2], p[:, 3]
+        k[:, 11:] = 1.0
+        return k
+
+    def control_points(self, p: np.ndarray, knots: np.ndarray | None = None, n5: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """(knots (P, 17), Q (P, 11, 3)) solving Eq. (16) with B = [s0 … s4, v0, 0, 0, v1, 0, 0] (11 × 1,
+        not "6 × 1" as the text after Eq. (18) says). ``n5`` (P, 3, 6): the degree-5 basis at τ7, ½, τ9
+        when the caller has it."""
+        prob = self.prob
+        P = p.shape[0]
+        if knots is None:
+            knots = self.knots(p)
+        via = prob.base[None, :, :] + np.zeros((P, 1, 1))
+        via[:, 1:4] += p[:, 4:7, None] * prob.offset[None, :, :]
+        zeros = np.zeros((P, 2, 3))
+        ds = np.concatenate([np.broadcast_to(prob.v_start, (P, 1, 3)), zeros], axis=1)
+        de = np.concatenate([np.broadcast_to(prob.v_end, (P, 1, 3)), zeros], axis=1)
+        q = np.empty((P, 11, 3))
+        q[:, :4] = batch_end_control_points(knots, via[:, 0], ds)
+        q[:, 7:] = batch_end_control_points(knots, via[:, 4], de, at_end=True)
+        if n5 is None:
+            n5 = batch_basis(knots, knots[:, [7, 8, 9]], _VIA_SPAN, 5)  # (P, 3, 6): N_{s−5 … s, 5}, s = 7, 8, 9
+        a = np.zeros((P, 3, 11))
+        for row, s in enumerate(_VIA_SPAN):
+            a[:, row, s - 5 : s + 1] = n5[:, row]
+        rhs = via[:, 1:4] - a[:, :, :4] @ q[:, :4] - a[:, :, 7:] @ q[:, 7:]
+        q[:, 4:7] = np.linalg.solve(a[:, :, 4:7], rhs)
+        return knots, q
+
+    def prepare(self, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(widths (P, 6), D (P, 6, 4, 3)) of parameters p (P, 7): the knot spans' widths and, at the left
+        end of each span, the derivatives of orders 2 … 5 (a, j, snap, crackle). The acceleration is cubic
+        on a span, so these Taylor coefficients are exact: a(h) = D0 + D1 h + D2 h²/2 + D3 h³/6 at h = τ − τ_left.
+        Derivatives from the control points of the derivative splines [Yang2022, Eq. (12)–(14), continued]."""
+        p = np.atleast_2d(p)
+        self.count += p.shape[0]
+        knots = self.knots(p)
+        left = knots[:, 5:11]  # the six span starts 0, τ6, τ7, ½, τ9, τ10 (τ7, ½, τ9 are the via points)
+        basis = batch_basis(knots, left, _SPANS, 5, all_degrees=True)
+        knots, q = self.control_points(p, knots, basis[5][:, 2:5])
+        ctrl = derivative_control_points(knots, q, 5)
+        d = np.stack([batch_combine(basis[5 - r], _SPANS, ctrl[r], r) for r in (2, 3, 4, 5)], axis=2)
+        return np.diff(knots[:, 5:12], axis=1), d
+
+    @staticmethod
+    def derivatives(prep: tuple, piece: np.ndarray, u: np.ndarray, count: int = 2) -> list[np.ndarray]:
+        """[a, j, snap, crackle][:count], each (P, M, 3), at the samples (piece, u) of prepared parameters."""
+        width, d = prep
+        h = (u * width[:, piece])[..., None]  # (P, M, 1) offset from the span start
+        c = d[:, piece]  # (P, M, 4, 3)
+        out = [c[:, :, 0] + h * (c[:, :, 1] + h * (c[:, :, 2] / 2 + h * c[:, :, 3] / 6))]
+        if count > 1:
+            out.append(c[:, :, 1] + h * (c[:, :, 2] + h * c[:, :, 3] / 2))
+        if count > 2:
+            out.append(c[:, :, 2] + h * c[:, :, 3])
+        if count > 3:
+            out.append(c[:, :, 3])
+        return out
+
+    @classmethod
+    def values(cls, prep: tuple, piece: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(‖a‖², ‖j‖²), each (P, M), at the samples (piece, u) of prepared parameters."""
+        acc, jerk = cls.derivatives(prep, piece, u)
+        return np.einsum("pmd,pmd->pm", acc, acc), np.einsum("pmd,pmd->pm", jerk, jerk)
+
+    @classmethod
+    def newton_max(cls, prep: tuple, piece: np.ndarray, u: np.ndarray, lo: np.ndarray, hi: np.ndarray, which: np.ndarray) -> np.ndarray:
+        """One Newton step on d‖·‖²/dτ = 0 from (piece, u) for the first parameter vector of ``prep``,
+        kept inside [lo, hi] (fractions of the span); ``which`` 0 = ‖a‖² (uses a, j, s), 1 = ‖j‖² (j, s, c)."""
+        first = (prep[0][:1], prep[1][:1])
+        a, j, s, c = (x[0] for x in cls.derivatives(first, piece, u, 4))
+        acc = (which == 0)[:, None]
+        f0, f1, f2 = np.where(acc, a, j), np.where(acc, j, s), np.where(acc, s, c)
+        g1 = 2 * np.sum(f0 * f1, axis=1)  # d‖f‖²/dτ
+        g2 = 2 * np.sum(f1 * f1 + f0 * f2, axis=1)
+        step = np.where(g2 < 0, -g1 / np.where(g2 < 0, g2, -1.0), 0.0) / first[0][0, piece]
+        return np.clip(u + step, lo, hi)
+
+    def sampled(self, p: np.ndarray, piece: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(‖a‖², ‖j‖²) at the samples (piece, u), each (P, M) (normalised: lengths / scale, T = 1)."""
+        return self.values(self.prepare(p), piece, u)
+
+
+def _grid(per_piece: int) -> tuple[np.ndarray, np.ndarray]:
+    """(piece, u) of ``per_piece`` + 1 points on each of the 6 knot spans (shared ends once)."""
+    u = np.linspace(0.0, 1.0, per_piece + 1)
+    piece = np.repeat(np.arange(6), per_piece)
+    uu = np.tile(u[:-1], 6)
+    return np.append(piece, 5), np.append(uu, 1.0)
+
+
+def spline_of(prob: VelProblem, params) -> Any:
+    """scipy BSpline (normalised: lengths / ``prob.scale``, τ ∈ [0, 1]) of full parameters p (7,)."""
+    p = np.asarray(params, float).reshape(1, 7)
+    yang_knots(*p[0, :4])  # validates Eq. (36)
+    knots, q = _Evaluator(prob).control_points(p)
+    return make_spline(knots[0], q[0])
+
+
+def exact_peaks(prob: VelProblem, params) -> tuple[float, float, float]:
+    """Exact (v_max, a_max, j_max) of Eq. (34)–(35) in the problem's normalised units."""
+    return norm_peaks(spline_of(prob, params), (1, 2, 3))  # type: ignore[return-value]
+
+
+# ------------------------------------------------------------------------------------------ optimiser
+
+
+@dataclass(frozen=True)
+class VelResult:
+    """Optimum of Eq. (37) for one problem (peaks normalised: lengths / scale, T = 1).
+
+    ``params`` (τ6, τ7, τ9, τ10, λ1, λ2, λ3); ``a_max``, ``j_max``, ``v_max`` exact peaks there; ``a_min``,
+    ``j_min`` the stage-1 minima (the normalisers of F); ``F`` ≤ 2; ``lambda_free`` which λ were optimised;
+    ``params_a``, ``params_j`` the minimisers of a_max and j_max; ``evaluations`` parameter vectors evaluated.
+    """
+
+    params: tuple[float, ...]
+    a_max: float
+    j_max: float
+    v_max: float
+    a_min: float
+    j_min: float
+    F: float
+    lambda_free: tuple[bool, bool, bool]
+    params_a: tuple[float, ...]
+    params_j: tuple[float, ...]
+    settings: VelSettings = field(default_factory=VelSettings)
+    evaluations: int = 0
+
+    def as_dict(self) -> dict[str, Any]:
+        d = dict(zip(PARAM_NAMES, self.params))
+        d.update(F=self.F, a_min=self.a_min, j_min=self.j_min, margin=self.settings.margin,
+                 lambda_free=list(self.lambda_free))
+        return d
+
+
+def _quasi_random(n: int, d: int) -> np.ndarray:
+    """n points of the unit cube [0, 1)^d from the Kronecker (R_d) low-discrepancy sequence: frac(k·α) with
+    α_i = φ_d^−i, φ_d the real root of x^(d+1) = x + 1 (Roberts 2018). Deterministic, no import cost."""
+    phi = 2.0
+    for _ in range(40):
+        phi = (1.0 + phi) ** (1.0 / (d + 1))
+    alpha = phi ** -np.arange(1, d + 1)
+    return np.mod(0.5 + np.arange(1, n + 1)[:, None] * alpha[None, :], 1.0)
+
+
+class _Space:
+    """Free variables x ↔ full parameters p; bounds and the linear ordering constraints of Eq. (36)."""
+
+    def __init__(self, free_lambda: tuple[bool, bool, bool], margin: float) -> None:
+        self.free = np.array([True] * 4 + list(free_lambda))
+        self.fixed = np.array(PAPER_INITIAL)
+        m = margin
+        lo = np.array([m, 2 * m, 0.5 + m, 0.5 + 2 * m, 0.0, 0.0, 0.0])
+        hi = np.array([0.5 - 2 * m, 0.5 - m, 1 - 2 * m, 1 - m, 1.0, 1.0, 1.0])
+        self.lo, self.hi = lo[self.free], hi[self.free]
+        self.m = m
+        self.n = int(self.free.sum())
+
+    def full(self, x: np.ndarray) -> np.ndarray:
+        x = np.atleast_2d(x)
+        p = np.broadcast_to(self.fixed, (x.shape[0], 7)).copy()
+        p[:, self.free] = x
+        return p
+
+    def order_gaps(self, x: np.ndarray) -> np.ndarray:
+        """τ7 − τ6 − m and τ10 − τ9 − m (≥ 0 when feasible); the rest are bounds."""
+        return np.array([x[1] - x[0] - self.m, x[3] - x[2] - self.m])
+
+    def order_jac(self) -> np.ndarray:
+        j = np.zeros((2, self.n))
+        j[0, 0], j[0, 1], j[1, 2], j[1, 3] = -1.0, 1.0, -1.0, 1.0
+        return j
+
+    def from_unit(self, u: np.ndarray) -> np.ndarray:
+        """Map points of the unit cube onto the feasible set (knots in order, gaps ≥ margin)."""
+        m = self.m
+        x = np.empty_like(u)
+        t7 = 2 * m + u[:, 1] * (0.5 - 3 * m)
+        t6 = m + u[:, 0] * (t7 - 2 * m)
+        t9 = 0.5 + m + u[:, 2] * (0.5 - 3 * m)
+        t10 = t9 + m + u[:, 3] * (1 - m - t9 - m)
+        x[:, 0], x[:, 1], x[:, 2], x[:, 3] = t6, t7, t9, t10
+        x[:, 4:] = u[:, 4:]
+        return x
+
+    def clip(self, x: np.ndarray) -> np.ndarray:
+        x = np.clip(x, self.lo, self.hi)
+        x[1] = max(x[1], x[0] + self.m)
+        x[3] = max(x[3], x[2] + self.m)
+        return np.clip(x, self.lo, self.hi)
+
+
+def _distinct_best(x: np.ndarray, values: np.ndarray, count: int, radius: float = 0.05) -> list[np.ndarray]:
+    order = np.argsort(values)
+    picked: list[np.ndarray] = []
+    for i in order:
+        if all(np.max(np.abs(x[i] - y)) > radius for y in picked):
+            picked.append(x[i])
+            if len(picked) == count:
+                break
+    return picked
+
+
+def _segment_maxima(g: np.ndarray, per: int, sub: int) -> tuple[np.ndarray, np.ndarray]:
+    """(piece, u) of the maximum of each of the ``sub`` equal segments of every knot span, from samples
+    ``g`` on ``_grid(per·sub)``: the best sample of the segment, moved to the vertex of the parabola
+    through it and its neighbours."""
+    dense = per * sub
+    seg = np.arange(6 * sub)
+    idx = seg[:, None] * per + np.arange(per + 1)[None, :]  # (6·sub, per + 1) sample indices
+    vals = g[idx]
+    i = np.argmax(vals, axis=1)
+    inner = (i > 0) & (i < per)
+    ii = np.clip(i, 1, per - 1)
+    y0, y1, y2 = vals[seg, ii - 1], vals[seg, ii], vals[seg, ii + 1]
+    den = y0 - 2 * y1 + y2
+    ok = inner & (den < 0)
+    shift = np.where(ok, np.clip(0.5 * (y0 - y2) / np.where(ok, den, -1.0), -1.0, 1.0), 0.0)
+    pos = (seg % sub) * per + i + shift  # position in the span's dense grid
+    return seg // sub, np.clip(pos / dense, 0.0, 1.0)
+
+
+def _anti_diagonal(k: int, _cache: dict = {}) -> np.ndarray:  # noqa: B006 - deliberate memo
+    """(k², 2k − 1) 0/1 matrix summing products c_i c_j into the coefficient of power i + j."""
+    if k not in _cache:
+        m = np.zeros((k * k, 2 * k - 1))
+        i, j = np.divmod(np.arange(k * k), k)
+        m[np.arange(k * k), i + j] = 1.0
+        _cache[k] = m
+    return _cache[k]
+
+
+def _exact_segment_maxima(prep: tuple, q: int, sub: int) -> np.ndarray:
+    """u (6·sub,) of the maximum of ‖a‖² (q = 0) or ‖j‖² (q = 1) on each of the ``sub`` equal segments of
+    every knot span, for the first parameter vector of ``prep``: exact, from the real roots of the
+    derivative of the span's polynomial ‖·‖² (companion-matrix eigenvalues) and the segment ends."""
+    width, d = prep[0][0], prep[1][0]  # (6,), (6, 4, 3)
+    w = width[:, None, None]
+    if q == 0:  # a(u) = D0 + D1 (wu) + D2 (wu)²/2 + D3 (wu)³/6, coefficients in powers of u (lowest first)
+        c = np.stack([d[:, 0], d[:, 1] * w[:, 0], d[:, 2] * w[:, 0] ** 2 / 2, d[:, 3] * w[:, 0] ** 3 / 6], axis=1)
+    else:  # j(u) = D1 + D2 (wu) + D3 (wu)²/2
+        c = np.stack([d[:, 1], d[:, 2] * w[:, 0], d[:, 3] * w[:, 0] ** 2 / 2], axis=1)
+    k = c.shape[1]
+    sq = np.einsum("sid,sjd->sij", c, c).reshape(6, k * k) @ _anti_diagonal(k)  # ‖·‖², lowest power first
+    deriv = sq[:, 1:] * np.arange(1, 2 * k - 1)  # degree 2k − 3
+    n = deriv.shape[1] - 1
+    lead = deriv[:, -1]
+    scale = np.max(np.abs(deriv), axis=1) + 1e-300
+    lead = np.where(np.abs(lead) > 1e-13 * scale, lead, 1e-13 * scale)  # a dropped degree: roots go far away
+    comp = np.zeros((6, n, n))
+    comp[:, 0, :] = -deriv[:, -2::-1] / lead[:, None]
+    comp[:, np.arange(1, n), np.arange(n - 1)] = 1.0
+    roots = np.linalg.eigvals(comp)
+    real = np.abs(roots.imag) <= 1e-9 * (1.0 + np.abs(roots.real))
+    r = np.where(real, roots.real, -1.0)  # (6, n); non-real → outside
+    ends = np.arange(sub + 1) / sub
+    cand = np.concatenate([r, np.broadcast_to(ends, (6, sub + 1))], axis=1)  # (6, n + sub + 1)
+    powers = cand[..., None] ** np.arange(2 * k - 1)
+    val = np.einsum("scp,sp->sc", powers, sq)
+    lo, hi = ends[:-1], ends[1:]
+    inside = (cand[:, None, :] >= lo[None, :, None] - 1e-15) & (cand[:, None, :] <= hi[None, :, None] + 1e-15)
+    best = np.argmax(np.where(inside, val[:, None, :], -np.inf), axis=2)  # (6, sub)
+    u = np.take_along_axis(np.broadcast_to(cand[:, None, :], inside.shape), best[..., None], axis=2)[..., 0]
+    return np.clip(u, lo, hi).reshape(-1)
+
+
+class _Stage:
+    """One stage of Eq. (37) by SLSQP in epigraph form.
+
+    ``kind`` 'a' / 'j': minimise t subject to m_k(p) ≤ t, where m_k is the maximum of ‖a‖² (‖j‖²) over
+    segment k — each knot span cut into ``SUB`` equal segments that move with the knots; 'F': maximise
+    a_min/√ta + j_min/√tj subject to both sets. Each m_k is found on a grid of ``PER`` points of its
+    segment and refined to the vertex of the parabola through the best three; its gradient is that of
+    ‖a(τ*)‖² with τ* held at the same fraction of the span (envelope theorem: the motion of the maximiser
+    does not change the maximum to first order), by central differences evaluated as one batch. Segments
+    short enough to hold a single local maximum keep every m_k smooth (a whole span can hold two humps
+    whose swap is a kink that stalls SLSQP's line search). Final peaks are exact (``exact_peaks``).
+    """
+
+    SUB = 3
+    PER = 10
+    NEWTON = 2
+
+    def __init__(self, ev: _Evaluator, space: _Space, kind: str, a_norm: float, j_norm: float, settings: VelSettings):
+        self.ev, self.space, self.kind = ev, space, kind
+        self.norm = np.array([a_norm, j_norm])  # scale of ‖a‖², ‖j‖² (values / norm ~ 1)
+        self.s = settings
+        self.h = 1e-6
+        n = space.n
+        self._steps = np.vstack([np.zeros(n), self.h * np.eye(n), -self.h * np.eye(n)])
+        self.uses = (0,) if kind == "a" else (1,) if kind == "j" else (0, 1)
+        self.dense = _grid(self.SUB * self.PER)
+        self._key = None
+
+    def _eval(self, x: np.ndarray) -> tuple[list, list]:
+        """Per quantity used: the 6 span maxima at x and their Jacobians (memoised on x)."""
+        key = x.tobytes()
+        if key != self._key:
+            n = self.space.n
+            sp = self.space
+            prep = self.ev.prepare(sp.full(x[None, :] + self._steps))
+            piece = np.tile(np.repeat(np.arange(6), self.SUB), len(self.uses))
+            u = np.concatenate([_exact_segment_maxima(prep, q, self.SUB) for q in self.uses])
+            vals_all = self.ev.values(prep, piece, u)
+            vals, jacs = [], []
+            for i, q in enumerate(self.uses):
+                m = 6 * self.SUB
+                gq = vals_all[q][:, m * i : m * i + m] / self.norm[q]
+                vals.append(gq[0])
+                jacs.append((gq[1 : n + 1] - gq[n + 1 :]).T / (2 * self.h))
+            self._key, self._val = key, (vals, jacs)
+        return self._val
+
+    def solve(self, x0: np.ndarray, a_min: float = 1.0, j_min: float = 1.0, ftol: float | None = None,
+              maxiter: int | None = None) -> np.ndarray:
+        from scipy.optimize import minimize
+
+        sp = self.space
+        n, k = sp.n, len(self.uses)
+        cf = (a_min / math.sqrt(self.norm[0]), j_min / math.sqrt(self.norm[1]))
+        vals, _ = self._eval(x0)
+        y0 = np.concatenate([x0, [v.max() * (1 + 1e-9) for v in vals]])
+        if self.kind == "F":
+            y0[n:] = np.maximum(y0[n:], [(a_min**2 / self.norm[0]), (j_min**2 / self.norm[1])])
+
+        if self.kind == "F":
+            def fun(y):
+                return -(cf[0] / math.sqrt(y[n]) + cf[1] / math.sqrt(y[n + 1]))
+
+            def jac(y):
+                g = np.zeros(n + 2)
+                g[n] = 0.5 * cf[0] * y[n] ** -1.5
+                g[n + 1] = 0.5 * cf[1] * y[n + 1] ** -1.5
+                return g
+        else:
+            def fun(y):
+                return y[n]
+
+            def jac(y):
+                g = np.zeros(n + 1)
+                g[n] = 1.0
+                return g
+
+        def cons(y):
+            vals, _ = self._eval(y[:n])
+            return np.concatenate([y[n + i] - v for i, v in enumerate(vals)] + [sp.order_gaps(y[:n])])
+
+        def cjac(y):
+            _, jacs = self._eval(y[:n])
+            rows = []
+            for i, d in enumerate(jacs):
+                e = np.zeros((d.shape[0], k))
+                e[:, i] = 1.0
+                rows.append(np.hstack([-d, e]))
+            rows.append(np.hstack([sp.order_jac(), np.zeros((2, k))]))
+            return np.vstack(rows)
+
+        # t ≥ max‖·‖² ≥ (its minimum)²: a valid bound that keeps SLSQP's F-steps from t → 0
+        floor = [(a_min**2 / self.norm[0]) * (1 - 1e-6), (j_min**2 / self.norm[1]) * (1 - 1e-6)]
+        tb = [(floor[q], None) for q in self.uses] if self.kind == "F" else [(1e-12, None)]
+        bounds = list(zip(sp.lo, sp.hi)) + tb
+        res = minimize(
+            fun, y0, jac=jac, method="SLSQP", bounds=bounds,
+            constraints=[{"type": "ineq", "fun": cons, "jac": cjac}],
+            options={"ftol": ftol or self.s.ftol, "maxiter": maxiter or self.s.maxiter},
+        )
+        return sp.clip(np.asarray(res.x[:n], float))
+
+    def objective(self, x: np.ndarray, a_min: float = 1.0, j_min: float = 1.0) -> float:
+        """The stage's objective at x from its own (segment-maximum) peaks: max ‖a‖² or ‖j‖², or −F."""
+        vals, _ = self._eval(x)
+        if self.kind == "F":
+            return -(a_min / math.sqrt(vals[0].max() * self.norm[0]) + j_min / math.sqrt(vals[1].max() * self.norm[1]))
+        return float(vals[0].max())
+
+
+def solve(prob: VelProblem, settings: VelSettings = VelSettings(), warm: VelResult | None = None) -> VelResult:
+    """The two-stage optimum of [Yang2022, Eq. (37)] under Eq. (36) with ``settings.margin``.
+
+    Global: coarse quasi-random candidates, then SLSQP from the best distinct ones (module docstring).
+    ``warm``: the optimum of a nearby problem (e.g. the same move at a slightly different duration); each
+    stage then runs once, from that optimum's own point — a local continuation, used while searching
+    over T; the caller confirms the end result with a global solve."""
+    ev = _Evaluator(prob)
+    free = prob.lambda_free
+    space = _Space(free, settings.margin)
+    if warm is not None and tuple(warm.lambda_free) == tuple(free):
+        starts = {k: space.clip(np.asarray(p)[space.free]) for k, p in (("a", warm.params_a), ("j", warm.params_j), ("F", warm.params))}
+        cand = np.vstack(list(starts.values()))
+        pick = {"a": [starts["a"]], "j": [starts["j"]]}
+    else:
+        cand = space.from_unit(_quasi_random(settings.starts, space.n))
+        cand = np.vstack([np.array(PAPER_INITIAL)[space.free][None, :], cand])
+        starts = None
+    ga, gj = ev.sampled(space.full(cand), *_grid(settings.samples_per_piece))
+    amax, jmax = ga.max(axis=1), gj.max(axis=1)
+    a_norm, j_norm = float(amax.min()), float(jmax.min())
+    if starts is None:
+        # min a_max and min j_max can each have a local minimum with an end knot on the margin (τ6 = m or
+        # τ10 = 1 − m) and another inside: start from the best candidate of each kind
+        inner = (cand[:, 0] >= 3 * settings.margin) & (cand[:, 3] <= 1 - 3 * settings.margin)
+        pick = {}
+        for kind, vals in (("a", amax), ("j", jmax)):
+            best = _distinct_best(cand, vals, settings.refine, settings.radius)
+            if not inner[int(np.argmin(vals))] and inner.any():
+                best = best[:1] + [cand[inner][int(np.argmin(vals[inner]))]] + best[1:]
+            pick[kind] = best[: max(settings.refine, 2)]
+
+    def exact(x: np.ndarray) -> tuple[float, float, float]:
+        return exact_peaks(prob, space.full(x)[0])
+
+    best = {}
+    for kind, idx in (("a", 1), ("j", 2)):
+        stage = _Stage(ev, space, kind, a_norm, j_norm, settings)
+        runs = [stage.solve(x0) for x0 in pick[kind]]
+        peaks = [exact(x)[idx] for x in runs]
+        k = int(np.argmin(peaks))
+        best[kind] = (runs[k], peaks[k])
+    xa, a_min = best["a"]
+    xj, j_min = best["j"]
+    if starts is None:
+        pool = np.vstack([cand, xa, xj])
+        ga, gj = ev.sampled(space.full(pool), *_grid(settings.samples_per_piece))
+        f_pool = a_min / np.sqrt(ga.max(axis=1)) + j_min / np.sqrt(gj.max(axis=1))
+        # the best sampled candidate (often the minimiser of j_max), the midpoint of the two minimisers and
+        # the minimiser of a_max: F trades a_max against j_max, and its basins lie between the two
+        order = [pool[int(np.argmax(f_pool))], (xa + xj) / 2, xa] + _distinct_best(pool, -f_pool, settings.refine_F)
+        f_starts = _distinct_best(np.array(order), np.arange(len(order)), settings.refine_F, radius=1e-3)
+    else:
+        f_starts = [starts["F"]]
+    stage = _Stage(ev, space, "F", a_norm, j_norm, settings)
+    if len(f_starts) > 2:
+        # screen every start with a loose tolerance, then polish the best one (basins differ by > 1e-3 in F)
+        screened = [stage.solve(x0, a_min, j_min, settings.screen_ftol, settings.screen_maxiter) for x0 in f_starts]
+        f_starts = [min(screened, key=lambda x: stage.objective(x, a_min, j_min))]
+    runs = [stage.solve(x0, a_min, j_min) for x0 in f_starts]
+    scored = []
+    for x in runs:
+        v, a, j = exact(x)
+        scored.append((a_min / a + j_min / j, x, v, a, j))
+    F, x, v, a, j = max(scored, key=lambda s: s[0])
+    full = tuple(float(c) for c in space.full(x)[0])
+    return VelResult(
+        full, a, j, v, a_min, j_min, float(F), free,
+        tuple(float(c) for c in space.full(xa)[0]), tuple(float(c) for c in space.full(xj)[0]),
+        settings, ev.count,
+    )
+
+
+# ------------------------------------------------------------------------------------------ the method
+
+
+SOLVERS = ("exact", "seeded", "table")
+
+
+def optimum(task: Task, duration: float, solver: str = "exact", table: str | None = None,
+            settings: VelSettings | None = None) -> tuple[tuple[float, ...], VelResult | None, str]:
+    """(params, the solve's result or None, source) of Eq. (37) for ``task`` in ``duration`` seconds.
+
+    ``solver``: "exact" — the global solve (:func:`solve`); "seeded" — the table's answer polished to the
+    exact optimum by a local solve from it (falls back to "exact" where the table does not apply: other η,
+    unequal heights, vertical velocities, outside its range); "table" — the table's answer alone."""
+    settings = settings or VelSettings()
+    prob = make_problem(task, duration)
+    if solver not in SOLVERS:
+        raise TaskError(f"solver = {solver!r}: choose one of {', '.join(SOLVERS)}")
+    if solver in ("seeded", "table"):
+        from ..errors import TableError
+        from ..table_vel import load_vel_table
+
+        tab = load_vel_table(table)
+        try:
+            seed = tab.lookup(task, duration)
+        except TableError:
+            if solver == "table":
+                raise
+            res = solve(prob, settings)
+            return res.params, res, "exact (outside the table)"
+        if solver == "table":
+            return seed, None, f"table {tab.source}"
+        warm = VelResult(seed, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, prob.lambda_free, seed, seed, settings)
+        res = solve(prob, settings, warm=warm)
+        return res.params, res, f"seeded (table {tab.source})"
+    res = solve(prob, settings)
+    return res.params, res, "exact"
+
+
+def _check_params(params) -> tuple[float, ...]:
+    try:
+        p = tuple(float(x) for x in params)
+    except (TypeError, ValueError):
+        raise TaskError(f"params = {params!r}: give seven numbers τ6, τ7, τ9, τ10, λ1, λ2, λ3") from None
+    if len(p) != 7 or not all(math.isfinite(x) for x in p):
+        raise TaskError(f"params = {params!r}: give seven finite numbers τ6, τ7, τ9, τ10, λ1, λ2, λ3")
+    if not (0 < p[0] < p[1] < 0.5 < p[2] < p[3] < 1):
+        raise TaskError(
+            f"params = {','.join(f'{x:g}' for x in p[:4])}: the knots need 0 < τ6 < τ7 < 0.5 < τ9 < τ10 < 1 "
+            "[Yang2022, Eq. (36)]"
+        )
+    if not all(0 <= x <= 1 for x in p[4:]):
+        raise TaskError(f"params λ = {','.join(f'{x:g}' for x in p[4:])}: each λ must lie in [0, 1] [Yang2022, Eq. (36)]")
+    return p
+
+
+def plan_bspline_vel(
+    task: Task,
+    duration: float,
+    params=None,
+    solver: str = "exact",
+    table: str | None = None,
+    settings: VelSettings | None = None,
+    margin: float | None = None,
+    _result: VelResult | None = None,
+    **named: float,
+) -> CartesianPath:
+    """CartesianPath of the conveyor-tracking B-spline for a move of ``duration`` seconds [Yang2022].
+
+    The shape parameters (τ6, τ7, τ9, τ10, λ1, λ2, λ3) are ``params`` (or all seven by name: ``tau6`` …
+    ``lambda3``) when given, else the optimum of Eq. (37) by ``solver`` (see :func:`optimum`): "exact"
+    (global solve), "seeded" (the table's answer polished to the exact optimum) or "table" (the
+    interpolant of :mod:`pickplace_cli.table_vel` alone; ``table`` is its file, default the shipped one).
+    ``margin`` overrides ``settings.margin``. The path is valid only when run in ``duration`` seconds:
+    its τ-derivative at the ends is v·T.
+    """
+    if named:
+        unknown = sorted(set(named) - set(PARAM_NAMES))
+        if unknown:
+            raise TypeError(f"plan_bspline_vel() got an unexpected keyword argument '{unknown[0]}'")
+        missing = [n for n in PARAM_NAMES if n not in named]
+        if missing or params is not None:
+            raise TaskError(
+                f"param {missing[0] if missing else 'params'}: give all seven shape parameters "
+                f"({', '.join(PARAM_NAMES)}) or none"
+            )
+        params = [named[n] for n in PARAM_NAMES]
+    if margin is not None:
+        settings = replace(settings or VelSettings(), margin=float(margin))
+    T = float(duration)
+    prob = make_problem(task, T)
+    extra: dict[str, Any] = {}
+    res = _result  # an exact solve the caller (PathFactory) already did
+    source = "exact"
+    if res is not None:
+        p = res.params
+    elif params is not None:
+        p = _check_params(params)
+        source = "given"
+    else:
+        p, res, source = optimum(task, T, solver, table, settings)
+    if res is not None:
+        # F's normalisers in the move's own units (like CartesianPath.peaks: m per τ², τ³ at T = 1 s)
+        extra = {"F": res.F, "a_min": res.a_min * prob.scale, "j_min": res.j_min * prob.scale,
+                 "margin": res.settings.margin, "lambda_free": list(res.lambda_free)}
+    spline = spline_of(prob, p)
+    scale = prob.scale
+    peaks = tuple(scale * x for x in norm_peaks(spline, (1, 2, 3)))
+    origin = task.p_from
+
+    def evaluate(tau: np.ndarray, order: int) -> np.ndarray:
+        out = scale * spline(tau, nu=order)
+        return out + origin if order == 0 else out
+
+    parameters: dict[str, Any] = dict(zip(PARAM_NAMES, p))
+    # C4 inside the move (quintic B-spline, simple interior knots); the measured class stops at jerk (C3).
+    # With conveyor velocities the ends are not at rest: the tool moves on with the belt.
+    parameters.update(continuity=3, jerk_jumps_at=[])
+    parameters.update(
+        params_source=source, duration_s=T, eta=task.eta, height_m=task.height,
+        v_from_m_s=task.v_from.tolist(), v_to_m_s=task.v_to.tolist(), **extra,
+    )
+    return CartesianPath(
+        evaluate=evaluate,
+        method="bspline-vel",
+        parameters=parameters,
+        peaks=peaks,  # type: ignore[arg-type]
+        breakpoints=np.unique(spline.t),
+    )
+
+
+class PathFactory:
+    """duration T [s] → CartesianPath of ``task`` planned for T (memoised): the hook the planner uses for
+    methods whose normalised path depends on T (``depends_on_duration``). ``params`` are those of
+    :func:`plan_bspline_vel` (checked here, so a wrong name fails before any duration is tried).
+
+    With the exact solver, the first duration is solved globally and later ones by continuation from the
+    nearest solved duration (``solve(..., warm=…)``, a few SLSQP steps): the optimum moves smoothly with T.
+    :meth:`final` re-solves a duration globally; when that finds a better optimum the continuation had
+    followed a worse branch, the factory stops using it, and the caller repeats its search."""
+
+    depends_on_duration = True
+    MAX_SWITCHES = 3
+    _ALLOWED = {"params", "solver", "table", "settings", "margin", *PARAM_NAMES}
+
+    def __init__(self, task: Task, **params: Any) -> None:
+        unknown = sorted(set(params) - self._ALLOWED)
+        if unknown:
+            name = unknown[0]
+            raise TaskError(
+                f"param {name} = {params[name]!r}: method bspline-vel has no parameter {name!r} (see README, Methods)"
+            )
+        self.task = task
+        self.params = params
+        self.continuation = params.get("solver", "exact") in ("exact", "seeded") and not (
+            params.get("params") is not None or any(n in params for n in PARAM_NAMES)
+        )
+        self._cache: dict[float, CartesianPath] = {}
+        self._results: dict[float, VelResult] = {}
+        self._switches = 0
+
+    def __call__(self, duration: float) -> CartesianPath:
+        T = float(duration)
+        if T not in self._cache:
+            if len(self._cache) > 256:
+                self._cache.clear()
+                self._results.clear()
+            if self.continuation and self._results:
+                near = min(self._results, key=lambda x: abs(math.log(x / T)))
+                self._cache[T] = self._exact(T, warm=self._results[near])
+            elif self.continuation:
+                self._cache[T] = self._exact(T, seeded=self.params.get("solver", "exact") == "seeded")
+            else:
+                self._cache[T] = plan_bspline_vel(self.task, T, **self.params)
+        return self._cache[T]
+
+    def _exact(self, T: float, warm: VelResult | None = None, seeded: bool = False) -> CartesianPath:
+        settings = self.params.get("settings") or VelSettings()
+        if self.params.get("margin") is not None:
+            settings = replace(settings, margin=float(self.params["margin"]))
+        if seeded and warm is None:  # the first duration: from the table when it applies (else global)
+            res = optimum(self.task, T, "seeded", self.params.get("table"), settings)[1]
+        else:
+            res = solve(make_problem(self.task, T), settings, warm=warm)
+        self._results[T] = res
+        return plan_bspline_vel(self.task, T, _result=res)
+
+    def final(self, duration: float) -> tuple[CartesianPath, bool]:
+        """(the path at T from a global solve, whether the continuation at T agreed: F within 1e-9).
+
+        On disagreement the global optimum becomes the seed of later continuations (so the caller's
+        repeated search follows the better branch); after ``MAX_SWITCHES`` switches only global solves are
+        used."""
+        T = float(duration)
+        if not self.continuation:
+            return self(T), True
+        before = self._results.get(T)
+        path = self._exact(T)
+        agreed = before is None or before.F >= self._results[T].F - 1e-9
+        if agreed and before is not None:  # keep the continuation's path (same optimum, ≥ F)
+            self._results[T] = before
+            return self._cache[T], True
+        self._switches += 1
+        self._cache = {T: path}
+        self._results = {T: self._results[T]}
+        if self._switches >= self.MAX_SWITCHES:
+            self.continuation = False
+        return path, agreed
+
+
+def resolve_velocities(workcell, v_from=None, v_to=None) -> tuple[np.ndarray, np.ndarray]:
+    """End velocities [m/s, base frame]: the given ones, else the profile's conveyor velocities, else 0."""
+    def pick(given, default):
+        if given is not None:
+            return np.asarray(given, float)
+        return np.asarray(default, float) if default is not None else np.zeros(3)
+
+    return (
+        pick(v_from, getattr(workcell, "conveyor_pick_velocity", None)),
+        pick(v_to, getattr(workcell, "conveyor_place_velocity", None)),
+    )
