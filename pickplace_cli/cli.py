@@ -65,6 +65,7 @@ class MethodName(str, Enum):
     superposition = "superposition"
     lame = "lame"
     piecewise_poly = "piecewise-poly"
+    bspline_vel = "bspline-vel"
 
 
 def _err(message: str) -> None:
@@ -116,16 +117,18 @@ def _usage(message: str) -> None:
     raise typer.BadParameter(message)
 
 
-def _parse_point(name: str, text: str):
+def _parse_point(name: str, text: str, unit: str = "m"):
     from .errors import TaskError
 
+    words = "metres" if unit == "m" else unit
     parts = [p.strip() for p in text.split(",")]
     if len(parts) != 3 or not all(parts):
-        raise TaskError(f"{name} = {text!r}: give three coordinates X,Y,Z in metres, e.g. -0.1525,0,-0.8")
+        example = "-0.1525,0,-0.8" if unit == "m" else "0,0.2,0"
+        raise TaskError(f"{name} = {text!r}: give three components X,Y,Z in {words}, e.g. {example}")
     try:
         values = [float(p) for p in parts]
     except ValueError:
-        raise TaskError(f"{name} = {text!r}: every coordinate must be a number in metres") from None
+        raise TaskError(f"{name} = {text!r}: every component must be a number in {words}") from None
     import math
 
     if not all(math.isfinite(v) for v in values):
@@ -170,6 +173,14 @@ def plan(
     ),
     eta: Optional[float] = typer.Option(
         None, "--eta", help="Lift-off/set-down ratio η, 0 < η < 1 (dimensionless). [default: profile]"
+    ),
+    v_from: Optional[str] = typer.Option(
+        None, "--v-from", help="Tool velocity VX,VY,VZ in m/s (base frame) leaving the pick point, e.g. the pick "
+        "conveyor's (--method bspline-vel). [default: profile workcell.conveyor_pick_velocity, else 0]"
+    ),
+    v_to: Optional[str] = typer.Option(
+        None, "--v-to", help="Tool velocity VX,VY,VZ in m/s arriving at the place point (--method bspline-vel). "
+        "[default: profile workcell.conveyor_place_velocity, else 0]"
     ),
     method: MethodName = typer.Option(MethodName.bspline, "--method", "-m", help="Planning method."),
     k1: Optional[float] = typer.Option(None, "--k1", help="B-spline time-ratio factor k1 = τ8/τ9 (overrides the table)."),
@@ -289,7 +300,20 @@ def plan(
     h = height if height is not None else prof.planning.height
     e = eta if eta is not None else prof.planning.eta
     options = PlanOptions(method=method.value, method_params=params, time=time, rate=rate)
-    task = Task(p_from, p_to, h, e)
+    wc = prof.workcell
+    vel_from = _parse_point("v-from", v_from, "m/s") if v_from is not None else (getattr(wc, "conveyor_pick_velocity", None) or (0.0, 0.0, 0.0))
+    vel_to = _parse_point("v-to", v_to, "m/s") if v_to is not None else (getattr(wc, "conveyor_place_velocity", None) or (0.0, 0.0, 0.0))
+    moving_ends = any(vel_from) or any(vel_to)
+    if method != MethodName.bspline_vel and (v_from is not None or v_to is not None) and moving_ends:
+        raise TaskError(
+            f"v-from/v-to: method {method.value} plans moves from rest to rest; use --method bspline-vel "
+            "for moving ends (conveyor tracking, Yang 2022)"
+        )
+    if method != MethodName.bspline_vel:
+        vel_from = vel_to = (0.0, 0.0, 0.0)  # the profile's conveyors concern bspline-vel only
+    if round_trip and moving_ends and method == MethodName.bspline_vel:
+        _usage("--round-trip dwells at rest between the legs: not possible with moving ends (--v-from/--v-to)")
+    task = Task(p_from, p_to, h, e, v_from=vel_from, v_to=vel_to)
     workspace_fit = None
     if fit_ws:
         from .workspace import fit_workspace

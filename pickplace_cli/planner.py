@@ -85,6 +85,13 @@ def motion_model(path, profile: Profile) -> MotionModel:
 
 def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions()) -> Plan:
     """Plan ``task`` on ``profile``: path, duration, samples, joint motion, limit report."""
+    if (np.any(task.v_from) or np.any(task.v_to)) and not depends_on_duration(options.method):
+        from .errors import TaskError
+
+        raise TaskError(
+            f"v_from/v_to = ({', '.join(f'{x:g}' for x in task.v_from)}), ({', '.join(f'{x:g}' for x in task.v_to)}) m/s: "
+            f"method {Method(options.method).value} plans moves from rest to rest; use bspline-vel for moving ends"
+        )
     dwell = profile.planning.dwell
     rate = options.rate if options.rate is not None else profile.planning.rate
     first_spec = "auto" if options.time == "fit" else options.time

@@ -239,3 +239,20 @@ def test_batch_on_two_processes_writes_the_same_bytes(tmp_path):
         assert r.exit_code in (1, 3, 4) and "row 31 " in r.stderr  # 9 m away: out of the table; others may break limits
         outs.append(out.read_bytes())
     assert outs[0] == outs[1] and len(outs[0]) > 0
+
+
+def test_end_velocities_need_the_velocity_method():
+    moving = ["--from", "0,0,-0.8", "--to", "0.28,-0.2,-0.8", "--height", "0.04", "--v-from", "0,0.2,0", "--v-to", "0,0.2,0"]
+    r = run("plan", *moving)
+    assert r.exit_code == 1 and "use --method bspline-vel" in r.stderr
+    r = run("plan", *moving, "--method", "bspline-vel", "--time", "0.25", "--report-only", "-q")
+    assert r.exit_code == 0, r.stderr
+    header, data = parse(r.stdout)
+    v = data[:, 4:7]
+    # Yang 2022 Eq. 24: the end velocities are met exactly (to the printed precision)
+    np.testing.assert_allclose(v[0], [0, 0.2, 0], atol=1e-11)
+    np.testing.assert_allclose(v[-1], [0, 0.2, 0], atol=1e-11)
+    r = run("plan", *moving, "--method", "bspline-vel", "--round-trip")
+    assert r.exit_code == 2
+    r = run("plan", *moving[:6], "--v-from", "0,0.2", "--method", "bspline-vel")
+    assert r.exit_code == 1 and "three components X,Y,Z in m/s" in r.stderr
