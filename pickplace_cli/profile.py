@@ -189,6 +189,16 @@ class Box(_Model):
 
 class Workcell(_Model):
     box: Box | None = Field(default=None, description="The tool must stay inside this box (optional)")
+    conveyor_pick_velocity: tuple[float, float, float] | None = Field(
+        default=None,
+        description="Velocity of the pick conveyor in m/s (base frame): the tool leaves the pick point with it "
+        "(method bspline-vel, Yang 2022; --v-from overrides it)",
+    )
+    conveyor_place_velocity: tuple[float, float, float] | None = Field(
+        default=None,
+        description="Velocity of the place conveyor in m/s (base frame): the tool arrives at the place point with "
+        "it (method bspline-vel; --v-to overrides it)",
+    )
 
 
 class Capacity(_Model):

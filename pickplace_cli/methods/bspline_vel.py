@@ -14,18 +14,25 @@ a_max and j_max (Eq. 34–35) each on its own, then the maximum of F = min a_max
 
 **The path depends on the duration T.** In normalised time τ = t/T the end velocity is v·T and the offsets
 are v·λ·T, so a path is built *for* a given T (:func:`plan_bspline_vel` takes ``duration``) and is only
-valid when run in that time; :func:`path_factory` gives T → CartesianPath for duration selection.
+valid when run in that time; :class:`PathFactory` gives T → CartesianPath for duration selection
+(``timing.choose_duration_for``: --time auto and fit, Eq. 38, re-optimise the shape at every trial T).
 
 **Dimensionless groups.** Dividing all lengths by the horizontal width b of the move, the optimum depends
 only on h/b, η, and v0·T/b, v1·T/b resolved along the move (e_u), across it (e_z × e_u) and vertically.
 :func:`groups` computes them; the table of :mod:`pickplace_cli.table_vel` is built over them.
 
-**How the optimum is found (exact solve).** Each peak is a maximum over τ, so each stage is solved in
-epigraph form (minimise t subject to ‖a(τ_k; p)‖² ≤ t at sample points that move with the knots,
-``samples_per_piece`` per knot span) by SLSQP, with Jacobians from central differences evaluated as one
-batch. Starts: the paper's initial guess and the best points of a quasi-random sample of the
-feasible set (a Kronecker sequence), all evaluated in one vectorised pass. The final peaks are the exact maxima of the piecewise
-polynomials (``bspline.norm_peaks``), not samples. A test compares with scipy's differential_evolution.
+**How the optimum is found.** Each stage of Eq. (37) is a minimax over τ, solved by SLSQP in epigraph
+form: minimise t subject to m_k(p) ≤ t, where m_k is the exact maximum of ‖a‖² (‖j‖²) on the k-th of
+three equal segments of each knot span (from the roots of its derivative: a is cubic on a span), with
+Jacobians by central differences evaluated as one numpy batch (:class:`_Evaluator`: control points of
+Eq. 16 and Taylor coefficients per span for many parameter vectors at once). F has more than one local
+maximum and a_max, j_max more than one local minimum, so :func:`solve` is a multi-start: the paper's
+initial guess and a quasi-random (Kronecker) sample of the feasible set are evaluated in one pass, and
+SLSQP runs from the best distinct ones (for a_max and j_max also from the best start with both end
+knots off the margin; for F from the best sampled point and from the midpoint of the two minimisers).
+The "seeded" solver (default) starts the same stages from the table's answer instead: as fast as one
+run per stage, and on the held-out tests never worse than the multi-start. Reported peaks are exact
+(``bspline.norm_peaks``). A test compares with scipy's differential_evolution.
 
 Departures from the paper, and its slips (all documented in README):
 
@@ -49,7 +56,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 
@@ -88,7 +95,7 @@ class VelSettings:
     margin: float = 0.01
     samples_per_piece: int = 8
     starts: int = 256
-    refine: int = 1
+    refine: int = 2
     refine_F: int = 2
     ftol: float = 1e-9
     screen_ftol: float = 1e-5
@@ -253,19 +260,6 @@ class _Evaluator:
         acc, jerk = cls.derivatives(prep, piece, u)
         return np.einsum("pmd,pmd->pm", acc, acc), np.einsum("pmd,pmd->pm", jerk, jerk)
 
-    @classmethod
-    def newton_max(cls, prep: tuple, piece: np.ndarray, u: np.ndarray, lo: np.ndarray, hi: np.ndarray, which: np.ndarray) -> np.ndarray:
-        """One Newton step on d‖·‖²/dτ = 0 from (piece, u) for the first parameter vector of ``prep``,
-        kept inside [lo, hi] (fractions of the span); ``which`` 0 = ‖a‖² (uses a, j, s), 1 = ‖j‖² (j, s, c)."""
-        first = (prep[0][:1], prep[1][:1])
-        a, j, s, c = (x[0] for x in cls.derivatives(first, piece, u, 4))
-        acc = (which == 0)[:, None]
-        f0, f1, f2 = np.where(acc, a, j), np.where(acc, j, s), np.where(acc, s, c)
-        g1 = 2 * np.sum(f0 * f1, axis=1)  # d‖f‖²/dτ
-        g2 = 2 * np.sum(f1 * f1 + f0 * f2, axis=1)
-        step = np.where(g2 < 0, -g1 / np.where(g2 < 0, g2, -1.0), 0.0) / first[0][0, piece]
-        return np.clip(u + step, lo, hi)
-
     def sampled(self, p: np.ndarray, piece: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(‖a‖², ‖j‖²) at the samples (piece, u), each (P, M) (normalised: lengths / scale, T = 1)."""
         return self.values(self.prepare(p), piece, u)
@@ -392,25 +386,6 @@ def _distinct_best(x: np.ndarray, values: np.ndarray, count: int, radius: float 
     return picked
 
 
-def _segment_maxima(g: np.ndarray, per: int, sub: int) -> tuple[np.ndarray, np.ndarray]:
-    """(piece, u) of the maximum of each of the ``sub`` equal segments of every knot span, from samples
-    ``g`` on ``_grid(per·sub)``: the best sample of the segment, moved to the vertex of the parabola
-    through it and its neighbours."""
-    dense = per * sub
-    seg = np.arange(6 * sub)
-    idx = seg[:, None] * per + np.arange(per + 1)[None, :]  # (6·sub, per + 1) sample indices
-    vals = g[idx]
-    i = np.argmax(vals, axis=1)
-    inner = (i > 0) & (i < per)
-    ii = np.clip(i, 1, per - 1)
-    y0, y1, y2 = vals[seg, ii - 1], vals[seg, ii], vals[seg, ii + 1]
-    den = y0 - 2 * y1 + y2
-    ok = inner & (den < 0)
-    shift = np.where(ok, np.clip(0.5 * (y0 - y2) / np.where(ok, den, -1.0), -1.0, 1.0), 0.0)
-    pos = (seg % sub) * per + i + shift  # position in the span's dense grid
-    return seg // sub, np.clip(pos / dense, 0.0, 1.0)
-
-
 def _anti_diagonal(k: int, _cache: dict = {}) -> np.ndarray:  # noqa: B006 - deliberate memo
     """(k², 2k − 1) 0/1 matrix summing products c_i c_j into the coefficient of power i + j."""
     if k not in _cache:
@@ -460,17 +435,16 @@ class _Stage:
 
     ``kind`` 'a' / 'j': minimise t subject to m_k(p) ≤ t, where m_k is the maximum of ‖a‖² (‖j‖²) over
     segment k — each knot span cut into ``SUB`` equal segments that move with the knots; 'F': maximise
-    a_min/√ta + j_min/√tj subject to both sets. Each m_k is found on a grid of ``PER`` points of its
-    segment and refined to the vertex of the parabola through the best three; its gradient is that of
-    ‖a(τ*)‖² with τ* held at the same fraction of the span (envelope theorem: the motion of the maximiser
-    does not change the maximum to first order), by central differences evaluated as one batch. Segments
-    short enough to hold a single local maximum keep every m_k smooth (a whole span can hold two humps
-    whose swap is a kink that stalls SLSQP's line search). Final peaks are exact (``exact_peaks``).
+    a_min/√ta + j_min/√tj subject to both sets. Each m_k is exact (:func:`_exact_segment_maxima`); its
+    gradient is that of ‖a(τ*)‖² with τ* held at the same fraction of the span (envelope theorem: the
+    motion of the maximiser does not change the maximum to first order), by central differences evaluated
+    as one batch. Segments short enough to hold a single local maximum keep every m_k smooth (a whole span
+    can hold two humps whose swap is a kink that stalls SLSQP's line search; an m_k whose maximiser is
+    off by even 1e-4 of the span has a gradient wrong enough to do the same). Final peaks are exact.
+    The lower bounds ta ≥ a_min², tj ≥ j_min² (valid: t ≥ max ≥ min) keep F-steps from t → 0.
     """
 
     SUB = 3
-    PER = 10
-    NEWTON = 2
 
     def __init__(self, ev: _Evaluator, space: _Space, kind: str, a_norm: float, j_norm: float, settings: VelSettings):
         self.ev, self.space, self.kind = ev, space, kind
@@ -480,11 +454,10 @@ class _Stage:
         n = space.n
         self._steps = np.vstack([np.zeros(n), self.h * np.eye(n), -self.h * np.eye(n)])
         self.uses = (0,) if kind == "a" else (1,) if kind == "j" else (0, 1)
-        self.dense = _grid(self.SUB * self.PER)
         self._key = None
 
     def _eval(self, x: np.ndarray) -> tuple[list, list]:
-        """Per quantity used: the 6 span maxima at x and their Jacobians (memoised on x)."""
+        """Per quantity used: the 6·SUB segment maxima at x and their Jacobians (memoised on x)."""
         key = x.tobytes()
         if key != self._key:
             n = self.space.n
@@ -644,13 +617,14 @@ def solve(prob: VelProblem, settings: VelSettings = VelSettings(), warm: VelResu
 SOLVERS = ("exact", "seeded", "table")
 
 
-def optimum(task: Task, duration: float, solver: str = "exact", table: str | None = None,
+def optimum(task: Task, duration: float, solver: str = "seeded", table: str | None = None,
             settings: VelSettings | None = None) -> tuple[tuple[float, ...], VelResult | None, str]:
     """(params, the solve's result or None, source) of Eq. (37) for ``task`` in ``duration`` seconds.
 
-    ``solver``: "exact" — the global solve (:func:`solve`); "seeded" — the table's answer polished to the
-    exact optimum by a local solve from it (falls back to "exact" where the table does not apply: other η,
-    unequal heights, vertical velocities, outside its range); "table" — the table's answer alone."""
+    ``solver``: "seeded" (default) — the table's answer polished to the exact optimum by the same SLSQP
+    stages run once from it (falls back to "exact" where the table does not apply: other η, unequal
+    heights, vertical velocities, outside its range, no table); "exact" — the global multi-start solve
+    (:func:`solve`), no table; "table" — the table's answer alone (instant, approximate: README)."""
     settings = settings or VelSettings()
     prob = make_problem(task, duration)
     if solver not in SOLVERS:
@@ -659,14 +633,14 @@ def optimum(task: Task, duration: float, solver: str = "exact", table: str | Non
         from ..errors import TableError
         from ..table_vel import load_vel_table
 
-        tab = load_vel_table(table)
         try:
+            tab = load_vel_table(table)
             seed = tab.lookup(task, duration)
-        except TableError:
+        except TableError as exc:
             if solver == "table":
                 raise
             res = solve(prob, settings)
-            return res.params, res, "exact (outside the table)"
+            return res.params, res, f"exact (table not used: {exc})"
         if solver == "table":
             return seed, None, f"table {tab.source}"
         warm = VelResult(seed, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, prob.lambda_free, seed, seed, settings)
@@ -697,7 +671,7 @@ def plan_bspline_vel(
     task: Task,
     duration: float,
     params=None,
-    solver: str = "exact",
+    solver: str = "seeded",
     table: str | None = None,
     settings: VelSettings | None = None,
     margin: float | None = None,
@@ -707,9 +681,10 @@ def plan_bspline_vel(
     """CartesianPath of the conveyor-tracking B-spline for a move of ``duration`` seconds [Yang2022].
 
     The shape parameters (τ6, τ7, τ9, τ10, λ1, λ2, λ3) are ``params`` (or all seven by name: ``tau6`` …
-    ``lambda3``) when given, else the optimum of Eq. (37) by ``solver`` (see :func:`optimum`): "exact"
-    (global solve), "seeded" (the table's answer polished to the exact optimum) or "table" (the
-    interpolant of :mod:`pickplace_cli.table_vel` alone; ``table`` is its file, default the shipped one).
+    ``lambda3``) when given, else the optimum of Eq. (37) by ``solver`` (see :func:`optimum`): "seeded"
+    (default: the table's answer polished to the exact optimum), "exact" (global multi-start solve) or
+    "table" (the interpolant of :mod:`pickplace_cli.table_vel` alone; ``table`` is its file, default the
+    shipped one).
     ``margin`` overrides ``settings.margin``. The path is valid only when run in ``duration`` seconds:
     its τ-derivative at the ends is v·T.
     """
@@ -791,7 +766,7 @@ class PathFactory:
             )
         self.task = task
         self.params = params
-        self.continuation = params.get("solver", "exact") in ("exact", "seeded") and not (
+        self.continuation = params.get("solver", "seeded") in ("exact", "seeded") and not (
             params.get("params") is not None or any(n in params for n in PARAM_NAMES)
         )
         self._cache: dict[float, CartesianPath] = {}
@@ -808,7 +783,7 @@ class PathFactory:
                 near = min(self._results, key=lambda x: abs(math.log(x / T)))
                 self._cache[T] = self._exact(T, warm=self._results[near])
             elif self.continuation:
-                self._cache[T] = self._exact(T, seeded=self.params.get("solver", "exact") == "seeded")
+                self._cache[T] = self._exact(T, seeded=self.params.get("solver", "seeded") == "seeded")
             else:
                 self._cache[T] = plan_bspline_vel(self.task, T, **self.params)
         return self._cache[T]

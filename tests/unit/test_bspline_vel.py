@@ -254,3 +254,60 @@ def test_path_factory_continuation_and_final_check():
     glob = bv.solve(bv.make_problem(EXAMPLE, 0.26))
     assert path.parameters["F"] == pytest.approx(glob.F, abs=1e-9)
     assert f(0.26) is path
+
+
+# ------------------------------------------------------------------------------- through the planner
+
+ADEPT_BELT = Task([-0.1525, 0, -0.8], [0.1525, 0, -0.8], 0.025, 0.5, [0.3, 0, 0], [0, 0.3, 0])
+
+
+@pytest.fixture(scope="module")
+def delta():
+    from pickplace_cli.profile import load_profile
+
+    return load_profile("delta-su2018")
+
+
+def test_plan_given_duration_meets_the_belts(delta):
+    from pickplace_cli.planner import PlanOptions, plan
+
+    r = plan(ADEPT_BELT, delta, PlanOptions(method="bspline-vel", time=0.25))
+    assert r.duration.mode == "given" and r.duration.seconds == 0.25
+    np.testing.assert_allclose(r.v[0], [0.3, 0, 0], atol=1e-12)
+    np.testing.assert_allclose(r.v[-1], [0, 0.3, 0], atol=1e-12)
+    np.testing.assert_allclose([r.a[0], r.a[-1]], 0.0, atol=1e-7)
+    assert r.parameters["duration_s"] == 0.25 and r.method == "bspline-vel"
+
+
+def test_auto_duration_is_the_smallest_meeting_the_capacity(delta):
+    """Eq. 26 with the shape re-optimised at each T: at T_auto the binding capacity is met with equality
+    (1e-6) by the path planned for T_auto; the path planned for 0.999·T_auto exceeds it."""
+    from pickplace_cli.planner import PlanOptions, plan
+    from pickplace_cli.timing import auto_duration
+
+    r = plan(ADEPT_BELT, delta, PlanOptions(method="bspline-vel", time="auto"))
+    T = r.duration.seconds
+    cap = delta.capacity
+    v, a, j = r.cartesian.peaks()
+    assert max(v / cap.velocity, a / cap.acceleration) == pytest.approx(1.0, abs=1e-6)
+    shorter = bv.plan_bspline_vel(ADEPT_BELT, 0.999 * T)
+    assert max(auto_duration(shorter, cap)[:2]) > 0.999 * T
+
+
+@pytest.mark.slow
+def test_fit_solves_eq38_every_motor_limit_at_the_optimal_shape(delta):
+    """Eq. 38: the smallest T at which every limit (motor torque and its rate, speed, RMS …) holds with the
+    shape optimal at T. All hold at T_fit; with 0.1 % less time (and the shape optimal there) one fails."""
+    from pickplace_cli.limits import check_limits
+    from pickplace_cli.planner import PlanOptions, motion_model, plan
+
+    r = plan(ADEPT_BELT, delta, PlanOptions(method="bspline-vel", time="fit"))
+    assert r.duration.mode == "fit" and r.report.ok
+    T = r.duration.seconds
+    shorter = 0.999 * T
+    model = motion_model(bv.plan_bspline_vel(ADEPT_BELT, shorter), delta)
+    rep = check_limits(model, shorter, dwell=delta.planning.dwell)
+    assert not all(row.ok for row in rep.rows if row.kind != "reach")
+    # the fitted path is the global optimum at T_fit (confirmed by the factory's final global solve)
+    glob = bv.solve(bv.make_problem(ADEPT_BELT, T))
+    assert r.parameters["F"] == pytest.approx(glob.F, abs=1e-8)

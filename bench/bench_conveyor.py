@@ -1,0 +1,151 @@
+"""Benchmarks of conveyor tracking, bspline-vel [Yang2022] (run: python bench/bench_conveyor.py [--repeat N]
+[--build] [--table PATH]).
+
+Measures, medians with min–max:
+
+* the exact solve of Eq. (37) (global multi-start), on the paper's two examples and on 20 random moves;
+* the seeded solve (table answer polished to the exact optimum) on the same 20 moves;
+* the table answer (lookup + interpolation);
+* ``plan`` through the planner with --time SECONDS, auto and fit (Eq. 38) on the default Delta;
+* with ``--build``: the full table build on all cores (``build_vel_table``), wall time.
+
+Also reports the table's accuracy on the 20 random moves (held out: random groups, not grid nodes): F of
+the table's answer relative to the exact optimum's F, with the exact normalisers. Writes
+bench/results/conveyor.json. Not a test: timings depend on the machine and its load (recorded).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import statistics
+import sys
+import time
+from pathlib import Path
+
+
+def stats(samples: list[float]) -> dict:
+    return {"median": statistics.median(samples), "min": min(samples), "max": max(samples), "n": len(samples)}
+
+
+def show(name: str, s: dict, unit: str = "ms", scale: float = 1e3) -> None:
+    print(f"{name:<52} median {s['median'] * scale:9.3f} {unit}   (min {s['min'] * scale:.3f} – max {s['max'] * scale:.3f}, n={s['n']})")
+
+
+def random_moves(n: int, seed: int = 2022):
+    """Held-out moves: h/b log-uniform in [0.025, 1], each v·T/b group uniform in [−0.5, 0.5], b, T random."""
+    import numpy as np
+
+    from pickplace_cli.methods.bspline_vel import task_from_groups
+
+    rng = np.random.default_rng(seed)
+    out = []
+    for _ in range(n):
+        hb = float(np.exp(rng.uniform(np.log(0.025), np.log(1.0))))
+        v = rng.uniform(-0.5, 0.5, 4)
+        g = dict(h_over_b=hb, eta=0.5, v0_along=v[0], v0_across=v[1], v1_along=v[2], v1_across=v[3])
+        b, T = float(rng.uniform(0.1, 0.6)), float(rng.uniform(0.1, 0.5))
+        out.append((task_from_groups(g, b=b, duration=T), T))
+    return out
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--moves", type=int, default=20)
+    ap.add_argument("--build", action="store_true", help="also time the full table build on all cores")
+    ap.add_argument("--table", default=None, help="bspline-vel table (default: the shipped one)")
+    args = ap.parse_args()
+
+    import numpy as np
+
+    from pickplace_cli.methods import bspline_vel as bv
+    from pickplace_cli.planner import PlanOptions, plan
+    from pickplace_cli.profile import load_profile
+    from pickplace_cli.table_vel import load_vel_table
+    from pickplace_cli.task import Task
+
+    results: dict = {"machine": {"platform": platform.platform(), "python": sys.version.split()[0],
+                                 "cpus": os.cpu_count(), "load_avg_start": os.getloadavg()}}
+    c = 0.305 / (2 * 2**0.5)
+    named = {
+        "paper example (Sec. 2.3.1), T = 0.25 s": (Task([0, 0, 0], [0.28, -0.2, 0], 0.04, 0.5, [0, 0.2, 0], [0, 0.2, 0]), 0.25),
+        "Adept with velocity (Sec. 3), T = 0.213 s": (Task([-c, c, -0.65], [c, -c, -0.65], 0.025, 0.5, [0, 0.2, 0], [0, 0.2, 0]), 0.213),
+    }
+    for name, (task, T) in named.items():
+        prob = bv.make_problem(task, T)
+        bv.solve(prob)  # warm: imports
+        times = []
+        for _ in range(args.repeat):
+            t0 = time.perf_counter()
+            bv.solve(prob)
+            times.append(time.perf_counter() - t0)
+        results[f"exact {name}"] = s = stats(times)
+        show(f"exact solve: {name}", s)
+
+    moves = random_moves(args.moves)
+    tab = load_vel_table(args.table)
+    t_exact, t_seed, t_table, loss, seed_gap = [], [], [], [], []
+    for task, T in moves:
+        prob = bv.make_problem(task, T)
+        t0 = time.perf_counter()
+        res = bv.solve(prob)
+        t_exact.append(time.perf_counter() - t0)
+        t0 = time.perf_counter()
+        seeded = bv.optimum(task, T, "seeded", args.table)[1]
+        t_seed.append(time.perf_counter() - t0)
+        for _ in range(10):
+            t0 = time.perf_counter()
+            p = tab.lookup(task, T)
+            t_table.append(time.perf_counter() - t0)
+        _, a, j = bv.exact_peaks(prob, p)
+        loss.append(1 - (res.a_min / a + res.j_min / j) / res.F)
+        A, J = min(res.a_min, seeded.a_min), min(res.j_min, seeded.j_min)
+        seed_gap.append((A / res.a_max + J / res.j_max) - (A / seeded.a_max + J / seeded.j_max))
+    results["exact random moves"] = s = stats(t_exact)
+    show(f"exact solve: {args.moves} random moves", s)
+    results["seeded random moves"] = s = stats(t_seed)
+    show(f"seeded solve (table + exact polish): {args.moves} moves", s)
+    results["table lookup"] = s = stats(t_table)
+    show("table answer (lookup + interpolation)", s)
+    loss_a = np.array(loss)
+    results["table F loss"] = {"median": float(np.median(loss_a)), "max": float(loss_a.max()),
+                               "within_1pct": int((loss_a <= 0.01).sum()), "n": len(loss)}
+    print(f"{'table F loss vs exact (held out)':<52} median {100 * np.median(loss_a):.2f} %, worst {100 * loss_a.max():.2f} %, "
+          f"{(loss_a <= 0.01).sum()}/{len(loss)} within 1 %")
+    gap = np.array(seed_gap)
+    results["seeded F minus exact F"] = {"min": float(-gap.max()), "max": float(-gap.min())}
+    print(f"{'seeded F − exact F (common normalisers)':<52} {(-gap).min():+.2e} … {(-gap).max():+.2e}")
+
+    prof = load_profile("delta-su2018")
+    belt = Task([-0.1525, 0, -0.8], [0.1525, 0, -0.8], 0.025, 0.5, [0.3, 0, 0], [0, 0.3, 0])
+    for spec, reps in ((0.2, args.repeat), ("auto", max(2, args.repeat // 2)), ("fit", max(2, args.repeat // 2))):
+        times = []
+        for _ in range(reps):
+            t0 = time.perf_counter()
+            r = plan(belt, prof, PlanOptions(method="bspline-vel", time=spec))
+            times.append(time.perf_counter() - t0)
+        results[f"plan time={spec}"] = s = stats(times)
+        s["duration_s"] = r.duration.seconds
+        show(f"plan Delta Adept + belts, --time {spec} (T = {r.duration.seconds:.4f} s)", s)
+
+    if args.build:
+        from pickplace_cli.table_vel import VelGrid, build_vel_table
+
+        t0 = time.perf_counter()
+        built = build_vel_table(VelGrid(), workers=os.cpu_count() or 1)
+        results["build"] = {"seconds": time.perf_counter() - t0, "workers": os.cpu_count(),
+                            "solved_nodes": built.meta["solved_nodes"]}
+        print(f"{'table build, all cores':<52} {results['build']['seconds']:.1f} s ({built.meta['solved_nodes']} solves, {os.cpu_count()} workers)")
+    results["machine"]["load_avg_end"] = os.getloadavg()
+    out = Path(__file__).resolve().parent / "results" / "conveyor.json"
+    out.parent.mkdir(exist_ok=True)
+    out.write_text(json.dumps(results, indent=2) + "\n")
+    print(f"written {out}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
