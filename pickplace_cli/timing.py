@@ -280,7 +280,7 @@ def choose_duration_for(
             "time = fit: the profile sets no velocity, acceleration, jerk or motor limit that depends on the "
             "duration; add joint limits or drives, or use --time auto / seconds"
         )
-    tv, ta, tj, _ = auto_duration(path, capacity)
+    # tv, ta, tj: the capacity bounds of the path planned for t_auto (so Duration.t_auto is the auto time)
     return Duration(t_fit, "fit", tv, ta, tj, fit_binding, t_fit), path
 
 
