@@ -47,6 +47,11 @@ class CsvDialectName(str, Enum):
     tsv = "tsv"
 
 
+class TableMethod(str, Enum):
+    bspline = "bspline"
+    bspline_vel = "bspline-vel"
+
+
 class McapFlavor(str, Enum):
     ros2 = "ros2"
     foxglove = "foxglove"
@@ -121,14 +126,15 @@ def _parse_point(name: str, text: str, unit: str = "m"):
     from .errors import TaskError
 
     words = "metres" if unit == "m" else unit
+    what = "coordinates" if unit == "m" else "components"
     parts = [p.strip() for p in text.split(",")]
     if len(parts) != 3 or not all(parts):
         example = "-0.1525,0,-0.8" if unit == "m" else "0,0.2,0"
-        raise TaskError(f"{name} = {text!r}: give three components X,Y,Z in {words}, e.g. {example}")
+        raise TaskError(f"{name} = {text!r}: give three {what} X,Y,Z in {words}, e.g. {example}")
     try:
         values = [float(p) for p in parts]
     except ValueError:
-        raise TaskError(f"{name} = {text!r}: every component must be a number in {words}") from None
+        raise TaskError(f"{name} = {text!r}: every {what[:-1]} must be a number in {words}") from None
     import math
 
     if not all(math.isfinite(v) for v in values):
@@ -185,7 +191,10 @@ def plan(
     method: MethodName = typer.Option(MethodName.bspline, "--method", "-m", help="Planning method."),
     k1: Optional[float] = typer.Option(None, "--k1", help="B-spline time-ratio factor k1 = τ8/τ9 (overrides the table)."),
     k2: Optional[float] = typer.Option(None, "--k2", help="B-spline time-ratio factor k2 = τ7/τ8 (overrides the table)."),
-    table: Optional[str] = typer.Option(None, "--table", help="λ → (k1, k2) table CSV. [default: shipped table]"),
+    table: Optional[str] = typer.Option(
+        None, "--table", help="bspline: λ → (k1, k2) table CSV; bspline-vel: conveyor table that seeds the exact "
+        "solve. [default: shipped table]"
+    ),
     param: Optional[list[str]] = typer.Option(
         None, "--param", help="A method parameter NAME=VALUE (repeatable): ph m=, r= (corner extents in m); "
         "lame m= (exponent, >= 3); piecewise-poly ratio= (τv/τu). [default: the paper's values]",
@@ -281,8 +290,10 @@ def plan(
     params: dict = _parse_params(param or [])
     if method == MethodName.bspline:
         params.update({"k1": k1, "k2": k2, "table": table})
+    elif method == MethodName.bspline_vel and table is not None and k1 is None and k2 is None:
+        params.update({"solver": "seeded", "table": table})  # that table seeds the exact polish
     elif k1 is not None or k2 is not None or table is not None:
-        _usage(f"--k1/--k2/--table belong to --method bspline, not {method.value}")
+        _usage(f"--k1/--k2/--table belong to --method bspline (--table also to bspline-vel), not {method.value}")
     writer = _writer(fmt, csv_dialect, mcap_flavor, compression)
     if batch is not None and fit_ws:
         _usage("--fit-workspace is not available with --batch")
@@ -640,7 +651,14 @@ def _print_summary(result) -> None:
     s = result.summary()
     d = result.duration
     par = result.parameters
-    ks = f"k1 = {par['k1']:.4f}, k2 = {par['k2']:.4f} ({par['k_source']})" if "k1" in par else ""
+    if "k1" in par:
+        ks = f"k1 = {par['k1']:.4f}, k2 = {par['k2']:.4f} ({par['k_source']})"
+    else:  # the method's scalar shape parameters (e.g. ph m, r; bspline-vel τ6 … λ3 and F)
+        skip = {"continuity", "eta", "height_m", "duration_s", "margin", "a_min", "j_min", "paper_time_factor"}
+        ks = ", ".join(
+            f"{k} = {v:.4g}" if isinstance(v, float) else f"{k} = {v}"
+            for k, v in par.items() if k not in skip and isinstance(v, (int, float, str)) and not isinstance(v, bool)
+        )
     bounds = f"v {d.t_velocity:.4f} s, a {d.t_acceleration:.4f} s" + (f", j {d.t_jerk:.4f} s" if d.t_jerk else "")
     fit = f"; fit {d.t_fit:.4f} s" if d.t_fit is not None else ""
     sys.stderr.write(
@@ -820,6 +838,11 @@ def build_table_cmd(
         TableFormat.csv, "--format", "-f",
         help="csv (the table file plan --table reads), json, or st (IEC 61131-3 Structured Text with a look-up function).",
     ),
+    table_method: TableMethod = typer.Option(
+        TableMethod.bspline, "--method", "-m",
+        help="bspline: Li 2018's λ → (k1, k2) table; bspline-vel: Yang 2022's conveyor-tracking table over the "
+        "dimensionless groups (h/b, v·T/b along and across; local processes and CSV only).",
+    ),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar."),
 ) -> None:
     """Compute the optimal (k1*, k2*) of the B-spline method for a grid of λ, with the Eq. 23 cubic fit.
@@ -832,6 +855,12 @@ def build_table_cmd(
 
     from .errors import TableError
     from .table import TableSettings, checkpoint_path, format_table, lambda_grid, run_build
+
+    if table_method == TableMethod.bspline_vel:
+        if scheduler or resume or table_format != TableFormat.csv:
+            _usage("--method bspline-vel builds on local processes into a CSV (no --scheduler, --resume, --format)")
+        _build_vel_table(eta, workers, output, quiet)
+        return
 
     if not (0 < eta < 1):
         raise TableError(f"eta = {eta!r}: the lift-off/set-down ratio η must lie strictly between 0 and 1")
@@ -1101,6 +1130,34 @@ def _checkpointed_rows(ckpt, settings) -> int:
         return len(read_checkpoint(ckpt, settings)) if ckpt is not None else 0
     except PickplaceError:
         return 0
+
+
+def _build_vel_table(eta: float, workers: int, output: str, quiet: bool) -> None:
+    """build-table --method bspline-vel: Yang 2022 optima on the default dimensionless grid."""
+    import os
+
+    from .errors import TableError
+    from .export import atomic_output, check_writable
+    from .table_vel import VelGrid, build_vel_table, format_vel_table
+
+    if workers < 0:
+        raise TableError(f"workers = {workers}: must be 0 (all cores) or a positive number")
+    check_writable(output)
+    grid = VelGrid(eta=eta)
+    n_workers = workers or os.cpu_count() or 1
+    if quiet:
+        table = build_vel_table(grid, workers=n_workers)
+    else:
+        from rich.console import Console
+        from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+
+        with Progress(TextColumn("{task.description}"), BarColumn(), TextColumn("{task.completed}/{task.total}"),
+                      TimeElapsedColumn(), TimeRemainingColumn(), console=Console(stderr=True)) as progress:
+            bar = progress.add_task("solving Yang 2022 optima (one node per symmetry orbit)", total=None)
+            table = build_vel_table(grid, workers=n_workers,
+                                    progress=lambda done, total: progress.update(bar, completed=done, total=total))
+    with atomic_output(output) as stream:
+        stream.write(format_vel_table(table, __version__))
 
 
 def main() -> None:

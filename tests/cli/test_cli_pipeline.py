@@ -256,3 +256,8 @@ def test_end_velocities_need_the_velocity_method():
     assert r.exit_code == 2
     r = run("plan", *moving[:6], "--v-from", "0,0.2", "--method", "bspline-vel")
     assert r.exit_code == 1 and "three components X,Y,Z in m/s" in r.stderr
+
+
+def test_build_table_bspline_vel_options():
+    r = run("build-table", "--method", "bspline-vel", "--format", "st")
+    assert r.exit_code == 2
