@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..bspline import li_knots, make_spline, norm_peaks, solve_control_points
+from ..bspline import DEGREE, li_knots, make_spline, norm_peaks, piece_coefficients, solve_control_points
 from ..errors import TaskError
 from ..task import Task
 from ..trajectory import CartesianPath
@@ -51,10 +51,37 @@ def plan_bspline(
     peaks = norm_peaks(spline, (1, 2, 3))
 
     origin = task.p_from
+    breaks, coef = piece_coefficients(spline, 0)  # (m+1,), (m, 3, 6): the exact polynomial of each piece
+    powers = np.arange(DEGREE, -1, -1.0)
+    memo: list = [None]  # one entry (τ, [p, p′, p″, p‴]): the pipeline asks orders 0…3 at the same τ in turn
 
     def evaluate(tau: np.ndarray, order: int) -> np.ndarray:
-        out = spline(tau, nu=order)
-        return out + origin if order == 0 else out
+        entry = memo[0]
+        if entry is None or entry[0] is not tau:
+            entry = (tau, _all_orders(tau))
+            memo[0] = entry
+        out = entry[1][order]
+        return out + origin if order == 0 else out.copy()
+
+    def _all_orders(tau: np.ndarray) -> list[np.ndarray]:
+        """p, p′, p″, p‴ (each (N, 3)) by Horner on the piece polynomials (one search for every order)."""
+        i = np.clip(np.searchsorted(breaks, tau, side="right") - 1, 0, len(coef) - 1)
+        dx = (tau - breaks[i])[:, None]
+        c = coef[i]  # (N, 3, 6), highest power first
+        out = []
+        for k in range(4):
+            ck = c[..., : DEGREE + 1 - k]
+            if k:
+                ck = ck * _falling(powers[: DEGREE + 1 - k], k)
+            acc = ck[..., 0]
+            for col in range(1, ck.shape[-1]):
+                acc = acc * dx + ck[..., col]
+            out.append(acc)
+        ends = np.flatnonzero((tau <= 0.0) | (tau >= 1.0))
+        if ends.size:  # the end states exactly as de Boor gives them (v = a = 0 without round-off)
+            for k in range(4):
+                out[k][ends] = spline(tau[ends], nu=k)
+        return out
 
     return CartesianPath(
         evaluate=evaluate,
@@ -63,3 +90,11 @@ def plan_bspline(
         peaks=peaks,  # type: ignore[arg-type]
         breakpoints=np.unique(spline.t),
     )
+
+
+def _falling(n: np.ndarray, k: int) -> np.ndarray:
+    """n (n−1) … (n−k+1): the factor a power n picks up from k derivatives."""
+    out = np.ones_like(n)
+    for r in range(k):
+        out = out * (n - r)
+    return out
