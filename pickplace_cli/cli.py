@@ -197,7 +197,8 @@ def plan(
     ),
     param: Optional[list[str]] = typer.Option(
         None, "--param", help="A method parameter NAME=VALUE (repeatable): ph m=, r= (corner extents in m); "
-        "lame m= (exponent, >= 3); piecewise-poly ratio= (τv/τu). [default: the paper's values]",
+        "lame m= (exponent, >= 3); piecewise-poly ratio= (τv/τu); bspline-vel margin=, tau6= … lambda3=. "
+        "[default: the paper's values]",
     ),
     time: str = typer.Option(
         "auto",
