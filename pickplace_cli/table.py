@@ -830,23 +830,30 @@ def parse_table(text: str, source: str = "<table>") -> Table:
     return Table(tuple(rows), meta=meta, source=source)
 
 
-_CACHE: dict[tuple[str, float, int], Table] = {}
+_CACHE: dict[tuple[str, float, int], object] = {}
+
+
+def read_table_file(path: Path, parse: Callable[[str, str], object], source: str, build_hint: str):
+    """Parse a table file once per (path, mtime, size) (shared by the Li and conveyor tables); TableError
+    when it is missing (saying how to build it: ``build_hint``) or unreadable."""
+    try:
+        st = path.stat()
+        key = (str(path.resolve()), st.st_mtime, st.st_size)
+        if key in _CACHE:
+            return _CACHE[key]
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise TableError(f"table {path}: no such file (build one with `{build_hint} -o {path}`)") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise TableError(f"table {path}: cannot read: {exc}") from None
+    table = parse(text, source)
+    _CACHE[key] = table
+    return table
 
 
 def load_table(path: str | Path | None = None) -> Table:
     """Read a table file (default: the shipped table); TableError when missing or corrupt."""
     p = Path(path) if path is not None else default_table_path()
-    try:
-        st = p.stat()
-        key = (str(p.resolve()), st.st_mtime, st.st_size)
-        if key in _CACHE:
-            return _CACHE[key]
-        text = p.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise TableError(f"table {p}: no such file (build one with `pickplace build-table -o {p}`)") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise TableError(f"table {p}: cannot read: {exc}") from None
     # the shipped table is named, not located: outputs (JSON summaries) must not depend on the checkout path
-    table = parse_table(text, f"{DEFAULT_TABLE} (shipped)" if path is None else str(p))
-    _CACHE[key] = table
-    return table
+    source = f"{DEFAULT_TABLE} (shipped)" if path is None else str(p)
+    return read_table_file(p, parse_table, source, "pickplace build-table")  # type: ignore[return-value]

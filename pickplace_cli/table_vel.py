@@ -393,24 +393,9 @@ def parse_vel_table(text: str, source: str = "<table>") -> VelTable:
     return VelTable(grid, params, F, a_min, j_min, dict(meta), source)
 
 
-_CACHE: dict[tuple[str, float, int], VelTable] = {}
-
-
 def load_vel_table(path: str | Path | None = None) -> VelTable:
     """Read a bspline-vel table file (default: the shipped one); TableError when missing or corrupt."""
+    from .table import read_table_file
+
     p = Path(path) if path is not None else default_vel_table_path()
-    try:
-        st = p.stat()
-        key = (str(p.resolve()), st.st_mtime, st.st_size)
-        if key in _CACHE:
-            return _CACHE[key]
-        text = p.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise TableError(
-            f"table {p}: no such file (build one with `pickplace build-table --method bspline-vel -o {p}`)"
-        ) from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise TableError(f"table {p}: cannot read: {exc}") from None
-    table = parse_vel_table(text, str(p))
-    _CACHE[key] = table
-    return table
+    return read_table_file(p, parse_vel_table, str(p), "pickplace build-table --method bspline-vel")  # type: ignore[return-value]

@@ -70,10 +70,10 @@ def _hold(plan, at_end: bool, t: np.ndarray) -> dict[str, Any]:
             joint[name] = None
         elif name in ("q", "torque", "motor_torque"):
             # at rest the torque is the holding (gravity) torque, which the move's end sample already is
-            joint[name] = np.repeat(arr[k : k + 1 if k >= 0 else None], n, axis=0)
+            joint[name] = np.repeat(arr[[k]], n, axis=0)
         else:
             joint[name] = np.zeros((n, arr.shape[1]))
-    return {"t": t, "p": np.repeat(plan.p[k : k + 1 if k >= 0 else None], n, axis=0), "v": zeros3,
+    return {"t": t, "p": np.repeat(plan.p[[k]], n, axis=0), "v": zeros3,
             "a": zeros3, "j": zeros3, "joint": joint}
 
 

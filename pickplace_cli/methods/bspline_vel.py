@@ -70,6 +70,7 @@ from ..bspline import (
     yang_knots,
 )
 from ..errors import TaskError
+from ..peaks import _anti_diagonal_sum
 from ..task import Task
 from ..trajectory import CartesianPath
 
@@ -386,16 +387,6 @@ def _distinct_best(x: np.ndarray, values: np.ndarray, count: int, radius: float 
     return picked
 
 
-def _anti_diagonal(k: int, _cache: dict = {}) -> np.ndarray:  # noqa: B006 - deliberate memo
-    """(k², 2k − 1) 0/1 matrix summing products c_i c_j into the coefficient of power i + j."""
-    if k not in _cache:
-        m = np.zeros((k * k, 2 * k - 1))
-        i, j = np.divmod(np.arange(k * k), k)
-        m[np.arange(k * k), i + j] = 1.0
-        _cache[k] = m
-    return _cache[k]
-
-
 def _exact_segment_maxima(prep: tuple, q: int, sub: int) -> np.ndarray:
     """u (6·sub,) of the maximum of ‖a‖² (q = 0) or ‖j‖² (q = 1) on each of the ``sub`` equal segments of
     every knot span, for the first parameter vector of ``prep``: exact, from the real roots of the
@@ -407,7 +398,7 @@ def _exact_segment_maxima(prep: tuple, q: int, sub: int) -> np.ndarray:
     else:  # j(u) = D1 + D2 (wu) + D3 (wu)²/2
         c = np.stack([d[:, 1], d[:, 2] * w[:, 0], d[:, 3] * w[:, 0] ** 2 / 2], axis=1)
     k = c.shape[1]
-    sq = np.einsum("sid,sjd->sij", c, c).reshape(6, k * k) @ _anti_diagonal(k)  # ‖·‖², lowest power first
+    sq = np.einsum("sid,sjd->sij", c, c).reshape(6, k * k) @ _anti_diagonal_sum(k)  # ‖·‖², lowest power first
     deriv = sq[:, 1:] * np.arange(1, 2 * k - 1)  # degree 2k − 3
     n = deriv.shape[1] - 1
     lead = deriv[:, -1]
