@@ -1,8 +1,15 @@
 """Quintic B-spline machinery shared by the B-spline methods [Li2018, Sec. 2.2–2.3].
 
 A motion profile is ``s(τ) = Σ Q_i N_{i,5}(τ)`` on τ ∈ [0, 1] (Eq. 3) with clamped knots (Eq. 7).
-scipy's :class:`scipy.interpolate.BSpline` does the basis and evaluation; this module builds the knots
-and solves for the control points.
+This module builds the knots and solves for the control points; :func:`make_spline` wraps the result in
+scipy's :class:`scipy.interpolate.BSpline` (table builds, the conveyor method, the tests' reference).
+
+**One evaluation path without scipy, on purpose.** Importing ``scipy.interpolate`` costs ~0.45 s of cold
+start (it pulls in scipy.special and scipy.optimize), more than half of the 0.8 s budget of one
+``pickplace plan`` [issue 7]. The online path of the default method therefore evaluates its 11-point spline
+with the batched Cox–de Boor recursion below (:func:`basis_matrix`, :func:`left_derivatives`: the same
+arithmetic scipy's de Boor does, used by the conveyor optimiser for hundreds of knot vectors at once). Tests
+hold it to scipy's BSpline at 1e-12 (values and every derivative) and to an independent recursion.
 
 Departure from the paper, on purpose: Eq. (10) solves the full 11×11 system ``A q = b``. That matrix is
 badly conditioned for small k2 (cond ≈ 1e8 at k2 = 0.12, worse as k2 → 0). With clamped knots the
@@ -43,8 +50,51 @@ def yang_knots(tau6: float, tau7: float, tau9: float, tau10: float) -> np.ndarra
 
 
 def basis_matrix(knots: np.ndarray, x: np.ndarray, order: int = 0) -> np.ndarray:
-    """(len(x), n) matrix of the ``order``-th derivative of every basis function N_{i,5} at x."""
-    return _basis_spline(knots)(np.asarray(x, float), nu=order)
+    """(len(x), n) matrix of the ``order``-th derivative of every basis function N_{i,5} at x ∈ [0, 1].
+
+    numpy only (see the module docstring): the derivative control points of the identity coefficient
+    matrix (Eq. 12–14 of [Yang2022]) on the non-zero basis functions of degree 5 − order at each x. A point
+    on an interior knot is evaluated on the span to its right, τ = 1 on the last span (as scipy does)."""
+    t = np.asarray(knots, float)
+    x = np.asarray(x, float).reshape(-1)
+    n = len(t) - DEGREE - 1
+    span = span_index(t, x)
+    values = batch_basis(t[None], x[None], span, degree=DEGREE - order)
+    if order == 0:  # the non-zero functions N_{s−5} … N_s, scattered into their columns
+        out = np.zeros((len(x), n))
+        out[np.arange(len(x))[:, None], span[:, None] - DEGREE + np.arange(DEGREE + 1)] = values[0]
+        return out
+    q = derivative_control_points(t[None], np.eye(n)[None], order)[order]
+    return batch_combine(values, span, q, shift=order)[0]
+
+
+def span_index(knots: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """Knot span s of each x (t_s ≤ x < t_{s+1}, the last non-empty span at the right end), for
+    :func:`batch_basis`."""
+    n = len(knots) - DEGREE - 1
+    return np.clip(np.searchsorted(knots, x, side="right") - 1, DEGREE, n - 1)
+
+
+def left_derivatives(knots: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, list[np.ndarray]]:
+    """Breakpoints (m+1,) and the derivatives of orders 0…5 of Σ q_i N_{i,5} at the left end of each of
+    the m pieces (a list of six (m, d) arrays): the exact piece polynomials, numpy only (see
+    :func:`piece_coefficients`, which accepts them as ``_derivs``)."""
+    t = np.asarray(knots, float)
+    breaks = np.unique(t)
+    return breaks, derivatives_at(t, q, breaks[:-1])
+
+
+def derivatives_at(knots: np.ndarray, q: np.ndarray, x: np.ndarray) -> list[np.ndarray]:
+    """Derivatives of orders 0…5 of Σ q_i N_{i,5} at the points x (a list of six (len(x), d) arrays), from
+    one pass of the recursion (the basis of every degree comes out of it), numpy only."""
+    t = np.asarray(knots, float)
+    q = np.asarray(q, float)
+    q2 = q if q.ndim == 2 else q[:, None]
+    x = np.asarray(x, float).reshape(-1)
+    span = span_index(t, x)
+    qs = derivative_control_points(t[None], q2[None], DEGREE)
+    values = batch_basis(t[None], x[None], span, all_degrees=True)
+    return [batch_combine(values[DEGREE - r], span, qs[r], shift=r)[0] for r in range(DEGREE + 1)]
 
 
 def solve_control_points(
@@ -75,7 +125,7 @@ def solve_control_points(
     if interior.size != n - 8:
         raise ValueError(f"{n} control points need {n - 8} interior via points, got {interior.size}")
     q = np.empty((n, d))
-    basis = _basis_spline(knots)
+    basis = lambda x, nu=0: basis_matrix(knots, x, nu)  # noqa: E731
     if not np.any(start) and not np.any(end):
         # rest to rest: the r-th derivative at a clamped end is a combination of differences of
         # Q_1..Q_{r+1}, so zero velocity, acceleration and jerk there means Q_1 = Q_2 = Q_3 = Q_4 (and the
@@ -98,14 +148,6 @@ def solve_control_points(
     return q
 
 
-def _basis_spline(knots: np.ndarray):
-    """A BSpline whose coefficient matrix is the identity: evaluating it gives every basis function."""
-    from scipy.interpolate import BSpline
-
-    n = len(knots) - DEGREE - 1
-    return BSpline(knots, np.eye(n), DEGREE, extrapolate=True)
-
-
 def make_spline(knots: np.ndarray, control_points: np.ndarray):
     """scipy BSpline of degree 5 (vector-valued when control_points is (n, d))."""
     from scipy.interpolate import BSpline
@@ -113,14 +155,15 @@ def make_spline(knots: np.ndarray, control_points: np.ndarray):
     return BSpline(knots, control_points, DEGREE, extrapolate=True)
 
 
-def piece_coefficients(spline, order: int, _derivs: list | None = None) -> tuple[np.ndarray, np.ndarray]:
+def piece_coefficients(spline, order: int, _derivs: list | None = None, breaks: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Breakpoints (m+1,) and Taylor coefficients (m, d, 6−order) of the ``order``-th derivative.
 
     Piece i is Σ_p coef[i, :, p] (τ − breaks[i])^(deg−p), highest power first, deg = 5 − order. The
     coefficients are the derivatives of orders ``order``..5 at the left end of each piece divided by the
     factorials, i.e. the exact polynomial of that piece.
     """
-    breaks = np.unique(spline.t)
+    if breaks is None:
+        breaks = np.unique(spline.t)
     if _derivs is None:
         _derivs = _left_derivatives(spline, breaks)
     deg = DEGREE - order
@@ -139,8 +182,12 @@ def _left_derivatives(spline, breaks: np.ndarray) -> list:
 def norm_peaks(spline, orders: tuple[int, ...] = (1, 2, 3)) -> tuple[float, ...]:
     """Exact max over τ ∈ [0, 1] of ‖d^r s/dτ^r‖ for each r in ``orders`` (piecewise-polynomial roots)."""
     breaks = np.unique(spline.t)
-    derivs = _left_derivatives(spline, breaks)
-    return tuple(ppoly_norm_peak(*piece_coefficients(spline, r, derivs))[0] for r in orders)
+    return pieces_norm_peaks(breaks, _left_derivatives(spline, breaks), orders)
+
+
+def pieces_norm_peaks(breaks: np.ndarray, derivs: list, orders: tuple[int, ...] = (1, 2, 3)) -> tuple[float, ...]:
+    """:func:`norm_peaks` from breakpoints and left-end derivatives (:func:`left_derivatives`)."""
+    return tuple(ppoly_norm_peak(*piece_coefficients(None, r, derivs, breaks))[0] for r in orders)
 
 
 # ------------------------------------------------------------------------------- batched (many knot vectors)
@@ -203,7 +250,7 @@ def batch_combine(values: np.ndarray, span: np.ndarray, coef: np.ndarray, shift:
 def derivative_control_points(knots: np.ndarray, q: np.ndarray, order: int = 3) -> list[np.ndarray]:
     """Control points of the derivative splines [Yang2022, Eq. (12)–(14)], batched.
 
-    ``knots`` (P, K), ``q`` (P, n, d) → [Q, Q_V, Q_A, Q_J][: order + 1], Q_r of shape (P, n − r, d).
+    ``knots`` (P, K), ``q`` (P, n, d) → [Q, Q_V, Q_A, Q_J, …][: order + 1], Q_r of shape (P, n − r, d).
     The r-th derivative is Σ_i Q_r[i] N_{i+r, 5−r} on the same knot vector (Eq. 9–11).
     """
     t = np.asarray(knots, float)

@@ -194,10 +194,9 @@ class MotionModel:
         self.rotor = np.array([d.rotor_inertia if d else 0.0 for d in drives])
 
     # --------------------------------------------------------------------------------- evaluation
-    def _torques(self, tau: np.ndarray, rates: bool = False):
-        path = self.path
+    def _torques(self, tau: np.ndarray, rates: bool = False, motion: tuple | None = None):
         robot = self.robot
-        p, v, a, j = (path(tau, k) for k in range(4))
+        p, v, a, j = motion if motion is not None else (self.path(tau, k) for k in range(4))
         q, qd, qdd, qddd = robot.joint_motion(p, v, a, j)
         dA = dG = None
         if hasattr(robot, "split_dynamics"):  # one pass over the geometry (Delta)
@@ -218,14 +217,18 @@ class MotionModel:
             dGm = dG / ng
         return p, v, a, j, q, qd, qdd, qddd, A, G, Am, Gm, dAm, dGm
 
-    def parts(self, tau: np.ndarray, derivatives: bool = True) -> Parts:
+    def parts(self, tau: np.ndarray, derivatives: bool = True, motion: tuple | None = None) -> Parts:
         """Evaluate at τ; ``derivatives`` adds d/dτ of the motor torques.
 
         The robot's analytic ``torque_rate`` gives them when it has one; otherwise central differences of
-        the model (step ``DTAU``, two more evaluations)."""
+        the model (step ``DTAU``, two more evaluations). ``motion`` = (p, v, a, j), each (N, 3) at T = 1 s,
+        gives the Cartesian motion at τ directly instead of evaluating ``path`` (the batched verdict engine
+        stacks many moves' samples into one call; needs the analytic rates)."""
         tau = np.asarray(tau, float)
         analytic = derivatives and hasattr(self.robot, "torque_rate")
-        p, v, a, j, q, qd, qdd, qddd, A, G, Am, Gm, dAm, dGm = self._torques(tau, rates=analytic)
+        if motion is not None and derivatives and not analytic:
+            raise ValueError("motion= needs a robot with an analytic torque_rate")
+        p, v, a, j, q, qd, qdd, qddd, A, G, Am, Gm, dAm, dGm = self._torques(tau, rates=analytic, motion=motion)
         if derivatives and not analytic:
             hi = self._torques(tau + DTAU)
             lo = self._torques(tau - DTAU)

@@ -6,24 +6,38 @@ from pathlib import Path
 
 import numpy as np
 
-from ..bspline import DEGREE, li_knots, make_spline, norm_peaks, piece_coefficients, solve_control_points
+from ..bspline import (
+    DEGREE,
+    derivatives_at,
+    left_derivatives,
+    li_knots,
+    make_spline,
+    piece_coefficients,
+    pieces_norm_peaks,
+    solve_control_points,
+)
 from ..errors import TaskError
 from ..task import Task
 from ..trajectory import CartesianPath
 
 
 def bspline_curve(task: Task, k1: float, k2: float):
-    """The scipy BSpline (11 control points in 3-D, base frame) of [Li2018, Eq. (11)–(16)].
+    """The scipy BSpline (11 control points in 3-D, base frame) of [Li2018, Eq. (11)–(16)]
+    (:func:`bspline_control_points` wrapped by scipy; the planner uses the control points directly).
 
     Equivalent to Eq. (15) r = b·(s_u, λ⁻¹ s_v) mapped by Eq. (1): the control points are solved in base-frame
     axes directly (the map is affine, so the spline commutes with it). The spline holds the displacement
     from P1 (add ``task.p_from`` for positions): small coordinates keep the round-off of the cancelling
     end derivatives (|N‴| ~ 1/τ7³) at the level of the move, not of the robot's base offset.
     """
+    return make_spline(*bspline_control_points(task, k1, k2))
+
+
+def bspline_control_points(task: Task, k1: float, k2: float) -> tuple[np.ndarray, np.ndarray]:
+    """Knots (17,) and control points (11, 3) [m, displacement from P1] of [Li2018, Eq. (11)–(16)]."""
     knots = li_knots(k1, k2)
     via_tau = knots[[0, 7, 8, 9, 16]]  # τ1 = 0, τ8, τ9, τ10, τ17 = 1 (Eq. 8 with f = 5)
-    q = solve_control_points(knots, via_tau, task.via_points() - task.p_from)
-    return make_spline(knots, q)
+    return knots, solve_control_points(knots, via_tau, task.via_points() - task.p_from)
 
 
 def plan_bspline(
@@ -47,11 +61,13 @@ def plan_bspline(
     for name, k in (("k1", k1), ("k2", k2)):
         if not (np.isfinite(k) and 0 < k < 1):
             raise TaskError(f"{name} = {k!r}: time-ratio factors must lie strictly between 0 and 1")
-    spline = bspline_curve(task, float(k1), float(k2))
-    peaks = norm_peaks(spline, (1, 2, 3))
+    knots, q = bspline_control_points(task, float(k1), float(k2))
+    breaks, derivs = left_derivatives(knots, q)  # numpy only: no scipy import on the online path
+    peaks = pieces_norm_peaks(breaks, derivs, (1, 2, 3))
 
     origin = task.p_from
-    breaks, coef = piece_coefficients(spline, 0)  # (m+1,), (m, 3, 6): the exact polynomial of each piece
+    _, coef = piece_coefficients(None, 0, derivs, breaks)  # (m, 3, 6): the exact polynomial of each piece
+    end_states = derivatives_at(knots, q, np.array([0.0, 1.0]))  # de Boor at τ = 0 and 1, each (2, 3)
     powers = np.arange(DEGREE, -1, -1.0)
     memo: list = [None]  # one entry (τ, [p, p′, p″, p‴]): the pipeline asks orders 0…3 at the same τ in turn
 
@@ -77,10 +93,12 @@ def plan_bspline(
             for col in range(1, ck.shape[-1]):
                 acc = acc * dx + ck[..., col]
             out.append(acc)
-        ends = np.flatnonzero((tau <= 0.0) | (tau >= 1.0))
-        if ends.size:  # the end states exactly as de Boor gives them (v = a = 0 without round-off)
+        # the end states exactly as de Boor gives them (v = a = 0 without round-off)
+        if tau[0] <= 0.0 or tau[-1] >= 1.0 or np.any((tau <= 0.0) | (tau >= 1.0)):
+            at0, at1 = tau <= 0.0, tau >= 1.0
             for k in range(4):
-                out[k][ends] = spline(tau[ends], nu=k)
+                out[k][at0] = end_states[k][0]
+                out[k][at1] = end_states[k][1]
         return out
 
     return CartesianPath(
@@ -88,7 +106,7 @@ def plan_bspline(
         method="bspline",
         parameters={"k1": float(k1), "k2": float(k2), "k_source": source, "lambda": task.lam, "eta": task.eta},
         peaks=peaks,  # type: ignore[arg-type]
-        breakpoints=np.unique(spline.t),
+        breakpoints=breaks,
     )
 
 

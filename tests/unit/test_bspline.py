@@ -47,7 +47,7 @@ def test_knots_eq14():
 
 @pytest.mark.parametrize("k1,k2", [(0.31, 0.12), (0.05, 0.9), (0.9, 0.01)])
 def test_basis_matches_cox_de_boor(k1, k2):
-    """scipy's basis equals the independent recursion to 1e-12 (round-off of a degree-5 recursion)."""
+    """The numpy basis equals the independent recursion to 1e-12 (round-off of a degree-5 recursion)."""
     t = li_knots(k1, k2)
     x = np.linspace(0, 1, 41)
     b = basis_matrix(t, x)
@@ -206,3 +206,45 @@ def test_end_and_derivative_control_points_match_the_general_solve():
             # the r-th derivative spline has degree 5 − r on the same knots: Σ Q_r[i] N_{i+r, 5−r}
             ds = BSpline(t[r:len(t) - r], ctrl[r][0], 5 - r, extrapolate=True)
             np.testing.assert_allclose(ds(x), s(x, nu=r), rtol=1e-9, atol=1e-9 * np.abs(s(x, nu=r)).max())
+
+
+@pytest.mark.parametrize("k1,k2", [(0.31, 0.12), (0.05, 0.9), (0.9, 0.01), (0.3966, 0.1328)])
+def test_numpy_basis_and_pieces_match_scipy(k1, k2):
+    """The scipy-free evaluation of the online path (basis_matrix, left_derivatives) equals scipy's
+    BSpline for every derivative order 0…5, on a dense grid, on the knots themselves and at both ends:
+    1e-12 relative to the largest value (both are the same de Boor arithmetic; measured ~3e-16)."""
+    from scipy.interpolate import BSpline
+
+    from pickplace_cli.bspline import left_derivatives
+
+    t = li_knots(k1, k2)
+    x = np.concatenate([np.linspace(0, 1, 401), t])
+    ref_basis = BSpline(t, np.eye(11), DEGREE)
+    for r in range(DEGREE + 1):
+        ref = ref_basis(x, nu=r)
+        np.testing.assert_allclose(basis_matrix(t, x, r), ref, rtol=0, atol=1e-12 * np.max(np.abs(ref)))
+    q = np.random.default_rng(7).normal(size=(11, 3))
+    breaks, derivs = left_derivatives(t, q)
+    np.testing.assert_array_equal(breaks, np.unique(t))
+    s = BSpline(t, q, DEGREE)
+    for r in range(DEGREE + 1):
+        ref = s(breaks[:-1], nu=r)
+        np.testing.assert_allclose(derivs[r], ref, rtol=0, atol=1e-12 * np.max(np.abs(ref)))
+
+
+def test_online_bspline_path_loads_no_scipy():
+    """Planning the default method's path (table lookup, control points, peaks, evaluation) imports no
+    scipy: the cold-start budget of `pickplace plan` [issue 7]. Run in a fresh interpreter."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, numpy as np\n"
+        "from pickplace_cli.methods import plan_path\n"
+        "from pickplace_cli.task import Task\n"
+        "p = plan_path(Task(np.array([-0.15, 0, -0.8]), np.array([0.15, 0, -0.8]), 0.025, 0.5), 'bspline')\n"
+        "p(np.linspace(0, 1, 11), 3)\n"
+        "print(sorted(m for m in sys.modules if m.startswith('scipy')))\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "[]"
