@@ -515,8 +515,15 @@ def _plan_batch(source, prof, options, height, eta, fail_fast, writer, output, r
     try:
         n_workers = workers or ((os.cpu_count() or 1) if len(rows) >= 100 else 1)
         csv_dialect = writer.csv_dialect if output is not None else None
-        for res in plan_rows_parallel(rows, prof, options, height, eta, fail_fast, name, workers=n_workers,
-                                      csv_dialect=csv_dialect, format_failed=report_only):
+        verdicts_only = json_summary and output is None and report is None
+        if verdicts_only:  # the batched verdict engine decides the rows clearly inside every limit (verdicts.py)
+            from .verdicts import engine_applies, verdict_rows_parallel
+        if verdicts_only and engine_applies(prof, options):
+            outcomes = verdict_rows_parallel(rows, prof, options, height, eta, fail_fast, name, workers=n_workers)
+        else:
+            outcomes = plan_rows_parallel(rows, prof, options, height, eta, fail_fast, name, workers=n_workers,
+                                          csv_dialect=csv_dialect, format_failed=report_only)
+        for res in outcomes:
             flush(res.row)
             results[res.row] = res
             if progress is not None:

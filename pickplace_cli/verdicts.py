@@ -86,6 +86,11 @@ class Screen:
     meta: list
 
 
+def _given(params: dict) -> dict:
+    """The method parameters that are set (plan_bspline treats None as not given)."""
+    return {k: v for k, v in params.items() if v is not None}
+
+
 def engine_enabled() -> bool:
     """False when ``PICKPLACE_NO_VERDICT_ENGINE`` is set to a non-empty value other than 0."""
     return os.environ.get(OFF_SWITCH, "") in ("", "0")
@@ -103,9 +108,8 @@ def engine_applies(profile, options) -> bool:
             return False
     except ValueError:
         return False
-    if options.fit or options.time == "fit" or not set(options.method_params) <= _PARAMS:
-        return False
-    if ("k1" in options.method_params) != ("k2" in options.method_params):
+    params = _given(options.method_params)
+    if options.fit or options.time == "fit" or not set(params) <= _PARAMS or ("k1" in params) != ("k2" in params):
         return False
     try:
         robot = build_robot(profile.robot)
@@ -196,17 +200,46 @@ def batch_norm_peaks(breaks: np.ndarray, coefs: list[np.ndarray]) -> np.ndarray:
         sqs.append((outer @ _anti_diagonal_sum(k1)).reshape(P * m, 2 * k1 - 1))  # per-move products
     degs = [sq.shape[1] - 1 for sq in sqs]
     top = max(degs)
-    dsq = np.zeros((len(sqs) * P * m, top))
-    for k, (sq, d) in enumerate(zip(sqs, degs)):
+    # Only pieces that can hold the maximum need their roots: a piece whose upper bound on ‖c‖² (the largest
+    # Bernstein coefficient on [0, h]) lies below the value already reached at some piece end of the same
+    # move cannot (its candidates are all smaller, so leaving them out does not change the max). Round-off
+    # allowance: 1e-9 of Σ|a_p| h^p.
+    ends, need = [], []
+    for sq in sqs:
+        e = _horner(sq, np.column_stack([np.zeros(P * m), h]))
+        best = np.max(e.reshape(P, -1), axis=1)
+        n = sq.shape[1] - 1
+        scaled = sq[:, ::-1] * h[:, None] ** np.arange(n + 1)  # a_p h^p, lowest power first
+        bound = np.max(scaled @ _bernstein(n), axis=1) + 1e-9 * np.sum(np.abs(scaled), axis=1)
+        ends.append(e)
+        need.append(bound.reshape(P, m) >= best[:, None])
+    rows = [np.flatnonzero(nd.reshape(-1)) for nd in need]
+    dsq = np.zeros((sum(r.size for r in rows), top))
+    at = 0
+    for sq, d, r in zip(sqs, degs, rows):
         if d:
-            dsq[k * P * m : (k + 1) * P * m, :d] = sq[:, :-1] * np.arange(d, 0, -1)
-    crit = _critical_points(dsq, np.tile(h, len(sqs)))
+            dsq[at : at + r.size, :d] = sq[r, :-1] * np.arange(d, 0, -1)
+        at += r.size
+    crit = _critical_points(dsq, np.concatenate([h[r] for r in rows]))
     out = np.empty((P, len(sqs)))
-    for k, sq in enumerate(sqs):
-        cand = np.concatenate([np.zeros((P * m, 1)), h[:, None], crit[k * P * m : (k + 1) * P * m]], axis=1)
-        vals = _horner(sq, cand).reshape(P, -1)
-        out[:, k] = np.sqrt(np.maximum(np.max(vals, axis=1), 0.0))
+    at = 0
+    for k, (sq, r) in enumerate(zip(sqs, rows)):
+        vals = np.full((P * m, 2 + crit.shape[1]), -np.inf)
+        vals[:, :2] = ends[k]
+        vals[r, 2:] = _horner(sq[r], crit[at : at + r.size])
+        at += r.size
+        out[:, k] = np.sqrt(np.maximum(np.max(vals.reshape(P, -1), axis=1), 0.0))
     return out
+
+
+def _bernstein(n: int, _cache: dict = {}) -> np.ndarray:  # noqa: B006 - deliberate memo
+    """(n+1, n+1) matrix M with b = a M: power coefficients a_i of x^i on [0, 1] (lowest first) → Bernstein
+    coefficients b_j = Σ_{i≤j} C(j, i)/C(n, i) a_i (the polynomial lies between min b and max b)."""
+    if n not in _cache:
+        from math import comb
+
+        _cache[n] = np.array([[comb(j, i) / comb(n, i) if i <= j else 0.0 for j in range(n + 1)] for i in range(n + 1)])
+    return _cache[n]
 
 
 def batch_paths(k1: np.ndarray, k2: np.ndarray, via: np.ndarray):
@@ -221,25 +254,24 @@ def batch_paths(k1: np.ndarray, k2: np.ndarray, via: np.ndarray):
 
 def batch_motion(breaks: np.ndarray, coef: np.ndarray, tau: np.ndarray) -> list[np.ndarray]:
     """p, p′, p″, p‴ (each (P, G, 3), p as displacement) of P piecewise quintics at their own τ (P, G):
-    Horner on the piece polynomials, as the bspline path's evaluator does."""
+    Horner on the piece polynomials (the bspline path's evaluator does the same per move), all four orders
+    in one pass: the derivative coefficients are stacked, right-aligned, beside the position's."""
     P, m = coef.shape[:2]
+    powers = np.arange(DEGREE, -1, -1.0)
+    stacked = np.zeros((P, m, 4, 3, DEGREE + 1))
+    for k in range(4):
+        f = np.ones(DEGREE + 1 - k)
+        for r in range(k):
+            f = f * (powers[: DEGREE + 1 - k] - r)
+        stacked[:, :, k, :, k:] = coef[..., : DEGREE + 1 - k] * f
+    stacked = stacked.reshape(P, m, 12, DEGREE + 1)
     i = np.clip(np.sum(tau[:, :, None] >= breaks[:, None, 1:-1], axis=-1), 0, m - 1)
     dx = (tau - np.take_along_axis(breaks, i, axis=1))[..., None]
-    c = coef[np.arange(P)[:, None], i]  # (P, G, 3, 6)
-    powers = np.arange(DEGREE, -1, -1.0)
-    out = []
-    for k in range(4):
-        ck = c[..., : DEGREE + 1 - k]
-        if k:
-            f = np.ones(DEGREE + 1 - k)
-            for r in range(k):
-                f = f * (powers[: DEGREE + 1 - k] - r)
-            ck = ck * f
-        acc = ck[..., 0]
-        for col in range(1, ck.shape[-1]):
-            acc = acc * dx + ck[..., col]
-        out.append(acc)
-    return out
+    c = stacked[np.arange(P)[:, None], i]  # (P, G, 12, 6)
+    acc = c[..., 0]
+    for col in range(1, DEGREE + 1):
+        acc = acc * dx + c[..., col]
+    return [acc[..., 3 * k : 3 * k + 3] for k in range(4)]
 
 
 # ------------------------------------------------------------------------------------------ screening
@@ -369,7 +401,7 @@ def decide(rows: list[BatchRow], profile, options, height: float | None = None, 
     from .timing import choose_duration
     from .trajectory import CartesianPath, CartesianTrajectory
 
-    params = dict(options.method_params)
+    params = _given(options.method_params)
     if not set(params) <= _PARAMS or ("k1" in params) != ("k2" in params):
         return {}
     tab = None
