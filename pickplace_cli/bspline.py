@@ -186,8 +186,12 @@ def norm_peaks(spline, orders: tuple[int, ...] = (1, 2, 3)) -> tuple[float, ...]
 
 
 def pieces_norm_peaks(breaks: np.ndarray, derivs: list, orders: tuple[int, ...] = (1, 2, 3)) -> tuple[float, ...]:
-    """:func:`norm_peaks` from breakpoints and left-end derivatives (:func:`left_derivatives`)."""
-    return tuple(ppoly_norm_peak(*piece_coefficients(None, r, derivs, breaks))[0] for r in orders)
+    """:func:`norm_peaks` from breakpoints and left-end derivatives (:func:`left_derivatives`), all
+    orders in one batched root search."""
+    from .peaks import ppoly_norm_peaks
+
+    found = ppoly_norm_peaks(breaks, [piece_coefficients(None, r, derivs, breaks)[1] for r in orders])
+    return tuple(v for v, _ in found)
 
 
 # ------------------------------------------------------------------------------- batched (many knot vectors)

@@ -35,14 +35,58 @@ from .trajectory import CartesianPath
 
 #: peaks within this fraction of their limit are refined exactly (golden section on the model)
 EXACT_BAND = 0.05
-#: the check samples at least this many points of τ ∈ [0, 1] (plus the output samples and the path's
-#: breakpoints), so a peak's refinement does not depend on the output rate
-CHECK_SAMPLES = 1001
+#: the check samples at least this many uniform points of τ ∈ [0, 1] (plus the output samples, the
+#: path's breakpoints and ``SPAN_SAMPLES`` points inside every span between breakpoints), so a peak's
+#: refinement does not depend on the output rate. Every quantity is smooth inside a span (the paths are C²
+#: or better there, the robot models analytic away from singularities), so a few points per span locate
+#: its local maxima; the parabolic estimate through them is never more than 4e-3 below the true peak
+#: (measured on every method and robot; the test holds 1 %), far inside the 5 % band refined exactly
+#: (``EXACT_BAND``). (An estimate above the true peak, e.g. across a jump of the torque rate where a
+#: law's jerk steps, only sends the quantity to the exact refinement.) The span points are Gauss–Legendre
+#: nodes, on which the RMS torque is integrated (:func:`span_nodes`).
+CHECK_SAMPLES = 129
+SPAN_SAMPLES = 8
 
 
 def check_grid(tau: np.ndarray, breakpoints: np.ndarray) -> np.ndarray:
-    """The τ grid the limit check samples: the output samples ∪ a uniform grid ∪ the breakpoints."""
+    """The τ grid the limit check samples: output samples ∪ uniform grid ∪ breakpoints ∪ points per span."""
     return check_grid_index(tau, breakpoints)[0]
+
+
+def span_nodes(breakpoints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Gauss–Legendre nodes (``SPAN_SAMPLES`` per span between consecutive breakpoints, all interior) and
+    their weights (summing to 1 over τ ∈ [0, 1]). The check grid contains them: they sample every span,
+    and the RMS torque integrates on them (exact for polynomials of degree 2·SPAN_SAMPLES − 1 per span;
+    the integrand is smooth inside a span, so the rule is accurate to round-off for the paths here)."""
+    key = tuple(np.asarray(breakpoints, float).tolist())
+    hit = _NODES.get(key)
+    if hit is None:
+        b = np.unique(np.clip(np.asarray(breakpoints, float), 0.0, 1.0))
+        b = np.unique(np.concatenate([[0.0], b, [1.0]]))
+        x, w = _LEGGAUSS
+        h = np.diff(b)[:, None]
+        hit = ((b[:-1, None] + h * (x + 1.0) / 2.0).ravel(), (h * w / 2.0).ravel())
+        if len(_NODES) > 256:
+            _NODES.clear()
+        _NODES[key] = hit
+    return hit
+
+
+_NODES: dict = {}
+_LEGGAUSS = np.polynomial.legendre.leggauss(SPAN_SAMPLES)
+
+
+def quadrature_weights(tau: np.ndarray, breakpoints: np.ndarray) -> np.ndarray | None:
+    """Weights (N,) on the sorted grid ``tau`` that integrate over [0, 1] by :func:`span_nodes`' Gauss rule
+    (zero off the nodes), or None when the grid does not contain every node (within 1e-9)."""
+    nodes, w = span_nodes(breakpoints)
+    i = np.clip(np.searchsorted(tau, nodes), 1, len(tau) - 1)
+    i = np.where(np.abs(tau[i - 1] - nodes) < np.abs(tau[i] - nodes), i - 1, i)
+    if len(tau) < 2 or np.max(np.abs(tau[i] - nodes)) > 1e-9:
+        return None
+    out = np.zeros(len(tau))
+    np.add.at(out, i, w)
+    return out
 
 
 def check_grid_index(tau: np.ndarray, breakpoints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -51,7 +95,7 @@ def check_grid_index(tau: np.ndarray, breakpoints: np.ndarray) -> tuple[np.ndarr
     Extra points within 1e-9 of an output sample or of each other (round-off twins) are dropped, so
     every output sample is in the grid exactly."""
     tau = np.asarray(tau, float)
-    extra = np.unique(np.concatenate([np.linspace(0.0, 1.0, CHECK_SAMPLES), breakpoints]))
+    extra = np.unique(np.concatenate([np.linspace(0.0, 1.0, CHECK_SAMPLES), breakpoints, span_nodes(breakpoints)[0]]))
     extra = extra[np.concatenate([[True], np.diff(extra) > 1e-9])]
     pos = np.clip(np.searchsorted(tau, extra), 1, len(tau) - 1) if len(tau) > 1 else np.zeros(len(extra), int)
     near = np.minimum(np.abs(extra - tau[pos - 1 if len(tau) > 1 else 0]), np.abs(extra - tau[pos]))
@@ -288,10 +332,13 @@ class MotionModel:
     def rms_motor_torque(self, parts: Parts, T: float, dwell: float) -> np.ndarray:
         """RMS motor torque (n,) [N·m] over the duty cycle move–dwell–back–dwell (see module docstring).
 
-        ``parts`` must be on a grid covering τ ∈ [0, 1] (trapezoid rule on it)."""
+        ``parts`` must be on a grid covering τ ∈ [0, 1]. When the grid holds the Gauss nodes of
+        :func:`span_nodes` (the check grid and the fit grid do), the integral is Gauss–Legendre on them, so
+        it does not depend on which other points the grid has; otherwise the trapezoid rule."""
         tau = parts.tau
         tm = parts.Am / T**2 + parts.Gm
-        integral = T * np.trapezoid(tm**2, tau, axis=0)
+        w = quadrature_weights(tau, self.path.breakpoints)
+        integral = T * (w @ tm**2 if w is not None else np.trapezoid(tm**2, tau, axis=0))
         hold = parts.Gm[0] ** 2 + parts.Gm[-1] ** 2
         return np.sqrt((2 * integral + dwell * hold) / (2 * T + 2 * dwell))
 

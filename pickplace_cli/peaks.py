@@ -87,6 +87,32 @@ def ppoly_norm_peak(breaks: np.ndarray, coef: np.ndarray) -> tuple[float, float]
     return float(np.sqrt(max(vals[i, j], 0.0))), float(breaks[i] + cand[i, j])
 
 
+def ppoly_norm_peaks(breaks: np.ndarray, coefs: list[np.ndarray]) -> list[tuple[float, float]]:
+    """:func:`ppoly_norm_peak` of several piecewise polynomials on the same ``breaks`` (e.g. the velocity,
+    acceleration and jerk of one spline) with one batched eigenvalue call: each derivative of ‖c‖² is
+    multiplied by a power of (τ − breaks[i]) to reach the highest degree, which only adds roots at the
+    piece's left end (a candidate anyway). Returns [(peak, τ of the peak)] in the order of ``coefs``."""
+    h = np.diff(breaks)
+    m = len(h)
+    sqs = [_poly_square_norm(c) for c in coefs]
+    degs = [sq.shape[1] - 1 for sq in sqs]
+    top = max(degs)
+    if top < 2:  # constant ‖c‖²: no interior critical point
+        return [ppoly_norm_peak(breaks, c) for c in coefs]
+    dsq = np.zeros((len(sqs) * m, top))
+    for k, (sq, d) in enumerate(zip(sqs, degs)):
+        if d:
+            dsq[k * m : (k + 1) * m, : d] = sq[:, :-1] * np.arange(d, 0, -1)
+    crit = _critical_points(dsq, np.tile(h, len(sqs)))
+    out = []
+    for k, sq in enumerate(sqs):
+        cand = np.concatenate([np.zeros((m, 1)), h[:, None], crit[k * m : (k + 1) * m]], axis=1)
+        vals = _horner(sq, cand)
+        i, j = np.unravel_index(int(np.argmax(vals)), vals.shape)
+        out.append((float(np.sqrt(max(vals[i, j], 0.0))), float(breaks[i] + cand[i, j])))
+    return out
+
+
 def refine_max(
     fun: Callable[[np.ndarray], np.ndarray],
     x: np.ndarray,

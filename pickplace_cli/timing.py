@@ -107,9 +107,11 @@ def _worst_utilisation(model, dwell: float = 0.0):
     duration T, its name), from one evaluation of the model (``parts``); None when no limit depends on T."""
     import numpy as np
 
-    from .limits import _parabolic_peak
+    from .limits import _parabolic_peak, span_nodes
 
-    tau = np.unique(np.concatenate([np.linspace(0.0, 1.0, FIT_SAMPLES), model.path.breakpoints]))
+    # the Gauss nodes of every span too: the RMS torque is then integrated by the same rule as the check's
+    tau = np.unique(np.concatenate([np.linspace(0.0, 1.0, FIT_SAMPLES), model.path.breakpoints,
+                                    span_nodes(model.path.breakpoints)[0]]))
     tau = tau[np.concatenate([[True], np.diff(tau) > 1e-9])]  # merge round-off twins
     parts = model.parts(tau)
     meta, _ = model.columns(parts, 1.0)

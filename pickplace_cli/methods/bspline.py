@@ -9,7 +9,6 @@ import numpy as np
 from ..bspline import (
     DEGREE,
     derivatives_at,
-    left_derivatives,
     li_knots,
     make_spline,
     piece_coefficients,
@@ -62,12 +61,16 @@ def plan_bspline(
         if not (np.isfinite(k) and 0 < k < 1):
             raise TaskError(f"{name} = {k!r}: time-ratio factors must lie strictly between 0 and 1")
     knots, q = bspline_control_points(task, float(k1), float(k2))
-    breaks, derivs = left_derivatives(knots, q)  # numpy only: no scipy import on the online path
+    # numpy only (no scipy import on the online path): one de Boor pass gives the derivatives 0…5 at the
+    # left end of every piece (its exact polynomial) and at τ = 1
+    breaks = np.unique(knots)
+    at = derivatives_at(knots, q, np.append(breaks[:-1], 1.0))
+    derivs = [d[:-1] for d in at]
+    end_states = [np.stack([d[0], d[-1]]) for d in at]  # de Boor at τ = 0 and 1, each (2, 3)
     peaks = pieces_norm_peaks(breaks, derivs, (1, 2, 3))
 
     origin = task.p_from
     _, coef = piece_coefficients(None, 0, derivs, breaks)  # (m, 3, 6): the exact polynomial of each piece
-    end_states = derivatives_at(knots, q, np.array([0.0, 1.0]))  # de Boor at τ = 0 and 1, each (2, 3)
     powers = np.arange(DEGREE, -1, -1.0)
     memo: list = [None]  # one entry (τ, [p, p′, p″, p‴]): the pipeline asks orders 0…3 at the same τ in turn
 

@@ -160,7 +160,9 @@ def test_fit_and_auto_are_both_reported():
 
 def test_rms_matches_independent_duty_cycle_integration():
     """RMS over move–dwell–back–dwell: the return move planned explicitly (reverse task), torques
-    integrated on a dense grid, dwell at the holding torque; equals the report to 1e-6 relative."""
+    integrated on a dense grid, dwell at the holding torque; equals the report to 1e-6 relative (the report
+    integrates by Gauss–Legendre on the check grid's span nodes; the reference's trapezoid at 20 kHz is the
+    larger error)."""
     prof = profile_from(raw("delta-su2018"))
     T, dwell = 0.2, prof.planning.dwell
     there = plan(ADEPT, prof, PlanOptions(time=T, rate=20000, fit=False))
@@ -221,3 +223,49 @@ def test_analytic_torque_rate_matches_differences_of_the_model(name, task):
         ref = (4 * fd(5e-5, k) - fd(1e-4, k)) / 3
         scale = max(np.max(np.abs(ref)), 1e-300)
         assert np.max(np.abs(got - ref)) <= 1e-7 * max(scale, np.max(np.abs(parts.dAm))), (name, k)
+
+
+@pytest.mark.parametrize("name,task", [("delta-su2018", ADEPT), ("scara-600", SCARA_MOVE), ("gantry", ADEPT)])
+@pytest.mark.parametrize("method", ["bspline", "ph", "superposition", "lame", "piecewise-poly"])
+def test_check_grid_estimates_every_peak_well_inside_the_exact_band(name, task, method):
+    """The check grid (129 uniform points ∪ 8 per span ∪ breakpoints ∪ output samples) never estimates a
+    peak more than 1 % below the true one (found by golden section on a 20,001-point grid), on every robot
+    and method; peaks within 5 % of their limit (or estimated above it) are then refined exactly
+    (EXACT_BAND), so no violation can hide between the grid's points. An estimate may be *above* the true
+    peak (the parabola through a jump of the torque rate, where a 3-4-5 law's jerk steps): that only sends
+    the quantity to the exact refinement. Measured worst underestimate: 3.7e-3 (ph, torque rate)."""
+    from pickplace_cli.limits import EXACT_BAND, _parabolic_peak, check_grid
+    from pickplace_cli.methods import plan_path
+    from pickplace_cli.peaks import refine_max
+
+    prof = profile_from(raw(name))
+    if name == "gantry":
+        task = Task([0.2, 0.2, -0.1], [0.5, 0.3, -0.1], 0.025, 0.5)
+    path = plan_path(task, method)
+    model = motion_model(path, prof)
+    T = 0.3
+    grid = check_grid(np.array([0.0, 1.0]), path.breakpoints)
+    meta, data = model.columns(model.parts(grid), T)
+    est, _ = _parabolic_peak(grid, data, np.argmax(data, axis=0))
+    fine = np.linspace(0, 1, 20001)
+    ref, _ = refine_max(lambda s: model.columns(model.parts(np.clip(s, 0, 1)), T)[1], fine)
+    scale = np.maximum(np.abs(ref), 1e-9 * np.max(np.abs(ref)))
+    under = (ref - est) / scale
+    assert np.max(under) < 0.2 * EXACT_BAND, [(m[0], m[1], e) for m, e in zip(meta, under) if e >= 0.01]
+
+
+def test_rms_does_not_depend_on_the_other_grid_points():
+    """The RMS torque is integrated on the Gauss nodes of each span, so the check grid (with the output
+    samples of any rate) and the fit grid (1,001 points) give the same value to 1e-12 relative: a fitted
+    duration at the RMS limit passes the check that follows it."""
+    from pickplace_cli.limits import check_grid, span_nodes
+    from pickplace_cli.methods import plan_path
+
+    prof = profile_from(raw("delta-su2018"))
+    model = motion_model(plan_path(ADEPT, "bspline"), prof)
+    bp = model.path.breakpoints
+    grids = [check_grid(np.array([0.0, 1.0]), bp), check_grid(np.linspace(0, 1, 2001), bp),
+             np.unique(np.concatenate([np.linspace(0, 1, 1001), bp, span_nodes(bp)[0]]))]
+    vals = [model.rms_motor_torque(model.parts(g), 0.2, 0.1) for g in grids]
+    for v in vals[1:]:
+        np.testing.assert_allclose(v, vals[0], rtol=1e-12)

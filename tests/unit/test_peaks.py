@@ -29,3 +29,25 @@ def test_refine_max_beats_samples():
     # sin(7.3x) peaks at x = π/14.6 with value 1; cos(3.1x + 0.2) at x = 0 (edge)
     assert peak[0] == pytest.approx(1.0, abs=1e-12) and at[0] == pytest.approx(np.pi / 14.6, abs=1e-6)
     assert peak[1] == pytest.approx(np.cos(0.2), abs=1e-12)
+
+
+def test_several_orders_in_one_root_search_equal_one_by_one():
+    """ppoly_norm_peaks (one batched eigenvalue call for v, a, j of a spline; lower degrees padded with
+    roots at the piece's left end) gives the same peaks and places as ppoly_norm_peak order by order, to
+    1e-13 relative (the same roots from differently shaped companion matrices)."""
+    from pickplace_cli.bspline import li_knots, piece_coefficients, left_derivatives, solve_control_points
+    from pickplace_cli.peaks import ppoly_norm_peaks
+
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        k1, k2 = rng.uniform(0.05, 0.95, 2)
+        t = li_knots(k1, k2)
+        via = rng.normal(size=(5, 3))
+        q = solve_control_points(t, t[[0, 7, 8, 9, 16]], via)
+        breaks, derivs = left_derivatives(t, q)
+        coefs = [piece_coefficients(None, r, derivs, breaks)[1] for r in (1, 2, 3, 4)]
+        got = ppoly_norm_peaks(breaks, coefs)
+        for c, (peak, at) in zip(coefs, got):
+            ref_peak, ref_at = ppoly_norm_peak(breaks, c)
+            assert peak == pytest.approx(ref_peak, rel=1e-13)
+            assert at == pytest.approx(ref_at, abs=1e-9)
