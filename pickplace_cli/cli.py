@@ -633,8 +633,12 @@ def _print_limit_table(report) -> None:
         table.add_column(col, justify=just)  # type: ignore[arg-type]
     for r in report.rows:
         mark = "ok" if r.ok else "[bold red]EXCEEDED[/]"
+        quantity = r.quantity
+        if quantity.startswith(("position", "workcell")):  # a [min, max] range: say which side the row is
+            quantity += " min" if r.bound == "lower" else " max"
         table.add_row(
-            r.joint, escape(f"{r.quantity} [{r.unit}]"), _fmt(r.peak), _fmt(r.limit), f"{100 * r.utilisation:.1f}",
+            r.joint, escape(f"{quantity} [{r.unit}]"), _fmt(r.peak),
+            ("≥ " if r.bound == "lower" else "≤ ") + _fmt(r.limit), f"{100 * r.utilisation:.1f}",
             "" if r.t_peak is None else f"{r.t_peak:.4f}", mark,
         )
     Console(stderr=True, highlight=False, soft_wrap=True).print(table)
