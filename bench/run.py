@@ -10,6 +10,8 @@ default Delta profile ``delta-su2018``, output at 1 kHz):
   mapping, dynamics, limit check), and the B-spline plan with ``--time fit``;
 * batch throughput in moves/s through ``pickplace_cli.batch.plan_rows`` (full plans; and verdicts only,
   i.e. output rate 1 Hz — duration and verdict are the same, since the check grid does not depend on it);
+  the batched verdict engine (``pickplace_cli.verdicts``) in-process and through the CLI
+  (``plan --batch F --json -q``, fresh process, -j 1 and -j 2) for 1,000 and 10,000 moves;
 * CLI cold start, wall time of a fresh process: ``--help``, ``--version``, one ``plan`` to a CSV file;
 * ``build-table`` wall time for the default grid (79 λ), sequential (``-j 1``) and on all cores;
 * the conveyor method ``bspline-vel``: exact solve and table lookup (when the module is there);
@@ -188,7 +190,7 @@ def _batch_rows(n: int) -> str:
     return "\n".join(lines) + "\n"
 
 
-def bench_batch(n: int, repeat: int) -> dict:
+def bench_batch(n: int, repeat: int, engine_sizes: tuple[int, ...] = (1000, 10000)) -> dict:
     section(f"batch throughput ({n} moves, {PROFILE}, bspline)")
     try:
         from pickplace_cli.batch import plan_rows, read_batch_text
@@ -216,6 +218,44 @@ def bench_batch(n: int, repeat: int) -> dict:
              "mv/s", 1.0, target="> 1000 mv/s" if key == "verdicts" else "")
         if failed:
             note("", f"({failed} of {n} rows could not be planned)")
+    res["engine"] = _bench_verdict_engine(prof, engine_sizes, repeat)
+    return res
+
+
+def _bench_verdict_engine(prof, sizes: tuple[int, ...], repeat: int) -> dict:
+    """The batched verdict engine (``plan --batch F --json`` without -o): in-process moves/s through
+    ``pickplace_cli.verdicts.verdict_rows``, and the CLI's wall time (fresh process) with -j 1 and -j 2."""
+    try:
+        from pickplace_cli.verdicts import Verdict, verdict_rows
+    except ImportError:
+        note("verdict engine", "not available (pickplace_cli.verdicts is missing); skipped")
+        return {"error": "pickplace_cli.verdicts not available"}
+    from pickplace_cli.batch import read_batch_text
+    from pickplace_cli.planner import PlanOptions
+
+    res: dict = {}
+    cmd = cli_command()
+    with tempfile.TemporaryDirectory() as d:
+        for m in sizes:
+            text = _batch_rows(m)
+            rows, _ = read_batch_text(text, "bench")
+            outcome: list = []
+            s = timeit(lambda: outcome.__setitem__(slice(None), list(verdict_rows(rows, prof, PlanOptions(fit=False)))),
+                       repeat)
+            decided = sum(1 for r in outcome if isinstance(r.plan, Verdict))
+            rate = {"median": m / s["median"], "min": m / s["max"], "max": m / s["min"]}
+            entry = {"in_process": {"seconds": s, "moves_per_s": rate, "decided_by_engine": decided}}
+            show(f"verdict engine, in-process ({m} moves)", {**rate, "n": s["n"]}, "mv/s", 1.0, target="> 1000 mv/s")
+            note("", f"({decided} of {m} rows decided by the engine, the rest by plan())")
+            path = os.path.join(d, f"b{m}.csv")
+            Path(path).write_text(text)
+            for j in (1, 2):
+                w = wall(cmd + ["plan", "--batch", path, "--json", "-q", "-j", str(j)], repeat)
+                wrate = {"median": m / w["median"], "min": m / w["max"], "max": m / w["min"]}
+                entry[f"cli_j{j}"] = {"seconds": w, "moves_per_s": wrate}
+                show(f"pickplace plan --batch ({m} moves) --json -q -j {j}", w, "s", 1.0)
+                note("", f"= {wrate['median']:.0f} moves/s ({wrate['min']:.0f}–{wrate['max']:.0f}) including start-up")
+            res[str(m)] = entry
     return res
 
 
@@ -419,7 +459,7 @@ def main() -> None:
     m = results["machine"]
     print(f"pickplace {m['pickplace']} · {m['cpu']} · {m['cores']} cores · Python {m['python']} · {m['platform']}")
     results["plan"] = bench_methods(10 if q else 50)
-    results["batch"] = bench_batch(50 if q else 200, 1 if q else 3)
+    results["batch"] = bench_batch(50 if q else 200, 1 if q else 3, (1000,) if q else (1000, 10000))
     results["cli"] = bench_cli(3 if q else 10)
     if not args.no_table:
         results["build_table"] = bench_build_table(1 if q else 3)
