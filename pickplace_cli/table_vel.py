@@ -43,7 +43,11 @@ from .errors import TableError
 DEFAULT_VEL_TABLE = "bspline-vel-eta0.5.csv"
 GROUP_AXES = ("h_over_b", "v0_along", "v0_across", "v1_along", "v1_across")
 PARAM_COLUMNS = ("tau6", "tau7", "tau9", "tau10", "lambda1", "lambda2", "lambda3")
-COLUMNS = GROUP_AXES + PARAM_COLUMNS + ("F", "a_min", "j_min")
+#: the minimisers of a_max and j_max (stage 1 of Eq. 37): starts for the exact solve's first stage
+STAGE_COLUMNS = tuple(f"{c}_a" for c in PARAM_COLUMNS) + tuple(f"{c}_j" for c in PARAM_COLUMNS)
+COLUMNS = GROUP_AXES + PARAM_COLUMNS + ("F", "a_min", "j_min") + STAGE_COLUMNS
+#: the columns of tables written before the stage-1 minimisers were stored (still read)
+COLUMNS_V1 = GROUP_AXES + PARAM_COLUMNS + ("F", "a_min", "j_min")
 _CORNERS = np.array(np.meshgrid(*[[0, 1]] * 5, indexing="ij")).reshape(5, -1).T  # (32, 5) cell corners
 
 
@@ -107,7 +111,8 @@ def _orbit(idx: tuple[int, ...], n_v: int) -> list[tuple[tuple[int, ...], bool]]
 @dataclass(frozen=True)
 class VelTable:
     """The grid and, per node, the optimum: ``params`` (shape + (7,)), ``F``, ``a_min``, ``j_min``
-    (a_min, j_min are the normalisers of F for the move scaled to b = 1 m, T = 1 s)."""
+    (a_min, j_min are the normalisers of F for the move scaled to b = 1 m, T = 1 s), and the stage-1
+    minimisers ``params_a``, ``params_j`` (shape + (7,); None in tables written without them)."""
 
     grid: VelGrid
     params: np.ndarray
@@ -116,6 +121,8 @@ class VelTable:
     j_min: np.ndarray
     meta: dict = field(default_factory=dict)
     source: str = "<memory>"
+    params_a: np.ndarray | None = None
+    params_j: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         axes = self.grid.axes()
@@ -124,6 +131,10 @@ class VelTable:
         shape = tuple(len(a) for a in axes)
         if self.params.shape != shape + (7,):
             raise TableError(f"{self.source}: parameters have shape {self.params.shape}, the grid needs {shape + (7,)}")
+        for name in ("params_a", "params_j"):
+            arr = getattr(self, name)
+            if arr is not None and arr.shape != shape + (7,):
+                raise TableError(f"{self.source}: {name} has shape {arr.shape}, the grid needs {shape + (7,)}")
         if not np.all(np.isfinite(self.params)):
             raise TableError(f"{self.source}: a parameter is not a finite number")
 
@@ -176,6 +187,21 @@ class VelTable:
         corner = self.params[tuple(at)]
         return w @ corner, corner, w, float(w @ self.a_min[tuple(at)]), float(w @ self.j_min[tuple(at)])
 
+    def seeds(self, task, duration: float) -> dict[str, np.ndarray]:
+        """Starts for the exact solve of ``task`` in ``duration`` seconds, one (k, 7) array per stage of
+        Eq. (37) ("a", "j": the minimisers of a_max, j_max; "F": the optimum), interpolated one first, then
+        the cell's 32 corner values (each a node's exact optimum). Tables without stage-1 columns give the
+        F values for all three."""
+        x = self.query_groups(task, duration)
+        at, w = self._cell(x)
+        out = {}
+        for kind, arr in (("a", self.params_a), ("j", self.params_j), ("F", self.params)):
+            corner = (self.params if arr is None else arr)[tuple(at)]
+            p = w @ corner
+            p[:4] = _order_knots(p[:4], self.grid.margin)
+            out[kind] = np.vstack([p[None, :], corner])
+        return out
+
     def lookup(self, task, duration: float) -> tuple[float, ...]:
         """Shape parameters (τ6, τ7, τ9, τ10, λ1, λ2, λ3) for ``task`` run in ``duration`` seconds: the
         multilinear interpolation of the cell's 32 corners (h/b in log scale)."""
@@ -206,7 +232,7 @@ def solve_node(args: tuple) -> tuple[tuple[int, ...], tuple[float, ...], float, 
     task = task_from_groups(g, b=1.0, duration=1.0)
     prob = make_problem(task, 1.0)
     res = solve(prob, settings or VelSettings())
-    return idx, res.params, res.F, res.a_min * prob.scale, res.j_min * prob.scale
+    return idx, res.params, res.F, res.a_min * prob.scale, res.j_min * prob.scale, res.params_a, res.params_j
 
 
 def _solve_chunk(items: list[tuple]) -> list[tuple]:
@@ -267,29 +293,35 @@ def build_vel_table(
             done += len(c)
             if progress:
                 progress(done, total)
-    params, F, a_min, j_min = _fill_by_symmetry(grid, results)
+    params, F, a_min, j_min, params_a, params_j = _fill_by_symmetry(grid, results)
     meta = {"method": "bspline-vel", "solved_nodes": len(todo), "nodes": int(np.prod(shape)),
             "solver": {k: v for k, v in asdict(settings).items()}}
-    return VelTable(grid, params, F, a_min, j_min, meta)
+    return VelTable(grid, params, F, a_min, j_min, meta, params_a=params_a, params_j=params_j)
 
 
 def _fill_by_symmetry(grid: VelGrid, known: dict) -> tuple[np.ndarray, ...]:
-    """Full arrays (params, F, a_min, j_min) from the values at one node of every orbit (``known``:
-    node → (params, F, a_min, j_min)); TableError when an orbit has no known node."""
+    """Full arrays (params, F, a_min, j_min, params_a, params_j) from the values at one node of every orbit
+    (``known``: node → (params, F, a_min, j_min[, params_a, params_j])); TableError when an orbit has no
+    known node. params_a, params_j are None when the rows have none."""
     shape = tuple(len(a) for a in grid.axes())
     params = np.empty(shape + (7,))
     F, a_min, j_min = np.empty(shape), np.empty(shape), np.empty(shape)
+    staged = all(len(v) == 6 for v in known.values())
+    stage = [np.empty(shape + (7,)), np.empty(shape + (7,))] if staged else None
     for idx in np.ndindex(*shape):
         for node, rev in _orbit(idx, grid.v_count):
             if node in known:
-                p, f, am, jm = known[node]
-                # node → idx by the same map (each map is its own inverse)
+                p, f, am, jm = known[node][:4]
+                # node → idx by the same map (each map is its own inverse); the stage-1 minimisers too
                 params[idx] = reverse_params(p) if rev else p
                 F[idx], a_min[idx], j_min[idx] = f, am, jm
+                if stage is not None:
+                    for arr, q in zip(stage, known[node][4:]):
+                        arr[idx] = reverse_params(q) if rev else q
                 break
         else:
             raise TableError(f"node {idx} of the grid has no row (nor a symmetric one)")
-    return params, F, a_min, j_min
+    return (params, F, a_min, j_min) + (tuple(stage) if stage is not None else (None, None))
 
 
 # -------------------------------------------------------------------------------------------------- I/O
@@ -326,13 +358,18 @@ def format_vel_table(table: VelTable, version: str, extra_meta: dict | None = No
     out.write("# equal pick/place heights, horizontal conveyor velocities. One row per symmetry orbit (the node with\n")
     out.write("#   the smallest grid index); the reader fills the mirrored (across negated) and reversed (v0 <-> v1:\n")
     out.write("#   tau6 <-> 1-tau10, tau7 <-> 1-tau9, lambda1 <-> lambda3) nodes\n")
-    out.write(",".join(COLUMNS) + "\n")
+    staged = table.params_a is not None and table.params_j is not None
+    if staged:
+        out.write("# *_a, *_j: the minimisers of a_max and of j_max (stage 1 of Eq. 37), starts for the exact solve\n")
+    out.write(",".join(COLUMNS if staged else COLUMNS_V1) + "\n")
     axes = g.axes()
     for idx in np.ndindex(*table.F.shape):
         if min(i for i, _ in _orbit(idx, g.v_count)) != idx:
             continue
         vals = [axes[k][i] for k, i in enumerate(idx)] + list(table.params[idx]) + [
             table.F[idx], table.a_min[idx], table.j_min[idx]]
+        if staged:
+            vals += list(table.params_a[idx]) + list(table.params_j[idx])  # type: ignore[index]
         out.write(",".join(f"{v:.9g}" for v in vals) + "\n")
     return out.getvalue()
 
@@ -355,7 +392,7 @@ def parse_vel_table(text: str, source: str = "<table>") -> VelTable:
         cells = [c.strip() for c in s.split(",")]
         if header is None:
             header = cells
-            if tuple(header) != COLUMNS:
+            if tuple(header) not in (COLUMNS, COLUMNS_V1):
                 raise TableError(f"{source}:{lineno}: header must be {','.join(COLUMNS)}")
             continue
         if len(cells) != len(header):
@@ -388,9 +425,10 @@ def parse_vel_table(text: str, source: str = "<table>") -> VelTable:
             if not math.isclose(axis[i], vals[k], rel_tol=1e-7, abs_tol=1e-9):
                 raise TableError(f"{source}: {GROUP_AXES[k]} = {vals[k]:g} is not a value of the grid in the header")
             idx.append(i)
-        known[tuple(idx)] = (tuple(vals[5:12]), vals[12], vals[13], vals[14])
-    params, F, a_min, j_min = _fill_by_symmetry(grid, known)
-    return VelTable(grid, params, F, a_min, j_min, dict(meta), source)
+        known[tuple(idx)] = (tuple(vals[5:12]), vals[12], vals[13], vals[14]) + (
+            (tuple(vals[15:22]), tuple(vals[22:29])) if len(vals) == len(COLUMNS) else ())
+    params, F, a_min, j_min, params_a, params_j = _fill_by_symmetry(grid, known)
+    return VelTable(grid, params, F, a_min, j_min, dict(meta), source, params_a, params_j)
 
 
 def load_vel_table(path: str | Path | None = None) -> VelTable:
