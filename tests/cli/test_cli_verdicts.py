@@ -75,6 +75,10 @@ def test_mixed_batch_identical_with_and_without_the_engine(monkeypatch, extra):
 
 
 def test_random_batch_identical_on_two_workers(monkeypatch, tmp_path):
+    from functools import partial
+
+    # chunks of 100 rows (the default, ≥ 500, would keep 300 rows in one process)
+    monkeypatch.setattr(verdicts, "verdict_rows_parallel", partial(verdicts.verdict_rows_parallel, chunk=100))
     src = tmp_path / "moves.csv"
     src.write_text(random_rows(300, seed=1))
     on, off = both(["plan", "--batch", str(src), "--json", "-q", "-j", "2"], None, monkeypatch)
