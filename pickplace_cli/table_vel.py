@@ -16,11 +16,13 @@ the paper's setting — equal pick and place heights, horizontal conveyors (no v
 **Accuracy, and why it is limited.** The optimum is a minimax point: several acceleration (or jerk)
 peaks are equal there, so a shape that is optimal for a nearby problem loses F to *first* order in the
 distance (one peak rises), and F has more than one local maximum, so the optimum also jumps. Measured:
-moving one velocity group by 0.02 and keeping the old optimum loses 0.6 % of F (median), 5 % (worst). No
-grid that builds in minutes holds F within 1 % everywhere by interpolation; README reports the held-out
-numbers. The exact answer stays fast: ``solve(..., warm=…)`` from the table's answer (the "seeded"
-solver of ``plan_bspline_vel``) polishes it to the exact optimum in tens of milliseconds, and a test
-holds that polish to the global solve's F.
+moving one velocity group by 0.02 and keeping the old optimum loses 0.6 % of F (median), 5 % (worst);
+averaging the exact optima at the 32 corners of a cell of half-width d around a point (2d in log h/b)
+loses, at the point, 7.1 % median / 18 % worst (10 points) for d = 0.125 (this grid), 2.1 % / 11 % for
+d = 0.0625 and 0.84 % / 5.7 % for d = 0.03125: first order in d, so no grid that builds in minutes holds
+F within 1 % everywhere by interpolation (README reports the held-out numbers). The exact answer stays
+fast: the table also stores each node's minimisers of a_max and j_max, and ``VelTable.seeds`` gives the
+interpolated and the 32 corner values of all three as starts for ``methods.bspline_vel.solve_seeded``.
 
 Symmetries cut the build by four: mirroring the move in its vertical plane (across components negated)
 leaves the optimum unchanged; running the move backwards (v0 ↔ v1 with along and across kept, since both
