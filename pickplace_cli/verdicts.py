@@ -10,17 +10,18 @@ spends most of its 3–5 ms in per-call numpy overhead on ~1,200 points [issue 7
    path peaks ‖p′‖, ‖p″‖, ‖p‴‖ per move (:func:`batch_norm_peaks`, a batched
    :func:`~pickplace_cli.peaks.ppoly_norm_peak`) [Li2018, Eq. (3), (8)–(16)], and the duration per move by
    :func:`~pickplace_cli.timing.choose_duration` itself (auto: [Li2018, Eq. (26)]; or the row's seconds);
-3. a *screening* grid per move (``SCREEN_SAMPLES`` uniform τ ∪ its knots), the Cartesian motion of a block of
-   moves stacked into one (B·G, 3) array per order, ONE call ``model.parts(tau, motion=…)`` per block, the
-   limit columns with each move's own duration, the parabolic-vertex estimate of every peak and the RMS
-   motor torque per move.
+3. a *screening* grid per move (``SCREEN_SAMPLES`` uniform τ ∪ its knots ∪ ``PIECE_SAMPLES`` points inside
+   every piece), the Cartesian motion of a block of moves stacked into one (B·G, 3) array per order, ONE
+   call ``model.parts(tau, motion=…)`` per block, the limit columns with each move's own duration, the
+   parabolic-vertex estimate of every peak and the RMS motor torque per move.
 
 **Contract: a limit check never lies.** A move is decided here only when every screened quantity is clearly
 inside its limit: estimated utilisation ≤ ``SCREEN_MARGIN`` (0.9) for every column and the RMS torque, the
 singularity measure ≥ max(margin, ``REACH_GUARD``)/0.9 (the measure vanishes on the boundary of the
-reachable set of the Delta and the SCARA, so no unreachable point hides between screening samples), and
+reachable set of the Delta — D = d·E′ = −½ ∂f/∂q is zero where the loop-closure root is double — and of
+the SCARA, |sin q2| = 0 at full stretch, so no unreachable point hides between screening samples), and
 every value finite. That is stricter than plan()'s own 5 % exact-refinement band (``limits.EXACT_BAND``):
-at ≤ 0.9 plan() never refines and never finds a violation (the screening estimate is within ~0.1 % of
+at ≤ 0.9 plan() never refines and never finds a violation (the screening estimate is within ~0.3 % of
 plan()'s peaks; tests/unit/test_verdicts.py measures it). Every other row (near or over a limit,
 unreachable, a parse/task/table error, ``time = fit``, moving ends, anything unusual) is planned by
 :func:`~pickplace_cli.batch.plan_rows`, i.e. by ``plan()`` itself, so its verdict, violation rows and
@@ -41,14 +42,14 @@ from typing import Any, Iterator
 
 import numpy as np
 
-from .batch import BatchRow, PlanRecord, RowResult, plan_rows
+from .batch import BatchRow, RowResult, plan_rows
 from .bspline import DEGREE, batch_basis, batch_combine, derivative_control_points
 from .errors import PickplaceError, UnreachableError
 from .limits import LimitReport
 
-#: uniform τ samples of the screening grid per move (plus the move's interior knots); the estimate of a
-#: smooth peak from 129 samples + parabolic vertex is within ~1e-3 relative (measured in the tests)
-SCREEN_SAMPLES = 129
+#: uniform τ samples of the screening grid per move (plus its interior knots and PIECE_SAMPLES points inside
+#: every piece: 144 in all); the parabolic-vertex estimate is within 0.3 % of plan()'s peaks (tests)
+SCREEN_SAMPLES = 97
 #: extra screening samples inside every piece of the spline (evenly spaced)
 PIECE_SAMPLES = 7
 #: a move is decided by the engine only when every estimated utilisation is at most this
