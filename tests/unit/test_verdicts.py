@@ -12,6 +12,8 @@ import json
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from pickplace_cli.batch import plan_rows, read_batch_text
 from pickplace_cli.errors import PickplaceError
@@ -243,3 +245,21 @@ def test_scara_rows_agree_with_plan():
     got = list(verdict_rows(rows, scara, OPTS))
     assert [line(r) for r in got] == ref
     assert any(isinstance(g.plan, Verdict) for g in got)
+
+
+_coord = st.floats(-0.35, 0.35, allow_nan=False).map(lambda x: round(x, 4))
+_z = st.floats(-1.0, -0.5, allow_nan=False).map(lambda x: round(x, 4))
+_row = st.tuples(_coord, _coord, _z, _coord, _coord, _z,
+                 st.one_of(st.just(""), st.floats(0.005, 0.1).map(lambda x: f"{x:.4f}")),
+                 st.one_of(st.just(""), st.floats(0.03, 0.4).map(lambda x: f"{x:.3f}")))
+
+
+@settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.lists(_row, min_size=1, max_size=4), st.one_of(st.none(), st.tuples(st.floats(0.05, 0.95), st.floats(0.05, 0.95))))
+def test_property_engine_never_changes_a_line(moves, k):
+    """Any rows over and beyond the Delta's workspace (reachable or not, within limits or not), table or given
+    k1, k2: the engine's lines are plan()'s lines."""
+    text = HEADER + "\n" + "\n".join(",".join(str(c) for c in m) for m in moves) + "\n"
+    rows, _ = read_batch_text(text)
+    opts = PlanOptions(fit=False, method_params={} if k is None else {"k1": k[0], "k2": k[1]})
+    assert [line(r) for r in verdict_rows(rows, DELTA, opts)] == [line(r) for r in plan_rows(rows, DELTA, opts)]
