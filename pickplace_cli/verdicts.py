@@ -37,8 +37,9 @@ the output must not change).
 from __future__ import annotations
 
 import os
+from collections.abc import Iterator
 from dataclasses import dataclass
-from typing import Any, Iterator
+from typing import Any
 
 import numpy as np
 
@@ -288,10 +289,10 @@ def _batched_parabolic_peak(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     sample and its neighbours (:func:`~pickplace_cli.limits._parabolic_peak` for (B, G) grids and (B, G, C)
     values); never below the sampled maximum. A zero-width neighbour interval (a knot on a uniform sample)
     keeps the sample."""
-    B, G, C = y.shape
+    G = y.shape[1]
     i = np.argmax(y, axis=1)  # (B, C)
     k = np.clip(i, 1, G - 2)
-    take = lambda a, j: np.take_along_axis(a, j[:, None, :], axis=1)[:, 0]  # noqa: E731
+    take = lambda a, j: np.take_along_axis(a, j[:, None, :], axis=1)[:, 0]
     top = take(y, i)
     y0, y1, y2 = take(y, k - 1), take(y, k), take(y, k + 1)
     xk = np.take_along_axis(x, k, axis=1)
@@ -347,7 +348,7 @@ def screen_block(model, breaks: np.ndarray, coef: np.ndarray, origin: np.ndarray
     G = tau.shape[1]
     p, v, a, j = batch_motion(breaks, coef, tau)
     p = p + origin[:, None, :]
-    flat = lambda x: x.reshape(-1, 3)  # noqa: E731
+    flat = lambda x: x.reshape(-1, 3)
     robot = model.robot
     reach = np.all(robot.reachable(flat(p)).reshape(B, G), axis=1)
     use = np.flatnonzero(reach)
