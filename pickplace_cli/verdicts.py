@@ -80,7 +80,8 @@ class Verdict:
 @dataclass(frozen=True)
 class Screen:
     """Screening of a block of moves: ``decided`` (P,), estimated peaks (P, n_cols) in plan()'s sign
-    convention (the value the limit row would show), their utilisation (P, n_cols) and the RMS motor torque
+    convention (the value the limit row would show), the utilisation of every column and of every joint's
+    RMS motor torque (P, n_cols + n_joints; inf for a move not screened) and the RMS motor torque
     (P, n_joints) [N·m]; ``meta`` as :meth:`~pickplace_cli.limits.MotionModel.columns` gives it."""
 
     decided: np.ndarray
