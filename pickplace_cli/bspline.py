@@ -188,10 +188,10 @@ def norm_peaks(spline, orders: tuple[int, ...] = (1, 2, 3)) -> tuple[float, ...]
 def pieces_norm_peaks(breaks: np.ndarray, derivs: list, orders: tuple[int, ...] = (1, 2, 3)) -> tuple[float, ...]:
     """:func:`norm_peaks` from breakpoints and left-end derivatives (:func:`left_derivatives`), all
     orders in one batched root search."""
-    from .peaks import ppoly_norm_peaks
+    from .peaks import batch_norm_peaks
 
-    found = ppoly_norm_peaks(breaks, [piece_coefficients(None, r, derivs, breaks)[1] for r in orders])
-    return tuple(v for v, _ in found)
+    coefs = [piece_coefficients(None, r, derivs, breaks)[1][None] for r in orders]
+    return tuple(float(v) for v in batch_norm_peaks(np.asarray(breaks)[None], coefs)[0])
 
 
 # ------------------------------------------------------------------------------- batched (many knot vectors)
@@ -302,3 +302,60 @@ def batch_end_control_points(knots: np.ndarray, p0: np.ndarray, d0: np.ndarray, 
     q8 = q9 - qv8 * gap(n - 3, 1)
     q7 = q8 - qv7 * gap(n - 4, 1)
     return np.stack([q7, q8, q9, p0], axis=1)
+
+
+# -------------------------------------------- batched Li 2018 paths (the planner with P = 1, the verdict engine)
+
+
+def batch_li_knots(k1: np.ndarray, k2: np.ndarray) -> np.ndarray:
+    """(P, 17) knots of [Li2018, Eq. (14)] (the arithmetic of :func:`li_knots`)."""
+    P = len(k1)
+    return np.column_stack(
+        [np.zeros((P, 6)), k1 * k2 / 2, k1 / 2, np.full(P, 0.5), 1 - k1 / 2, 1 - k1 * k2 / 2, np.ones((P, 6))]
+    )
+
+
+def batch_spans(knots: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """Knot span of each x (P, M) on its own knot vector (P, K): :func:`span_index`
+    row by row."""
+    n = knots.shape[1] - DEGREE - 1
+    s = np.sum(knots[:, None, :] <= x[:, :, None], axis=-1) - 1  # = searchsorted(side="right") − 1
+    return np.clip(s, DEGREE, n - 1)
+
+
+def batch_control_points(knots: np.ndarray, via: np.ndarray) -> np.ndarray:
+    """Control points (P, 11, 3) of the rest-to-rest quintic through ``via`` (P, 5, 3) [Li2018, Eq. (8)–(10)]
+    at τ = 0, knots[7], knots[8], knots[9], 1, with zero end velocity, acceleration and jerk (Eq. 9): the
+    reduced system of :func:`solve_control_points` (Q1..Q4 and Q8..Q11 fixed by the
+    ends, the three interior ones from one batched 3×3 solve)."""
+    P, K = knots.shape
+    n = K - DEGREE - 1
+    x = knots[:, [7, 8, 9]]
+    span = batch_spans(knots, x)
+    vals = batch_basis(knots, x, span, degree=DEGREE)  # (P, 3, 6)
+    a = np.zeros((P, 3, n))
+    a[np.arange(P)[:, None, None], np.arange(3)[None, :, None], span[..., None] - DEGREE + np.arange(DEGREE + 1)] = vals
+    q = np.empty((P, n, via.shape[2]))
+    q[:, :4] = via[:, :1]
+    q[:, -4:] = via[:, -1:]
+    rhs = via[:, 1:-1] - a[:, :, :4] @ q[:, :4] - a[:, :, -4:] @ q[:, -4:]
+    q[:, 4:-4] = np.linalg.solve(a[:, :, 4:-4], rhs)
+    return q
+
+
+def batch_pieces(knots: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, list[np.ndarray]]:
+    """Breakpoints (P, 7) and left-end derivatives of orders 0…5 of each move's 6 pieces (six (P, 6, d)
+    arrays): :func:`left_derivatives` for P knot vectors (distinct interior knots)."""
+    breaks = knots[:, DEGREE : knots.shape[1] - DEGREE]
+    x = breaks[:, :-1]
+    span = batch_spans(knots, x)
+    qs = derivative_control_points(knots, q, DEGREE)
+    values = batch_basis(knots, x, span, all_degrees=True)
+    return breaks, [batch_combine(values[DEGREE - r], span, qs[r], shift=r) for r in range(DEGREE + 1)]
+
+
+def batch_piece_coefficients(derivs: list[np.ndarray], order: int) -> np.ndarray:
+    """(P, m, d, 6 − order) Taylor coefficients of the ``order``-th derivative, highest power first
+    (:func:`piece_coefficients` per move)."""
+    deg = DEGREE - order
+    return np.stack([derivs[order + p] / _FACT[p] for p in range(deg, -1, -1)], axis=-1)

@@ -87,30 +87,64 @@ def ppoly_norm_peak(breaks: np.ndarray, coef: np.ndarray) -> tuple[float, float]
     return float(np.sqrt(max(vals[i, j], 0.0))), float(breaks[i] + cand[i, j])
 
 
-def ppoly_norm_peaks(breaks: np.ndarray, coefs: list[np.ndarray]) -> list[tuple[float, float]]:
-    """:func:`ppoly_norm_peak` of several piecewise polynomials on the same ``breaks`` (e.g. the velocity,
-    acceleration and jerk of one spline) with one batched eigenvalue call: each derivative of ‖c‖² is
-    multiplied by a power of (τ − breaks[i]) to reach the highest degree, which only adds roots at the
-    piece's left end (a candidate anyway). Returns [(peak, τ of the peak)] in the order of ``coefs``."""
-    h = np.diff(breaks)
-    m = len(h)
-    sqs = [_poly_square_norm(c) for c in coefs]
+def batch_norm_peaks(breaks: np.ndarray, coefs: list[np.ndarray]) -> np.ndarray:
+    """Exact max of ‖c(τ)‖ per move and per piecewise polynomial, (P, len(coefs)):
+    :func:`ppoly_norm_peak` of several piecewise polynomials for P moves at once. ``breaks`` (P, m+1); each of
+    ``coefs`` (P, m, d, k+1), piece i of move p being Σ coef[p, i, :, j] (τ − breaks[p, i])^(k−j). On each
+    piece ‖c‖² is a polynomial; its maximum is at an end or at a real root of its derivative (companion-matrix
+    eigenvalues; every derivative padded to the highest degree by powers of (τ − breaks[i]), which only adds
+    roots at the piece's left end, a candidate anyway). The same row-wise arithmetic as the one-move function
+    (per-move matrix products, one eigenvalue problem per row), so the peaks are bitwise equal (tested)."""
+    P, m = breaks.shape[0], breaks.shape[1] - 1
+    h = np.diff(breaks, axis=1).reshape(P * m)
+    sqs = []
+    for c in coefs:
+        k1 = c.shape[-1]
+        flat = c.reshape(P * m, c.shape[2], k1)
+        outer = np.einsum("mdi,mdj->mij", flat, flat).reshape(P, m, k1 * k1)
+        sqs.append((outer @ _anti_diagonal_sum(k1)).reshape(P * m, 2 * k1 - 1))  # per-move products
     degs = [sq.shape[1] - 1 for sq in sqs]
     top = max(degs)
-    if top < 2:  # constant ‖c‖²: no interior critical point
-        return [ppoly_norm_peak(breaks, c) for c in coefs]
-    dsq = np.zeros((len(sqs) * m, top))
-    for k, (sq, d) in enumerate(zip(sqs, degs)):
+    # Only pieces that can hold the maximum need their roots: a piece whose upper bound on ‖c‖² (the largest
+    # Bernstein coefficient on [0, h]) lies below the value already reached at some piece end of the same
+    # move cannot (its candidates are all smaller, so leaving them out does not change the max). Round-off
+    # allowance: 1e-9 of Σ|a_p| h^p.
+    ends, need = [], []
+    for sq in sqs:
+        e = _horner(sq, np.column_stack([np.zeros(P * m), h]))
+        best = np.max(e.reshape(P, -1), axis=1)
+        n = sq.shape[1] - 1
+        scaled = sq[:, ::-1] * h[:, None] ** np.arange(n + 1)  # a_p h^p, lowest power first
+        bound = np.max(scaled @ _bernstein(n), axis=1) + 1e-9 * np.sum(np.abs(scaled), axis=1)
+        ends.append(e)
+        need.append(bound.reshape(P, m) >= best[:, None])
+    rows = [np.flatnonzero(nd.reshape(-1)) for nd in need]
+    dsq = np.zeros((sum(r.size for r in rows), top))
+    at = 0
+    for sq, d, r in zip(sqs, degs, rows):
         if d:
-            dsq[k * m : (k + 1) * m, : d] = sq[:, :-1] * np.arange(d, 0, -1)
-    crit = _critical_points(dsq, np.tile(h, len(sqs)))
-    out = []
-    for k, sq in enumerate(sqs):
-        cand = np.concatenate([np.zeros((m, 1)), h[:, None], crit[k * m : (k + 1) * m]], axis=1)
-        vals = _horner(sq, cand)
-        i, j = np.unravel_index(int(np.argmax(vals)), vals.shape)
-        out.append((float(np.sqrt(max(vals[i, j], 0.0))), float(breaks[i] + cand[i, j])))
+            dsq[at : at + r.size, :d] = sq[r, :-1] * np.arange(d, 0, -1)
+        at += r.size
+    crit = _critical_points(dsq, np.concatenate([h[r] for r in rows]))
+    out = np.empty((P, len(sqs)))
+    at = 0
+    for k, (sq, r) in enumerate(zip(sqs, rows)):
+        vals = np.full((P * m, 2 + crit.shape[1]), -np.inf)
+        vals[:, :2] = ends[k]
+        vals[r, 2:] = _horner(sq[r], crit[at : at + r.size])
+        at += r.size
+        out[:, k] = np.sqrt(np.maximum(np.max(vals.reshape(P, -1), axis=1), 0.0))
     return out
+
+
+def _bernstein(n: int, _cache: dict = {}) -> np.ndarray:  # noqa: B006 - deliberate memo
+    """(n+1, n+1) matrix M with b = a M: power coefficients a_i of x^i on [0, 1] (lowest first) → Bernstein
+    coefficients b_j = Σ_{i≤j} C(j, i)/C(n, i) a_i (the polynomial lies between min b and max b)."""
+    if n not in _cache:
+        from math import comb
+
+        _cache[n] = np.array([[comb(j, i) / comb(n, i) if i <= j else 0.0 for j in range(n + 1)] for i in range(n + 1)])
+    return _cache[n]
 
 
 def refine_max(

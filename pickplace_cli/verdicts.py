@@ -44,7 +44,8 @@ from typing import Any
 import numpy as np
 
 from .batch import BatchRow, RowResult, plan_rows
-from .bspline import DEGREE, batch_basis, batch_combine, derivative_control_points
+from .bspline import DEGREE
+from .methods.bspline import batch_paths
 from .errors import PickplaceError, UnreachableError
 from .limits import LimitReport
 
@@ -126,135 +127,6 @@ def engine_applies(profile, options) -> bool:
 
 
 # ------------------------------------------------------------------------------------ batched geometry
-
-
-def batch_li_knots(k1: np.ndarray, k2: np.ndarray) -> np.ndarray:
-    """(P, 17) knots of [Li2018, Eq. (14)] (the arithmetic of :func:`~pickplace_cli.bspline.li_knots`)."""
-    P = len(k1)
-    return np.column_stack(
-        [np.zeros((P, 6)), k1 * k2 / 2, k1 / 2, np.full(P, 0.5), 1 - k1 / 2, 1 - k1 * k2 / 2, np.ones((P, 6))]
-    )
-
-
-def batch_spans(knots: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """Knot span of each x (P, M) on its own knot vector (P, K): :func:`~pickplace_cli.bspline.span_index`
-    row by row."""
-    n = knots.shape[1] - DEGREE - 1
-    s = np.sum(knots[:, None, :] <= x[:, :, None], axis=-1) - 1  # = searchsorted(side="right") − 1
-    return np.clip(s, DEGREE, n - 1)
-
-
-def batch_control_points(knots: np.ndarray, via: np.ndarray) -> np.ndarray:
-    """Control points (P, 11, 3) of the rest-to-rest quintic through ``via`` (P, 5, 3) [Li2018, Eq. (8)–(10)]
-    at τ = 0, knots[7], knots[8], knots[9], 1, with zero end velocity, acceleration and jerk (Eq. 9): the
-    reduced system of :func:`~pickplace_cli.bspline.solve_control_points` (Q1..Q4 and Q8..Q11 fixed by the
-    ends, the three interior ones from one batched 3×3 solve)."""
-    P, K = knots.shape
-    n = K - DEGREE - 1
-    x = knots[:, [7, 8, 9]]
-    span = batch_spans(knots, x)
-    vals = batch_basis(knots, x, span, degree=DEGREE)  # (P, 3, 6)
-    a = np.zeros((P, 3, n))
-    a[np.arange(P)[:, None, None], np.arange(3)[None, :, None], span[..., None] - DEGREE + np.arange(DEGREE + 1)] = vals
-    q = np.empty((P, n, via.shape[2]))
-    q[:, :4] = via[:, :1]
-    q[:, -4:] = via[:, -1:]
-    rhs = via[:, 1:-1] - a[:, :, :4] @ q[:, :4] - a[:, :, -4:] @ q[:, -4:]
-    q[:, 4:-4] = np.linalg.solve(a[:, :, 4:-4], rhs)
-    return q
-
-
-def batch_pieces(knots: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, list[np.ndarray]]:
-    """Breakpoints (P, 7) and left-end derivatives of orders 0…5 of each move's 6 pieces (six (P, 6, d)
-    arrays): :func:`~pickplace_cli.bspline.left_derivatives` for P knot vectors (distinct interior knots)."""
-    breaks = knots[:, DEGREE : knots.shape[1] - DEGREE]
-    x = breaks[:, :-1]
-    span = batch_spans(knots, x)
-    qs = derivative_control_points(knots, q, DEGREE)
-    values = batch_basis(knots, x, span, all_degrees=True)
-    return breaks, [batch_combine(values[DEGREE - r], span, qs[r], shift=r) for r in range(DEGREE + 1)]
-
-
-_FACT = (1.0, 1.0, 2.0, 6.0, 24.0, 120.0)
-
-
-def batch_piece_coefficients(derivs: list[np.ndarray], order: int) -> np.ndarray:
-    """(P, m, d, 6 − order) Taylor coefficients of the ``order``-th derivative, highest power first
-    (:func:`~pickplace_cli.bspline.piece_coefficients` per move)."""
-    deg = DEGREE - order
-    return np.stack([derivs[order + p] / _FACT[p] for p in range(deg, -1, -1)], axis=-1)
-
-
-def batch_norm_peaks(breaks: np.ndarray, coefs: list[np.ndarray]) -> np.ndarray:
-    """Exact max of ‖c(τ)‖ per move and per piecewise polynomial, (P, len(coefs)):
-    :func:`~pickplace_cli.peaks.ppoly_norm_peaks` for P moves at once. ``breaks`` (P, m+1); each of
-    ``coefs`` (P, m, d, k+1), piece i of move p being Σ coef[p, i, :, j] (τ − breaks[p, i])^(k−j). On each
-    piece ‖c‖² is a polynomial; its maximum is at an end or at a real root of its derivative (companion-matrix
-    eigenvalues; every derivative padded to the highest degree by powers of (τ − breaks[i]), which only adds
-    roots at the piece's left end, a candidate anyway). The same row-wise arithmetic as the one-move function
-    (per-move matrix products, one eigenvalue problem per row), so the peaks are bitwise equal (tested)."""
-    from .peaks import _anti_diagonal_sum, _critical_points, _horner
-
-    P, m = breaks.shape[0], breaks.shape[1] - 1
-    h = np.diff(breaks, axis=1).reshape(P * m)
-    sqs = []
-    for c in coefs:
-        k1 = c.shape[-1]
-        flat = c.reshape(P * m, c.shape[2], k1)
-        outer = np.einsum("mdi,mdj->mij", flat, flat).reshape(P, m, k1 * k1)
-        sqs.append((outer @ _anti_diagonal_sum(k1)).reshape(P * m, 2 * k1 - 1))  # per-move products
-    degs = [sq.shape[1] - 1 for sq in sqs]
-    top = max(degs)
-    # Only pieces that can hold the maximum need their roots: a piece whose upper bound on ‖c‖² (the largest
-    # Bernstein coefficient on [0, h]) lies below the value already reached at some piece end of the same
-    # move cannot (its candidates are all smaller, so leaving them out does not change the max). Round-off
-    # allowance: 1e-9 of Σ|a_p| h^p.
-    ends, need = [], []
-    for sq in sqs:
-        e = _horner(sq, np.column_stack([np.zeros(P * m), h]))
-        best = np.max(e.reshape(P, -1), axis=1)
-        n = sq.shape[1] - 1
-        scaled = sq[:, ::-1] * h[:, None] ** np.arange(n + 1)  # a_p h^p, lowest power first
-        bound = np.max(scaled @ _bernstein(n), axis=1) + 1e-9 * np.sum(np.abs(scaled), axis=1)
-        ends.append(e)
-        need.append(bound.reshape(P, m) >= best[:, None])
-    rows = [np.flatnonzero(nd.reshape(-1)) for nd in need]
-    dsq = np.zeros((sum(r.size for r in rows), top))
-    at = 0
-    for sq, d, r in zip(sqs, degs, rows):
-        if d:
-            dsq[at : at + r.size, :d] = sq[r, :-1] * np.arange(d, 0, -1)
-        at += r.size
-    crit = _critical_points(dsq, np.concatenate([h[r] for r in rows]))
-    out = np.empty((P, len(sqs)))
-    at = 0
-    for k, (sq, r) in enumerate(zip(sqs, rows)):
-        vals = np.full((P * m, 2 + crit.shape[1]), -np.inf)
-        vals[:, :2] = ends[k]
-        vals[r, 2:] = _horner(sq[r], crit[at : at + r.size])
-        at += r.size
-        out[:, k] = np.sqrt(np.maximum(np.max(vals.reshape(P, -1), axis=1), 0.0))
-    return out
-
-
-def _bernstein(n: int, _cache: dict = {}) -> np.ndarray:  # noqa: B006 - deliberate memo
-    """(n+1, n+1) matrix M with b = a M: power coefficients a_i of x^i on [0, 1] (lowest first) → Bernstein
-    coefficients b_j = Σ_{i≤j} C(j, i)/C(n, i) a_i (the polynomial lies between min b and max b)."""
-    if n not in _cache:
-        from math import comb
-
-        _cache[n] = np.array([[comb(j, i) / comb(n, i) if i <= j else 0.0 for j in range(n + 1)] for i in range(n + 1)])
-    return _cache[n]
-
-
-def batch_paths(k1: np.ndarray, k2: np.ndarray, via: np.ndarray):
-    """The B-spline paths of P moves: (breaks (P, 7), position coefficients (P, 6, 3, 6) [displacement from
-    P1], peaks (P, 3) of ‖p′‖, ‖p″‖, ‖p‴‖ at T = 1). ``via`` (P, 5, 3) are the via points minus P1."""
-    knots = batch_li_knots(k1, k2)
-    q = batch_control_points(knots, via)
-    breaks, derivs = batch_pieces(knots, q)
-    peaks = batch_norm_peaks(breaks, [batch_piece_coefficients(derivs, r) for r in (1, 2, 3)])
-    return breaks, batch_piece_coefficients(derivs, 0), peaks
 
 
 def batch_motion(breaks: np.ndarray, coef: np.ndarray, tau: np.ndarray) -> list[np.ndarray]:

@@ -8,14 +8,16 @@ import numpy as np
 
 from ..bspline import (
     DEGREE,
-    derivatives_at,
+    batch_control_points,
+    batch_li_knots,
+    batch_piece_coefficients,
+    batch_pieces,
     li_knots,
     make_spline,
-    piece_coefficients,
-    pieces_norm_peaks,
     solve_control_points,
 )
 from ..errors import TaskError
+from ..peaks import batch_norm_peaks
 from ..task import Task
 from ..trajectory import CartesianPath
 
@@ -60,17 +62,18 @@ def plan_bspline(
     for name, k in (("k1", k1), ("k2", k2)):
         if not (np.isfinite(k) and 0 < k < 1):
             raise TaskError(f"{name} = {k!r}: time-ratio factors must lie strictly between 0 and 1")
-    knots, q = bspline_control_points(task, float(k1), float(k2))
-    # numpy only (no scipy import on the online path): one de Boor pass gives the derivatives 0…5 at the
-    # left end of every piece (its exact polynomial) and at τ = 1
-    breaks = np.unique(knots)
-    at = derivatives_at(knots, q, np.append(breaks[:-1], 1.0))
-    derivs = [d[:-1] for d in at]
-    end_states = [np.stack([d[0], d[-1]]) for d in at]  # de Boor at τ = 0 and 1, each (2, 3)
-    peaks = pieces_norm_peaks(breaks, derivs, (1, 2, 3))
+    # numpy only (no scipy import on the online path), and the very arithmetic of the batch verdict
+    # engine (P = 1): control points, the exact polynomial of every piece, the exact peaks
+    via = (task.via_points() - task.p_from)[None]
+    b_all, c_all, pk_all = batch_paths(np.array([float(k1)]), np.array([float(k2)]), via)
+    breaks, coef = b_all[0], c_all[0]  # (m+1,), (m, 3, 6): the exact polynomial of each piece
+    peaks = tuple(float(x) for x in pk_all[0])
+    # the end states exactly (clamped ends, Eq. 9: Q1 = … = Q4 and Q8 = … = Q11, so the derivatives there
+    # are differences of equal control points, zero without round-off, as de Boor gives them)
+    zero = np.zeros((2, 3))
+    end_states = [np.stack([via[0, 0], via[0, -1]]), zero, zero, zero]
 
     origin = task.p_from
-    _, coef = piece_coefficients(None, 0, derivs, breaks)  # (m, 3, 6): the exact polynomial of each piece
     powers = np.arange(DEGREE, -1, -1.0)
     memo: list = [None]  # one entry (τ, [p, p′, p″, p‴]): the pipeline asks orders 0…3 at the same τ in turn
 
@@ -119,3 +122,13 @@ def _falling(n: np.ndarray, k: int) -> np.ndarray:
     for r in range(k):
         out = out * (n - r)
     return out
+
+
+def batch_paths(k1: np.ndarray, k2: np.ndarray, via: np.ndarray):
+    """The B-spline paths of P moves: (breaks (P, 7), position coefficients (P, 6, 3, 6) [displacement from
+    P1], peaks (P, 3) of ‖p′‖, ‖p″‖, ‖p‴‖ at T = 1). ``via`` (P, 5, 3) are the via points minus P1."""
+    knots = batch_li_knots(k1, k2)
+    q = batch_control_points(knots, via)
+    breaks, derivs = batch_pieces(knots, q)
+    peaks = batch_norm_peaks(breaks, [batch_piece_coefficients(derivs, r) for r in (1, 2, 3)])
+    return breaks, batch_piece_coefficients(derivs, 0), peaks

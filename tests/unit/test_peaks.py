@@ -31,23 +31,23 @@ def test_refine_max_beats_samples():
     assert peak[1] == pytest.approx(np.cos(0.2), abs=1e-12)
 
 
-def test_several_orders_in_one_root_search_equal_one_by_one():
-    """ppoly_norm_peaks (one batched eigenvalue call for v, a, j of a spline; lower degrees padded with
-    roots at the piece's left end) gives the same peaks and places as ppoly_norm_peak order by order, to
-    1e-13 relative (the same roots from differently shaped companion matrices)."""
+def test_batched_peaks_equal_one_by_one():
+    """batch_norm_peaks (P moves × several orders in one eigenvalue call; lower degrees padded with roots at
+    the piece's left end; pieces whose Bernstein bound is below a reached value skipped) gives the same
+    peaks as ppoly_norm_peak move by move and order by order, to 1e-13 relative."""
     from pickplace_cli.bspline import li_knots, piece_coefficients, left_derivatives, solve_control_points
-    from pickplace_cli.peaks import ppoly_norm_peaks
+    from pickplace_cli.peaks import batch_norm_peaks
 
     rng = np.random.default_rng(3)
+    breaks_all, coefs_all = [], []
     for _ in range(20):
         k1, k2 = rng.uniform(0.05, 0.95, 2)
         t = li_knots(k1, k2)
-        via = rng.normal(size=(5, 3))
-        q = solve_control_points(t, t[[0, 7, 8, 9, 16]], via)
+        q = solve_control_points(t, t[[0, 7, 8, 9, 16]], rng.normal(size=(5, 3)))
         breaks, derivs = left_derivatives(t, q)
-        coefs = [piece_coefficients(None, r, derivs, breaks)[1] for r in (1, 2, 3, 4)]
-        got = ppoly_norm_peaks(breaks, coefs)
-        for c, (peak, at) in zip(coefs, got):
-            ref_peak, ref_at = ppoly_norm_peak(breaks, c)
-            assert peak == pytest.approx(ref_peak, rel=1e-13)
-            assert at == pytest.approx(ref_at, abs=1e-9)
+        breaks_all.append(breaks)
+        coefs_all.append([piece_coefficients(None, r, derivs, breaks)[1] for r in (1, 2, 3, 4)])
+    got = batch_norm_peaks(np.array(breaks_all), [np.array([c[k] for c in coefs_all]) for k in range(4)])
+    for p, (breaks, coefs) in enumerate(zip(breaks_all, coefs_all)):
+        for k, c in enumerate(coefs):
+            assert got[p, k] == pytest.approx(ppoly_norm_peak(breaks, c)[0], rel=1e-13)
