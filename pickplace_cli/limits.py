@@ -288,7 +288,9 @@ class MotionModel:
         """Limited quantities at duration T as columns: (meta list, (N, n_cols) values to maximise).
 
         meta = (joint, quantity, unit, limit, kind, sign) where the column holds sign·value, so every
-        check is "max of the column ≤ limit" (position min and singularity use sign −1)."""
+        check is "max of the column ≤ limit" (position min and singularity use sign −1). ``T`` may also be
+        an (N,) array, one duration per sample (every column is computed sample by sample): the batch
+        verdict engine stacks moves of different durations into one call."""
         meta: list[tuple] = []
         cols: list[np.ndarray] = []
         for i, (name, unit, spec) in enumerate(zip(self.robot.joint_names, self.robot.joint_units, self.specs)):
