@@ -24,17 +24,18 @@ only on h/b, η, and v0·T/b, v1·T/b resolved along the move (e_u), across it (
 **How the optimum is found.** Each stage of Eq. (37) is a minimax over τ, solved by SLSQP in epigraph
 form: minimise t subject to m_k(p) ≤ t, where m_k is the exact maximum of ‖a‖² (‖j‖²) on the k-th of
 three equal segments of each knot span (from the roots of its derivative: a is cubic on a span), with
-Jacobians by central differences evaluated as one numpy batch (:class:`_Evaluator`: control points of
-Eq. 16 and Taylor coefficients per span for many parameter vectors at once). F has more than one local
+Jacobians by central differences evaluated as one numpy batch (:class:`_Evaluator`: the Taylor
+coefficients per span of the spline of Eq. 16 for many parameter vectors at once, solved in
+piecewise-Taylor form; tests hold them to the B-spline route and to scipy). F has more than one local
 maximum and a_max, j_max more than one local minimum, so :func:`solve` is a multi-start: the paper's
 initial guess and a quasi-random (Kronecker) sample of the feasible set are evaluated in one pass, and
 SLSQP runs from the best distinct ones (for a_max and j_max also from the best start with both end
 knots off the margin; for F from the best sampled point and from the midpoint of the two minimisers).
 Where the shipped table applies, :func:`solve_seeded` (the default "exact" solver) starts each stage
 from the table's seeds for that stage (the interpolated optimum and the 32 corner optima of the query's
-cell; the table stores the minimisers of a_max and j_max too) together with the multi-start's best
-sampled candidates, screening several starts loosely and polishing the best: about 60 % of the
-evaluations of running the multi-start and a table-seeded polish separately. Reported peaks are exact
+cell; the table stores the minimisers of a_max and j_max too), then screens the multi-start's best
+sampled candidates where they come within ``check_ratio`` of the result: about half the evaluations of
+running the multi-start and a table-seeded polish separately, and as good (README). Reported peaks are exact
 (``bspline.norm_peaks``). A test compares with scipy's differential_evolution.
 
 Departures from the paper, and its slips (all documented in README):
@@ -93,7 +94,8 @@ class VelSettings:
     ``samples_per_piece``: points per knot span of the epigraph constraints (final peaks are exact).
     ``starts``: quasi-random (Kronecker sequence) candidates evaluated in the coarse stage; ``refine`` (``refine_F``): local
     SLSQP runs for each minimum (for F) from the best distinct candidates (the paper's initial guess is
-    always a candidate).
+    always a candidate). ``check_ratio`` (:func:`solve_seeded` only): another start is screened when its
+    peak is below the result's times this, or its F above the result's divided by this.
     """
 
     margin: float = 0.01
@@ -106,6 +108,7 @@ class VelSettings:
     screen_maxiter: int = 100
     radius: float = 0.05
     maxiter: int = 100
+    check_ratio: float = 1.2
 
     def __post_init__(self) -> None:
         if not (0.0 < self.margin <= 0.1):
@@ -184,6 +187,9 @@ def task_from_groups(g: dict[str, float], b: float = 1.0, duration: float = 1.0)
 
 _VIA_SPAN = np.array([7, 8, 9])  # τ7, ½, τ9 evaluated on the span they open (the basis is C⁴ there)
 _SPANS = np.arange(5, 11)  # the six non-empty knot spans [t5, t6] … [t10, t11]
+_FACTORIAL = np.array([1.0, 1.0, 2.0, 6.0, 24.0, 120.0])
+_SHIFT_POWER = np.clip(np.subtract.outer(np.arange(6), np.arange(6)).T, 0, None)  # [r, q] = q − r (≥ 0)
+_SHIFT_MASK = np.triu(np.ones((6, 6), bool))  # the Taylor shift of a quintic's state is upper triangular
 
 
 class _Evaluator:
@@ -232,9 +238,60 @@ class _Evaluator:
         """(widths (P, 6), D (P, 6, 4, 3)) of parameters p (P, 7): the knot spans' widths and, at the left
         end of each span, the derivatives of orders 2 … 5 (a, j, snap, crackle). The acceleration is cubic
         on a span, so these Taylor coefficients are exact: a(h) = D0 + D1 h + D2 h²/2 + D3 h³/6 at h = τ − τ_left.
-        Derivatives from the control points of the derivative splines [Yang2022, Eq. (12)–(14), continued]."""
+
+        The same spline as Eq. (16) (quintic, C⁴ at the simple knots τ6, τ7, ½, τ9, τ10, through s0 … s4,
+        with v, a, j = (v0, 0, 0) and (v1, 0, 0) at the ends), solved in piecewise-Taylor form rather than
+        for B-spline control points — a departure for speed only, held to :meth:`prepare_bspline` and to
+        scipy's BSpline by tests. Each span's state (derivatives 0 … 5 at its start) follows from the
+        previous one by the exact Taylor shift of a quintic; only the crackle (constant on a span) is new.
+        Shooting from τ = 0 forwards over the first three spans and from τ = 1 backwards over the last
+        three (half the distance: well conditioned), the unknowns are snap and crackle at each end and the
+        crackles of the four inner spans (8), fixed by the via points at τ7, ½, τ9 and C⁴ continuity at ½
+        (8): one 8 × 8 solve per parameter vector and about 30 numpy calls for the batch, where the
+        Cox–de Boor route takes about 150 (the cost here is per call, not per vector)."""
         p = np.atleast_2d(p)
-        self.count += p.shape[0]
+        P = p.shape[0]
+        self.count += P
+        starts = np.empty((P, 7))
+        starts[:, 0], starts[:, 3], starts[:, 6] = 0.0, 0.5, 1.0
+        starts[:, 1], starts[:, 2], starts[:, 4], starts[:, 5] = p[:, 0], p[:, 1], p[:, 2], p[:, 3]
+        w = np.diff(starts, axis=1)
+        step = np.concatenate([w[:, :3], -w[:, 3:]], axis=1)  # forwards on the left half, backwards on the right
+        shift = np.where(_SHIFT_MASK, (step[..., None] ** np.arange(6) / _FACTORIAL)[:, :, _SHIFT_POWER], 0.0)
+        # y = [z (8 unknowns), s0, v0, 0, 0, s4, v1, 0, 0]; G[:, k] maps y to the state at the start of span k
+        G = np.zeros((P, 6, 6, 16))
+        G[:, 0, np.arange(4), np.arange(8, 12)] = 1.0
+        G[:, 0, 4, 0] = G[:, 0, 5, 1] = 1.0  # snap, crackle at τ = 0
+        for k in (0, 1):
+            G[:, k + 1] = shift[:, k] @ G[:, k]
+            G[:, k + 1, 5] = 0.0
+            G[:, k + 1, 5, k + 2] = 1.0  # the crackle of spans 1, 2
+        half = shift[:, 2] @ G[:, 2]  # the state at ½ from the left
+        end = np.zeros((P, 6, 16))  # the state at τ = 1: s4, v1, 0, 0, snap, crackle (of span 5)
+        end[:, np.arange(4), np.arange(12, 16)] = 1.0
+        end[:, 4, 4] = end[:, 5, 5] = 1.0
+        for k, crackle in ((5, 6), (4, 7), (3, None)):
+            G[:, k] = shift[:, k] @ end  # the end of span k − 1 is the start of span k
+            if crackle is not None:
+                end = G[:, k].copy()
+                end[:, 5] = 0.0
+                end[:, 5, crackle] = 1.0  # the crackle of spans 4, 3
+        rows = np.concatenate([G[:, 2, :1], G[:, 3, :1], G[:, 4, :1], half[:, :5] - G[:, 3, :5]], axis=1)
+        prob = self.prob
+        via = prob.base[1:4][None] + p[:, 4:7, None] * prob.offset[None]  # s1, s2, s3 of Eq. (25)–(27)
+        known = np.zeros((P, 8, 3))
+        known[:, 0], known[:, 1], known[:, 4], known[:, 5] = prob.base[0], prob.v_start, prob.base[4], prob.v_end
+        rhs = np.zeros((P, 8, 3))
+        rhs[:, :3] = via
+        z = np.linalg.solve(rows[:, :, :8], rhs - rows[:, :, 8:] @ known)
+        d = G[:, :, 2:6] @ np.concatenate([z, known], axis=1)[:, None]
+        return w, d
+
+    def prepare_bspline(self, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`prepare` by the B-spline route: control points of Eq. (16), derivatives from the control
+        points of the derivative splines [Yang2022, Eq. (12)–(14), continued] on the Cox–de Boor basis
+        (shared ``bspline`` machinery). The reference for :meth:`prepare` in tests."""
+        p = np.atleast_2d(p)
         knots = self.knots(p)
         left = knots[:, 5:11]  # the six span starts 0, τ6, τ7, ½, τ9, τ10 (τ7, ½, τ9 are the via points)
         basis = batch_basis(knots, left, _SPANS, 5, all_degrees=True)
@@ -390,36 +447,53 @@ def _distinct_best(x: np.ndarray, values: np.ndarray, count: int, radius: float 
     return picked
 
 
-def _exact_segment_maxima(prep: tuple, q: int, sub: int) -> np.ndarray:
-    """u (6·sub,) of the maximum of ‖a‖² (q = 0) or ‖j‖² (q = 1) on each of the ``sub`` equal segments of
-    every knot span, for the first parameter vector of ``prep``: exact, from the real roots of the
-    derivative of the span's polynomial ‖·‖² (companion-matrix eigenvalues) and the segment ends."""
+def _exact_segment_maxima(prep: tuple, q: int | tuple[int, ...], sub: int) -> np.ndarray:
+    """u (6·sub·len(q),) of the maximum of ‖a‖² (q = 0) or ‖j‖² (q = 1) — or of each in the tuple ``q``, in
+    that order — on each of the ``sub`` equal segments of every knot span, for the first parameter vector of
+    ``prep``: exact, from the real roots of the derivative of the span's polynomial ‖·‖² (companion-matrix
+    eigenvalues, one batched call for all quantities) and the segment ends."""
+    qs = (q,) if isinstance(q, (int, np.integer)) else tuple(q)
     width, d = prep[0][0], prep[1][0]  # (6,), (6, 4, 3)
-    w = width[:, None, None]
-    if q == 0:  # a(u) = D0 + D1 (wu) + D2 (wu)²/2 + D3 (wu)³/6, coefficients in powers of u (lowest first)
-        c = np.stack([d[:, 0], d[:, 1] * w[:, 0], d[:, 2] * w[:, 0] ** 2 / 2, d[:, 3] * w[:, 0] ** 3 / 6], axis=1)
-    else:  # j(u) = D1 + D2 (wu) + D3 (wu)²/2
-        c = np.stack([d[:, 1], d[:, 2] * w[:, 0], d[:, 3] * w[:, 0] ** 2 / 2], axis=1)
-    k = c.shape[1]
-    sq = np.einsum("sid,sjd->sij", c, c).reshape(6, k * k) @ _anti_diagonal_sum(k)  # ‖·‖², lowest power first
-    deriv = sq[:, 1:] * np.arange(1, 2 * k - 1)  # degree 2k − 3
-    n = deriv.shape[1] - 1
+    w = width[:, None]
+    sqs, derivs = [], []
+    for qq in qs:
+        if qq == 0:  # a(u) = D0 + D1 (wu) + D2 (wu)²/2 + D3 (wu)³/6, coefficients in powers of u (lowest first)
+            c = np.stack([d[:, 0], d[:, 1] * w, d[:, 2] * w**2 / 2, d[:, 3] * w**3 / 6], axis=1)
+        else:  # j(u) = D1 + D2 (wu) + D3 (wu)²/2
+            c = np.stack([d[:, 1], d[:, 2] * w, d[:, 3] * w**2 / 2], axis=1)
+        k = c.shape[1]
+        sq = np.einsum("sid,sjd->sij", c, c).reshape(6, k * k) @ _anti_diagonal_sum(k)  # ‖·‖², lowest power first
+        deriv = sq[:, 1:] * np.arange(1, 2 * k - 1)  # degree 2k − 3
+        if k == 3:
+            # the cubic times (u − 10)² (two roots far outside [0, 1]): degree 5 like a's, so that both
+            # quantities share one batch of 5 × 5 companion matrices
+            cubic = deriv
+            deriv = np.zeros((6, 6))
+            deriv[:, :4] += 100.0 * cubic
+            deriv[:, 1:5] -= 20.0 * cubic
+            deriv[:, 2:] += cubic
+            sq = np.concatenate([sq, np.zeros((6, 2))], axis=1)
+        sqs.append(sq)
+        derivs.append(deriv)
+    sq, deriv = np.concatenate(sqs), np.concatenate(derivs)  # (6·len(qs), 7), (6·len(qs), 6)
+    m = sq.shape[0]
+    n = 5
     lead = deriv[:, -1]
     scale = np.max(np.abs(deriv), axis=1) + 1e-300
     lead = np.where(np.abs(lead) > 1e-13 * scale, lead, 1e-13 * scale)  # a dropped degree: roots go far away
-    comp = np.zeros((6, n, n))
+    comp = np.zeros((m, n, n))
     comp[:, 0, :] = -deriv[:, -2::-1] / lead[:, None]
     comp[:, np.arange(1, n), np.arange(n - 1)] = 1.0
     roots = np.linalg.eigvals(comp)
     real = np.abs(roots.imag) <= 1e-9 * (1.0 + np.abs(roots.real))
-    r = np.where(real, roots.real, -1.0)  # (6, n); non-real → outside
+    r = np.where(real, roots.real, -1.0)  # (m, n); non-real → outside
     ends = np.arange(sub + 1) / sub
-    cand = np.concatenate([r, np.broadcast_to(ends, (6, sub + 1))], axis=1)  # (6, n + sub + 1)
-    powers = cand[..., None] ** np.arange(2 * k - 1)
+    cand = np.concatenate([r, np.broadcast_to(ends, (m, sub + 1))], axis=1)  # (m, n + sub + 1)
+    powers = cand[..., None] ** np.arange(7)
     val = np.einsum("scp,sp->sc", powers, sq)
     lo, hi = ends[:-1], ends[1:]
     inside = (cand[:, None, :] >= lo[None, :, None] - 1e-15) & (cand[:, None, :] <= hi[None, :, None] + 1e-15)
-    best = np.argmax(np.where(inside, val[:, None, :], -np.inf), axis=2)  # (6, sub)
+    best = np.argmax(np.where(inside, val[:, None, :], -np.inf), axis=2)  # (m, sub)
     u = np.take_along_axis(np.broadcast_to(cand[:, None, :], inside.shape), best[..., None], axis=2)[..., 0]
     return np.clip(u, lo, hi).reshape(-1)
 
@@ -458,7 +532,7 @@ class _Stage:
             sp = self.space
             prep = self.ev.prepare(sp.full(x[None, :] + self._steps))
             piece = np.tile(np.repeat(np.arange(6), self.SUB), len(self.uses))
-            u = np.concatenate([_exact_segment_maxima(prep, q, self.SUB) for q in self.uses])
+            u = _exact_segment_maxima(prep, self.uses, self.SUB)
             vals_all = self.ev.values(prep, piece, u)
             vals, jacs = [], []
             for i, q in enumerate(self.uses):
@@ -611,14 +685,15 @@ def solve_seeded(prob: VelProblem, seeds: dict[str, np.ndarray], settings: VelSe
     "F") a (k, 7) array of full parameter vectors near its optimum, e.g. the table's interpolated answer
     and the 32 corner optima of its cell (``VelTable.seeds``), each a global optimum of a nearby problem.
 
-    Each stage starts from the seed of that stage with the best sampled objective (the table's nodes
-    carry the basins that are optimal nearby); F also from the interpolated seed. With ``check`` (the
-    "exact" solver) the multi-start's starts of :func:`solve` are added, from its quasi-random sample
-    evaluated in the same batch as the seeds: for a_max and j_max the best sampled candidate and the
-    best with both end knots off the margin, for F the best sampled candidate (minimisers included) and
-    the midpoint of the two minimisers. Several distinct starts (1e-3 apart) are screened with
-    ``screen_ftol`` and the best is polished, as in :func:`solve`. Without ``check`` (the "seeded"
-    solver) only the seeds are used. Peaks and F are exact at the result."""
+    Each stage is solved from the seed of that stage with the best sampled objective (the table's nodes
+    carry the basins that are optimal nearby). Then other starts, each in another basin (1e-3 away), are
+    screened with ``screen_ftol`` when their objective is within ``check_ratio`` of the result's, and
+    polished when the screen beats it. Without ``check`` (the "seeded" solver) the only other start is
+    the interpolated F seed. With ``check`` (the "exact" solver) they are the multi-start's starts of
+    :func:`solve`, from its quasi-random sample evaluated in the same batch as the seeds: for a_max and
+    j_max the best sampled candidate and the best with both end knots off the margin, for F the best
+    sampled candidate (minimisers included) and the midpoint of the two minimisers. Peaks and F are
+    exact at the result."""
     ev = _Evaluator(prob)
     space = _Space(prob.lambda_free, settings.margin)
     rows = {k: np.vstack([space.clip(np.asarray(r, float)[space.free]) for r in np.atleast_2d(v)])
@@ -635,42 +710,57 @@ def solve_seeded(prob: VelProblem, seeds: dict[str, np.ndarray], settings: VelSe
     def exact(x: np.ndarray) -> tuple[float, float, float]:
         return exact_peaks(prob, space.full(x)[0])
 
-    def run(stage: _Stage, starts: list[np.ndarray], *norms: float) -> np.ndarray:
-        """SLSQP from the one start, or: screen every start loosely and polish the best (as :func:`solve`)."""
-        starts = _distinct_best(np.array(starts), np.arange(len(starts)), len(starts), radius=1e-3)
-        if len(starts) > 1:
-            screened = [stage.solve(x0, *norms, settings.screen_ftol, settings.screen_maxiter) for x0 in starts]
-            starts = [min(screened, key=lambda x: stage.objective(x, *norms))]
-        return stage.solve(starts[0], *norms)
+    def run(stage: _Stage, first: np.ndarray, others: list[np.ndarray], *norms: float) -> np.ndarray:
+        """SLSQP from ``first``; then each other start (in another basin: 1e-3 away) whose objective is
+        within ``settings.check_ratio`` of the result's is screened loosely, and polished when the screen
+        beats the result (as :func:`solve` does with its starts)."""
+        x = stage.solve(first, *norms)
+        fx = stage.objective(x, *norms)
+        c = settings.check_ratio
+        # the objective is −F for F (negative), the squared peak for a and j
+        bound = (lambda f: f * c * c) if stage.kind != "F" else (lambda f: f / c)
+        for x0 in others:
+            if min(np.max(np.abs(x0 - first)), np.max(np.abs(x0 - x))) <= 1e-3:
+                continue
+            f0 = stage.objective(x0, *norms)
+            if not f0 < bound(fx):
+                continue
+            y = stage.solve(x0, *norms, ftol=settings.screen_ftol, maxiter=settings.screen_maxiter)
+            if stage.objective(y, *norms) < fx:
+                y = stage.solve(y, *norms)
+                fy = stage.objective(y, *norms)
+                if fy < fx:
+                    x, fx = y, fy
+        return x
 
     inner = (pool[:, 0] >= 3 * settings.margin) & (pool[:, 3] <= 1 - 3 * settings.margin)
     best = {}
     for kind, idx, vals in (("a", 1, amax), ("j", 2, jmax)):
         stage = _Stage(ev, space, kind, a_norm, j_norm, settings)
         seg = slice(offset[kind], offset[kind] + len(rows[kind]))
-        starts = [pool[seg][int(np.argmin(vals[seg]))]]
+        others = []
         if check:
             # stage 1 is multimodal (an end knot on the margin or inside, and the table's cell may straddle
             # a switch between basins): also the multi-start's starts, the best candidate of the pool and
             # the best with both end knots off the margin
-            starts.append(pool[int(np.argmin(vals))])
+            others.append(pool[int(np.argmin(vals))])
             if inner.any():
-                starts.append(pool[inner][int(np.argmin(vals[inner]))])
-        x = run(stage, starts)
+                others.append(pool[inner][int(np.argmin(vals[inner]))])
+        x = run(stage, pool[seg][int(np.argmin(vals[seg]))], others)
         best[kind] = (x, exact(x)[idx])
     (xa, a_min), (xj, j_min) = best["a"], best["j"]
     stage = _Stage(ev, space, "F", a_norm, j_norm, settings)
     f_pool = a_min / amax + j_min / jmax
     seg = slice(offset["F"], offset["F"] + len(rows["F"]))
-    starts = [pool[seg][int(np.argmax(f_pool[seg]))], pool[seg][0]]  # the best seed, the interpolated one
+    others = [pool[seg][0]]  # the interpolated seed (after the best one)
     if check:
         # the multi-start's first F starts: the best sampled candidate of the pool and of the minimisers
         extra = np.vstack([xa, xj, (xa + xj) / 2])
         ga2, gj2 = ev.sampled(space.full(extra), *_grid(settings.samples_per_piece))
         f_extra = a_min / np.sqrt(ga2.max(axis=1)) + j_min / np.sqrt(gj2.max(axis=1))
         allx, allf = np.vstack([pool, extra]), np.concatenate([f_pool, f_extra])
-        starts += [allx[int(np.argmax(allf))], extra[2]]
-    x = run(stage, starts, a_min, j_min)
+        others = [allx[int(np.argmax(allf))], extra[2]]
+    x = run(stage, pool[seg][int(np.argmax(f_pool[seg]))], others, a_min, j_min)
     v, a, j = exact(x)
     result = (a_min / a + j_min / j, x, v, a, j)
     F, x, v, a, j = result
@@ -707,11 +797,11 @@ def optimum(task: Task, duration: float, solver: str = "exact", table: str | Non
 
     * "exact" (default) — where the table applies, :func:`solve_seeded` with its check: the three stages
       started from the table's seeds (interpolated and corner optima of the query's cell, for each stage)
-      and from the multi-start's best sampled candidates (loose screening, the best polished); about 60 %
-      of the evaluations of the multi-start plus seeded polish it replaces (README: on 240 held-out moves
-      it matches or beats that on 239). Elsewhere the global multi-start (:func:`solve`).
-    * "seeded" — only the table's seeds, one SLSQP run per stage (two for F: the best seed and the
-      interpolated one): faster, exact to the optimum of its basin.
+      then the multi-start's best sampled candidates where they come close (screened, polished when
+      better); about half the evaluations of the multi-start plus seeded polish it replaces (README:
+      held-out accuracy). Elsewhere the global multi-start (:func:`solve`).
+    * "seeded" — only the table's seeds, one SLSQP run per stage (F may also screen the interpolated
+      seed): faster, exact to the optimum of its basin.
     * "table" — the table's answer alone (instant, approximate: README).
 
     Where the table does not apply (other η, unequal heights, vertical velocities, outside its range, no
