@@ -6,16 +6,11 @@ scipy's :class:`scipy.interpolate.BSpline` (table builds, the conveyor method, t
 
 **One evaluation path without scipy, on purpose.** Importing ``scipy.interpolate`` costs ~0.45 s of cold
 start (it pulls in scipy.special and scipy.optimize), more than half of the 0.8 s budget of one
-``pickplace plan`` [issue 7]. The online path of the default method therefore evaluates its 11-point spline
-with the batched Cox–de Boor recursion below (:func:`basis_matrix`, :func:`left_derivatives`: the same
-arithmetic scipy's de Boor does, used by the conveyor optimiser for hundreds of knot vectors at once). Tests
-hold it to scipy's BSpline at 1e-12 (values and every derivative) and to an independent recursion.
-
-Departure from the paper, on purpose: Eq. (10) solves the full 11×11 system ``A q = b``. That matrix is
-badly conditioned for small k2 (cond ≈ 1e8 at k2 = 0.12, worse as k2 → 0). With clamped knots the
-derivatives of order r at τ = 0 involve only Q_1 … Q_{r+1} (Eq. 9), so the boundary rows form a small
-triangular system that fixes Q_1..Q_4 (and Q_8..Q_11 at τ = 1) directly; only the interior control points
-are left for the interpolation rows (Eq. 8). Same solution, well conditioned.
+``pickplace plan`` [issue 7]. The online path of the default method (``methods.bspline.batch_paths``, for
+one move in ``plan`` and for thousands in the batch verdict engine) therefore uses the batched Cox–de Boor
+recursion at the end of this module (:func:`batch_control_points`, :func:`batch_pieces`: the same arithmetic
+scipy's de Boor does; the conveyor optimiser uses it for hundreds of knot vectors at once). Tests hold it to
+scipy's BSpline at 1e-12 (values and every derivative order).
 """
 
 from __future__ import annotations
@@ -50,51 +45,8 @@ def yang_knots(tau6: float, tau7: float, tau9: float, tau10: float) -> np.ndarra
 
 
 def basis_matrix(knots: np.ndarray, x: np.ndarray, order: int = 0) -> np.ndarray:
-    """(len(x), n) matrix of the ``order``-th derivative of every basis function N_{i,5} at x ∈ [0, 1].
-
-    numpy only (see the module docstring): the derivative control points of the identity coefficient
-    matrix (Eq. 12–14 of [Yang2022]) on the non-zero basis functions of degree 5 − order at each x. A point
-    on an interior knot is evaluated on the span to its right, τ = 1 on the last span (as scipy does)."""
-    t = np.asarray(knots, float)
-    x = np.asarray(x, float).reshape(-1)
-    n = len(t) - DEGREE - 1
-    span = span_index(t, x)
-    values = batch_basis(t[None], x[None], span, degree=DEGREE - order)
-    if order == 0:  # the non-zero functions N_{s−5} … N_s, scattered into their columns
-        out = np.zeros((len(x), n))
-        out[np.arange(len(x))[:, None], span[:, None] - DEGREE + np.arange(DEGREE + 1)] = values[0]
-        return out
-    q = derivative_control_points(t[None], np.eye(n)[None], order)[order]
-    return batch_combine(values, span, q, shift=order)[0]
-
-
-def span_index(knots: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """Knot span s of each x (t_s ≤ x < t_{s+1}, the last non-empty span at the right end), for
-    :func:`batch_basis`."""
-    n = len(knots) - DEGREE - 1
-    return np.clip(np.searchsorted(knots, x, side="right") - 1, DEGREE, n - 1)
-
-
-def left_derivatives(knots: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, list[np.ndarray]]:
-    """Breakpoints (m+1,) and the derivatives of orders 0…5 of Σ q_i N_{i,5} at the left end of each of
-    the m pieces (a list of six (m, d) arrays): the exact piece polynomials, numpy only (see
-    :func:`piece_coefficients`, which accepts them as ``_derivs``)."""
-    t = np.asarray(knots, float)
-    breaks = np.unique(t)
-    return breaks, derivatives_at(t, q, breaks[:-1])
-
-
-def derivatives_at(knots: np.ndarray, q: np.ndarray, x: np.ndarray) -> list[np.ndarray]:
-    """Derivatives of orders 0…5 of Σ q_i N_{i,5} at the points x (a list of six (len(x), d) arrays), from
-    one pass of the recursion (the basis of every degree comes out of it), numpy only."""
-    t = np.asarray(knots, float)
-    q = np.asarray(q, float)
-    q2 = q if q.ndim == 2 else q[:, None]
-    x = np.asarray(x, float).reshape(-1)
-    span = span_index(t, x)
-    qs = derivative_control_points(t[None], q2[None], DEGREE)
-    values = batch_basis(t[None], x[None], span, all_degrees=True)
-    return [batch_combine(values[DEGREE - r], span, qs[r], shift=r)[0] for r in range(DEGREE + 1)]
+    """(len(x), n) matrix of the ``order``-th derivative of every basis function N_{i,5} at x."""
+    return _basis_spline(knots)(np.asarray(x, float), nu=order)
 
 
 def solve_control_points(
@@ -125,7 +77,7 @@ def solve_control_points(
     if interior.size != n - 8:
         raise ValueError(f"{n} control points need {n - 8} interior via points, got {interior.size}")
     q = np.empty((n, d))
-    basis = lambda x, nu=0: basis_matrix(knots, x, nu)  # noqa: E731
+    basis = _basis_spline(knots)
     if not np.any(start) and not np.any(end):
         # rest to rest: the r-th derivative at a clamped end is a combination of differences of
         # Q_1..Q_{r+1}, so zero velocity, acceleration and jerk there means Q_1 = Q_2 = Q_3 = Q_4 (and the
@@ -146,6 +98,14 @@ def solve_control_points(
         rhs = via[1:-1] - a[:, :4] @ q[:4] - a[:, -4:] @ q[-4:]
         q[4:-4] = np.linalg.solve(a[:, 4:-4], rhs)
     return q
+
+
+def _basis_spline(knots: np.ndarray):
+    """A BSpline whose coefficient matrix is the identity: evaluating it gives every basis function."""
+    from scipy.interpolate import BSpline
+
+    n = len(knots) - DEGREE - 1
+    return BSpline(knots, np.eye(n), DEGREE, extrapolate=True)
 
 
 def make_spline(knots: np.ndarray, control_points: np.ndarray):
@@ -186,8 +146,8 @@ def norm_peaks(spline, orders: tuple[int, ...] = (1, 2, 3)) -> tuple[float, ...]
 
 
 def pieces_norm_peaks(breaks: np.ndarray, derivs: list, orders: tuple[int, ...] = (1, 2, 3)) -> tuple[float, ...]:
-    """:func:`norm_peaks` from breakpoints and left-end derivatives (:func:`left_derivatives`), all
-    orders in one batched root search."""
+    """:func:`norm_peaks` from breakpoints and left-end derivatives (six (m, d) arrays), all orders in one
+    batched root search."""
     from .peaks import batch_norm_peaks
 
     coefs = [piece_coefficients(None, r, derivs, breaks)[1][None] for r in orders]
@@ -316,8 +276,8 @@ def batch_li_knots(k1: np.ndarray, k2: np.ndarray) -> np.ndarray:
 
 
 def batch_spans(knots: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """Knot span of each x (P, M) on its own knot vector (P, K): :func:`span_index`
-    row by row."""
+    """Knot span of each x (P, M) on its own knot vector (P, K): t_s ≤ x < t_{s+1}, the last non-empty
+    span at the right end (as scipy evaluates), for :func:`batch_basis`."""
     n = knots.shape[1] - DEGREE - 1
     s = np.sum(knots[:, None, :] <= x[:, :, None], axis=-1) - 1  # = searchsorted(side="right") − 1
     return np.clip(s, DEGREE, n - 1)
@@ -345,7 +305,7 @@ def batch_control_points(knots: np.ndarray, via: np.ndarray) -> np.ndarray:
 
 def batch_pieces(knots: np.ndarray, q: np.ndarray) -> tuple[np.ndarray, list[np.ndarray]]:
     """Breakpoints (P, 7) and left-end derivatives of orders 0…5 of each move's 6 pieces (six (P, 6, d)
-    arrays): :func:`left_derivatives` for P knot vectors (distinct interior knots)."""
+    arrays), for P knot vectors (distinct interior knots)."""
     breaks = knots[:, DEGREE : knots.shape[1] - DEGREE]
     x = breaks[:, :-1]
     span = batch_spans(knots, x)
