@@ -182,17 +182,24 @@ def plan_rows_parallel(
     plans come back as :class:`PlanRecord`). The same numbers as the sequential planner (same code).
     ``csv_dialect``: also format each written plan's CSV rows in the worker (``RowResult.text``; rows whose
     limits fail only when ``format_failed``)."""
-    from concurrent.futures import ProcessPoolExecutor
-
     if workers <= 1 or len(rows) <= chunk:
         yield from plan_rows(rows, profile, options, height, eta, fail_fast, source)
         return
     chunks = [rows[i : i + chunk] for i in range(0, len(rows), chunk)]
+    yield from run_chunks_in_order(
+        _plan_chunk, [(c, profile, options, height, eta, source, csv_dialect, format_failed) for c in chunks],
+        workers, fail_fast,
+    )
+
+
+def run_chunks_in_order(fn, args: list, workers: int, fail_fast: bool) -> Iterator[RowResult]:
+    """``fn(a)`` → list of RowResult for every ``a`` of ``args`` on a process pool of ``workers``; yields the
+    results in the order of ``args`` (and within each list), stops after the first failing row when
+    ``fail_fast`` and cancels the chunks not started yet."""
+    from concurrent.futures import ProcessPoolExecutor
+
     with ProcessPoolExecutor(max_workers=workers) as pool:
-        futures = [
-            pool.submit(_plan_chunk, (c, profile, options, height, eta, source, csv_dialect, format_failed))
-            for c in chunks
-        ]
+        futures = [pool.submit(fn, a) for a in args]
         try:
             for fut in futures:
                 for res in fut.result():

@@ -43,7 +43,7 @@ from typing import Any
 
 import numpy as np
 
-from .batch import BatchRow, RowResult, plan_rows
+from .batch import BatchRow, RowResult, plan_rows, run_chunks_in_order
 from .bspline import DEGREE
 from .methods.bspline import batch_paths
 from .errors import PickplaceError, UnreachableError
@@ -425,8 +425,6 @@ def verdict_rows_parallel(
     worker, at least 500: the engine decides ~2,500 rows/s per process, so a smaller chunk costs more in
     process start-up and transfer than it saves), results in row order; one process when there are too
     few rows."""
-    from concurrent.futures import ProcessPoolExecutor
-
     if chunk is None:
         chunk = max(500, -(-len(rows) // (4 * max(workers, 1))))
     if workers <= 1 or len(rows) <= chunk:
@@ -437,14 +435,6 @@ def verdict_rows_parallel(
     # paying ~0.3 s for it
     decide(rows[:1], profile, options, height, eta)
     next(plan_rows(rows[:1], profile, options, height, eta, False, source), None)
-    with ProcessPoolExecutor(max_workers=workers) as pool:
-        futures = [pool.submit(_verdict_chunk, (c, profile, options, height, eta, source)) for c in chunks]
-        try:
-            for fut in futures:
-                for res in fut.result():
-                    yield res
-                    if fail_fast and res.code:
-                        return
-        finally:
-            for fut in futures:
-                fut.cancel()
+    yield from run_chunks_in_order(
+        _verdict_chunk, [(c, profile, options, height, eta, source) for c in chunks], workers, fail_fast
+    )
