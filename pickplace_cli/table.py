@@ -783,11 +783,13 @@ def format_table(table: Table, version: str, extra_meta: dict | None = None) -> 
     return out.getvalue()
 
 
-def parse_table(text: str, source: str = "<table>") -> Table:
-    """Read a table written by :func:`format_table`; TableError (with file:line) on anything wrong."""
+def read_numeric_table(text: str, source: str, check_header: Callable[[list[str], int], None]):
+    """The common layout of the table files: ``# key: value`` metadata lines before the header, a CSV
+    header, then rows of finite numbers. Returns (meta, header or None, [(line number, values)]).
+    ``check_header(header, lineno)`` raises TableError for a header the caller cannot read."""
     meta: dict = {}
     header: list[str] | None = None
-    rows: list[TableRow] = []
+    rows: list[tuple[int, list[float]]] = []
     for lineno, line in enumerate(text.splitlines(), 1):
         s = line.strip()
         if not s:
@@ -798,26 +800,40 @@ def parse_table(text: str, source: str = "<table>") -> Table:
                 key, _, val = body.partition(":")
                 meta.setdefault(key.strip(), val.strip())
             continue
-        cells = next(csv.reader([s]))
+        cells = [c.strip() for c in next(csv.reader([s]))]
         if header is None:
-            header = [c.strip() for c in cells]
-            missing = [c for c in ("lambda", "k1", "k2") if c not in header]
-            if missing:
-                raise TableError(f"{source}:{lineno}: header lacks column(s) {', '.join(missing)} (need {', '.join(COLUMNS)})")
+            header = cells
+            check_header(header, lineno)
             continue
         if len(cells) != len(header):
             raise TableError(f"{source}:{lineno}: {len(cells)} values, header has {len(header)} columns")
         try:
-            vals = {h: float(c) for h, c in zip(header, cells)}
+            vals = [float(c) for c in cells]
         except ValueError:
             raise TableError(f"{source}:{lineno}: not a number in row {s!r}") from None
-        bad = [h for h, v in vals.items() if not math.isfinite(v)]
+        bad = [h for h, v in zip(header, vals) if not math.isfinite(v)]
         if bad:
-            raise TableError(f"{source}:{lineno}: {bad[0]} = {vals[bad[0]]}: values must be finite")
+            raise TableError(f"{source}:{lineno}: {bad[0]} = {vals[header.index(bad[0])]}: values must be finite")
+        rows.append((lineno, vals))
+    return meta, header, rows
+
+
+def parse_table(text: str, source: str = "<table>") -> Table:
+    """Read a table written by :func:`format_table`; TableError (with file:line) on anything wrong."""
+
+    def check(header: list[str], lineno: int) -> None:
+        missing = [c for c in ("lambda", "k1", "k2") if c not in header]
+        if missing:
+            raise TableError(f"{source}:{lineno}: header lacks column(s) {', '.join(missing)} (need {', '.join(COLUMNS)})")
+
+    meta, header, numeric = read_numeric_table(text, source, check)
+    rows: list[TableRow] = []
+    nan = float("nan")
+    for lineno, values in numeric:
+        vals = dict(zip(header, values))  # type: ignore[arg-type]
         for name in ("k1", "k2"):
             if not 0 < vals[name] < 1:
                 raise TableError(f"{source}:{lineno}: {name} = {vals[name]:g}: must lie strictly between 0 and 1")
-        nan = float("nan")
         rows.append(TableRow(*(vals.get(c, nan) for c in COLUMNS)))
     if header is None or not rows:
         raise TableError(f"{source}: no table rows (expected a header '{','.join(COLUMNS)}' and data)")

@@ -378,34 +378,14 @@ def format_vel_table(table: VelTable, version: str, extra_meta: dict | None = No
 
 def parse_vel_table(text: str, source: str = "<table>") -> VelTable:
     """Read a table written by :func:`format_vel_table`; TableError (with file:line) on anything wrong."""
-    meta: dict = {}
-    header: list[str] | None = None
-    rows: list[list[float]] = []
-    for lineno, line in enumerate(text.splitlines(), 1):
-        s = line.strip()
-        if not s:
-            continue
-        if s.startswith("#"):
-            body = s[1:].strip()
-            if ":" in body and header is None:
-                key, _, val = body.partition(":")
-                meta.setdefault(key.strip(), val.strip())
-            continue
-        cells = [c.strip() for c in s.split(",")]
-        if header is None:
-            header = cells
-            if tuple(header) not in (COLUMNS, COLUMNS_V1):
-                raise TableError(f"{source}:{lineno}: header must be {','.join(COLUMNS)}")
-            continue
-        if len(cells) != len(header):
-            raise TableError(f"{source}:{lineno}: {len(cells)} values, header has {len(header)} columns")
-        try:
-            vals = [float(c) for c in cells]
-        except ValueError:
-            raise TableError(f"{source}:{lineno}: not a number in row {s!r}") from None
-        if not all(math.isfinite(v) for v in vals):
-            raise TableError(f"{source}:{lineno}: values must be finite")
-        rows.append(vals)
+    from .table import read_numeric_table
+
+    def check(header: list[str], lineno: int) -> None:
+        if tuple(header) not in (COLUMNS, COLUMNS_V1):
+            raise TableError(f"{source}:{lineno}: header must be {','.join(COLUMNS)}")
+
+    meta, _, numeric = read_numeric_table(text, source, check)
+    rows = [vals for _, vals in numeric]
     if meta.get("method") != "bspline-vel":
         raise TableError(f"{source}: not a bspline-vel table (no '# method: bspline-vel' line)")
     try:
