@@ -131,7 +131,9 @@ def _anti_diagonal(k: int) -> np.ndarray:
     return s
 
 
-def unit_pieces(k1: np.ndarray | float, k2: np.ndarray | float, eta: float) -> tuple[np.ndarray, np.ndarray]:
+def unit_pieces(
+    k1: np.ndarray | float, k2: np.ndarray | float, eta: float | np.ndarray, rowwise: bool = False
+) -> tuple[np.ndarray, np.ndarray]:
     """The unit path (s_u, s_v) of [Li2018, Eq. (16)] on τ ∈ [0, 1/2], for a batch of (k1, k2).
 
     Returns ``h`` (N, 3), the lengths of the pieces [0, τ7], [τ7, τ8], [τ8, 1/2] (τ7 = k1 k2/2, τ8 = k1/2,
@@ -147,6 +149,11 @@ def unit_pieces(k1: np.ndarray | float, k2: np.ndarray | float, eta: float) -> t
     conditions at τ = 1/2 (Eq. 8, 11): one batched 4×4 solve. Agrees with the scipy path to ~1e-13
     relative for k1 ∈ [0.05, 0.95]; near the corners k1 → 0 or 1 of the box (never near an optimum) the
     solve loses digits (1e-7 at k1 = 0.001).
+
+    ``rowwise``: every row by operations on that row alone (a stacked product instead of one matrix
+    product over all rows, whose BLAS kernel may depend on the number of rows), so a row's result does not
+    depend on the batch it is in: the planner (one move) and the batch verdict engine (thousands) agree
+    bitwise. ``eta`` may then be an array (one η per row).
     """
     k1 = np.atleast_1d(np.asarray(k1, dtype=float))
     k2 = np.atleast_1d(np.asarray(k2, dtype=float))
@@ -157,13 +164,23 @@ def unit_pieces(k1: np.ndarray | float, k2: np.ndarray | float, eta: float) -> t
     h[:, 0], h[:, 1], h[:, 2] = a, c - a, 0.5 - c
     # pieces 0 and 1 as M @ z, z = (d3, d4, d5, g2), entries powers of a (start value s(0) = 0)
     m = np.empty((n, 3, _NC, 4))
-    m[:, :2] = ((a[:, None] ** _A_POWERS) @ _A_TERMS).reshape(n, 2, _NC, 4)
+    if rowwise:
+        m[:, :2] = ((a[:, None, None] ** _A_POWERS) @ _A_TERMS).reshape(n, 2, _NC, 4)
+    else:
+        m[:, :2] = ((a[:, None] ** _A_POWERS) @ _A_TERMS).reshape(n, 2, _NC, 4)
     m[:, 2] = (_SHIFT * h[:, 1, None, None] ** _EXP) @ m[:, 1]  # piece 2 continues piece 1 (C⁴) …
     m[:, 2, 5, 3] += 1.0  # … plus its own fifth coefficient g2
     rows = np.empty((n, 6, 4))
     rows[:, 0] = m[:, 2, 0]  # value at τ8
     rows[:, 1:] = (_DROW[:5] * h[:, 2, None, None] ** _EXP[:5]) @ m[:, 2]  # derivatives 0..4 at τ = 1/2
-    z = np.linalg.solve(rows[:, _CONDITIONS], _rhs(eta))  # (N, 2 axes, 4, 1); the rhs broadcasts
+    if rowwise:
+        rhs = np.zeros((n, 2, 4, 1))
+        rhs[:, 0, 1, 0] = 0.5
+        rhs[:, 1, 0, 0] = eta
+        rhs[:, 1, 1, 0] = 1.0
+    else:
+        rhs = _rhs(eta)  # broadcasts over the rows
+    z = np.linalg.solve(rows[:, _CONDITIONS], rhs)  # (N, 2 axes, 4, 1)
     return h, (m[:, :, None] @ z[:, None])[..., 0]
 
 

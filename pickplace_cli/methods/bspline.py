@@ -124,9 +124,86 @@ def _falling(n: np.ndarray, k: int) -> np.ndarray:
     return out
 
 
+#: k1 range of the closed-form symmetric path (:func:`_unit_paths`): it loses digits towards k1 → 0 or 1
+#: (3e-10 relative at k1 = 0.05, tests/unit/test_table.py); every table optimum lies in [0.18, 0.6]
+UNIT_K1 = (0.1, 0.9)
+
+
 def batch_paths(k1: np.ndarray, k2: np.ndarray, via: np.ndarray):
     """The B-spline paths of P moves: (breaks (P, 7), position coefficients (P, 6, 3, 6) [displacement from
-    P1], peaks (P, 3) of ‖p′‖, ‖p″‖, ‖p‴‖ at T = 1). ``via`` (P, 5, 3) are the via points minus P1."""
+    P1, highest power first], peaks (P, 3) of ‖p′‖, ‖p″‖, ‖p‴‖ at T = 1). ``via`` (P, 5, 3) are the via
+    points minus P1.
+
+    Moves between end points at the same height (the common case; the path is then symmetric about
+    τ = 1/2) use the closed form of the table build (:func:`pickplace_cli.table.unit_pieces`, ~20 numpy
+    calls instead of the ~300 of the Cox–de Boor recursion); the others, and k1 outside ``UNIT_K1``, the
+    batched de Boor path. Either way every row is computed by operations on that row alone, so one move
+    planned alone and the same move in a batch of thousands get bitwise the same path (tested)."""
+    k1 = np.asarray(k1, float)
+    k2 = np.asarray(k2, float)
+    via = np.asarray(via, float)
+    sym = _symmetric(k1, via)
+    if sym.all():
+        return _unit_paths(k1, k2, via)
+    if not sym.any():
+        return _deboor_paths(k1, k2, via)
+    breaks = np.empty((len(k1), 7))
+    coef = np.empty((len(k1), 6, 3, 6))
+    peaks = np.empty((len(k1), 3))
+    for rows, fn in ((sym, _unit_paths), (~sym, _deboor_paths)):
+        breaks[rows], coef[rows], peaks[rows] = fn(k1[rows], k2[rows], via[rows])
+    return breaks, coef, peaks
+
+
+def _symmetric(k1: np.ndarray, via: np.ndarray) -> np.ndarray:
+    """Rows whose via points are those of Task.via_points for end points at the same height (P5 − P1
+    horizontal, P2 and P4 straight above the ends at one height, P3 above the midpoint) with b > 0."""
+    d = via[:, 4]
+    scale = np.abs(d).sum(axis=1) + np.abs(via[:, 2, 2])
+    return (
+        (d[:, 2] == 0.0)
+        & np.all(via[:, 0] == 0.0, axis=1)
+        & np.all(via[:, 1, :2] == 0.0, axis=1)
+        & np.all(via[:, 3, :2] == d[:, :2], axis=1)
+        & (via[:, 1, 2] == via[:, 3, 2])
+        & np.all(np.abs(via[:, 2, :2] - d[:, :2] / 2) <= 1e-13 * scale[:, None], axis=1)
+        & (via[:, 2, 2] > 0.0)
+        & (np.hypot(d[:, 0], d[:, 1]) > 1e-9 * scale)
+        & (k1 >= UNIT_K1[0])
+        & (k1 <= UNIT_K1[1])
+    )
+
+
+def _unit_paths(k1: np.ndarray, k2: np.ndarray, via: np.ndarray):
+    """:func:`batch_paths` of symmetric moves from the closed-form unit path (s_u, s_v) of [Li2018,
+    Eq. (16)] on [0, 1/2] and its mirror image s_u(1 − τ) = 1 − s_u(τ), s_v(1 − τ) = s_v(τ):
+    p − P1 = s_u(τ)·(P5 − P1) + s_v(τ)·h e_z with h the clearance, and ‖p⁽ʳ⁾‖ = b ‖(s_u⁽ʳ⁾, s_v⁽ʳ⁾/λ)‖."""
+    from ..table import _EXP, _SHIFT, unit_peaks, unit_pieces
+
+    d = via[:, 4]
+    top = via[:, 2, 2]
+    eta = via[:, 1, 2] / top
+    h, half = unit_pieces(k1, k2, eta, rowwise=True)  # (P, 3), (P, 3, 2, 6) lowest power first
+    b = np.hypot(d[:, 0], d[:, 1])
+    peaks = b[:, None] * unit_peaks(h, half, (b / top)[:, None, None])
+    # the mirrored pieces 5, 4, 3 of pieces 0, 1, 2: Taylor shift to the piece's right end, x → −x
+    right = ((_SHIFT * h[:, :, None, None, None] ** _EXP) @ half[..., None])[..., 0] * _SIGN
+    right[:, :, 0] = -right[:, :, 0]  # s_u: 1 − s_u(1 − τ)
+    right[:, :, 0, 0] += 1.0
+    unit = np.concatenate([half, right[:, ::-1]], axis=1)[..., ::-1]  # (P, 6, 2, 6) highest power first
+    coef = np.empty((len(k1), 6, 3, 6))
+    coef[:, :, 0] = d[:, 0, None, None] * unit[:, :, 0]
+    coef[:, :, 1] = d[:, 1, None, None] * unit[:, :, 0]
+    coef[:, :, 2] = top[:, None, None] * unit[:, :, 1]
+    breaks = batch_li_knots(k1, k2)[:, DEGREE:-DEGREE]
+    return breaks, coef, peaks
+
+
+_SIGN = (-1.0) ** np.arange(6)  # x → −x on Taylor coefficients, lowest power first
+
+
+def _deboor_paths(k1: np.ndarray, k2: np.ndarray, via: np.ndarray):
+    """:func:`batch_paths` by the batched Cox–de Boor recursion (any via points)."""
     knots = batch_li_knots(k1, k2)
     q = batch_control_points(knots, via)
     breaks, derivs = batch_pieces(knots, q)

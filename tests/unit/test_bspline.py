@@ -236,6 +236,44 @@ def test_batched_pieces_match_scipy():
             np.testing.assert_allclose(derivs[r][p], ref, rtol=0, atol=1e-10 * np.max(np.abs(ref)))
 
 
+def test_symmetric_closed_form_path_equals_de_boor():
+    """batch_paths' closed form for moves between end points at one height (the table's unit path and its
+    mirror image) against the batched de Boor path through the same via points, on 200 random moves per k1
+    band: piece polynomials to 1e-9 of the largest coefficient of each power (measured 1.4e-10 at
+    k1 = 0.1 with k2 = 1e-4, ~3e-12 inside; the closed form loses digits towards k1 → 0, hence UNIT_K1)
+    and exact peaks to 1e-10 relative (measured 1.3e-11). Moves at two heights, and k1 outside UNIT_K1,
+    take the de Boor path, and a batch mixing both gives each row what it gets alone."""
+    from pickplace_cli.methods.bspline import UNIT_K1, _deboor_paths, _symmetric, _unit_paths, batch_paths
+    from pickplace_cli.task import Task
+
+    rng = np.random.default_rng(5)
+    tasks = []
+    for _ in range(200):
+        r, a, z = rng.uniform(0.03, 0.3), rng.uniform(0, 2 * np.pi), rng.uniform(-0.9, -0.7)
+        tasks.append(Task([-r * np.cos(a), -r * np.sin(a), z], [r * np.cos(a), r * np.sin(a), z],
+                          rng.uniform(0.01, 0.06), rng.uniform(0.2, 0.8)))
+    via = np.stack([t.via_points() - t.p_from for t in tasks])
+    for lo, hi in ((UNIT_K1[0], UNIT_K1[0] + 0.02), UNIT_K1, (UNIT_K1[1] - 0.02, UNIT_K1[1])):
+        k1 = rng.uniform(lo, hi, 200)
+        k2 = np.r_[rng.uniform(0.01, 0.99, 190), np.full(10, 1e-4)]
+        assert _symmetric(k1, via).all()
+        b1, c1, p1 = _unit_paths(k1, k2, via)
+        b2, c2, p2 = _deboor_paths(k1, k2, via)
+        np.testing.assert_array_equal(b1, b2)
+        for o in range(6):
+            np.testing.assert_allclose(c1[..., o], c2[..., o], rtol=0, atol=1e-9 * np.abs(c2[..., o]).max())
+        np.testing.assert_allclose(p1, p2, rtol=1e-10)
+    # outside the band, or at two heights: de Boor; a mixed batch row by row as alone
+    k1 = np.r_[0.05, 0.5, 0.95, 0.5]
+    via2 = via[:4].copy()
+    via2[3, 4, 2] = 0.01  # P5 1 cm higher (the via points no longer symmetric)
+    assert list(_symmetric(k1, via2)) == [False, True, False, False]
+    b, c, p = batch_paths(k1, np.full(4, 0.3), via2)
+    for i in range(4):
+        bi, ci, pi = batch_paths(k1[i : i + 1], np.full(1, 0.3), via2[i : i + 1])
+        assert np.array_equal(bi[0], b[i]) and np.array_equal(ci[0], c[i]) and np.array_equal(pi[0], p[i])
+
+
 def test_online_bspline_path_loads_no_scipy():
     """Planning the default method's path (table lookup, control points, peaks, evaluation) imports no
     scipy: the cold-start budget of `pickplace plan` [issue 7]. Run in a fresh interpreter."""
