@@ -241,17 +241,19 @@ class MotionModel:
     def _torques(self, tau: np.ndarray, rates: bool = False, motion: tuple | None = None):
         robot = self.robot
         p, v, a, j = motion if motion is not None else (self.path(tau, k) for k in range(4))
-        q, qd, qdd, qddd = robot.joint_motion(p, v, a, j)
-        dA = dG = None
-        if hasattr(robot, "split_dynamics"):  # one pass over the geometry (Delta)
-            A, G, dA, dG = robot.split_dynamics(q, qd, qdd, qddd, p, v, a, j, rates=rates)
+        dA = dG = sing = None
+        if hasattr(robot, "motion_and_dynamics"):  # one pass over the geometry (Delta)
+            q, qd, qdd, qddd, A, G, dA, dG, sing = robot.motion_and_dynamics(p, v, a, j, rates=rates)
         else:
+            q, qd, qdd, qddd = robot.joint_motion(p, v, a, j)
             full = robot.inverse_dynamics(q, qd, qdd, p, a)
             zeros = np.zeros_like(q)
             G = robot.inverse_dynamics(q, zeros, zeros, p, np.zeros_like(a))
             A = full - G
             if rates:
                 dA, dG = robot.torque_rate(q, qd, qdd, qddd, p, v, a, j)
+            if hasattr(robot, "singularity_measure"):
+                sing = robot.singularity_measure(q, p)
         ng = self.gear * self.eff
         Am = A / ng + self.rotor * self.gear * qdd
         Gm = G / ng
@@ -259,7 +261,7 @@ class MotionModel:
         if rates:
             dAm = dA / ng + self.rotor * self.gear * qddd
             dGm = dG / ng
-        return p, v, a, j, q, qd, qdd, qddd, A, G, Am, Gm, dAm, dGm
+        return p, v, a, j, q, qd, qdd, qddd, A, G, Am, Gm, dAm, dGm, sing
 
     def parts(self, tau: np.ndarray, derivatives: bool = True, motion: tuple | None = None) -> Parts:
         """Evaluate at τ; ``derivatives`` adds d/dτ of the motor torques.
@@ -272,15 +274,12 @@ class MotionModel:
         analytic = derivatives and hasattr(self.robot, "torque_rate")
         if motion is not None and derivatives and not analytic:
             raise ValueError("motion= needs a robot with an analytic torque_rate")
-        p, v, a, j, q, qd, qdd, qddd, A, G, Am, Gm, dAm, dGm = self._torques(tau, rates=analytic, motion=motion)
+        p, v, a, j, q, qd, qdd, qddd, A, G, Am, Gm, dAm, dGm, sing = self._torques(tau, rates=analytic, motion=motion)
         if derivatives and not analytic:
             hi = self._torques(tau + DTAU)
             lo = self._torques(tau - DTAU)
             dAm = (hi[10] - lo[10]) / (2 * DTAU)
             dGm = (hi[11] - lo[11]) / (2 * DTAU)
-        sing = None
-        if hasattr(self.robot, "singularity_measure"):
-            sing = self.robot.singularity_measure(q, p)
         return Parts(tau, p, v, a, j, q, qd, qdd, qddd, A, G, Am, Gm, dAm, dGm, sing)
 
     # ------------------------------------------------------------------------- scaled quantities

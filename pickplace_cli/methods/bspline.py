@@ -75,6 +75,11 @@ def plan_bspline(
 
     origin = task.p_from
     powers = np.arange(DEGREE, -1, -1.0)
+    # the polynomials of p, p′, p″, p‴ on every piece, (m, 4, 3, 6), highest power first, the derivatives
+    # padded with leading zeros (Horner then gives each order bitwise as its own shorter Horner would)
+    stacked = np.zeros((len(coef), 4, 3, DEGREE + 1))
+    for k in range(4):
+        stacked[:, k, :, k:] = coef[..., : DEGREE + 1 - k] * _falling(powers[: DEGREE + 1 - k], k) if k else coef
     memo: list = [None]  # one entry (τ, [p, p′, p″, p‴]): the pipeline asks orders 0…3 at the same τ in turn
 
     def evaluate(tau: np.ndarray, order: int) -> np.ndarray:
@@ -88,17 +93,12 @@ def plan_bspline(
     def _all_orders(tau: np.ndarray) -> list[np.ndarray]:
         """p, p′, p″, p‴ (each (N, 3)) by Horner on the piece polynomials (one search for every order)."""
         i = np.clip(np.searchsorted(breaks, tau, side="right") - 1, 0, len(coef) - 1)
-        dx = (tau - breaks[i])[:, None]
-        c = coef[i]  # (N, 3, 6), highest power first
-        out = []
-        for k in range(4):
-            ck = c[..., : DEGREE + 1 - k]
-            if k:
-                ck = ck * _falling(powers[: DEGREE + 1 - k], k)
-            acc = ck[..., 0]
-            for col in range(1, ck.shape[-1]):
-                acc = acc * dx + ck[..., col]
-            out.append(acc)
+        dx = (tau - breaks[i])[:, None, None]
+        c = stacked[i]  # (N, 4, 3, 6)
+        acc = c[..., 0]
+        for col in range(1, DEGREE + 1):  # one Horner pass for all four orders
+            acc = acc * dx + c[..., col]
+        out = [acc[:, k] for k in range(4)]
         # the end states exactly as de Boor gives them (v = a = 0 without round-off)
         if tau[0] <= 0.0 or tau[-1] >= 1.0 or np.any((tau <= 0.0) | (tau >= 1.0)):
             at0, at1 = tau <= 0.0, tau >= 1.0

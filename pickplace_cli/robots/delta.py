@@ -105,20 +105,23 @@ class _Arms:
     """Arm-wise quantities of one (q, p) configuration, each (3, N): cos q, sin q and the forearm vector d in
     the arm frame (radial dr, tangential dt, vertical dz), D = d·E′ and D2 = d·E″ (see module docstring)."""
 
-    __slots__ = ("c", "s", "dr", "dt", "dz", "D", "D2")
+    __slots__ = ("c", "s", "dr", "dt", "dz", "D", "D2", "_base")
 
     def __init__(self, L: float, c: np.ndarray, s: np.ndarray, dr: np.ndarray, dt: np.ndarray, dz: np.ndarray):
         self.c, self.s, self.dr, self.dt, self.dz = c, s, dr, dt, dz
         self.D = -L * (s * dr + c * dz)
         self.D2 = L * (s * dz - c * dr)
+        self._base = None
 
     def base_frame(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """d in the base frame: (dx, dy, dz), each (3, N)."""
-        return (
-            self.dr * _COS_PHI - self.dt * _SIN_PHI,
-            self.dr * _SIN_PHI + self.dt * _COS_PHI,
-            self.dz,
-        )
+        """d in the base frame: (dx, dy, dz), each (3, N) (computed once per configuration)."""
+        if self._base is None:
+            self._base = (
+                self.dr * _COS_PHI - self.dt * _SIN_PHI,
+                self.dr * _SIN_PHI + self.dt * _COS_PHI,
+                self.dz,
+            )
+        return self._base
 
 
 @dataclass(frozen=True)
@@ -373,6 +376,11 @@ class DeltaRobot:
         a = _samples(a, "a")
         j = _samples(j, "j")
         q, arms = self._solve(p)
+        qd, qdd, qddd = self._joint_rates(arms, v, a, j)
+        return q.T.copy(), qd.T.copy(), qdd.T.copy(), qddd.T.copy()
+
+    def _joint_rates(self, arms: _Arms, v: np.ndarray, a: np.ndarray, j: np.ndarray):
+        """q̇, q̈, q⃛ (each (3, N)) of :meth:`joint_motion` from the arm geometry of the configuration."""
         L = self.L
         c, s, dr, dt, dz, D, D2 = arms.c, arms.s, arms.dr, arms.dt, arms.dz, arms.D, arms.D2
         vr, vt, vz = _local(v)
@@ -396,7 +404,26 @@ class DeltaRobot:
             + dz * jz
             + qd * (D * qd * qd - 3.0 * D2 * qdd)
         ) / D
-        return q.T.copy(), qd.T.copy(), qdd.T.copy(), qddd.T.copy()
+        return qd, qdd, qddd
+
+    def motion_and_dynamics(
+        self, p: np.ndarray, v: np.ndarray, a: np.ndarray, j: np.ndarray, rates: bool = True
+    ) -> tuple:
+        """(q, q̇, q̈, q⃛, A, G, dA, dG, μ) in one pass over the arm geometry: :meth:`joint_motion`,
+        :meth:`split_dynamics` (dA, dG None unless ``rates``) and :meth:`singularity_measure` at the platform
+        motion p, v, a, j (each (N, 3), SI), sharing one inverse kinematics. Each (N, 3) except μ (N,).
+        (The separate methods recompute cos q, sin q and the forearm vectors from q; this pass takes them
+        from the inverse kinematics, so values agree to round-off, not bitwise.)"""
+        p = _samples(p, "p")
+        v = _samples(v, "v")
+        a = _samples(a, "a")
+        j = _samples(j, "j")
+        q, arms = self._solve(p)
+        qd, qdd, qddd = self._joint_rates(arms, v, a, j)
+        A, G, dA, dG = self._dynamics(arms, qd, qdd, qddd, v, a, j, rates)
+        out = [x.T.copy() for x in (q, qd, qdd, qddd, A, G)]
+        out += [None if x is None else x.T.copy() for x in (dA, dG)]
+        return (*out, self._singularity(arms))
 
     def singularity_measure(self, q: np.ndarray, p: np.ndarray) -> np.ndarray:
         """Dimensionless distance from singularity (N,), in [0, 1]; 0 at a singularity.
@@ -414,7 +441,9 @@ class DeltaRobot:
         """
         q = _samples(q, "q")
         p = _samples(p, "p")
-        arms = self._arms(q, p)
+        return self._singularity(self._arms(q, p))
+
+    def _singularity(self, arms: _Arms) -> np.ndarray:
         serial = np.min(np.abs(arms.D), axis=0) / (self.l * self.L)
         dx, dy, dz = arms.base_frame()
         lo, hi = _gram_extremes(dx, dy, dz)
@@ -486,19 +515,24 @@ class DeltaRobot:
         qdd = _samples(qdd, "qdd")
         p = _samples(p, "p")
         a = _samples(a, "a")
-        arms = self._arms(q, p)
+        if rates:
+            qddd = _samples(qddd, "qddd")
+            v = _samples(v, "v")
+            j = _samples(j, "j")
+        A, G, dA, dG = self._dynamics(self._arms(q, p), qd.T, qdd.T, None if qddd is None else qddd.T, v, a, j, rates)
+        return A.T.copy(), G.T.copy(), None if dA is None else dA.T.copy(), None if dG is None else dG.T.copy()
+
+    def _dynamics(self, arms: _Arms, qd, qdd, qddd, v, a, j, rates: bool):
+        """(A, G, dA, dG) of :meth:`split_dynamics`, arm-major (3, N), from the arm geometry; q̇, q̈, q⃛ (3, N)."""
         cx, cy, cz, det = self._reciprocal(arms)
         L, mp, g, M = self.L, self.platform_mass, self.g, self.arm_gravity_moment
         lam_a = mp * (a[:, 0] * cx + a[:, 1] * cy + a[:, 2] * cz) / det
         lam_g = (mp * g) * cz / det
-        A = self.arm_inertia * qdd.T + arms.D * lam_a
+        A = self.arm_inertia * qdd + arms.D * lam_a
         G = -(g * M) * arms.c + arms.D * lam_g
         if not rates:
-            return A.T.copy(), G.T.copy(), None, None
-        qddd = _samples(qddd, "qddd")
-        v = _samples(v, "v")
-        j = _samples(j, "j")
-        w = qd.T
+            return A, G, None, None
+        w = qd
         vr, vt, vz = _local(v)
         d1r = vr + arms.s * L * w
         d1z = vz + arms.c * L * w
@@ -512,9 +546,9 @@ class DeltaRobot:
             rz = dF[2] - np.sum(d1z * lam, axis=0)
             return (rx * cx + ry * cy + rz * cz) / det
 
-        dA = self.arm_inertia * qddd.T + Ddot * lam_a + arms.D * lam_dot(lam_a, (mp * j[:, 0], mp * j[:, 1], mp * j[:, 2]))
+        dA = self.arm_inertia * qddd + Ddot * lam_a + arms.D * lam_dot(lam_a, (mp * j[:, 0], mp * j[:, 1], mp * j[:, 2]))
         dG = (g * M) * arms.s * w + Ddot * lam_g + arms.D * lam_dot(lam_g, (0.0, 0.0, 0.0))
-        return A.T.copy(), G.T.copy(), dA.T.copy(), dG.T.copy()
+        return A, G, dA, dG
 
     def kinetic_energy(self, q: np.ndarray, qd: np.ndarray, v: np.ndarray) -> np.ndarray:
         """KE (N,) [J] of the lumped model: Σ_i ½ I_b q̇_i² + ½ m_p ‖v‖². (q is unused; kept for symmetry.)"""
