@@ -452,32 +452,42 @@ def _distinct_best(x: np.ndarray, values: np.ndarray, count: int, radius: float 
 def _exact_segment_maxima(prep: tuple, q: int | tuple[int, ...], sub: int) -> np.ndarray:
     """u (6·sub·len(q),) of the maximum of ‖a‖² (q = 0) or ‖j‖² (q = 1) — or of each in the tuple ``q``, in
     that order — on each of the ``sub`` equal segments of every knot span, for the first parameter vector of
-    ``prep``: exact, from the real roots of the derivative of the span's polynomial ‖·‖² (companion-matrix
-    eigenvalues, one batched call for all quantities) and the segment ends."""
+    ``prep`` (:func:`_segment_maxima` for several)."""
+    return _segment_maxima(prep[0][:1], prep[1][:1], q, sub)[0]
+
+
+def _segment_maxima(width: np.ndarray, d: np.ndarray, q: int | tuple[int, ...], sub: int) -> np.ndarray:
+    """u (R, 6·sub·len(q)) of the maxima of ‖a‖² (q = 0) or ‖j‖² (q = 1) — or of each in the tuple ``q``,
+    in that order — on each of the ``sub`` equal segments of every knot span, for R prepared parameter
+    vectors (``width`` (R, 6), ``d`` (R, 6, 4, 3) from :meth:`_Evaluator.prepare`): exact, from the real
+    roots of the derivative of the span's polynomial ‖·‖² (companion-matrix eigenvalues, one batched call
+    for all vectors and quantities) and the segment ends."""
     qs = (q,) if isinstance(q, (int, np.integer)) else tuple(q)
-    width, d = prep[0][0], prep[1][0]  # (6,), (6, 4, 3)
-    w = width[:, None]
+    R = width.shape[0]
+    w = width[:, :, None]  # (R, 6, 1)
     sqs, derivs = [], []
     for qq in qs:
         if qq == 0:  # a(u) = D0 + D1 (wu) + D2 (wu)²/2 + D3 (wu)³/6, coefficients in powers of u (lowest first)
-            c = np.stack([d[:, 0], d[:, 1] * w, d[:, 2] * w**2 / 2, d[:, 3] * w**3 / 6], axis=1)
+            c = np.stack([d[:, :, 0], d[:, :, 1] * w, d[:, :, 2] * w**2 / 2, d[:, :, 3] * w**3 / 6], axis=2)
         else:  # j(u) = D1 + D2 (wu) + D3 (wu)²/2
-            c = np.stack([d[:, 1], d[:, 2] * w, d[:, 3] * w**2 / 2], axis=1)
-        k = c.shape[1]
-        sq = np.einsum("sid,sjd->sij", c, c).reshape(6, k * k) @ _anti_diagonal_sum(k)  # ‖·‖², lowest power first
+            c = np.stack([d[:, :, 1], d[:, :, 2] * w, d[:, :, 3] * w**2 / 2], axis=2)
+        k = c.shape[2]
+        sq = np.einsum("rsid,rsjd->rsij", c, c).reshape(R * 6, k * k) @ _anti_diagonal_sum(k)  # ‖·‖², lowest power first
         deriv = sq[:, 1:] * np.arange(1, 2 * k - 1)  # degree 2k − 3
         if k == 3:
             # the cubic times (u − 10)² (two roots far outside [0, 1]): degree 5 like a's, so that both
             # quantities share one batch of 5 × 5 companion matrices
             cubic = deriv
-            deriv = np.zeros((6, 6))
+            deriv = np.zeros((R * 6, 6))
             deriv[:, :4] += 100.0 * cubic
             deriv[:, 1:5] -= 20.0 * cubic
             deriv[:, 2:] += cubic
-            sq = np.concatenate([sq, np.zeros((6, 2))], axis=1)
-        sqs.append(sq)
-        derivs.append(deriv)
-    sq, deriv = np.concatenate(sqs), np.concatenate(derivs)  # (6·len(qs), 7), (6·len(qs), 6)
+            sq = np.concatenate([sq, np.zeros((R * 6, 2))], axis=1)
+        sqs.append(sq.reshape(R, 6, 7))
+        derivs.append(deriv.reshape(R, 6, 6))
+    # (R, len(qs), 6, ·) → rows in the order vector, quantity, span
+    sq = np.stack(sqs, axis=1).reshape(-1, 7)
+    deriv = np.stack(derivs, axis=1).reshape(-1, 6)
     m = sq.shape[0]
     n = 5
     lead = deriv[:, -1]
@@ -497,7 +507,7 @@ def _exact_segment_maxima(prep: tuple, q: int | tuple[int, ...], sub: int) -> np
     inside = (cand[:, None, :] >= lo[None, :, None] - 1e-15) & (cand[:, None, :] <= hi[None, :, None] + 1e-15)
     best = np.argmax(np.where(inside, val[:, None, :], -np.inf), axis=2)  # (m, sub)
     u = np.take_along_axis(np.broadcast_to(cand[:, None, :], inside.shape), best[..., None], axis=2)[..., 0]
-    return np.clip(u, lo, hi).reshape(-1)
+    return np.clip(u, lo, hi).reshape(R, -1)
 
 
 class _Stage:
@@ -505,13 +515,15 @@ class _Stage:
 
     ``kind`` 'a' / 'j': minimise t subject to m_k(p) ≤ t, where m_k is the maximum of ‖a‖² (‖j‖²) over
     segment k — each knot span cut into ``SUB`` equal segments that move with the knots; 'F': maximise
-    a_min/√ta + j_min/√tj subject to both sets. Each m_k is exact (:func:`_exact_segment_maxima`); its
+    a_min/√ta + j_min/√tj subject to both sets. Each m_k is exact (:func:`_segment_maxima`); its
     gradient is that of ‖a(τ*)‖² with τ* held at the same fraction of the span (envelope theorem: the
     motion of the maximiser does not change the maximum to first order), by central differences evaluated
     as one batch. Segments short enough to hold a single local maximum keep every m_k smooth (a whole span
     can hold two humps whose swap is a kink that stalls SLSQP's line search; an m_k whose maximiser is
     off by even 1e-4 of the span has a gradient wrong enough to do the same). Final peaks are exact.
     The lower bounds ta ≥ a_min², tj ≥ j_min² (valid: t ≥ max ≥ min) keep F-steps from t → 0.
+    Several SLSQP runs (of any stages of one problem) advance together, their evaluations batched
+    (:func:`_run_slsqp`).
     """
 
     SUB = 3
@@ -524,81 +536,11 @@ class _Stage:
         n = space.n
         self._steps = np.vstack([np.zeros(n), self.h * np.eye(n), -self.h * np.eye(n)])
         self.uses = (0,) if kind == "a" else (1,) if kind == "j" else (0, 1)
-        self._key = None
+        self._memo: dict[bytes, tuple[list, list]] = {}
 
     def _eval(self, x: np.ndarray) -> tuple[list, list]:
         """Per quantity used: the 6·SUB segment maxima at x and their Jacobians (memoised on x)."""
-        key = x.tobytes()
-        if key != self._key:
-            n = self.space.n
-            sp = self.space
-            prep = self.ev.prepare(sp.full(x[None, :] + self._steps))
-            piece = np.tile(np.repeat(np.arange(6), self.SUB), len(self.uses))
-            u = _exact_segment_maxima(prep, self.uses, self.SUB)
-            vals_all = self.ev.values(prep, piece, u)
-            vals, jacs = [], []
-            for i, q in enumerate(self.uses):
-                m = 6 * self.SUB
-                gq = vals_all[q][:, m * i : m * i + m] / self.norm[q]
-                vals.append(gq[0])
-                jacs.append((gq[1 : n + 1] - gq[n + 1 :]).T / (2 * self.h))
-            self._key, self._val = key, (vals, jacs)
-        return self._val
-
-    def solve(self, x0: np.ndarray, a_min: float = 1.0, j_min: float = 1.0, ftol: float | None = None,
-              maxiter: int | None = None) -> np.ndarray:
-        from scipy.optimize import minimize
-
-        sp = self.space
-        n, k = sp.n, len(self.uses)
-        cf = (a_min / math.sqrt(self.norm[0]), j_min / math.sqrt(self.norm[1]))
-        vals, _ = self._eval(x0)
-        y0 = np.concatenate([x0, [v.max() * (1 + 1e-9) for v in vals]])
-        if self.kind == "F":
-            y0[n:] = np.maximum(y0[n:], [(a_min**2 / self.norm[0]), (j_min**2 / self.norm[1])])
-
-        if self.kind == "F":
-            def fun(y):
-                return -(cf[0] / math.sqrt(y[n]) + cf[1] / math.sqrt(y[n + 1]))
-
-            def jac(y):
-                g = np.zeros(n + 2)
-                g[n] = 0.5 * cf[0] * y[n] ** -1.5
-                g[n + 1] = 0.5 * cf[1] * y[n + 1] ** -1.5
-                return g
-        else:
-            def fun(y):
-                return y[n]
-
-            def jac(y):
-                g = np.zeros(n + 1)
-                g[n] = 1.0
-                return g
-
-        def cons(y):
-            vals, _ = self._eval(y[:n])
-            return np.concatenate([y[n + i] - v for i, v in enumerate(vals)] + [sp.order_gaps(y[:n])])
-
-        def cjac(y):
-            _, jacs = self._eval(y[:n])
-            rows = []
-            for i, d in enumerate(jacs):
-                e = np.zeros((d.shape[0], k))
-                e[:, i] = 1.0
-                rows.append(np.hstack([-d, e]))
-            rows.append(np.hstack([sp.order_jac(), np.zeros((2, k))]))
-            return np.vstack(rows)
-
-        # t ≥ max‖·‖² ≥ (its minimum)²: a valid bound that keeps SLSQP's F-steps from t → 0
-        floor = [(a_min**2 / self.norm[0]) * (1 - 1e-6), (j_min**2 / self.norm[1]) * (1 - 1e-6)]
-        tb = [(floor[q], None) for q in self.uses] if self.kind == "F" else [(1e-12, None)]
-        bounds = list(zip(sp.lo, sp.hi)) + tb
-        res = minimize(
-            fun, y0, jac=jac, method="SLSQP", bounds=bounds,
-            constraints=[{"type": "ineq", "fun": cons, "jac": cjac}],
-            options={"ftol": ftol or self.s.ftol, "maxiter": maxiter or self.s.maxiter},
-        )
-        return sp.clip(np.asarray(res.x[:n], float))
+        return _eval_stages([(self, x)])[0]
 
     def objective(self, x: np.ndarray, a_min: float = 1.0, j_min: float = 1.0) -> float:
         """The stage's objective at x from its own (segment-maximum) peaks: max ‖a‖² or ‖j‖², or −F."""
@@ -606,6 +548,197 @@ class _Stage:
         if self.kind == "F":
             return -(a_min / math.sqrt(vals[0].max() * self.norm[0]) + j_min / math.sqrt(vals[1].max() * self.norm[1]))
         return float(vals[0].max())
+
+    def run(self, x0: np.ndarray, a_min: float = 1.0, j_min: float = 1.0, ftol: float | None = None,
+            maxiter: int | None = None) -> "_Run":
+        """One SLSQP run from x0 (to pass to :func:`_run_slsqp`)."""
+        return _Run(self, np.asarray(x0, float), a_min, j_min, ftol or self.s.ftol, maxiter or self.s.maxiter)
+
+    def solve(self, x0: np.ndarray, a_min: float = 1.0, j_min: float = 1.0, ftol: float | None = None,
+              maxiter: int | None = None) -> np.ndarray:
+        """The local optimum of this stage from x0 (free variables)."""
+        return _run_slsqp([self.run(x0, a_min, j_min, ftol, maxiter)])[0]
+
+
+def _eval_stages(requests: list[tuple[_Stage, np.ndarray]]) -> list[tuple[list, list]]:
+    """(values, Jacobians) of each (stage, x) — see :meth:`_Stage._eval` — computed in one batch for
+    those not memoised (all stages share one evaluator and space): the 2n + 1 central-difference vectors
+    of every x in one :meth:`_Evaluator.prepare`, the segment maxima of ‖a‖² and ‖j‖² at every x in one
+    :func:`_segment_maxima` call. The cost is per numpy call far more than per vector."""
+    for stage, _ in requests:
+        if len(stage._memo) > 256:
+            stage._memo.clear()
+    todo: dict[tuple[int, bytes], tuple[_Stage, np.ndarray]] = {}
+    for stage, x in requests:
+        key = x.tobytes()
+        if key not in stage._memo:
+            todo[(id(stage), key)] = (stage, x)
+    if todo:
+        stage0 = requests[0][0]
+        ev, space, steps, sub = stage0.ev, stage0.space, stage0._steps, _Stage.SUB
+        n, S, m = space.n, steps.shape[0], 6 * sub
+        xs = np.array([x for _, x in todo.values()])
+        prep = ev.prepare(space.full((xs[:, None, :] + steps[None]).reshape(-1, n)))
+        u = _segment_maxima(prep[0][::S], prep[1][::S], (0, 1), sub)  # (R, 2m): a's then j's
+        piece = np.tile(np.repeat(np.arange(6), sub), 2)
+        sq = ev.values(prep, piece, np.repeat(u, S, axis=0))  # (‖a‖², ‖j‖²), each (R·S, 2m)
+        h2 = 2 * stage0.h
+        for r, ((_, key), (stage, _)) in enumerate(todo.items()):
+            vals, jacs = [], []
+            for q in stage.uses:
+                g = sq[q][r * S : (r + 1) * S, m * q : m * q + m] / stage.norm[q]
+                vals.append(g[0])
+                jacs.append((g[1 : n + 1] - g[n + 1 :]).T / h2)
+            stage._memo[key] = (vals, jacs)
+    return [stage._memo[x.tobytes()] for stage, x in requests]
+
+
+class _Run:
+    """One SLSQP run of a stage in epigraph form: y = (x, t…), minimise t (or −F(t)) subject to
+    t_q ≥ m_k(x) for every segment k of each quantity q used, and the ordering constraints of Eq. (36)."""
+
+    def __init__(self, stage: _Stage, x0: np.ndarray, a_min: float, j_min: float, ftol: float, maxiter: int):
+        self.stage, self.x0, self.ftol, self.maxiter = stage, x0, ftol, maxiter
+        self.a_min, self.j_min = a_min, j_min
+        self.n, self.k = stage.space.n, len(stage.uses)
+        norm = stage.norm
+        self.cf = (a_min / math.sqrt(norm[0]), j_min / math.sqrt(norm[1]))
+        # t ≥ max‖·‖² ≥ (its minimum)²: a valid bound that keeps SLSQP's F-steps from t → 0
+        self.floor = [(a_min**2 / norm[0]), (j_min**2 / norm[1])]
+        sp = stage.space
+        if stage.kind == "F":
+            tlo = [self.floor[q] * (1 - 1e-6) for q in stage.uses]
+        else:
+            tlo = [1e-12]
+        self.lo = np.concatenate([sp.lo, tlo])
+        self.hi = np.concatenate([sp.hi, [np.inf] * self.k])
+
+    def y0(self, vals: list) -> np.ndarray:
+        y0 = np.concatenate([self.x0, [v.max() * (1 + 1e-9) for v in vals]])
+        if self.stage.kind == "F":
+            y0[self.n:] = np.maximum(y0[self.n:], self.floor)
+        return y0
+
+    def fun(self, y: np.ndarray) -> float:
+        n = self.n
+        if self.stage.kind == "F":
+            return -(self.cf[0] / math.sqrt(y[n]) + self.cf[1] / math.sqrt(y[n + 1]))
+        return float(y[n])
+
+    def grad(self, y: np.ndarray) -> np.ndarray:
+        n = self.n
+        g = np.zeros(n + self.k)
+        if self.stage.kind == "F":
+            g[n] = 0.5 * self.cf[0] * y[n] ** -1.5
+            g[n + 1] = 0.5 * self.cf[1] * y[n + 1] ** -1.5
+        else:
+            g[n] = 1.0
+        return g
+
+    def cons(self, y: np.ndarray, vals: list) -> np.ndarray:
+        n = self.n
+        return np.concatenate([y[n + i] - v for i, v in enumerate(vals)] + [self.stage.space.order_gaps(y[:n])])
+
+    def cjac(self, jacs: list) -> np.ndarray:
+        rows = []
+        for i, d in enumerate(jacs):
+            e = np.zeros((d.shape[0], self.k))
+            e[:, i] = 1.0
+            rows.append(np.hstack([-d, e]))
+        rows.append(np.hstack([self.stage.space.order_jac(), np.zeros((2, self.k))]))
+        return np.vstack(rows)
+
+
+def _run_slsqp(runs: list[_Run]) -> list[np.ndarray]:
+    """The results x (free variables, clipped to the feasible set) of several SLSQP runs of stages of one
+    problem, advanced together: each round evaluates the points all runs ask for in one batch
+    (:func:`_eval_stages`), so k runs cost about as many numpy calls as the longest of them alone.
+
+    Each run is exactly scipy's SLSQP (``minimize(method="SLSQP")``: the same reverse-communication
+    routine, bounds and tolerances, driven here as ``scipy.optimize._minimize_slsqp`` drives it). That
+    routine is private scipy API (scipy ≥ 1.16); where it is missing the runs go one by one through
+    ``minimize`` — the same results, slower."""
+    if not runs:
+        return []
+    first = _eval_stages([(r.stage, r.x0) for r in runs])
+    y0 = [r.y0(vals) for r, (vals, _) in zip(runs, first)]
+    try:
+        from scipy.optimize._slsqplib import slsqp
+    except ImportError:  # older scipy: one run at a time through the public API
+        return [_run_one(r, y) for r, y in zip(runs, y0)]
+    states = [_LockstepSLSQP(r, y, slsqp) for r, y in zip(runs, y0)]
+    active = list(states)
+    while active:
+        _eval_stages([(st.run.stage, st.want) for st in active])
+        active = [st for st in active if st.advance()]
+    return [st.run.stage.space.clip(np.asarray(st.x[: st.run.n], float)) for st in states]
+
+
+def _run_one(r: _Run, y0: np.ndarray) -> np.ndarray:
+    from scipy.optimize import minimize
+
+    n = r.n
+    res = minimize(
+        r.fun, y0, jac=r.grad, method="SLSQP", bounds=list(zip(r.lo, [None if not math.isfinite(h) else h for h in r.hi])),
+        constraints=[{"type": "ineq", "fun": lambda y: r.cons(y, r.stage._eval(y[:n].copy())[0]),
+                      "jac": lambda y: r.cjac(r.stage._eval(y[:n].copy())[1])}],
+        options={"ftol": r.ftol, "maxiter": r.maxiter},
+    )
+    return r.stage.space.clip(np.asarray(res.x[:n], float))
+
+
+class _LockstepSLSQP:
+    """scipy's SLSQP driver loop (``scipy.optimize._slsqp_py._minimize_slsqp``) for one run, stepped:
+    :meth:`advance` calls the routine until it needs constraint values or normals at a point not yet
+    evaluated (``want``), or stops. Same set-up as scipy's: x0 clipped to the bounds, infinite bounds as
+    NaN, the same work-space sizes, acc = ftol, the objective evaluated at the bounds-clipped point."""
+
+    def __init__(self, run: _Run, y0: np.ndarray, routine) -> None:
+        self.run, self.routine = run, routine
+        n = y0.size
+        self.x = np.clip(y0, run.lo, run.hi).astype(float)
+        self.xl = np.where(np.isfinite(run.lo), run.lo, np.nan)
+        self.xu = np.where(np.isfinite(run.hi), run.hi, np.nan)
+        m = run.k * 6 * _Stage.SUB + 2
+        self.state = {"acc": run.ftol, "alpha": 0.0, "f0": 0.0, "gs": 0.0, "h1": 0.0, "h2": 0.0, "h3": 0.0,
+                      "h4": 0.0, "t": 0.0, "t0": 0.0, "tol": 10.0 * run.ftol, "exact": 0, "inconsistent": 0,
+                      "reset": 0, "iter": 0, "itermax": int(run.maxiter), "line": 0, "m": m, "meq": 0,
+                      "mode": 0, "n": n}
+        self.indices = np.zeros(max(m + 2 * n + 2, 1), dtype=np.int32)
+        size = n * (n + 1) // 2 + 3 * m * n - (m + 5 * n + 7) * 0 + 9 * m + 8 * n * n + 35 * n + 28
+        self.buffer = np.zeros(max(size, 1))
+        self.mult = np.zeros(max(1, m + 2 * n + 2))
+        self.C = np.zeros((m, n), order="F")
+        self.d = np.zeros(m)
+        self.need = "both"  # the initial call needs f, g, constraints and normals
+        self.want = self._xpart()
+
+    def _xpart(self) -> np.ndarray:
+        return self.x[: self.run.n].copy()
+
+    def advance(self) -> bool:
+        """Step until an evaluation not yet memoised is needed (True) or the run has stopped (False)."""
+        r, stage = self.run, self.run.stage
+        while True:
+            key = self.want.tobytes()
+            if key not in stage._memo:
+                return True
+            vals, jacs = stage._memo[key]
+            if self.need in ("both", "f"):
+                xf = np.clip(self.x, r.lo, r.hi) if self.need == "both" else self.x
+                self.fx = r.fun(xf)
+                self.d[:] = r.cons(self.x, vals)
+            if self.need in ("both", "g"):
+                xg = np.clip(self.x, r.lo, r.hi) if self.need == "both" else self.x
+                self.g = r.grad(xg)
+                self.C[:] = r.cjac(jacs)
+            self.routine(self.state, self.fx, self.g, self.C, self.d, self.x, self.mult, self.xl, self.xu,
+                         self.buffer, self.indices)
+            mode = self.state["mode"]
+            if abs(mode) != 1:
+                return False
+            self.need = "f" if mode == 1 else "g"
+            self.want = self._xpart()
 
 
 def solve(prob: VelProblem, settings: VelSettings = VelSettings(), warm: VelResult | None = None) -> VelResult:
@@ -711,33 +844,39 @@ def solve_seeded(prob: VelProblem, seeds: dict[str, np.ndarray], settings: VelSe
     def exact(x: np.ndarray) -> tuple[float, float, float]:
         return exact_peaks(prob, space.full(x)[0])
 
-    def run(stage: _Stage, first: np.ndarray, others: list[np.ndarray], *norms: float) -> np.ndarray:
-        """SLSQP from ``first``; then each other start (1e-3 away from it and from the result) is screened
-        (``screen_ftol``; for a_max, j_max only when its peak is within ``check_ratio`` of the result's),
-        and polished when the screen beats the result."""
-        x = stage.solve(first, *norms)
-        fx = stage.objective(x, *norms)
-        c = settings.check_ratio
-        # the objective is the squared peak for a and j; for F (−F) every other start is screened
-        bound = (lambda f: f * c * c) if stage.kind != "F" else (lambda f: np.inf)
-        for x0 in others:
-            if min(np.max(np.abs(x0 - first)), np.max(np.abs(x0 - x))) <= 1e-3:
-                continue
-            f0 = stage.objective(x0, *norms)
-            if not f0 < bound(fx):
-                continue
-            y = stage.solve(x0, *norms, ftol=settings.screen_ftol, maxiter=settings.screen_maxiter)
-            if stage.objective(y, *norms) < fx:
-                y = stage.solve(y, *norms)
-                fy = stage.objective(y, *norms)
-                if fy < fx:
-                    x, fx = y, fy
-        return x
+    def runs(groups: list[tuple[_Stage, np.ndarray, list[np.ndarray], tuple, float]]) -> list[np.ndarray]:
+        """For each (stage, first, others, norms, bound): SLSQP from ``first``, and each other start (1e-3
+        away from it, sampled objective below ``bound``) screened (``screen_ftol``) — all of them advancing
+        together (:func:`_run_slsqp`); then the screens that beat their stage's result are polished
+        (together) and the best point of each stage returned."""
+        jobs, owner = [], []
+        for g, (stage, first, others, norms, bound) in enumerate(groups):
+            jobs.append(stage.run(first, *norms))
+            owner.append(g)
+            for x0 in others:
+                if np.max(np.abs(x0 - first)) <= 1e-3 or not stage.objective(x0, *norms) < bound:
+                    continue
+                jobs.append(stage.run(x0, *norms, ftol=settings.screen_ftol, maxiter=settings.screen_maxiter))
+                owner.append(g)
+        xs = _run_slsqp(jobs)
+        best = [(xs[owner.index(g)], groups[g][0].objective(xs[owner.index(g)], *groups[g][3])) for g in range(len(groups))]
+        polish, towner = [], []
+        for i, (g, x) in enumerate(zip(owner, xs)):
+            stage, norms = groups[g][0], groups[g][3]
+            if i != owner.index(g) and np.max(np.abs(x - best[g][0])) > 1e-3 and stage.objective(x, *norms) < best[g][1]:
+                polish.append(stage.run(x, *norms))
+                towner.append(g)
+        for g, y in zip(towner, _run_slsqp(polish)):
+            fy = groups[g][0].objective(y, *groups[g][3])
+            if fy < best[g][1]:
+                best[g] = (y, fy)
+        return [x for x, _ in best]
 
     sample, s_amax, s_jmax = pool[in_sample], amax[in_sample], jmax[in_sample]
     inner = (sample[:, 0] >= 3 * settings.margin) & (sample[:, 3] <= 1 - 3 * settings.margin)
-    best = {}
-    for kind, idx, vals, s_vals in (("a", 1, amax, s_amax), ("j", 2, jmax, s_jmax)):
+    stage1 = []
+    c = settings.check_ratio
+    for kind, vals, s_vals in (("a", amax, s_amax), ("j", jmax, s_jmax)):
         stage = _Stage(ev, space, kind, a_norm, j_norm, settings)
         seg = slice(offset[kind], offset[kind] + len(rows[kind]))
         others = []
@@ -748,9 +887,12 @@ def solve_seeded(prob: VelProblem, seeds: dict[str, np.ndarray], settings: VelSe
             others += _distinct_best(sample, s_vals, settings.refine, settings.radius)
             if inner.any():
                 others.append(sample[inner][int(np.argmin(s_vals[inner]))])
-        x = run(stage, pool[seg][int(np.argmin(vals[seg]))], others)
-        best[kind] = (x, exact(x)[idx])
-    (xa, a_min), (xj, j_min) = best["a"], best["j"]
+        i0 = int(np.argmin(vals[seg]))
+        # check_ratio: screen only starts whose sampled peak is within c of the seed's sampled peak
+        bound = float(vals[seg][i0] ** 2 / stage.norm[0 if kind == "a" else 1]) * c * c if math.isfinite(c) else np.inf
+        stage1.append((stage, pool[seg][i0], others, (), bound))
+    xa, xj = runs(stage1)
+    a_min, j_min = exact(xa)[1], exact(xj)[2]
     stage = _Stage(ev, space, "F", a_norm, j_norm, settings)
     f_pool = a_min / amax + j_min / jmax
     seg = slice(offset["F"], offset["F"] + len(rows["F"]))
@@ -762,10 +904,9 @@ def solve_seeded(prob: VelProblem, seeds: dict[str, np.ndarray], settings: VelSe
         f_extra = a_min / np.sqrt(ga2.max(axis=1)) + j_min / np.sqrt(gj2.max(axis=1))
         allx, allf = np.vstack([pool, extra]), np.concatenate([f_pool, f_extra])
         others = [allx[int(np.argmax(allf))], extra[2]]
-    x = run(stage, pool[seg][int(np.argmax(f_pool[seg]))], others, a_min, j_min)
+    (x,) = runs([(stage, pool[seg][int(np.argmax(f_pool[seg]))], others, (a_min, j_min), np.inf)])
     v, a, j = exact(x)
-    result = (a_min / a + j_min / j, x, v, a, j)
-    F, x, v, a, j = result
+    F = a_min / a + j_min / j
     return VelResult(
         tuple(float(c) for c in space.full(x)[0]), a, j, v, a_min, j_min, float(F), prob.lambda_free,
         tuple(float(c) for c in space.full(xa)[0]), tuple(float(c) for c in space.full(xj)[0]),
