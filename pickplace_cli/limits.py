@@ -25,7 +25,7 @@ gravity torque G_m at that end.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from typing import Any
 
 import numpy as np
@@ -80,24 +80,49 @@ def quadrature_weights(tau: np.ndarray, breakpoints: np.ndarray) -> np.ndarray |
     """Weights (N,) on the sorted grid ``tau`` that integrate over [0, 1] by :func:`span_nodes`' Gauss rule
     (zero off the nodes), or None when the grid does not contain every node (within 1e-9)."""
     nodes, w = span_nodes(breakpoints)
-    i = np.clip(np.searchsorted(tau, nodes), 1, len(tau) - 1)
+    i = np.minimum(np.maximum(np.searchsorted(tau, nodes), 1), len(tau) - 1)
     i = np.where(np.abs(tau[i - 1] - nodes) < np.abs(tau[i] - nodes), i - 1, i)
-    if len(tau) < 2 or np.max(np.abs(tau[i] - nodes)) > 1e-9:
+    if len(tau) < 2 or np.abs(tau[i] - nodes).max() > 1e-9:
         return None
     out = np.zeros(len(tau))
     np.add.at(out, i, w)
     return out
 
 
+def _extra_points(breakpoints: np.ndarray, uniform: bool) -> np.ndarray:
+    """The sorted points the check adds to the output samples: breakpoints ∪ span nodes (∪ the uniform
+    grid), without round-off twins (memoised per breakpoints, like :func:`span_nodes`)."""
+    key = (tuple(np.asarray(breakpoints, float).tolist()), uniform)
+    hit = _EXTRA.get(key)
+    if hit is None:
+        parts = [breakpoints, span_nodes(breakpoints)[0]] + ([np.linspace(0.0, 1.0, CHECK_SAMPLES)] if uniform else [])
+        hit = np.unique(np.concatenate(parts))
+        hit = hit[np.concatenate([[True], np.diff(hit) > 1e-9])]
+        if len(_EXTRA) > 256:
+            _EXTRA.clear()
+        _EXTRA[key] = hit
+    return hit
+
+
+_EXTRA: dict = {}
+
+
 def check_grid_index(tau: np.ndarray, breakpoints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """:func:`check_grid` and the index of every output sample ``tau`` (sorted) in it.
 
     Extra points within 1e-9 of an output sample or of each other (round-off twins) are dropped, so
-    every output sample is in the grid exactly."""
+    every output sample is in the grid exactly. When the output samples already cover [0, 1] at least as
+    densely as the uniform grid (e.g. 1 kHz for a move of 0.128 s or longer), the uniform grid adds nothing
+    and is left out."""
     tau = np.asarray(tau, float)
-    extra = np.unique(np.concatenate([np.linspace(0.0, 1.0, CHECK_SAMPLES), breakpoints, span_nodes(breakpoints)[0]]))
-    extra = extra[np.concatenate([[True], np.diff(extra) > 1e-9])]
-    pos = np.clip(np.searchsorted(tau, extra), 1, len(tau) - 1) if len(tau) > 1 else np.zeros(len(extra), int)
+    dense = (
+        len(tau) >= CHECK_SAMPLES
+        and tau[0] <= 0.0
+        and tau[-1] >= 1.0
+        and float((tau[1:] - tau[:-1]).max()) <= 1.0 / (CHECK_SAMPLES - 1)
+    )
+    extra = _extra_points(breakpoints, not dense)
+    pos = np.minimum(np.maximum(np.searchsorted(tau, extra), 1), len(tau) - 1) if len(tau) > 1 else np.zeros(len(extra), int)
     near = np.minimum(np.abs(extra - tau[pos - 1 if len(tau) > 1 else 0]), np.abs(extra - tau[pos]))
     grid = np.concatenate([tau, extra[near > 1e-9]])
     order = np.argsort(grid, kind="stable")
@@ -205,12 +230,12 @@ class Parts:
     singularity: np.ndarray | None = None  # (N,)
 
 
+_PART_NAMES = tuple(f.name for f in fields(Parts))
+
+
 def take_parts(parts: Parts, index: np.ndarray) -> Parts:
     """The samples ``index`` of ``parts`` (every per-sample array indexed)."""
-    from dataclasses import fields
-
-    return Parts(**{f.name: (None if getattr(parts, f.name) is None else getattr(parts, f.name)[index])
-                    for f in fields(Parts)})
+    return Parts(*[None if x is None else x[index] for x in (getattr(parts, name) for name in _PART_NAMES)])
 
 
 @dataclass
@@ -362,7 +387,7 @@ def _parabolic_peak(x: np.ndarray, y: np.ndarray, i: np.ndarray) -> tuple[np.nda
         ok = curv < 0
         slope = d1 + curv * (x1 - x0)  # derivative at x1
         xv = np.where(ok, x1 - slope / (2 * np.where(ok, curv, -1.0)), x1)
-        xv = np.clip(xv, x0, x2)
+        xv = np.minimum(np.maximum(xv, x0), x2)
         yv = np.where(ok, y1 - slope**2 / (4 * np.where(ok, curv, -1.0)), y1)
         peak[inner] = np.maximum(yv, y1)
         at[inner] = np.where(yv >= y1, xv, x1)

@@ -487,6 +487,7 @@ class Table:
     source: str = "<memory>"
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "_columns", {})  # column arrays, built once (a table is immutable)
         lam = self.lam
         if len(lam) < 2:
             raise TableError(f"{self.source}: a table needs at least two rows, got {len(lam)}")
@@ -495,11 +496,17 @@ class Table:
 
     @property
     def lam(self) -> np.ndarray:
-        return np.array([r.lam for r in self.rows])
+        return self.column("lam")
 
     def column(self, name: str) -> np.ndarray:
+        """The column ``name`` as a read-only array (``lambda`` or ``lam``, ``k1``, ``k2``, …)."""
         attr = "lam" if name == "lambda" else name
-        return np.array([getattr(r, attr) for r in self.rows])
+        col = self._columns.get(attr)  # type: ignore[attr-defined]
+        if col is None:
+            col = np.array([getattr(r, attr) for r in self.rows])
+            col.flags.writeable = False
+            self._columns[attr] = col  # type: ignore[attr-defined]
+        return col
 
     @property
     def eta(self) -> float | None:
@@ -769,6 +776,7 @@ def build_table(
 # ------------------------------------------------------------------------------------------------- I/O
 
 
+@functools.lru_cache(maxsize=1)
 def default_table_path() -> Path:
     from .resources import data_dir
 
@@ -863,7 +871,7 @@ def parse_table(text: str, source: str = "<table>") -> Table:
     return Table(tuple(rows), meta=meta, source=source)
 
 
-_CACHE: dict[tuple[str, float, int], object] = {}
+_CACHE: dict[tuple, object] = {}
 
 
 def read_table_file(path: Path, parse: Callable[[str, str], object], source: str, build_hint: str):
@@ -871,7 +879,7 @@ def read_table_file(path: Path, parse: Callable[[str, str], object], source: str
     when it is missing (saying how to build it: ``build_hint``) or unreadable."""
     try:
         st = path.stat()
-        key = (str(path.resolve()), st.st_mtime, st.st_size)
+        key = (st.st_dev, st.st_ino, st.st_mtime_ns, st.st_size, source)  # the file itself, as it is now
         if key in _CACHE:
             return _CACHE[key]
         text = path.read_text(encoding="utf-8")

@@ -90,7 +90,7 @@ def _gram_extremes(dx: np.ndarray, dy: np.ndarray, dz: np.ndarray) -> tuple[np.n
     pp = np.sqrt(np.maximum((a0 * a0 + a1 * a1 + a2 * a2 + 2.0 * off) / 6.0, 1e-300))
     detb = (a0 * (a1 * a2 - g[1][2] ** 2) - g[0][1] * (g[0][1] * a2 - g[1][2] * g[0][2])
             + g[0][2] * (g[0][1] * g[1][2] - a1 * g[0][2])) / pp**3
-    phi = np.arccos(np.clip(detb / 2.0, -1.0, 1.0)) / 3.0
+    phi = np.arccos(np.minimum(np.maximum(detb / 2.0, -1.0), 1.0)) / 3.0
     hi = m + 2.0 * pp * np.cos(phi)
     # det G = (det A)², exact from the rows
     det_a = (dx[0] * (dy[1] * dz[2] - dz[1] * dy[2]) - dy[0] * (dx[1] * dz[2] - dz[1] * dx[2])
@@ -196,7 +196,7 @@ class DeltaRobot:
         xr, yt, z = _local(p)
         e = self.R - self.r
         a = xr - e
-        c0 = (np.sum(p * p, axis=1) + e * e + self.L**2 - self.l**2) / (2.0 * self.L)
+        c0 = ((p * p).sum(axis=1) + e * e + self.L**2 - self.l**2) / (2.0 * self.L)
         K = c0 - (e / self.L) * xr  # = (a² + y′² + z² + L² − l²) / (2L)
         disc = a * a + z * z - K * K
         return a, yt, K, disc, z
@@ -444,10 +444,10 @@ class DeltaRobot:
         return self._singularity(self._arms(q, p))
 
     def _singularity(self, arms: _Arms) -> np.ndarray:
-        serial = np.min(np.abs(arms.D), axis=0) / (self.l * self.L)
+        serial = np.abs(arms.D).min(axis=0) / (self.l * self.L)
         dx, dy, dz = arms.base_frame()
         lo, hi = _gram_extremes(dx, dy, dz)
-        parallel = np.sqrt(np.clip(lo, 0.0, None) / hi)
+        parallel = np.sqrt(np.maximum(lo, 0.0) / hi)
         return np.minimum(serial, parallel)
 
     # ------------------------------------------------------------------ dynamics
@@ -541,9 +541,9 @@ class DeltaRobot:
         d1y = d1r * _SIN_PHI + vt * _COS_PHI
 
         def lam_dot(lam: np.ndarray, dF: tuple) -> np.ndarray:
-            rx = dF[0] - np.sum(d1x * lam, axis=0)
-            ry = dF[1] - np.sum(d1y * lam, axis=0)
-            rz = dF[2] - np.sum(d1z * lam, axis=0)
+            rx = dF[0] - (d1x * lam).sum(axis=0)
+            ry = dF[1] - (d1y * lam).sum(axis=0)
+            rz = dF[2] - (d1z * lam).sum(axis=0)
             return (rx * cx + ry * cy + rz * cz) / det
 
         dA = self.arm_inertia * qddd + Ddot * lam_a + arms.D * lam_dot(lam_a, (mp * j[:, 0], mp * j[:, 1], mp * j[:, 2]))
