@@ -236,7 +236,7 @@ class _Evaluator:
         q[:, 4:7] = np.linalg.solve(a[:, :, 4:7], rhs)
         return knots, q
 
-    def prepare(self, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def prepare(self, p: np.ndarray, lambda_rows: np.ndarray | None = None) -> tuple[np.ndarray, ...]:
         """(widths (P, 6), D (P, 6, 4, 3)) of parameters p (P, 7): the knot spans' widths and, at the left
         end of each span, the derivatives of orders 2 … 5 (a, j, snap, crackle). The acceleration is cubic
         on a span, so these Taylor coefficients are exact: a(h) = D0 + D1 h + D2 h²/2 + D3 h³/6 at h = τ − τ_left.
@@ -250,7 +250,10 @@ class _Evaluator:
         three (half the distance: well conditioned), the unknowns are snap and crackle at each end and the
         crackles of the four inner spans (8), fixed by the via points at τ7, ½, τ9 and C⁴ continuity at ½
         (8): one 8 × 8 solve per parameter vector and about 30 numpy calls for the batch, where the
-        Cox–de Boor route takes about 150 (the cost here is per call, not per vector)."""
+        Cox–de Boor route takes about 150 (the cost here is per call, not per vector).
+
+        ``lambda_rows``: also return, for those rows, ∂D/∂λ1 … ∂λ3 (R, 3, 6, 4, 3) — exact, since the path is
+        affine in λ (Eq. 25–27); one solve with three more right-hand sides."""
         p = np.atleast_2d(p)
         P = p.shape[0]
         self.count += P
@@ -283,11 +286,20 @@ class _Evaluator:
         via = prob.base[1:4][None] + p[:, 4:7, None] * prob.offset[None]  # s1, s2, s3 of Eq. (25)–(27)
         known = np.zeros((P, 8, 3))
         known[:, 0], known[:, 1], known[:, 4], known[:, 5] = prob.base[0], prob.v_start, prob.base[4], prob.v_end
-        rhs = np.zeros((P, 8, 3))
-        rhs[:, :3] = via
-        z = np.linalg.solve(rows[:, :, :8], rhs - rows[:, :, 8:] @ known)
-        d = G[:, :, 2:6] @ np.concatenate([z, known], axis=1)[:, None]
-        return w, d
+        rhs = np.zeros((P, 8, 3 if lambda_rows is None else 6))
+        rhs[:, :3, :3] = via
+        rhs[:, :, :3] -= rows[:, :, 8:] @ known
+        if lambda_rows is not None:
+            rhs[:, np.arange(3), np.arange(3, 6)] = 1.0  # columns 0–2 of the inverse: the via points' weights
+        z = np.linalg.solve(rows[:, :, :8], rhs)
+        d = G[:, :, 2:6] @ np.concatenate([z[:, :, :3], known], axis=1)[:, None]
+        if lambda_rows is None:
+            return w, d
+        # the path is affine in λ (Eq. 25–27: via point i moves by λ_i·offset_i): ∂d/∂λ_i exactly
+        inv = z[lambda_rows, :, 3:]  # (R, 8, 3)
+        g = G[lambda_rows][:, :, 2:6, :8]  # (R, 6, 4, 8)
+        dl = np.einsum("rsok,rki->riso", g, inv)  # (R, 3, 6, 4)
+        return w, d, dl[..., None] * prob.offset[None, :, None, None, :]  # (R, 3, 6, 4, 3)
 
     def prepare_bspline(self, p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """:meth:`prepare` by the B-spline route: control points of Eq. (16), derivatives from the control
@@ -534,7 +546,8 @@ class _Stage:
         self.s = settings
         self.h = 1e-6
         n = space.n
-        self._steps = np.vstack([np.zeros(n), self.h * np.eye(n), -self.h * np.eye(n)])
+        # central differences in the four knots only (the path is affine in λ: those derivatives are exact)
+        self._steps = np.vstack([np.zeros(n), self.h * np.eye(n)[:4], -self.h * np.eye(n)[:4]])
         self.uses = (0,) if kind == "a" else (1,) if kind == "j" else (0, 1)
         self._memo: dict[bytes, tuple[list, list]] = {}
 
@@ -578,17 +591,32 @@ def _eval_stages(requests: list[tuple[_Stage, np.ndarray]]) -> list[tuple[list, 
         ev, space, steps, sub = stage0.ev, stage0.space, stage0._steps, _Stage.SUB
         n, S, m = space.n, steps.shape[0], 6 * sub
         xs = np.array([x for _, x in todo.values()])
-        prep = ev.prepare(space.full((xs[:, None, :] + steps[None]).reshape(-1, n)))
-        u = _segment_maxima(prep[0][::S], prep[1][::S], (0, 1), sub)  # (R, 2m): a's then j's
-        piece = np.tile(np.repeat(np.arange(6), sub), 2)
-        sq = ev.values(prep, piece, np.repeat(u, S, axis=0))  # (‖a‖², ‖j‖²), each (R·S, 2m)
+        R = xs.shape[0]
+        width, d, dlam = ev.prepare(space.full((xs[:, None, :] + steps[None]).reshape(-1, n)), np.arange(0, R * S, S))
+        u = _segment_maxima(width[::S], d[::S], (0, 1), sub)  # (R, 2m): a's then j's
+        piece = np.repeat(np.arange(6), sub)
+        c = d[:, piece]  # (R·S, m, 4, 3)
+        cl = dlam[:, :, piece]  # (R, 3, m, 4, 3)
+        lam = space.free[4:]
+        sq, grad = [], []
+        for q in (0, 1):
+            h = np.repeat(u[:, q * m : q * m + m], S, axis=0) * width[:, piece]  # (R·S, m) from the span start
+            hl = h[::S, None, :, None]
+            if q == 0:  # a = D0 + D1 h + D2 h²/2 + D3 h³/6
+                val = c[:, :, 0] + h[..., None] * (c[:, :, 1] + h[..., None] * (c[:, :, 2] / 2 + h[..., None] * c[:, :, 3] / 6))
+                dv = cl[..., 0, :] + hl * (cl[..., 1, :] + hl * (cl[..., 2, :] / 2 + hl * cl[..., 3, :] / 6))
+            else:  # j = D1 + D2 h + D3 h²/2
+                val = c[:, :, 1] + h[..., None] * (c[:, :, 2] + h[..., None] * c[:, :, 3] / 2)
+                dv = cl[..., 1, :] + hl * (cl[..., 2, :] + hl * cl[..., 3, :] / 2)
+            sq.append(np.einsum("pmd,pmd->pm", val, val).reshape(R, S, m))
+            grad.append(2.0 * np.einsum("rmd,rimd->rim", val[::S], dv)[:, lam])  # ∂‖·‖²/∂λ (R, free λ, m)
         h2 = 2 * stage0.h
         for r, ((_, key), (stage, _)) in enumerate(todo.items()):
             vals, jacs = [], []
             for q in stage.uses:
-                g = sq[q][r * S : (r + 1) * S, m * q : m * q + m] / stage.norm[q]
+                g = sq[q][r] / stage.norm[q]
                 vals.append(g[0])
-                jacs.append((g[1 : n + 1] - g[n + 1 :]).T / h2)
+                jacs.append(np.hstack([(g[1:5] - g[5:9]).T / h2, grad[q][r].T / stage.norm[q]]))
             stage._memo[key] = (vals, jacs)
     return [stage._memo[x.tobytes()] for stage, x in requests]
 
