@@ -11,7 +11,10 @@ the paper's setting — equal pick and place heights, horizontal conveyors (no v
 
     h/b (geometric), v0_along, v0_across, v1_along, v1_across (uniform in [−V, V])
 
-(the file holds one node per symmetry orbit, see below) and answers by multilinear interpolation (h/b in log scale) of the 32 corners of the query's cell.
+(the file holds one node per symmetry orbit, see below). The answer (:meth:`VelTable.lookup`) is the
+better, by F estimated in one batch of the solver's evaluator, of two interpolants of the 32 corners of the
+query's cell (h/b in log scale): plain multilinear, and multilinear with λ1, λ2, λ3 blended as the
+via-point displacements they make (:meth:`VelTable.via_interpolate`).
 
 **Accuracy, and why it is limited.** The optimum is a minimax point: several acceleration (or jerk)
 peaks are equal there, so a shape that is optimal for a nearby problem loses F to *first* order in the
@@ -20,9 +23,16 @@ moving one velocity group by 0.02 and keeping the old optimum loses 0.6 % of F (
 averaging the exact optima at the 32 corners of a cell of half-width d around a point (2d in log h/b)
 loses, at the point, 7.1 % median / 18 % worst (10 points) for d = 0.125 (this grid), 2.1 % / 11 % for
 d = 0.0625 and 0.84 % / 5.7 % for d = 0.03125: first order in d, so no grid that builds in minutes holds
-F within 1 % everywhere by interpolation (README reports the held-out numbers). The exact answer stays
-fast: the table also stores each node's minimisers of a_max and j_max, and ``VelTable.seeds`` gives the
-interpolated and the 32 corner values of all three as starts for ``methods.bspline_vel.solve_seeded``.
+F within 1 % everywhere by interpolation. On the 200 held-out moves of ``bench/bench_conveyor.py`` (F
+against the best exact solve; count within 1 %, median / 95th percentile / worst loss): multilinear
+31/200, 2.78 / 10.5 / 26.8 %; via-point λ 37/200, 2.32 / 7.3 / 13.3 %; the better of the two (the answer)
+40/200, 2.14 / 6.7 / 10.4 %, in 0.35 ms (median, load ~3 on 2 cores). Tried and worse: a
+tensor-product cubic spline of the optima (5/200, worst 72 %: the optima have kinks and steep ramps
+between nodes), corner optima (best of 32: 19/200), corner sensitivities (first-order Taylor blend: worse
+than multilinear), a local SLSQP polish of the F stage (one iteration 2.9 ms; converged, 20 ms, still
+5/60 beyond 1 %; all measured by bench/bench_conveyor_table.py). The exact answer stays fast: the table also stores each node's minimisers of a_max and
+j_max, and ``VelTable.seeds`` gives the interpolated and the 32 corner values of all three as starts for
+``methods.bspline_vel.solve_seeded``.
 
 Symmetries cut the build by four: mirroring the move in its vertical plane (across components negated)
 leaves the optimum unchanged; running the move backwards (v0 ↔ v1 with along and across kept, since both
@@ -204,13 +214,56 @@ class VelTable:
             out[kind] = np.vstack([p[None, :], corner])
         return out
 
-    def lookup(self, task, duration: float) -> tuple[float, ...]:
-        """Shape parameters (τ6, τ7, τ9, τ10, λ1, λ2, λ3) for ``task`` run in ``duration`` seconds: the
-        multilinear interpolation of the cell's 32 corners (h/b in log scale)."""
-        x = self.query_groups(task, duration)
-        p = self.interpolate(x)[0]
+    def via_interpolate(self, x: np.ndarray, at: list[np.ndarray] | None = None, w: np.ndarray | None = None) -> np.ndarray:
+        """Parameters (7,) at groups ``x`` with λ1, λ2, λ3 interpolated as the via-point displacements they
+        make, not as numbers: λ_i moves via point i by λ_i·o_i, o_i = v0·T/b, (v0 − v1)·T/b/2, −v1·T/b
+        [Yang2022, Eq. (25)–(27)] (horizontal, (along, across)). The corners' displacements λ_i·o_i (each
+        with its own o_i) are blended multilinearly and projected on the query's o_i: λ_i = d_i·o_i/|o_i|²
+        (clipped to [0, 1]; the multilinear λ_i where o_i = 0, where λ_i does not change the path). A λ of
+        a corner whose offset is short moves the path little however large it is, so it no longer pulls the
+        blend (multilinear λ: 31/200 held-out moves within 1 % of the exact F, worst loss 26.8 %; this:
+        37/200, worst 13.3 %). Knots are multilinear as in :meth:`interpolate`."""
+        if at is None or w is None:
+            at, w = self._cell(x)
+        corner = self.params[tuple(at)]
+        p = w @ corner
+        axes = self._axes  # type: ignore[attr-defined]
+        cv = [axes[k][at[k]] for k in range(1, 5)]  # corner groups (32,) each: v0 along/across, v1 along/across
+        v0, v1 = np.stack(cv[:2], axis=1), np.stack(cv[2:], axis=1)
+        off = np.stack([v0, (v0 - v1) / 2, -v1], axis=1)  # (32, 3, 2)
+        d = np.einsum("c,ci,cid->id", w, corner[:, 4:], off)  # blended displacement of each via point (3, 2)
+        q0, q1 = np.asarray(x[1:3], float), np.asarray(x[3:5], float)
+        o = np.stack([q0, (q0 - q1) / 2, -q1])
+        oo = np.einsum("id,id->i", o, o)
+        ok = oo > 1e-12
+        lam = np.where(ok, np.einsum("id,id->i", d, o) / np.where(ok, oo, 1.0), p[4:])
+        p[4:] = np.clip(lam, 0.0, 1.0)
         p[:4] = _order_knots(p[:4], self.grid.margin)
-        return tuple(float(c) for c in p)
+        return p
+
+    def candidates(self, task, duration: float) -> tuple[np.ndarray, np.ndarray]:
+        """(candidates (2, 7), sampled F (2,)) of ``task`` in ``duration`` seconds: the via-point
+        interpolation (:meth:`via_interpolate`) and the multilinear one, with F = a_min/a_max + j_min/j_max
+        estimated in one batch of the solver's evaluator (‖a‖, ‖j‖ at 8 points per knot span; a_min, j_min
+        interpolated from the cell's corners)."""
+        from .methods.bspline_vel import _Evaluator, _grid, make_problem
+
+        x = self.query_groups(task, duration)
+        at, w = self._cell(x)
+        lin = w @ self.params[tuple(at)]
+        lin[:4] = _order_knots(lin[:4], self.grid.margin)
+        cand = np.vstack([self.via_interpolate(x, at, w), lin])
+        ga, gj = _Evaluator(make_problem(task, duration)).sampled(cand, *_grid(8))
+        a_min, j_min = float(w @ self.a_min[tuple(at)]), float(w @ self.j_min[tuple(at)])
+        return cand, a_min / np.sqrt(ga.max(axis=1)) + j_min / np.sqrt(gj.max(axis=1))
+
+    def lookup(self, task, duration: float) -> tuple[float, ...]:
+        """Shape parameters (τ6, τ7, τ9, τ10, λ1, λ2, λ3) for ``task`` run in ``duration`` seconds: of the
+        two interpolants of the query's cell (:meth:`candidates`: λ as via-point displacements, and plain
+        multilinear; h/b in log scale) the one with the larger estimated F. Held-out accuracy and cost:
+        module docstring."""
+        cand, f = self.candidates(task, duration)
+        return tuple(float(c) for c in cand[int(np.argmax(f))])
 
 
 def _order_knots(t: np.ndarray, margin: float) -> np.ndarray:

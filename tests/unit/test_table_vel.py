@@ -62,10 +62,49 @@ def test_format_parse_round_trip_and_lookup_at_nodes(small):
     np.testing.assert_allclose(back.F, small.F, rtol=1e-8)
     task, T = _node_task(SMALL, (1, 0, 1, 1, 0), b=0.42, T=0.3)
     np.testing.assert_allclose(back.lookup(task, T), small.params[(1, 0, 1, 1, 0)], atol=1e-8)
-    # between nodes: the multilinear blend of the cell's corners (midpoint of the h/b axis in log scale)
+    # between nodes: the multilinear blend of the cell's corners (midpoint of the h/b axis in log scale);
+    # along h/b the offsets of the λ do not change, so the via-point blend is the same, and so the answer
     mid = dict(zip(GROUP_AXES, [float(np.sqrt(0.1 * 0.3)), -0.2, 0.2, 0.2, -0.2]), eta=0.5)
     want = (small.params[0, 0, 1, 1, 0] + small.params[1, 0, 1, 1, 0]) / 2
+    x = back.query_groups(bv.task_from_groups(mid), 1.0)
+    np.testing.assert_allclose(back.interpolate(x)[0], want, atol=1e-8)
+    np.testing.assert_allclose(back.via_interpolate(x), want, atol=1e-8)
     np.testing.assert_allclose(back.lookup(bv.task_from_groups(mid), 1.0), want, atol=1e-8)
+
+
+def test_via_interpolation_blends_displacements_not_lambdas(small):
+    """λ1 moves via point 1 by λ1·v0·T/b [Yang2022, Eq. (25)]. Between a node with v0 = 0 (λ1 = 0.21, no
+    displacement) and one with v0·T/b = (0.2, 0) and λ1 = 0.5 (displacement (0.1, 0)), halfway the blended
+    displacement is (0.05, 0), i.e. λ1 = 0.5 for v0·T/b = (0.1, 0); the multilinear λ1 is (0.21 + 0.5)/2."""
+    from pickplace_cli.table_vel import VelTable
+
+    grid = VelGrid(h_min=0.1, h_max=0.3, h_count=2, v_max=0.2, v_count=3)
+    shape = (2, 3, 3, 3, 3)
+    params = np.broadcast_to(np.array([0.02, 0.2, 0.8, 0.98, 0.21, 0.5, 0.21]), shape + (7,)).copy()
+    params[:, 2, 1, :, :, 4] = 0.5  # v0 = (0.2, 0): λ1 = 0.5
+    tab = VelTable(grid, params, np.full(shape, 1.8), np.ones(shape), np.ones(shape))
+    x = np.array([0.1, 0.1, 0.0, 0.0, 0.0])  # v0 = (0.1, 0), v1 = 0 (λ3's offset is zero: λ3 as stored)
+    assert tab.interpolate(x)[0][4] == pytest.approx(0.355, abs=1e-12)
+    p = tab.via_interpolate(x)
+    assert p[4] == pytest.approx(0.5, abs=1e-12)
+    # λ2's offset (v0 − v1)/2 = (0.05, 0); its corners: offset 0 (λ2 as stored) and (0.1, 0) with λ2 = 0.5
+    assert p[5] == pytest.approx(0.5, abs=1e-12) and p[6] == pytest.approx(0.21, abs=1e-12)
+
+
+def test_lookup_is_the_candidate_with_the_larger_sampled_F(shipped):
+    """The answer is the better of the two interpolants by F estimated from sampled peaks; that estimate
+    is within 1 % of F from the exact peaks (8 samples per knot span; the normalisers interpolated, so the
+    comparison is of F with the same normalisers)."""
+    for task, T in _held_out(5, seed=3):
+        cand, f = shipped.candidates(task, T)
+        assert cand.shape == (2, 7) and f.shape == (2,)
+        np.testing.assert_array_equal(shipped.lookup(task, T), cand[int(np.argmax(f))])
+        x = shipped.query_groups(task, T)
+        _, _, w, a_min, j_min = shipped.interpolate(x)
+        for p, fs in zip(cand, f):
+            _, a, j = bv.exact_peaks(bv.make_problem(task, T), p)
+            assert fs == pytest.approx(a_min / a + j_min / j, rel=1e-2)
+            assert fs >= a_min / a + j_min / j - 1e-12  # sampled peaks are never above the exact ones
 
 
 def test_stage1_minimisers_stored_and_seeds(small):
@@ -186,8 +225,10 @@ def test_seeded_solve_is_exact_and_the_table_alone_is_approximate(shipped):
     default "exact" solver (seeds plus the multi-start's sampled starts), whose a_min and j_min are also
     as low (1e-8 relative). README reports the 200-move benchmark, where each misses on a few moves. The table's answer alone is instant but
     approximate: its F loss against the exact optimum is below 1 % only on part of the set (the optimum
-    is a minimax point that moves fast with the groups; README): the test pins today's accuracy, median
-    loss under 5 %."""
+    is a minimax point that moves fast with the groups; README). The test pins today's accuracy: on these
+    12 moves the answer loses 0.7–9.7 % (median 2.0 %) and the multilinear interpolant 0.7–17.7 % (median
+    2.8 %); median under 3 %, and never more than 0.5 % points worse than multilinear (the choice between
+    the two uses interpolated normalisers; 200-move bench: at most 0.4 % points worse, on 7 moves)."""
     losses = []
     for task, T in _held_out(HELD_OUT):
         prob = bv.make_problem(task, T)
@@ -199,9 +240,12 @@ def test_seeded_solve_is_exact_and_the_table_alone_is_approximate(shipped):
         # the default solver (seeds + the multi-start's sampled starts) too, and its minima are as low
         assert A / exact.a_max + J / exact.j_max >= A / glob.a_max + J / glob.j_max - 1e-8
         assert exact.a_min <= glob.a_min * (1 + 1e-8) and exact.j_min <= glob.j_min * (1 + 1e-8)
+        best = A / seeded.a_max + J / seeded.j_max
         _, a, j = bv.exact_peaks(prob, shipped.lookup(task, T))
-        losses.append(1 - (A / a + J / j) / (A / seeded.a_max + J / seeded.j_max))
-    assert np.median(losses) < 0.05 and min(losses) >= -1e-9
+        losses.append(1 - (A / a + J / j) / best)
+        _, a, j = bv.exact_peaks(prob, shipped.interpolate(shipped.query_groups(task, T))[0])
+        assert losses[-1] <= 1 - (A / a + J / j) / best + 5e-3
+    assert np.median(losses) < 0.03 and min(losses) >= -1e-9
 
 
 def test_table_answer_is_fast(shipped):
