@@ -315,45 +315,82 @@ class MotionModel:
         check is "max of the column ≤ limit" (position min and singularity use sign −1). ``T`` may also be
         an (N,) array, one duration per sample (every column is computed sample by sample): the batch
         verdict engine stacks moves of different durations into one call."""
-        meta: list[tuple] = []
-        cols: list[np.ndarray] = []
+        meta, groups, perm = self._column_plan(parts.dAm is not None, parts.singularity is not None)
+        if not meta:
+            return meta, np.zeros((len(parts.tau), 0))
+        Tc = T if np.ndim(T) == 0 else np.asarray(T)[:, None]
+        cols = []
+        for kind, idx in groups:  # one array operation per quantity, all joints at once
+            if kind == "position max":
+                cols.append(parts.q[:, idx])
+            elif kind == "position min":
+                cols.append(-parts.q[:, idx])
+            elif kind == "velocity":
+                cols.append(np.abs(parts.qd1[:, idx]) / Tc)
+            elif kind == "acceleration":
+                cols.append(np.abs(parts.qdd1[:, idx]) / Tc**2)
+            elif kind == "jerk":
+                cols.append(np.abs(parts.qddd1[:, idx]) / Tc**3)
+            elif kind == "motor speed":
+                cols.append(np.abs(self.gear[idx] * parts.qd1[:, idx]) / Tc)
+            elif kind == "motor torque":
+                cols.append(np.abs(parts.Am[:, idx] / Tc**2 + parts.Gm[:, idx]))
+            elif kind == "motor torque rate":
+                cols.append(np.abs(parts.dAm[:, idx] / Tc**3 + parts.dGm[:, idx] / Tc))
+            elif kind == "singularity":
+                cols.append(-parts.singularity[:, None])
+            elif kind == "workcell max":
+                cols.append(parts.p[:, idx])
+            else:  # workcell min
+                cols.append(-parts.p[:, idx])
+        return list(meta), np.concatenate(cols, axis=1)[:, perm]
+
+    def _column_plan(self, rates: bool, singularity: bool) -> tuple[list[tuple], list[tuple], np.ndarray]:
+        """The columns of :meth:`columns` (memoised): meta per column in report order (joint by joint), the
+        quantity groups computed for all joints at once, and the permutation from group order to meta order."""
+        key = (rates, singularity)
+        plans = self.__dict__.setdefault("_plans", {})
+        if key in plans:
+            return plans[key]
+        entries: list[tuple] = []  # (meta, group kind, joint index or axis)
         for i, (name, unit, spec) in enumerate(zip(self.robot.joint_names, self.robot.joint_units, self.specs)):
             lim, drv = spec.limits, spec.drive
             if lim.position is not None:
                 # a joint range is part of the reachable workspace: no duration fixes it (exit 4)
-                meta.append((name, "position max", unit, lim.position[1], "reach", 1.0))
-                cols.append(parts.q[:, i])
-                meta.append((name, "position min", unit, lim.position[0], "reach", -1.0))
-                cols.append(-parts.q[:, i])
-            for qname, arr, k, limit, u in (
-                ("velocity", parts.qd1, 1, lim.velocity, f"{unit}/s"),
-                ("acceleration", parts.qdd1, 2, lim.acceleration, f"{unit}/s^2"),
-                ("jerk", parts.qddd1, 3, lim.jerk, f"{unit}/s^3"),
+                entries.append(((name, "position max", unit, lim.position[1], "reach", 1.0), "position max", i))
+                entries.append(((name, "position min", unit, lim.position[0], "reach", -1.0), "position min", i))
+            for qname, limit, u in (
+                ("velocity", lim.velocity, f"{unit}/s"),
+                ("acceleration", lim.acceleration, f"{unit}/s^2"),
+                ("jerk", lim.jerk, f"{unit}/s^3"),
             ):
                 if limit is not None:
-                    meta.append((name, qname, u, limit, "limit", 1.0))
-                    cols.append(np.abs(arr[:, i]) / T**k)
+                    entries.append(((name, qname, u, limit, "limit", 1.0), qname, i))
             if drv is not None:
                 if drv.max_speed is not None:
-                    meta.append((name, "motor speed", "rad/s", drv.max_speed, "limit", 1.0))
-                    cols.append(np.abs(self.gear[i] * parts.qd1[:, i]) / T)
+                    entries.append(((name, "motor speed", "rad/s", drv.max_speed, "limit", 1.0), "motor speed", i))
                 if drv.peak_torque is not None:
-                    meta.append((name, "motor torque", "N·m", drv.peak_torque, "limit", 1.0))
-                    cols.append(np.abs(parts.Am[:, i] / T**2 + parts.Gm[:, i]))
-                if drv.torque_rate is not None and parts.dAm is not None:
-                    meta.append((name, "motor torque rate", "N·m/s", drv.torque_rate, "limit", 1.0))
-                    cols.append(np.abs(parts.dAm[:, i] / T**3 + parts.dGm[:, i] / T))
-        if self.singularity_margin is not None and parts.singularity is not None:
-            meta.append(("tool", "singularity measure min", "1", self.singularity_margin, "reach", -1.0))
-            cols.append(-parts.singularity)
+                    entries.append(((name, "motor torque", "N·m", drv.peak_torque, "limit", 1.0), "motor torque", i))
+                if drv.torque_rate is not None and rates:
+                    entries.append(((name, "motor torque rate", "N·m/s", drv.torque_rate, "limit", 1.0),
+                                    "motor torque rate", i))
+        if self.singularity_margin is not None and singularity:
+            entries.append((("tool", "singularity measure min", "1", self.singularity_margin, "reach", -1.0),
+                            "singularity", 0))
         if self.box is not None:
             for c, axis in enumerate("xyz"):
-                meta.append(("tool", f"workcell {axis} max", "m", self.box.max[c], "reach", 1.0))
-                cols.append(parts.p[:, c])
-                meta.append(("tool", f"workcell {axis} min", "m", self.box.min[c], "reach", -1.0))
-                cols.append(-parts.p[:, c])
-        data = np.column_stack(cols) if cols else np.zeros((len(parts.tau), 0))
-        return meta, data
+                entries.append((("tool", f"workcell {axis} max", "m", self.box.max[c], "reach", 1.0), "workcell max", c))
+                entries.append((("tool", f"workcell {axis} min", "m", self.box.min[c], "reach", -1.0), "workcell min", c))
+        groups: list[tuple] = []
+        order: list[int] = []  # entry index of each computed column, in group order
+        for kind in dict.fromkeys(e[1] for e in entries):
+            members = [k for k, e in enumerate(entries) if e[1] == kind]
+            groups.append((kind, np.array([entries[k][2] for k in members])))
+            order += members
+        position = {k: n for n, k in enumerate(order)}
+        perm = np.array([position[k] for k in range(len(entries))], dtype=int)
+        plans[key] = ([e[0] for e in entries], groups, perm)
+        return plans[key]
 
     def rms_motor_torque(self, parts: Parts, T: float, dwell: float) -> np.ndarray:
         """RMS motor torque (n,) [N·m] over the duty cycle move–dwell–back–dwell (see module docstring).
@@ -438,9 +475,11 @@ def check_limits(
             peak[near] = exact
             at[near] = exact_at
         ranges: dict[tuple[str, str], dict[str, tuple]] = {}
+        values = (np.array([m[5] for m in meta]) * peak).tolist()
+        times = (at * T).tolist()
         for c, (joint, quantity, unit, limit, kind, sign) in enumerate(meta):
-            value = float(sign * peak[c])
-            t_at = float(at[c] * T)
+            value = values[c]
+            t_at = times[c]
             if quantity.endswith(" max") or quantity.endswith(" min"):
                 base, side = quantity.rsplit(" ", 1)
                 if base.startswith(("position", "workcell")):
