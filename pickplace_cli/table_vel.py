@@ -24,14 +24,15 @@ averaging the exact optima at the 32 corners of a cell of half-width d around a 
 loses, at the point, 7.1 % median / 18 % worst (10 points) for d = 0.125 (this grid), 2.1 % / 11 % for
 d = 0.0625 and 0.84 % / 5.7 % for d = 0.03125: first order in d, so no grid that builds in minutes holds
 F within 1 % everywhere by interpolation. On the 200 held-out moves of ``bench/bench_conveyor.py`` (F
-against the best exact solve; count within 1 %, median / 95th percentile / worst loss): multilinear
-31/200, 2.78 / 10.5 / 26.8 %; via-point λ 37/200, 2.32 / 7.3 / 13.3 %; the better of the two (the answer)
-40/200, 2.14 / 6.7 / 10.4 %, in 0.35 ms (median, load ~3 on 2 cores). Tried and worse: a
-tensor-product cubic spline of the optima (5/200, worst 72 %: the optima have kinks and steep ramps
-between nodes), corner optima (best of 32: 19/200), corner sensitivities (first-order Taylor blend: worse
-than multilinear), a local SLSQP polish of the F stage (one iteration 2.9 ms; converged, 20 ms, still
-5/60 beyond 1 %; all measured by bench/bench_conveyor_table.py). The exact answer stays fast: the table also stores each node's minimisers of a_max and
-j_max, and ``VelTable.seeds`` gives the interpolated and the 32 corner values of all three as starts for
+against the best exact solve; count within 1 %, median / 95th percentile / worst loss): multilinear 31/200,
+2.78 / 10.5 / 26.8 %; via-point λ 37/200, 2.32 / 7.3 / 13.3 %; the better of the two (the answer) 40/200,
+2.14 / 6.7 / 10.4 %, in 0.35 ms (median, load ~3 on 2 cores). Tried and worse: a tensor-product cubic spline
+of the optima (5/200, worst 72 %: the optima have kinks and steep ramps between nodes), corner optima (best
+of 32: 19/200), corner sensitivities (first-order Taylor blend, slopes by warm solves: 0/20 within 1 %,
+median 9.4 %, against 2/20, 3.1 % multilinear; scratch script), a local SLSQP polish of the F stage (one
+iteration 2.9 ms; converged, 20 ms, still 5/60 beyond 1 %); the rest by bench/bench_conveyor_table.py. The
+exact answer stays fast: the table also stores each node's minimisers of a_max and j_max, and
+``VelTable.seeds`` gives the interpolated and the 32 corner values of all three as starts for
 ``methods.bspline_vel.solve_seeded``.
 
 Symmetries cut the build by four: mirroring the move in its vertical plane (across components negated)
@@ -44,9 +45,9 @@ from __future__ import annotations
 
 import io
 import math
+from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Callable, Sequence
 
 import numpy as np
 
