@@ -247,6 +247,9 @@ class MotionModel:
     specs: list  # JointSpec per joint
     singularity_margin: float | None = None
     box: Any = None  # profile Box or None
+    #: memo of what depends only on robot, specs, margin and box (the column plans); the planner shares one
+    #: per profile between the models of successive moves
+    memo: dict = field(default_factory=dict, repr=False, compare=False)
     has_drives: bool = field(init=False)
     gear: np.ndarray = field(init=False)
     eff: np.ndarray = field(init=False)
@@ -348,8 +351,8 @@ class MotionModel:
     def _column_plan(self, rates: bool, singularity: bool) -> tuple[list[tuple], list[tuple], np.ndarray]:
         """The columns of :meth:`columns` (memoised): meta per column in report order (joint by joint), the
         quantity groups computed for all joints at once, and the permutation from group order to meta order."""
-        key = (rates, singularity)
-        plans = self.__dict__.setdefault("_plans", {})
+        key = ("columns", rates, singularity)
+        plans = self.memo
         if key in plans:
             return plans[key]
         entries: list[tuple] = []  # (meta, group kind, joint index or axis)

@@ -77,10 +77,20 @@ class Plan:
 
 
 def motion_model(path, profile: Profile) -> MotionModel:
-    """The path on the profile's robot, with its joint specs, singularity margin and workcell box."""
-    robot = build_robot(profile.robot)
-    margin = getattr(profile.robot, "singularity_margin", None)
-    return MotionModel(path, robot, profile.robot.joint_specs(), margin, profile.workcell.box)
+    """The path on the profile's robot, with its joint specs, singularity margin and workcell box (built
+    once per profile: a profile is immutable)."""
+    hit = _STATIC.get(id(profile))
+    if hit is None or hit[0] is not profile:
+        robot = build_robot(profile.robot)
+        margin = getattr(profile.robot, "singularity_margin", None)
+        hit = (profile, robot, profile.robot.joint_specs(), margin, profile.workcell.box, {})
+        if len(_STATIC) > 32:
+            _STATIC.clear()
+        _STATIC[id(profile)] = hit
+    return MotionModel(path, *hit[1:])
+
+
+_STATIC: dict[int, tuple] = {}  # id(profile) → (profile, robot, specs, margin, box, memo); holds the profile
 
 
 def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions()) -> Plan:
