@@ -579,7 +579,7 @@ def _eval_stages(requests: list[tuple[_Stage, np.ndarray]]) -> list[tuple[list, 
     of every x in one :meth:`_Evaluator.prepare`, the segment maxima of ‖a‖² and ‖j‖² at every x in one
     :func:`_segment_maxima` call. The cost is per numpy call far more than per vector."""
     for stage, _ in requests:
-        if len(stage._memo) > 256:
+        if len(stage._memo) > 2048:
             stage._memo.clear()
     todo: dict[tuple[int, bytes], tuple[_Stage, np.ndarray]] = {}
     for stage, x in requests:
@@ -621,12 +621,16 @@ def _eval_stages(requests: list[tuple[_Stage, np.ndarray]]) -> list[tuple[list, 
     return [stage._memo[x.tobytes()] for stage, x in requests]
 
 
+MAX_ROUNDS = 50
+
+
 class _Run:
     """One SLSQP run of a stage in epigraph form: y = (x, t…), minimise t (or −F(t)) subject to
     t_q ≥ m_k(x) for every segment k of each quantity q used, and the ordering constraints of Eq. (36)."""
 
     def __init__(self, stage: _Stage, x0: np.ndarray, a_min: float, j_min: float, ftol: float, maxiter: int):
         self.stage, self.x0, self.ftol, self.maxiter = stage, x0, ftol, maxiter
+        self.max_rounds = MAX_ROUNDS
         self.a_min, self.j_min = a_min, j_min
         self.n, self.k = stage.space.n, len(stage.uses)
         norm = stage.norm
@@ -696,10 +700,12 @@ def _run_slsqp(runs: list[_Run]) -> list[np.ndarray]:
         return [_run_one(r, y) for r, y in zip(runs, y0)]
     states = [_LockstepSLSQP(r, y, slsqp) for r, y in zip(runs, y0)]
     active = list(states)
+    rounds = 0
     while active:
         _eval_stages([(st.run.stage, st.want) for st in active])
-        active = [st for st in active if st.advance()]
-    return [st.run.stage.space.clip(np.asarray(st.x[: st.run.n], float)) for st in states]
+        rounds += 1
+        active = [st for st in active if st.advance() and rounds < st.run.max_rounds]
+    return [st.result() for st in states]
 
 
 def _run_one(r: _Run, y0: np.ndarray) -> np.ndarray:
@@ -740,6 +746,27 @@ class _LockstepSLSQP:
         self.d = np.zeros(m)
         self.need = "both"  # the initial call needs f, g, constraints and normals
         self.want = self._xpart()
+        self.best: tuple[float, np.ndarray] | None = None
+
+    def result(self) -> np.ndarray:
+        """x at the end (clipped to the feasible set); when the run was cut off (``max_rounds``), the best
+        feasible point it evaluated."""
+        sp = self.run.stage.space
+        if abs(self.state["mode"]) == 1 and self.best is not None:
+            return self.best[1]
+        return sp.clip(np.asarray(self.x[: self.run.n], float))
+
+    def _note(self, x: np.ndarray, vals: list) -> None:
+        """Remember the best feasible point evaluated (its objective from the exact segment maxima)."""
+        if np.max(np.abs(self.run.stage.space.clip(x) - x)) > 1e-12:
+            return
+        r = self.run
+        if r.stage.kind == "F":
+            f = -(r.cf[0] / math.sqrt(vals[0].max()) + r.cf[1] / math.sqrt(vals[1].max()))
+        else:
+            f = float(vals[0].max())
+        if self.best is None or f < self.best[0]:
+            self.best = (f, x)
 
     def _xpart(self) -> np.ndarray:
         return self.x[: self.run.n].copy()
@@ -753,6 +780,7 @@ class _LockstepSLSQP:
                 return True
             vals, jacs = stage._memo[key]
             if self.need in ("both", "f"):
+                self._note(self.want, vals)
                 xf = np.clip(self.x, r.lo, r.hi) if self.need == "both" else self.x
                 self.fx = r.fun(xf)
                 self.d[:] = r.cons(self.x, vals)
@@ -877,6 +905,8 @@ def solve_seeded(prob: VelProblem, seeds: dict[str, np.ndarray], settings: VelSe
         away from it, sampled objective below ``bound``) screened (``screen_ftol``) — all of them advancing
         together (:func:`_run_slsqp`); then the screens that beat their stage's result are polished
         (together) and the best point of each stage returned."""
+        # the starts' objectives, then the results', each in one batch
+        _eval_stages([(stage, x0) for stage, first, others, _, _ in groups for x0 in [first, *others]])
         jobs, owner = [], []
         for g, (stage, first, others, norms, bound) in enumerate(groups):
             jobs.append(stage.run(first, *norms))
@@ -887,18 +917,22 @@ def solve_seeded(prob: VelProblem, seeds: dict[str, np.ndarray], settings: VelSe
                 jobs.append(stage.run(x0, *norms, ftol=settings.screen_ftol, maxiter=settings.screen_maxiter))
                 owner.append(g)
         xs = _run_slsqp(jobs)
-        best = [(xs[owner.index(g)], groups[g][0].objective(xs[owner.index(g)], *groups[g][3])) for g in range(len(groups))]
+        _eval_stages([(groups[g][0], x) for g, x in zip(owner, xs)])
+        lead = [owner.index(g) for g in range(len(groups))]
+        best = [(xs[i], groups[g][0].objective(xs[i], *groups[g][3])) for g, i in enumerate(lead)]
         polish, towner = [], []
         for i, (g, x) in enumerate(zip(owner, xs)):
             stage, norms = groups[g][0], groups[g][3]
-            if i != owner.index(g) and np.max(np.abs(x - best[g][0])) > 1e-3 and stage.objective(x, *norms) < best[g][1]:
+            if i != lead[g] and np.max(np.abs(x - best[g][0])) > 1e-3 and stage.objective(x, *norms) < best[g][1]:
                 polish.append(stage.run(x, *norms))
                 towner.append(g)
-        for g, y in zip(towner, _run_slsqp(polish)):
+        ys = _run_slsqp(polish)
+        _eval_stages([(groups[g][0], y) for g, y in zip(towner, ys)])
+        for g, y in zip(towner, ys):
             fy = groups[g][0].objective(y, *groups[g][3])
             if fy < best[g][1]:
                 best[g] = (y, fy)
-        return [x for x, _ in best]
+        return [x for x, _ in best], [f for _, f in best]
 
     sample, s_amax, s_jmax = pool[in_sample], amax[in_sample], jmax[in_sample]
     inner = (sample[:, 0] >= 3 * settings.margin) & (sample[:, 3] <= 1 - 3 * settings.margin)
@@ -919,8 +953,9 @@ def solve_seeded(prob: VelProblem, seeds: dict[str, np.ndarray], settings: VelSe
         # check_ratio: screen only starts whose sampled peak is within c of the seed's sampled peak
         bound = float(vals[seg][i0] ** 2 / stage.norm[0 if kind == "a" else 1]) * c * c if math.isfinite(c) else np.inf
         stage1.append((stage, pool[seg][i0], others, (), bound))
-    xa, xj = runs(stage1)
-    a_min, j_min = exact(xa)[1], exact(xj)[2]
+    (xa, xj), (fa, fj) = runs(stage1)
+    # the exact peaks (the stage objective is the largest exact segment maximum of ‖a‖², ‖j‖² / its scale)
+    a_min, j_min = math.sqrt(fa * stage1[0][0].norm[0]), math.sqrt(fj * stage1[1][0].norm[1])
     stage = _Stage(ev, space, "F", a_norm, j_norm, settings)
     f_pool = a_min / amax + j_min / jmax
     seg = slice(offset["F"], offset["F"] + len(rows["F"]))
@@ -932,7 +967,7 @@ def solve_seeded(prob: VelProblem, seeds: dict[str, np.ndarray], settings: VelSe
         f_extra = a_min / np.sqrt(ga2.max(axis=1)) + j_min / np.sqrt(gj2.max(axis=1))
         allx, allf = np.vstack([pool, extra]), np.concatenate([f_pool, f_extra])
         others = [allx[int(np.argmax(allf))], extra[2]]
-    (x,) = runs([(stage, pool[seg][int(np.argmax(f_pool[seg]))], others, (a_min, j_min), np.inf)])
+    (x,), _ = runs([(stage, pool[seg][int(np.argmax(f_pool[seg]))], others, (a_min, j_min), np.inf)])
     v, a, j = exact(x)
     F = a_min / a + j_min / j
     return VelResult(
