@@ -25,7 +25,7 @@ gravity torque G_m at that end.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -228,14 +228,6 @@ class Parts:
     dAm: np.ndarray | None = None  # d/dτ of Am
     dGm: np.ndarray | None = None
     singularity: np.ndarray | None = None  # (N,)
-
-
-_PART_NAMES = tuple(f.name for f in fields(Parts))
-
-
-def take_parts(parts: Parts, index: np.ndarray) -> Parts:
-    """The samples ``index`` of ``parts`` (every per-sample array indexed)."""
-    return Parts(*[None if x is None else x[index] for x in (getattr(parts, name) for name in _PART_NAMES)])
 
 
 @dataclass

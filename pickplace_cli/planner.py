@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from .errors import UnreachableError
-from .limits import LimitReport, MotionModel, check_grid_index, check_limits, reach_error, take_parts
+from .limits import LimitReport, MotionModel, check_grid_index, check_limits, reach_error
 from .methods import Method, depends_on_duration, path_factory, plan_path
 from .profile import Profile
 from .robots import build_robot
@@ -90,7 +90,8 @@ def motion_model(path, profile: Profile) -> MotionModel:
     return MotionModel(path, *hit[1:])
 
 
-_STATIC: dict[int, tuple] = {}  # id(profile) → (profile, robot, specs, margin, box, memo); holds the profile
+_STATIC: dict[int, tuple] = {}
+_OUTPUT_PARTS = ("p", "v1", "a1", "j1", "q", "qd1", "qdd1", "qddd1", "A", "G", "Am", "Gm")  # id(profile) → (profile, robot, specs, margin, box, memo); holds the profile
 
 
 def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions()) -> Plan:
@@ -143,20 +144,21 @@ def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions()) -> 
             grid_parts = model.parts(grid)
         except UnreachableError as exc:  # a path planned for another duration can take another route
             raise reach_error(exc, grid, T) from None
-    parts = take_parts(grid_parts, index)
     report = check_limits(model, T, parts=grid_parts, dwell=dwell)
+    # the output samples of the quantities written out (the grid also holds the check's extra points)
+    out = {name: getattr(grid_parts, name)[index] for name in _OUTPUT_PARTS}
     robot = model.robot
     joint = JointTrajectory(
         t,
-        parts.q,
-        parts.qd1 / T,
-        parts.qdd1 / T**2,
-        parts.qddd1 / T**3,
+        out["q"],
+        out["qd1"] / T,
+        out["qdd1"] / T**2,
+        out["qddd1"] / T**3,
         robot.joint_names,
         robot.joint_units,
-        torque=parts.A / T**2 + parts.G,
-        motor_speed=model.gear * parts.qd1 / T if model.has_drives else None,
-        motor_torque=parts.Am / T**2 + parts.Gm if model.has_drives else None,
+        torque=out["A"] / T**2 + out["G"],
+        motor_speed=model.gear * out["qd1"] / T if model.has_drives else None,
+        motor_torque=out["Am"] / T**2 + out["Gm"] if model.has_drives else None,
     )
-    p, v, a, j = parts.p, parts.v1 / T, parts.a1 / T**2, parts.j1 / T**3
+    p, v, a, j = out["p"], out["v1"] / T, out["a1"] / T**2, out["j1"] / T**3
     return Plan(task, path.method, dict(path.parameters), duration, traj, t, p, v, a, j, joint, report, profile.name)

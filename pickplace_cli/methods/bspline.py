@@ -70,16 +70,16 @@ def plan_bspline(
     peaks = tuple(float(x) for x in pk_all[0])
     # the end states exactly (clamped ends, Eq. 9: Q1 = … = Q4 and Q8 = … = Q11, so the derivatives there
     # are differences of equal control points, zero without round-off, as de Boor gives them)
-    zero = np.zeros((2, 3))
-    end_states = [np.stack([via[0, 0], via[0, -1]]), zero, zero, zero]
+    ends = np.zeros((2, 4, 3))  # (τ = 0, τ = 1) × (p, p′, p″, p‴)
+    ends[0, 0], ends[1, 0] = via[0, 0], via[0, -1]
 
     origin = task.p_from
-    powers = np.arange(DEGREE, -1, -1.0)
     # the polynomials of p, p′, p″, p‴ on every piece, (m, 4, 3, 6), highest power first, the derivatives
     # padded with leading zeros (Horner then gives each order bitwise as its own shorter Horner would)
     stacked = np.zeros((len(coef), 4, 3, DEGREE + 1))
-    for k in range(4):
-        stacked[:, k, :, k:] = coef[..., : DEGREE + 1 - k] * _falling(powers[: DEGREE + 1 - k], k) if k else coef
+    stacked[:, 0] = coef
+    for k in range(1, 4):
+        stacked[:, k, :, k:] = coef[..., : DEGREE + 1 - k] * _FALLING[k]
     memo: list = [None]  # one entry (τ, [p, p′, p″, p‴]): the pipeline asks orders 0…3 at the same τ in turn
 
     def evaluate(tau: np.ndarray, order: int) -> np.ndarray:
@@ -98,14 +98,11 @@ def plan_bspline(
         acc = c[..., 0]
         for col in range(1, DEGREE + 1):  # one Horner pass for all four orders
             acc = acc * dx + c[..., col]
-        out = [acc[:, k] for k in range(4)]
         # the end states exactly as de Boor gives them (v = a = 0 without round-off)
         if tau[0] <= 0.0 or tau[-1] >= 1.0 or np.any((tau <= 0.0) | (tau >= 1.0)):
-            at0, at1 = tau <= 0.0, tau >= 1.0
-            for k in range(4):
-                out[k][at0] = end_states[k][0]
-                out[k][at1] = end_states[k][1]
-        return out
+            acc[tau <= 0.0] = ends[0]
+            acc[tau >= 1.0] = ends[1]
+        return [acc[:, k] for k in range(4)]
 
     return CartesianPath(
         evaluate=evaluate,
@@ -122,6 +119,10 @@ def _falling(n: np.ndarray, k: int) -> np.ndarray:
     for r in range(k):
         out = out * (n - r)
     return out
+
+
+#: the factors of the k-th derivative's coefficients (powers 5 … k, highest first), k = 0 … 3
+_FALLING = [_falling(np.arange(DEGREE, -1, -1.0)[: DEGREE + 1 - k], k) for k in range(4)]
 
 
 #: k1 range of the closed-form symmetric path (:func:`_unit_paths`): it loses digits towards k1 → 0 or 1

@@ -83,7 +83,11 @@ def _gram_extremes(dx: np.ndarray, dy: np.ndarray, dz: np.ndarray) -> tuple[np.n
     (dx, dy, dz)[i] (each (3, N)), in closed form (trigonometric solution of the characteristic cubic of a
     symmetric 3×3 matrix; Smith 1961). The largest comes from the cubic, the smallest from
     λ_min λ_mid = det G / λ_max and λ_min + λ_mid = tr G − λ_max in the cancellation-free form."""
-    g = [[dx[i] * dx[k] + dy[i] * dy[k] + dz[i] * dz[k] for k in range(3)] for i in range(3)]
+    def dot(i: int, k: int) -> np.ndarray:
+        return dx[i] * dx[k] + dy[i] * dy[k] + dz[i] * dz[k]
+
+    g01, g02, g12 = dot(0, 1), dot(0, 2), dot(1, 2)  # G is symmetric: six distinct entries
+    g = [[dot(0, 0), g01, g02], [g01, dot(1, 1), g12], [g02, g12, dot(2, 2)]]
     m = (g[0][0] + g[1][1] + g[2][2]) / 3.0
     off = g[0][1] ** 2 + g[0][2] ** 2 + g[1][2] ** 2
     a0, a1, a2 = g[0][0] - m, g[1][1] - m, g[2][2] - m
