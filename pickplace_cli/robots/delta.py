@@ -375,13 +375,17 @@ class DeltaRobot:
 
         using E‴ = −E′ (so d·E‴ = −D). No finite differences. D → 0 at a serial singularity.
         """
+        q, arms, (qd, qdd, qddd), _ = self._motion(p, v, a, j)
+        return q.T.copy(), qd.T.copy(), qdd.T.copy(), qddd.T.copy()
+
+    def _motion(self, p, v, a, j) -> tuple:
+        """Validated inputs → q (3, N), the arm geometry, (q̇, q̈, q⃛) (each (3, N)) and (v, a, j) as arrays."""
         p = _samples(p, "p")
         v = _samples(v, "v")
         a = _samples(a, "a")
         j = _samples(j, "j")
         q, arms = self._solve(p)
-        qd, qdd, qddd = self._joint_rates(arms, v, a, j)
-        return q.T.copy(), qd.T.copy(), qdd.T.copy(), qddd.T.copy()
+        return q, arms, self._joint_rates(arms, v, a, j), (v, a, j)
 
     def _joint_rates(self, arms: _Arms, v: np.ndarray, a: np.ndarray, j: np.ndarray):
         """q̇, q̈, q⃛ (each (3, N)) of :meth:`joint_motion` from the arm geometry of the configuration."""
@@ -418,12 +422,7 @@ class DeltaRobot:
         motion p, v, a, j (each (N, 3), SI), sharing one inverse kinematics. Each (N, 3) except μ (N,).
         (The separate methods recompute cos q, sin q and the forearm vectors from q; this pass takes them
         from the inverse kinematics, so values agree to round-off, not bitwise.)"""
-        p = _samples(p, "p")
-        v = _samples(v, "v")
-        a = _samples(a, "a")
-        j = _samples(j, "j")
-        q, arms = self._solve(p)
-        qd, qdd, qddd = self._joint_rates(arms, v, a, j)
+        q, arms, (qd, qdd, qddd), (v, a, j) = self._motion(p, v, a, j)
         A, G, dA, dG = self._dynamics(arms, qd, qdd, qddd, v, a, j, rates)
         out = [x.T.copy() for x in (q, qd, qdd, qddd, A, G)]
         out += [None if x is None else x.T.copy() for x in (dA, dG)]

@@ -348,3 +348,20 @@ def test_vectorised_shapes():
     assert all(x.shape == (1000, 3) for x in out)
     assert DELTA.inverse_dynamics(out[0], out[1], out[2], p, a).shape == (1000, 3)
     assert DELTA.singularity_measure(out[0], p).shape == (1000,)
+
+
+def test_motion_and_dynamics_is_the_separate_methods_in_one_pass():
+    """The one-pass evaluation (the limit check's) equals joint_motion + split_dynamics +
+    singularity_measure. Not bitwise: it takes cos q, sin q from the inverse kinematics' own C/ρ², S/ρ²
+    instead of np.cos/np.sin of the angle; 1e-12 relative to each quantity's scale (measured ~1e-15)."""
+    rng = np.random.default_rng(4)
+    p = np.column_stack([rng.uniform(-0.2, 0.2, 200), rng.uniform(-0.2, 0.2, 200), rng.uniform(-0.9, -0.7, 200)])
+    v, a, j = (rng.normal(scale=s, size=(200, 3)) for s in (2.0, 50.0, 3000.0))
+    one = DELTA.motion_and_dynamics(p, v, a, j)
+    q, qd, qdd, qddd = DELTA.joint_motion(p, v, a, j)
+    ref = (q, qd, qdd, qddd, *DELTA.split_dynamics(q, qd, qdd, qddd, p, v, a, j), DELTA.singularity_measure(q, p))
+    for got, want in zip(one, ref):
+        np.testing.assert_allclose(got, want, rtol=0, atol=1e-12 * np.abs(want).max())
+    no_rates = DELTA.motion_and_dynamics(p, v, a, j, rates=False)
+    assert no_rates[6] is None and no_rates[7] is None
+    np.testing.assert_array_equal(no_rates[4], one[4])
