@@ -192,6 +192,8 @@ _SPANS = np.arange(5, 11)  # the six non-empty knot spans [t5, t6] … [t10, t11
 _FACTORIAL = np.array([1.0, 1.0, 2.0, 6.0, 24.0, 120.0])
 _SHIFT_POWER = np.clip(np.subtract.outer(np.arange(6), np.arange(6)).T, 0, None)  # [r, q] = q − r (≥ 0)
 _SHIFT_MASK = np.triu(np.ones((6, 6), bool))  # the Taylor shift of a quintic's state is upper triangular
+_SHIFT_INDEX = np.where(_SHIFT_MASK, _SHIFT_POWER, 6)  # index 6: the zero below the diagonal
+_INV_COUNT = 1.0 / np.arange(1, 6)  # step^k / k! as a running product
 
 
 class _Evaluator:
@@ -262,7 +264,10 @@ class _Evaluator:
         starts[:, 1], starts[:, 2], starts[:, 4], starts[:, 5] = p[:, 0], p[:, 1], p[:, 2], p[:, 3]
         w = np.diff(starts, axis=1)
         step = np.concatenate([w[:, :3], -w[:, 3:]], axis=1)  # forwards on the left half, backwards on the right
-        shift = np.where(_SHIFT_MASK, (step[..., None] ** np.arange(6) / _FACTORIAL)[:, :, _SHIFT_POWER], 0.0)
+        powers = np.zeros((P, 6, 7))  # step^k / k!, k = 0 … 5, and a zero for the lower triangle
+        powers[:, :, 0] = 1.0
+        np.cumprod(step[..., None] * _INV_COUNT, axis=2, out=powers[:, :, 1:6])
+        shift = powers[:, :, _SHIFT_INDEX]  # (P, 6, 6, 6): [k, r, q] = step_k^(q−r) / (q−r)! for q ≥ r
         # y = [z (8 unknowns), s0, v0, 0, 0, s4, v1, 0, 0]; G[:, k] maps y to the state at the start of span k
         G = np.zeros((P, 6, 6, 16))
         G[:, 0, np.arange(4), np.arange(8, 12)] = 1.0
@@ -334,6 +339,21 @@ class _Evaluator:
         """(‖a‖², ‖j‖²), each (P, M), at the samples (piece, u) of prepared parameters."""
         acc, jerk = cls.derivatives(prep, piece, u)
         return np.einsum("pmd,pmd->pm", acc, acc), np.einsum("pmd,pmd->pm", jerk, jerk)
+
+    def grid_maxima(self, p: np.ndarray, per_piece: int) -> tuple[np.ndarray, np.ndarray]:
+        """(max ‖a‖², max ‖j‖²), each (P,), over the samples of :func:`_grid` (``per_piece`` on each knot
+        span and τ = 1): ``sampled(p, *_grid(per_piece))`` maximised, without gathering per sample."""
+        width, d = self.prepare(p)
+        h = (width[:, :, None] * (np.arange(per_piece) / per_piece))[..., None]  # (P, 6, per, 1)
+        c = d[:, :, None]  # (P, 6, 1, 4, 3)
+        acc = c[..., 0, :] + h * (c[..., 1, :] + h * (c[..., 2, :] / 2 + h * c[..., 3, :] / 6))
+        jerk = c[..., 1, :] + h * (c[..., 2, :] + h * c[..., 3, :] / 2)
+        w, e = width[:, 5, None], d[:, 5]  # τ = 1: the end of the last span
+        acc_end = e[:, 0] + w * (e[:, 1] + w * (e[:, 2] / 2 + w * e[:, 3] / 6))
+        jerk_end = e[:, 1] + w * (e[:, 2] + w * e[:, 3] / 2)
+        ga = np.maximum(np.einsum("psud,psud->psu", acc, acc).reshape(len(width), -1).max(axis=1), np.einsum("pd,pd->p", acc_end, acc_end))
+        gj = np.maximum(np.einsum("psud,psud->psu", jerk, jerk).reshape(len(width), -1).max(axis=1), np.einsum("pd,pd->p", jerk_end, jerk_end))
+        return ga, gj
 
     def sampled(self, p: np.ndarray, piece: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(‖a‖², ‖j‖²) at the samples (piece, u), each (P, M) (normalised: lengths / scale, T = 1)."""
@@ -468,23 +488,27 @@ def _exact_segment_maxima(prep: tuple, q: int | tuple[int, ...], sub: int) -> np
     return _segment_maxima(prep[0][:1], prep[1][:1], q, sub)[0]
 
 
-def _segment_maxima(width: np.ndarray, d: np.ndarray, q: int | tuple[int, ...], sub: int) -> np.ndarray:
+def _segment_maxima(width: np.ndarray, d: np.ndarray, q: int | tuple[int, ...], sub: int,
+                    rows: tuple[np.ndarray, ...] | None = None) -> np.ndarray | list[np.ndarray]:
     """u (R, 6·sub·len(q)) of the maxima of ‖a‖² (q = 0) or ‖j‖² (q = 1) — or of each in the tuple ``q``,
     in that order — on each of the ``sub`` equal segments of every knot span, for R prepared parameter
     vectors (``width`` (R, 6), ``d`` (R, 6, 4, 3) from :meth:`_Evaluator.prepare`): exact, from the real
     roots of the derivative of the span's polynomial ‖·‖² (companion-matrix eigenvalues, one batched call
-    for all vectors and quantities) and the segment ends."""
+    for all vectors and quantities) and the segment ends. With ``rows`` (one index array per quantity in
+    ``q``): only those vectors for each quantity, returned as a list of (len(rows[i]), 6·sub) arrays."""
     qs = (q,) if isinstance(q, (int, np.integer)) else tuple(q)
-    R = width.shape[0]
-    w = width[:, :, None]  # (R, 6, 1)
+    sel = rows if rows is not None else tuple(np.arange(width.shape[0]) for _ in qs)
     sqs, derivs = [], []
-    for qq in qs:
+    for qq, idx in zip(qs, sel):
+        R = len(idx)
+        w = width[idx][:, :, None]  # (R, 6, 1)
+        dd = d[idx]
         if qq == 0:  # a(u) = D0 + D1 (wu) + D2 (wu)²/2 + D3 (wu)³/6, coefficients in powers of u (lowest first)
-            c = np.stack([d[:, :, 0], d[:, :, 1] * w, d[:, :, 2] * w**2 / 2, d[:, :, 3] * w**3 / 6], axis=2)
+            c = np.stack([dd[:, :, 0], dd[:, :, 1] * w, dd[:, :, 2] * w**2 / 2, dd[:, :, 3] * w**3 / 6], axis=2)
         else:  # j(u) = D1 + D2 (wu) + D3 (wu)²/2
-            c = np.stack([d[:, :, 1], d[:, :, 2] * w, d[:, :, 3] * w**2 / 2], axis=2)
+            c = np.stack([dd[:, :, 1], dd[:, :, 2] * w, dd[:, :, 3] * w**2 / 2], axis=2)
         k = c.shape[2]
-        sq = np.einsum("rsid,rsjd->rsij", c, c).reshape(R * 6, k * k) @ _anti_diagonal_sum(k)  # ‖·‖², lowest power first
+        sq = (c @ c.transpose(0, 1, 3, 2)).reshape(R * 6, k * k) @ _anti_diagonal_sum(k)  # ‖·‖², lowest power first
         deriv = sq[:, 1:] * np.arange(1, 2 * k - 1)  # degree 2k − 3
         if k == 3:
             # the cubic times (u − 10)² (two roots far outside [0, 1]): degree 5 like a's, so that both
@@ -495,11 +519,9 @@ def _segment_maxima(width: np.ndarray, d: np.ndarray, q: int | tuple[int, ...], 
             deriv[:, 1:5] -= 20.0 * cubic
             deriv[:, 2:] += cubic
             sq = np.concatenate([sq, np.zeros((R * 6, 2))], axis=1)
-        sqs.append(sq.reshape(R, 6, 7))
-        derivs.append(deriv.reshape(R, 6, 6))
-    # (R, len(qs), 6, ·) → rows in the order vector, quantity, span
-    sq = np.stack(sqs, axis=1).reshape(-1, 7)
-    deriv = np.stack(derivs, axis=1).reshape(-1, 6)
+        sqs.append(sq)
+        derivs.append(deriv)
+    sq, deriv = np.concatenate(sqs), np.concatenate(derivs)  # rows: quantity, vector, span
     m = sq.shape[0]
     n = 5
     lead = deriv[:, -1]
@@ -513,13 +535,19 @@ def _segment_maxima(width: np.ndarray, d: np.ndarray, q: int | tuple[int, ...], 
     r = np.where(real, roots.real, -1.0)  # (m, n); non-real → outside
     ends = np.arange(sub + 1) / sub
     cand = np.concatenate([r, np.broadcast_to(ends, (m, sub + 1))], axis=1)  # (m, n + sub + 1)
-    powers = cand[..., None] ** np.arange(7)
-    val = np.einsum("scp,sp->sc", powers, sq)
+    val = sq[:, 6:7] * cand  # Horner
+    for k in range(5, 0, -1):
+        val = (val + sq[:, k : k + 1]) * cand
+    val = val + sq[:, :1]
     lo, hi = ends[:-1], ends[1:]
     inside = (cand[:, None, :] >= lo[None, :, None] - 1e-15) & (cand[:, None, :] <= hi[None, :, None] + 1e-15)
     best = np.argmax(np.where(inside, val[:, None, :], -np.inf), axis=2)  # (m, sub)
     u = np.take_along_axis(np.broadcast_to(cand[:, None, :], inside.shape), best[..., None], axis=2)[..., 0]
-    return np.clip(u, lo, hi).reshape(R, -1)
+    u = np.clip(u, lo, hi).reshape(m // 6, 6 * sub)  # rows: quantity, vector
+    parts = np.split(u, np.cumsum([len(i) for i in sel])[:-1])
+    if rows is not None:
+        return parts
+    return np.concatenate(parts, axis=1)
 
 
 class _Stage:
@@ -593,31 +621,36 @@ def _eval_stages(requests: list[tuple[_Stage, np.ndarray]]) -> list[tuple[list, 
         xs = np.array([x for _, x in todo.values()])
         R = xs.shape[0]
         width, d, dlam = ev.prepare(space.full((xs[:, None, :] + steps[None]).reshape(-1, n)), np.arange(0, R * S, S))
-        u = _segment_maxima(width[::S], d[::S], (0, 1), sub)  # (R, 2m): a's then j's
-        piece = np.repeat(np.arange(6), sub)
-        c = d[:, piece]  # (R·S, m, 4, 3)
-        cl = dlam[:, :, piece]  # (R, 3, m, 4, 3)
+        stages = [stage for stage, _ in todo.values()]
+        rows = tuple(np.array([r for r, st in enumerate(stages) if q in st.uses], int) for q in (0, 1))
+        us = _segment_maxima(width[::S], d[::S], (0, 1), sub, rows)  # per quantity (len(rows[q]), m)
         lam = space.free[4:]
-        sq, grad = [], []
+        width, d = width.reshape(R, S, 6), d.reshape(R, S, 6, 4, 3)
+        h2 = 2 * stage0.h
+        out: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = {}
         for q in (0, 1):
-            h = np.repeat(u[:, q * m : q * m + m], S, axis=0) * width[:, piece]  # (R·S, m) from the span start
-            hl = h[::S, None, :, None]
+            rq = rows[q]
+            if not len(rq):
+                continue
+            c = d[rq][:, :, :, None]  # (·, S, 6, 1, 4, 3)
+            cl = dlam[rq][:, :, :, None]  # (·, 3, 6, 1, 4, 3)
+            h = (us[q].reshape(-1, 1, 6, sub) * width[rq][..., None])[..., None]  # (·, S, 6, sub, 1) from the span start
+            hl = h[:, :1]
             if q == 0:  # a = D0 + D1 h + D2 h²/2 + D3 h³/6
-                val = c[:, :, 0] + h[..., None] * (c[:, :, 1] + h[..., None] * (c[:, :, 2] / 2 + h[..., None] * c[:, :, 3] / 6))
+                val = c[..., 0, :] + h * (c[..., 1, :] + h * (c[..., 2, :] / 2 + h * c[..., 3, :] / 6))
                 dv = cl[..., 0, :] + hl * (cl[..., 1, :] + hl * (cl[..., 2, :] / 2 + hl * cl[..., 3, :] / 6))
             else:  # j = D1 + D2 h + D3 h²/2
-                val = c[:, :, 1] + h[..., None] * (c[:, :, 2] + h[..., None] * c[:, :, 3] / 2)
+                val = c[..., 1, :] + h * (c[..., 2, :] + h * c[..., 3, :] / 2)
                 dv = cl[..., 1, :] + hl * (cl[..., 2, :] + hl * cl[..., 3, :] / 2)
-            sq.append(np.einsum("pmd,pmd->pm", val, val).reshape(R, S, m))
-            grad.append(2.0 * np.einsum("rmd,rimd->rim", val[::S], dv)[:, lam])  # ∂‖·‖²/∂λ (R, free λ, m)
-        h2 = 2 * stage0.h
-        for r, ((_, key), (stage, _)) in enumerate(todo.items()):
-            vals, jacs = [], []
-            for q in stage.uses:
-                g = sq[q][r] / stage.norm[q]
-                vals.append(g[0])
-                jacs.append(np.hstack([(g[1:5] - g[5:9]).T / h2, grad[q][r].T / stage.norm[q]]))
-            stage._memo[key] = (vals, jacs)
+            sqq = np.einsum("rsuvd,rsuvd->rsuv", val, val).reshape(-1, S, m)
+            gq = 2.0 * np.einsum("rsuvd,riuvd->riuv", val[:, :1], dv).reshape(-1, 3, m)[:, lam]  # ∂‖·‖²/∂λ
+            norm = np.array([stages[r].norm[q] for r in rq])[:, None, None]
+            jac = np.concatenate([(sqq[:, 1:5] - sqq[:, 5:9]) / h2, gq], axis=1).transpose(0, 2, 1) / norm
+            vals = sqq[:, 0] / norm[:, 0]
+            for i, r in enumerate(rq):
+                out[(q, r)] = (vals[i], jac[i])
+        for r, ((_, key), stage) in enumerate(zip(todo, stages)):
+            stage._memo[key] = ([out[(q, r)][0] for q in stage.uses], [out[(q, r)][1] for q in stage.uses])
     return [stage._memo[x.tobytes()] for stage, x in requests]
 
 
@@ -644,6 +677,12 @@ class _Run:
             tlo = [1e-12]
         self.lo = np.concatenate([sp.lo, tlo])
         self.hi = np.concatenate([sp.hi, [np.inf] * self.k])
+        # the constant part of the constraint normals: the t columns and the ordering rows
+        m = 6 * _Stage.SUB
+        self.normals = np.zeros((self.k * m + 2, self.n + self.k), order="F")
+        for i in range(self.k):
+            self.normals[i * m : (i + 1) * m, self.n + i] = 1.0
+        self.normals[-2:, : self.n] = sp.order_jac()
 
     def y0(self, vals: list) -> np.ndarray:
         y0 = np.concatenate([self.x0, [v.max() * (1 + 1e-9) for v in vals]])
@@ -672,13 +711,16 @@ class _Run:
         return np.concatenate([y[n + i] - v for i, v in enumerate(vals)] + [self.stage.space.order_gaps(y[:n])])
 
     def cjac(self, jacs: list) -> np.ndarray:
-        rows = []
+        out = self.normals.copy(order="F")
+        m = 6 * _Stage.SUB
         for i, d in enumerate(jacs):
-            e = np.zeros((d.shape[0], self.k))
-            e[:, i] = 1.0
-            rows.append(np.hstack([-d, e]))
-        rows.append(np.hstack([self.stage.space.order_jac(), np.zeros((2, self.k))]))
-        return np.vstack(rows)
+            out[i * m : (i + 1) * m, : self.n] = -d
+        return out
+
+    def feasible(self, x: np.ndarray) -> bool:
+        """x (free variables) within the bounds and the ordering of Eq. (36), to 1e-12."""
+        sp = self.stage.space
+        return bool((x - sp.lo).min() >= -1e-12 and (sp.hi - x).min() >= -1e-12 and sp.order_gaps(x).min() >= -1e-12)
 
 
 def _run_slsqp(runs: list[_Run]) -> list[np.ndarray]:
@@ -746,27 +788,26 @@ class _LockstepSLSQP:
         self.d = np.zeros(m)
         self.need = "both"  # the initial call needs f, g, constraints and normals
         self.want = self._xpart()
-        self.best: tuple[float, np.ndarray] | None = None
+        self.seen: list[np.ndarray] = []  # the points evaluated for values (for a run cut off)
 
     def result(self) -> np.ndarray:
         """x at the end (clipped to the feasible set); when the run was cut off (``max_rounds``), the best
-        feasible point it evaluated."""
-        sp = self.run.stage.space
-        if abs(self.state["mode"]) == 1 and self.best is not None:
-            return self.best[1]
-        return sp.clip(np.asarray(self.x[: self.run.n], float))
-
-    def _note(self, x: np.ndarray, vals: list) -> None:
-        """Remember the best feasible point evaluated (its objective from the exact segment maxima)."""
-        if np.max(np.abs(self.run.stage.space.clip(x) - x)) > 1e-12:
-            return
+        feasible point it evaluated (objective from the exact segment maxima)."""
         r = self.run
-        if r.stage.kind == "F":
-            f = -(r.cf[0] / math.sqrt(vals[0].max()) + r.cf[1] / math.sqrt(vals[1].max()))
-        else:
-            f = float(vals[0].max())
-        if self.best is None or f < self.best[0]:
-            self.best = (f, x)
+        if abs(self.state["mode"]) == 1:
+            best = None
+            for x in self.seen:
+                if r.feasible(x):
+                    vals = r.stage._eval(x)[0]
+                    if r.stage.kind == "F":
+                        f = -(r.cf[0] / math.sqrt(vals[0].max()) + r.cf[1] / math.sqrt(vals[1].max()))
+                    else:
+                        f = float(vals[0].max())
+                    if best is None or f < best[0]:
+                        best = (f, x)
+            if best is not None:
+                return best[1]
+        return r.stage.space.clip(np.asarray(self.x[: r.n], float))
 
     def _xpart(self) -> np.ndarray:
         return self.x[: self.run.n].copy()
@@ -780,7 +821,7 @@ class _LockstepSLSQP:
                 return True
             vals, jacs = stage._memo[key]
             if self.need in ("both", "f"):
-                self._note(self.want, vals)
+                self.seen.append(self.want)
                 xf = np.clip(self.x, r.lo, r.hi) if self.need == "both" else self.x
                 self.fx = r.fun(xf)
                 self.d[:] = r.cons(self.x, vals)
@@ -891,8 +932,8 @@ def solve_seeded(prob: VelProblem, seeds: dict[str, np.ndarray], settings: VelSe
     sample = space.from_unit(_quasi_random(settings.starts, space.n)) if check else np.empty((0, space.n))
     sample = np.vstack([np.array(PAPER_INITIAL)[space.free][None, :], sample])
     pool = np.vstack([rows["a"], rows["j"], rows["F"], sample])
-    ga, gj = ev.sampled(space.full(pool), *_grid(settings.samples_per_piece))
-    amax, jmax = np.sqrt(ga.max(axis=1)), np.sqrt(gj.max(axis=1))
+    ga, gj = ev.grid_maxima(space.full(pool), settings.samples_per_piece)
+    amax, jmax = np.sqrt(ga), np.sqrt(gj)
     a_norm, j_norm = float(amax.min() ** 2), float(jmax.min() ** 2)
     offset = {"a": 0, "j": len(rows["a"]), "F": len(rows["a"]) + len(rows["j"])}
     in_sample = slice(offset["F"] + len(rows["F"]), None)
@@ -946,9 +987,14 @@ def solve_seeded(prob: VelProblem, seeds: dict[str, np.ndarray], settings: VelSe
             # stage 1 is multimodal (an end knot on the margin or inside, and the table's cell may straddle
             # a switch between basins): also the multi-start's starts, the best candidate of the pool and
             # the best with both end knots off the margin
-            others += _distinct_best(sample, s_vals, settings.refine, settings.radius)
-            if inner.any():
-                others.append(sample[inner][int(np.argmin(s_vals[inner]))])
+            import os
+            exp = os.environ.get("EXP", "")
+            if "S" not in exp:
+                others += _distinct_best(sample, s_vals, settings.refine, settings.radius)
+                if inner.any():
+                    others.append(sample[inner][int(np.argmin(s_vals[inner]))])
+            if "D" in exp:
+                others += _distinct_best(pool[seg], vals[seg], 3, settings.radius)[1:]
         i0 = int(np.argmin(vals[seg]))
         # check_ratio: screen only starts whose sampled peak is within c of the seed's sampled peak
         bound = float(vals[seg][i0] ** 2 / stage.norm[0 if kind == "a" else 1]) * c * c if math.isfinite(c) else np.inf
@@ -963,8 +1009,8 @@ def solve_seeded(prob: VelProblem, seeds: dict[str, np.ndarray], settings: VelSe
     if check:
         # the multi-start's first F starts: the best sampled candidate of the pool and of the minimisers
         extra = np.vstack([xa, xj, (xa + xj) / 2])
-        ga2, gj2 = ev.sampled(space.full(extra), *_grid(settings.samples_per_piece))
-        f_extra = a_min / np.sqrt(ga2.max(axis=1)) + j_min / np.sqrt(gj2.max(axis=1))
+        ga2, gj2 = ev.grid_maxima(space.full(extra), settings.samples_per_piece)
+        f_extra = a_min / np.sqrt(ga2) + j_min / np.sqrt(gj2)
         allx, allf = np.vstack([pool, extra]), np.concatenate([f_pool, f_extra])
         others = [allx[int(np.argmax(allf))], extra[2]]
     (x,), _ = runs([(stage, pool[seg][int(np.argmax(f_pool[seg]))], others, (a_min, j_min), np.inf)])
