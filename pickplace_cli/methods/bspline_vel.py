@@ -501,12 +501,16 @@ def _segment_maxima(width: np.ndarray, d: np.ndarray, q: int | tuple[int, ...], 
     sqs, derivs = [], []
     for qq, idx in zip(qs, sel):
         R = len(idx)
-        w = width[idx][:, :, None]  # (R, 6, 1)
-        dd = d[idx]
+        w = width[idx]  # (R, 6)
+        wk = np.empty((R, 6, 4, 1))  # w^k / k!
+        wk[:, :, 0, 0] = 1.0
+        wk[:, :, 1, 0] = w
+        wk[:, :, 2, 0] = w * w / 2
+        wk[:, :, 3, 0] = wk[:, :, 2, 0] * w / 3
         if qq == 0:  # a(u) = D0 + D1 (wu) + D2 (wu)²/2 + D3 (wu)³/6, coefficients in powers of u (lowest first)
-            c = np.stack([dd[:, :, 0], dd[:, :, 1] * w, dd[:, :, 2] * w**2 / 2, dd[:, :, 3] * w**3 / 6], axis=2)
+            c = d[idx] * wk
         else:  # j(u) = D1 + D2 (wu) + D3 (wu)²/2
-            c = np.stack([dd[:, :, 1], dd[:, :, 2] * w, dd[:, :, 3] * w**2 / 2], axis=2)
+            c = d[idx][:, :, 1:] * wk[:, :, :3]
         k = c.shape[2]
         sq = (c @ c.transpose(0, 1, 3, 2)).reshape(R * 6, k * k) @ _anti_diagonal_sum(k)  # ‖·‖², lowest power first
         deriv = sq[:, 1:] * np.arange(1, 2 * k - 1)  # degree 2k − 3
@@ -534,7 +538,9 @@ def _segment_maxima(width: np.ndarray, d: np.ndarray, q: int | tuple[int, ...], 
     real = np.abs(roots.imag) <= 1e-9 * (1.0 + np.abs(roots.real))
     r = np.where(real, roots.real, -1.0)  # (m, n); non-real → outside
     ends = np.arange(sub + 1) / sub
-    cand = np.concatenate([r, np.broadcast_to(ends, (m, sub + 1))], axis=1)  # (m, n + sub + 1)
+    cand = np.empty((m, n + sub + 1))  # the roots and the segment ends
+    cand[:, :n] = r
+    cand[:, n:] = ends
     val = sq[:, 6:7] * cand  # Horner
     for k in range(5, 0, -1):
         val = (val + sq[:, k : k + 1]) * cand
@@ -542,9 +548,12 @@ def _segment_maxima(width: np.ndarray, d: np.ndarray, q: int | tuple[int, ...], 
     lo, hi = ends[:-1], ends[1:]
     inside = (cand[:, None, :] >= lo[None, :, None] - 1e-15) & (cand[:, None, :] <= hi[None, :, None] + 1e-15)
     best = np.argmax(np.where(inside, val[:, None, :], -np.inf), axis=2)  # (m, sub)
-    u = np.take_along_axis(np.broadcast_to(cand[:, None, :], inside.shape), best[..., None], axis=2)[..., 0]
+    u = cand[np.arange(m)[:, None], best]
     u = np.clip(u, lo, hi).reshape(m // 6, 6 * sub)  # rows: quantity, vector
-    parts = np.split(u, np.cumsum([len(i) for i in sel])[:-1])
+    parts, at = [], 0
+    for idx in sel:
+        parts.append(u[at : at + len(idx)])
+        at += len(idx)
     if rows is not None:
         return parts
     return np.concatenate(parts, axis=1)
@@ -710,6 +719,20 @@ class _Run:
         n = self.n
         return np.concatenate([y[n + i] - v for i, v in enumerate(vals)] + [self.stage.space.order_gaps(y[:n])])
 
+    def fill_cons(self, out: np.ndarray, y: np.ndarray, vals: list) -> None:
+        """:meth:`cons` written into ``out``."""
+        n, m, gap = self.n, 6 * _Stage.SUB, self.stage.space.m
+        for i, v in enumerate(vals):
+            np.subtract(y[n + i], v, out=out[i * m : (i + 1) * m])
+        out[-2] = y[1] - y[0] - gap
+        out[-1] = y[3] - y[2] - gap
+
+    def fill_normals(self, out: np.ndarray, jacs: list) -> None:
+        """:meth:`cjac` written into ``out``, whose constant part (:attr:`normals`) is already there."""
+        m = 6 * _Stage.SUB
+        for i, d in enumerate(jacs):
+            np.negative(d, out=out[i * m : (i + 1) * m, : self.n])
+
     def cjac(self, jacs: list) -> np.ndarray:
         out = self.normals.copy(order="F")
         m = 6 * _Stage.SUB
@@ -725,29 +748,54 @@ class _Run:
 
 def _run_slsqp(runs: list[_Run]) -> list[np.ndarray]:
     """The results x (free variables, clipped to the feasible set) of several SLSQP runs of stages of one
-    problem, advanced together: each round evaluates the points all runs ask for in one batch
-    (:func:`_eval_stages`), so k runs cost about as many numpy calls as the longest of them alone.
+    problem, advanced together (:class:`_Lockstep`)."""
+    lock = _Lockstep()
+    handles = [lock.add(r) for r in runs]
+    while lock.active:
+        lock.step()
+    return [h.result() for h in handles]
+
+
+class _Lockstep:
+    """SLSQP runs of stages of one problem advanced together: each :meth:`step` evaluates the points all
+    active runs ask for in one batch (:func:`_eval_stages`), so k runs cost about as many numpy calls as
+    the longest of them alone. Runs may be added (and dropped) between steps.
 
     Each run is exactly scipy's SLSQP (``minimize(method="SLSQP")``: the same reverse-communication
-    routine, bounds and tolerances, driven here as ``scipy.optimize._minimize_slsqp`` drives it). That
-    routine is private scipy API (scipy ≥ 1.16); where it is missing the runs go one by one through
-    ``minimize`` — the same results, slower."""
-    if not runs:
-        return []
-    first = _eval_stages([(r.stage, r.x0) for r in runs])
-    y0 = [r.y0(vals) for r, (vals, _) in zip(runs, first)]
-    try:
-        from scipy.optimize._slsqplib import slsqp
-    except ImportError:  # older scipy: one run at a time through the public API
-        return [_run_one(r, y) for r, y in zip(runs, y0)]
-    states = [_LockstepSLSQP(r, y, slsqp) for r, y in zip(runs, y0)]
-    active = list(states)
-    rounds = 0
-    while active:
-        _eval_stages([(st.run.stage, st.want) for st in active])
-        rounds += 1
-        active = [st for st in active if st.advance() and rounds < st.run.max_rounds]
-    return [st.result() for st in states]
+    routine, bounds and tolerances, driven as ``scipy.optimize._minimize_slsqp`` drives it), cut off after
+    ``_Run.max_rounds`` evaluation rounds (then its best feasible point counts). That routine is private
+    scipy API (scipy ≥ 1.16); where it is missing each run goes through ``minimize`` when added — the
+    same results, slower."""
+
+    def __init__(self) -> None:
+        try:
+            from scipy.optimize._slsqplib import slsqp
+        except ImportError:  # older scipy: one run at a time through the public API
+            slsqp = None
+        self.routine = slsqp
+        self.active: list[_LockstepSLSQP] = []
+
+    def add(self, run: _Run) -> "_LockstepSLSQP":
+        st = _LockstepSLSQP(run, self.routine)
+        if self.routine is None:
+            st.finish_serial()
+        else:
+            self.active.append(st)
+        return st
+
+    def drop(self, states: list["_LockstepSLSQP"]) -> None:
+        self.active = [st for st in self.active if st not in states]
+
+    def step(self) -> None:
+        _eval_stages([(st.run.stage, st.want) for st in self.active])
+        still = []
+        for st in self.active:
+            st.rounds += 1
+            if st.advance() and st.rounds < st.run.max_rounds:
+                still.append(st)
+            else:
+                st.done = True
+        self.active = still
 
 
 def _run_one(r: _Run, y0: np.ndarray) -> np.ndarray:
@@ -769,8 +817,22 @@ class _LockstepSLSQP:
     evaluated (``want``), or stops. Same set-up as scipy's: x0 clipped to the bounds, infinite bounds as
     NaN, the same work-space sizes, acc = ftol, the objective evaluated at the bounds-clipped point."""
 
-    def __init__(self, run: _Run, y0: np.ndarray, routine) -> None:
+    def __init__(self, run: _Run, routine) -> None:
         self.run, self.routine = run, routine
+        self.rounds, self.done = 0, False
+        self.need = "start"  # first the values at x0 (the starting t), then f, g, constraints and normals
+        self.want = run.x0
+        self.seen: list[np.ndarray] = []  # the points evaluated for values (for a run cut off)
+        self._result: np.ndarray | None = None
+
+    def finish_serial(self) -> None:
+        """Run to the end through ``scipy.optimize.minimize`` (no lockstep routine available)."""
+        vals = self.run.stage._eval(self.run.x0)[0]
+        self._result = _run_one(self.run, self.run.y0(vals))
+        self.done = True
+
+    def _setup(self, y0: np.ndarray) -> None:
+        run = self.run
         n = y0.size
         self.x = np.clip(y0, run.lo, run.hi).astype(float)
         self.xl = np.where(np.isfinite(run.lo), run.lo, np.nan)
@@ -784,16 +846,19 @@ class _LockstepSLSQP:
         size = n * (n + 1) // 2 + 3 * m * n - (m + 5 * n + 7) * 0 + 9 * m + 8 * n * n + 35 * n + 28
         self.buffer = np.zeros(max(size, 1))
         self.mult = np.zeros(max(1, m + 2 * n + 2))
-        self.C = np.zeros((m, n), order="F")
+        self.C = run.normals.copy(order="F")  # the constant part; fill_normals writes the rest
         self.d = np.zeros(m)
         self.need = "both"  # the initial call needs f, g, constraints and normals
         self.want = self._xpart()
-        self.seen: list[np.ndarray] = []  # the points evaluated for values (for a run cut off)
 
     def result(self) -> np.ndarray:
         """x at the end (clipped to the feasible set); when the run was cut off (``max_rounds``), the best
         feasible point it evaluated (objective from the exact segment maxima)."""
         r = self.run
+        if self._result is not None:
+            return self._result
+        if self.need == "start":
+            return r.stage.space.clip(r.x0.copy())
         if abs(self.state["mode"]) == 1:
             best = None
             for x in self.seen:
@@ -820,15 +885,18 @@ class _LockstepSLSQP:
             if key not in stage._memo:
                 return True
             vals, jacs = stage._memo[key]
+            if self.need == "start":
+                self._setup(r.y0(vals))
+                continue
             if self.need in ("both", "f"):
                 self.seen.append(self.want)
                 xf = np.clip(self.x, r.lo, r.hi) if self.need == "both" else self.x
                 self.fx = r.fun(xf)
-                self.d[:] = r.cons(self.x, vals)
+                r.fill_cons(self.d, self.x, vals)
             if self.need in ("both", "g"):
                 xg = np.clip(self.x, r.lo, r.hi) if self.need == "both" else self.x
                 self.g = r.grad(xg)
-                self.C[:] = r.cjac(jacs)
+                r.fill_normals(self.C, jacs)
             self.routine(self.state, self.fx, self.g, self.C, self.d, self.x, self.mult, self.xl, self.xu,
                          self.buffer, self.indices)
             mode = self.state["mode"]
@@ -941,39 +1009,47 @@ def solve_seeded(prob: VelProblem, seeds: dict[str, np.ndarray], settings: VelSe
     def exact(x: np.ndarray) -> tuple[float, float, float]:
         return exact_peaks(prob, space.full(x)[0])
 
-    def runs(groups: list[tuple[_Stage, np.ndarray, list[np.ndarray], tuple, float]]) -> list[np.ndarray]:
-        """For each (stage, first, others, norms, bound): SLSQP from ``first``, and each other start (1e-3
-        away from it, sampled objective below ``bound``) screened (``screen_ftol``) — all of them advancing
-        together (:func:`_run_slsqp`); then the screens that beat their stage's result are polished
-        (together) and the best point of each stage returned."""
-        # the starts' objectives, then the results', each in one batch
-        _eval_stages([(stage, x0) for stage, first, others, _, _ in groups for x0 in [first, *others]])
-        jobs, owner = [], []
-        for g, (stage, first, others, norms, bound) in enumerate(groups):
-            jobs.append(stage.run(first, *norms))
-            owner.append(g)
-            for x0 in others:
-                if np.max(np.abs(x0 - first)) <= 1e-3 or not stage.objective(x0, *norms) < bound:
-                    continue
-                jobs.append(stage.run(x0, *norms, ftol=settings.screen_ftol, maxiter=settings.screen_maxiter))
-                owner.append(g)
-        xs = _run_slsqp(jobs)
-        _eval_stages([(groups[g][0], x) for g, x in zip(owner, xs)])
-        lead = [owner.index(g) for g in range(len(groups))]
-        best = [(xs[i], groups[g][0].objective(xs[i], *groups[g][3])) for g, i in enumerate(lead)]
-        polish, towner = [], []
-        for i, (g, x) in enumerate(zip(owner, xs)):
-            stage, norms = groups[g][0], groups[g][3]
-            if i != lead[g] and np.max(np.abs(x - best[g][0])) > 1e-3 and stage.objective(x, *norms) < best[g][1]:
-                polish.append(stage.run(x, *norms))
-                towner.append(g)
-        ys = _run_slsqp(polish)
-        _eval_stages([(groups[g][0], y) for g, y in zip(towner, ys)])
-        for g, y in zip(towner, ys):
-            fy = groups[g][0].objective(y, *groups[g][3])
-            if fy < best[g][1]:
-                best[g] = (y, fy)
-        return [x for x, _ in best], [f for _, f in best]
+    lock = _Lockstep()
+
+    class Group:
+        """One stage: SLSQP from ``first`` (the lead) and from each other start 1e-3 away from it whose
+        objective is below ``bound`` (screens, ``screen_ftol``); a finished screen that beats the lead's
+        result is polished (full tolerance); ``best`` (x, objective) once the lead is done."""
+
+        def __init__(self, stage: _Stage, first: np.ndarray, others: list[np.ndarray], norms: tuple, bound: float):
+            self.stage, self.norms = stage, norms
+            _eval_stages([(stage, x0) for x0 in [first, *others]])  # the starts' objectives in one batch
+            self.lead = lock.add(stage.run(first, *norms))
+            self.screens = [
+                lock.add(stage.run(x0, *norms, ftol=settings.screen_ftol, maxiter=settings.screen_maxiter))
+                for x0 in others
+                if np.max(np.abs(x0 - first)) > 1e-3 and stage.objective(x0, *norms) < bound
+            ]
+            self.polishes: list[_LockstepSLSQP] = []
+            self.best: tuple[np.ndarray, float] | None = None
+            self.handled: set[int] = set()
+
+        def runs(self) -> list[_LockstepSLSQP]:
+            return [self.lead, *self.screens, *self.polishes]
+
+        def update(self) -> None:
+            """Take the results of runs finished since the last call (their objectives in one batch)."""
+            fresh = [st for st in self.runs() if st.done and id(st) not in self.handled]
+            if self.best is None and self.lead not in fresh:
+                return  # the screens are judged against the lead's result
+            self.handled.update(id(st) for st in fresh)
+            xs = [st.result() for st in fresh]
+            _eval_stages([(self.stage, x) for x in xs])
+            for st, x in zip(fresh, xs):
+                f = self.stage.objective(x, *self.norms)
+                if st is self.lead:
+                    self.best = (x, f) if self.best is None or f < self.best[1] else self.best
+            for st, x in zip(fresh, xs):
+                f = self.stage.objective(x, *self.norms)
+                if st in self.screens and np.max(np.abs(x - self.best[0])) > 1e-3 and f < self.best[1]:
+                    self.polishes.append(lock.add(self.stage.run(x, *self.norms)))
+                elif st in self.polishes and f < self.best[1]:
+                    self.best = (x, f)
 
     sample, s_amax, s_jmax = pool[in_sample], amax[in_sample], jmax[in_sample]
     inner = (sample[:, 0] >= 3 * settings.margin) & (sample[:, 3] <= 1 - 3 * settings.margin)
@@ -987,33 +1063,49 @@ def solve_seeded(prob: VelProblem, seeds: dict[str, np.ndarray], settings: VelSe
             # stage 1 is multimodal (an end knot on the margin or inside, and the table's cell may straddle
             # a switch between basins): also the multi-start's starts, the best candidate of the pool and
             # the best with both end knots off the margin
-            import os
-            exp = os.environ.get("EXP", "")
-            if "S" not in exp:
-                others += _distinct_best(sample, s_vals, settings.refine, settings.radius)
-                if inner.any():
-                    others.append(sample[inner][int(np.argmin(s_vals[inner]))])
-            if "D" in exp:
-                others += _distinct_best(pool[seg], vals[seg], 3, settings.radius)[1:]
+            others += _distinct_best(sample, s_vals, settings.refine, settings.radius)
+            if inner.any():
+                others.append(sample[inner][int(np.argmin(s_vals[inner]))])
         i0 = int(np.argmin(vals[seg]))
         # check_ratio: screen only starts whose sampled peak is within c of the seed's sampled peak
         bound = float(vals[seg][i0] ** 2 / stage.norm[0 if kind == "a" else 1]) * c * c if math.isfinite(c) else np.inf
-        stage1.append((stage, pool[seg][i0], others, (), bound))
-    (xa, xj), (fa, fj) = runs(stage1)
-    # the exact peaks (the stage objective is the largest exact segment maximum of ‖a‖², ‖j‖² / its scale)
-    a_min, j_min = math.sqrt(fa * stage1[0][0].norm[0]), math.sqrt(fj * stage1[1][0].norm[1])
-    stage = _Stage(ev, space, "F", a_norm, j_norm, settings)
-    f_pool = a_min / amax + j_min / jmax
-    seg = slice(offset["F"], offset["F"] + len(rows["F"]))
-    others = [pool[seg][0]]  # the interpolated seed (after the best one)
-    if check:
-        # the multi-start's first F starts: the best sampled candidate of the pool and of the minimisers
-        extra = np.vstack([xa, xj, (xa + xj) / 2])
-        ga2, gj2 = ev.grid_maxima(space.full(extra), settings.samples_per_piece)
-        f_extra = a_min / np.sqrt(ga2) + j_min / np.sqrt(gj2)
-        allx, allf = np.vstack([pool, extra]), np.concatenate([f_pool, f_extra])
-        others = [allx[int(np.argmax(allf))], extra[2]]
-    (x,), _ = runs([(stage, pool[seg][int(np.argmax(f_pool[seg]))], others, (a_min, j_min), np.inf)])
+        stage1.append(Group(stage, pool[seg][i0], others, (), bound))
+    ga1, gj1 = stage1
+
+    def stage_F(xa: np.ndarray, fa: float, xj: np.ndarray, fj: float) -> tuple[Group, float, float]:
+        # the exact peaks (a stage's objective is its largest exact segment maximum of ‖a‖², ‖j‖² / scale)
+        a_min, j_min = math.sqrt(fa * ga1.stage.norm[0]), math.sqrt(fj * gj1.stage.norm[1])
+        stage = _Stage(ev, space, "F", a_norm, j_norm, settings)
+        f_pool = a_min / amax + j_min / jmax
+        seg = slice(offset["F"], offset["F"] + len(rows["F"]))
+        others = [pool[seg][0]]  # the interpolated seed (after the best one)
+        if check:
+            # the multi-start's first F starts: the best sampled candidate of the pool and of the minimisers
+            extra = np.vstack([xa, xj, (xa + xj) / 2])
+            ga2, gj2 = ev.grid_maxima(space.full(extra), settings.samples_per_piece)
+            f_extra = a_min / np.sqrt(ga2) + j_min / np.sqrt(gj2)
+            allx, allf = np.vstack([pool, extra]), np.concatenate([f_pool, f_extra])
+            others = [allx[int(np.argmax(allf))], extra[2]]
+        return Group(stage, pool[seg][int(np.argmax(f_pool[seg]))], others, (a_min, j_min), np.inf), a_min, j_min
+
+    # The F stage starts as soon as both stage-1 leads are done, from their minima, while the stage-1
+    # screens run on; a screen that finds a lower minimum (rare) restarts it with the new normalisers.
+    gF, basis = None, None
+    while True:
+        ga1.update()
+        gj1.update()
+        if ga1.best is not None and gj1.best is not None:
+            now = (ga1.best[1], gj1.best[1])
+            if basis != now:
+                if gF is not None:
+                    lock.drop(gF.runs())
+                basis = now
+                gF, a_min, j_min = stage_F(ga1.best[0], now[0], gj1.best[0], now[1])
+            gF.update()
+        if not lock.active:
+            break
+        lock.step()
+    xa, xj, x = ga1.best[0], gj1.best[0], gF.best[0]
     v, a, j = exact(x)
     F = a_min / a + j_min / j
     return VelResult(
