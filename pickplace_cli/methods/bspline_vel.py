@@ -342,7 +342,11 @@ class _Evaluator:
 
     def grid_maxima(self, p: np.ndarray, per_piece: int) -> tuple[np.ndarray, np.ndarray]:
         """(max ‖a‖², max ‖j‖²), each (P,), over the samples of :func:`_grid` (``per_piece`` on each knot
-        span and τ = 1): ``sampled(p, *_grid(per_piece))`` maximised, without gathering per sample."""
+        span and τ = 1): ``sampled(p, *_grid(per_piece))`` maximised, without gathering per sample (in
+        blocks of 128 vectors: the temporaries stay in cache)."""
+        if len(p) > 128:
+            parts = [self.grid_maxima(p[i : i + 128], per_piece) for i in range(0, len(p), 128)]
+            return np.concatenate([a for a, _ in parts]), np.concatenate([j for _, j in parts])
         width, d = self.prepare(p)
         h = (width[:, :, None] * (np.arange(per_piece) / per_piece))[..., None]  # (P, 6, per, 1)
         c = d[:, :, None]  # (P, 6, 1, 4, 3)
@@ -1032,6 +1036,10 @@ def solve_seeded(prob: VelProblem, seeds: dict[str, np.ndarray], settings: VelSe
         def runs(self) -> list[_LockstepSLSQP]:
             return [self.lead, *self.screens, *self.polishes]
 
+        def pending(self) -> list[tuple[_Stage, np.ndarray]]:
+            """The results :meth:`update` will judge (to evaluate in one batch with other groups')."""
+            return [(self.stage, st.result()) for st in self.runs() if st.done and id(st) not in self.handled]
+
         def update(self) -> None:
             """Take the results of runs finished since the last call (their objectives in one batch)."""
             fresh = [st for st in self.runs() if st.done and id(st) not in self.handled]
@@ -1092,6 +1100,7 @@ def solve_seeded(prob: VelProblem, seeds: dict[str, np.ndarray], settings: VelSe
     # screens run on; a screen that finds a lower minimum (rare) restarts it with the new normalisers.
     gF, basis = None, None
     while True:
+        _eval_stages([item for g in (ga1, gj1, gF) if g is not None for item in g.pending()])
         ga1.update()
         gj1.update()
         if ga1.best is not None and gj1.best is not None:
