@@ -492,6 +492,28 @@ def _exact_segment_maxima(prep: tuple, q: int | tuple[int, ...], sub: int) -> np
     return _segment_maxima(prep[0][:1], prep[1][:1], q, sub)[0]
 
 
+def _poly_maps(k: int) -> tuple[np.ndarray, np.ndarray]:
+    """(k², 7), (k², 6): from the products c_i·c_j of a degree-(k−1) vector polynomial's coefficients to
+    the coefficients (lowest power first) of its squared norm, padded to degree 6, and of that norm's
+    derivative, padded to degree 5 — for k = 3 (jerk) the cubic derivative times (u − 10)², which adds two
+    roots far outside [0, 1], so that both quantities share one batch of 5 × 5 companion matrices."""
+    if k not in _POLY_MAPS:
+        sq = np.zeros((k * k, 7))
+        sq[:, : 2 * k - 1] = _anti_diagonal_sum(k)
+        deriv = sq[:, 1:] * np.arange(1, 7)  # degree 2k − 3
+        if k == 3:
+            cubic = deriv[:, :4].copy()
+            deriv = np.zeros((k * k, 6))
+            deriv[:, :4] += 100.0 * cubic
+            deriv[:, 1:5] -= 20.0 * cubic
+            deriv[:, 2:] += cubic
+        _POLY_MAPS[k] = (sq, deriv)
+    return _POLY_MAPS[k]
+
+
+_POLY_MAPS: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+
+
 def _segment_maxima(width: np.ndarray, d: np.ndarray, q: int | tuple[int, ...], sub: int,
                     rows: tuple[np.ndarray, ...] | None = None) -> np.ndarray | list[np.ndarray]:
     """u (R, 6·sub·len(q)) of the maxima of ‖a‖² (q = 0) or ‖j‖² (q = 1) — or of each in the tuple ``q``,
@@ -516,20 +538,12 @@ def _segment_maxima(width: np.ndarray, d: np.ndarray, q: int | tuple[int, ...], 
         else:  # j(u) = D1 + D2 (wu) + D3 (wu)²/2
             c = d[idx][:, :, 1:] * wk[:, :, :3]
         k = c.shape[2]
-        sq = (c @ c.transpose(0, 1, 3, 2)).reshape(R * 6, k * k) @ _anti_diagonal_sum(k)  # ‖·‖², lowest power first
-        deriv = sq[:, 1:] * np.arange(1, 2 * k - 1)  # degree 2k − 3
-        if k == 3:
-            # the cubic times (u − 10)² (two roots far outside [0, 1]): degree 5 like a's, so that both
-            # quantities share one batch of 5 × 5 companion matrices
-            cubic = deriv
-            deriv = np.zeros((R * 6, 6))
-            deriv[:, :4] += 100.0 * cubic
-            deriv[:, 1:5] -= 20.0 * cubic
-            deriv[:, 2:] += cubic
-            sq = np.concatenate([sq, np.zeros((R * 6, 2))], axis=1)
-        sqs.append(sq)
-        derivs.append(deriv)
-    sq, deriv = np.concatenate(sqs), np.concatenate(derivs)  # rows: quantity, vector, span
+        prod = (c @ c.transpose(0, 1, 3, 2)).reshape(R * 6, k * k)
+        to_sq, to_deriv = _poly_maps(k)
+        sqs.append(prod @ to_sq)  # ‖·‖² (degree 2k − 2, padded to 6), lowest power first
+        derivs.append(prod @ to_deriv)  # its derivative (padded to degree 5)
+    sq, deriv = (np.concatenate(sqs), np.concatenate(derivs)) if len(sqs) > 1 else (sqs[0], derivs[0])
+    # rows: quantity, vector, span
     m = sq.shape[0]
     n = 5
     lead = deriv[:, -1]
@@ -537,23 +551,19 @@ def _segment_maxima(width: np.ndarray, d: np.ndarray, q: int | tuple[int, ...], 
     lead = np.where(np.abs(lead) > 1e-13 * scale, lead, 1e-13 * scale)  # a dropped degree: roots go far away
     comp = np.zeros((m, n, n))
     comp[:, 0, :] = -deriv[:, -2::-1] / lead[:, None]
-    comp[:, np.arange(1, n), np.arange(n - 1)] = 1.0
+    comp[:, _SUBDIAG[0], _SUBDIAG[1]] = 1.0
     roots = np.linalg.eigvals(comp)
-    real = np.abs(roots.imag) <= 1e-9 * (1.0 + np.abs(roots.real))
-    r = np.where(real, roots.real, -1.0)  # (m, n); non-real → outside
     ends = np.arange(sub + 1) / sub
-    cand = np.empty((m, n + sub + 1))  # the roots and the segment ends
-    cand[:, :n] = r
+    cand = np.empty((m, n + sub + 1))  # the real roots (non-real → −1, outside) and the segment ends
+    cand[:, :n] = np.where(np.abs(roots.imag) <= 1e-9 * (1.0 + np.abs(roots.real)), roots.real, -1.0)
     cand[:, n:] = ends
-    val = sq[:, 6:7] * cand  # Horner
-    for k in range(5, 0, -1):
-        val = (val + sq[:, k : k + 1]) * cand
-    val = val + sq[:, :1]
-    lo, hi = ends[:-1], ends[1:]
-    inside = (cand[:, None, :] >= lo[None, :, None] - 1e-15) & (cand[:, None, :] <= hi[None, :, None] + 1e-15)
+    powers = np.empty((m, n + sub + 1, 7))
+    powers[:, :, 0] = 1.0
+    np.cumprod(np.broadcast_to(cand[:, :, None], (m, n + sub + 1, 6)), axis=2, out=powers[:, :, 1:])
+    val = np.einsum("scp,sp->sc", powers, sq)
+    inside = (cand[:, None, :] >= ends[:-1, None] - 1e-15) & (cand[:, None, :] <= ends[1:, None] + 1e-15)
     best = np.argmax(np.where(inside, val[:, None, :], -np.inf), axis=2)  # (m, sub)
-    u = cand[np.arange(m)[:, None], best]
-    u = np.clip(u, lo, hi).reshape(m // 6, 6 * sub)  # rows: quantity, vector
+    u = np.clip(cand[np.arange(m)[:, None], best], ends[:-1], ends[1:]).reshape(m // 6, 6 * sub)  # rows: quantity, vector
     parts, at = [], 0
     for idx in sel:
         parts.append(u[at : at + len(idx)])
@@ -561,6 +571,9 @@ def _segment_maxima(width: np.ndarray, d: np.ndarray, q: int | tuple[int, ...], 
     if rows is not None:
         return parts
     return np.concatenate(parts, axis=1)
+
+
+_SUBDIAG = (np.arange(1, 5), np.arange(4))  # the companion matrix's subdiagonal
 
 
 class _Stage:
