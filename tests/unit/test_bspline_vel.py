@@ -160,6 +160,92 @@ def test_exact_segment_maxima_are_the_maxima():
     np.testing.assert_allclose(both, np.concatenate([bv._exact_segment_maxima(prep, q, sub) for q in (0, 1)]), atol=1e-12)
 
 
+def _stages(prob, norms=(1.0, 1.0)):
+    ev = bv._Evaluator(prob)
+    space = bv._Space(prob.lambda_free, 0.01)
+    return space, {k: bv._Stage(ev, space, k, *norms, bv.VelSettings()) for k in "ajF"}
+
+
+def test_lockstep_runs_are_scipys_slsqp():
+    """Runs of different stages advanced together (evaluations batched) end where scipy's
+    minimize(method="SLSQP") ends from the same starts, each run alone on a fresh evaluator: the same
+    routine and set-up (bitwise here; 1e-9 allows for batched round-off)."""
+    prob = bv.make_problem(GENERAL, 0.3)
+    space, _ = _stages(prob)
+    x0 = space.from_unit(bv._quasi_random(4, space.n))
+    ga, gj = bv._Evaluator(prob).grid_maxima(space.full(x0), 8)
+    norms = (ga.min(), gj.min())  # F's normalisers: the smallest sampled peaks (squared) of the starts
+    _, st = _stages(prob, norms)
+    a_min, j_min = np.sqrt(norms)
+    runs = [st["a"].run(x0[0]), st["j"].run(x0[1]), st["a"].run(x0[2], ftol=1e-5), st["F"].run(x0[3], a_min, j_min)]
+    together = bv._run_slsqp(runs)
+    for r, x in zip(runs, together):
+        _, alone = _stages(prob, norms)
+        ra = alone[r.stage.kind].run(r.x0, r.a_min, r.j_min, r.ftol)
+        ref = bv._run_one(ra, ra.y0(ra.stage._eval(ra.x0)[0]))
+        np.testing.assert_allclose(x, ref, atol=1e-9)
+        assert r.stage.objective(x, r.a_min, r.j_min) < r.stage.objective(r.x0, r.a_min, r.j_min)
+
+
+def test_cut_off_run_returns_its_best_feasible_point():
+    """A run stopped after ``max_rounds`` evaluation rounds returns the best feasible point it evaluated:
+    feasible (Eq. 36 with the margin) and no worse than its start."""
+    prob = bv.make_problem(GENERAL, 0.3)
+    space, st = _stages(prob)
+    x0 = space.from_unit(bv._quasi_random(3, space.n))[2]
+    (x,) = bv._run_slsqp([st["j"].run(x0, max_rounds=3)])
+    assert np.all(x >= space.lo - 1e-12) and np.all(x <= space.hi + 1e-12) and np.all(space.order_gaps(x) >= -1e-12)
+    assert st["j"].objective(x) <= st["j"].objective(x0)
+    with pytest.raises(TaskError, match="max_rounds"):
+        bv.VelSettings(max_rounds=1)
+
+
+@pytest.mark.parametrize("free", [(True, True, True), (True, False, True)])
+def test_segment_maxima_jacobian_exact_in_lambda_central_in_knots(free):
+    """The constraint Jacobian: λ columns exact (the path is affine in λ), knot columns by central
+    differences at the maximisers' fractions (envelope theorem). Both equal central differences of the
+    exact segment maxima themselves to 1e-7 of the largest entry (their truncation and round-off)."""
+    task = GENERAL if free[1] else Task([0, 0, 0], [0.28, -0.2, 0], 0.04, 0.5, [0, 0.2, 0], [0, 0.2, 0])
+    prob = bv.make_problem(task, 0.3)
+    assert prob.lambda_free == free
+    space, st = _stages(prob)
+    x = space.from_unit(bv._quasi_random(3, space.n))[2]
+    for kind in "ajF":
+        vals, jacs = st[kind]._eval(x)
+        for q, jac in enumerate(jacs):
+            fd = np.zeros_like(jac)
+            for k in range(space.n):
+                e = np.zeros(space.n)
+                e[k] = 1e-6
+                fd[:, k] = (st[kind]._eval(x + e)[0][q] - st[kind]._eval(x - e)[0][q]) / 2e-6
+            assert np.abs(fd - jac).max() <= 1e-7 * np.abs(jac).max()
+
+
+def test_batched_pieces_match_the_one_at_a_time_ones():
+    """Grid maxima without per-sample gathers = the maxima of ``sampled`` (exactly); segment maxima for a
+    subset of vectors per quantity = the full computation's rows; the λ-derivatives of ``prepare`` =
+    central differences (1e-9 relative: round-off only, as D is affine in λ)."""
+    prob = bv.make_problem(GENERAL, 0.3)
+    ev = bv._Evaluator(prob)
+    space = bv._Space((True, True, True), 0.01)
+    p = space.full(space.from_unit(bv._quasi_random(300, 7)))
+    ga, gj = ev.sampled(p, *bv._grid(8))
+    a2, j2 = ev.grid_maxima(p, 8)
+    np.testing.assert_array_equal(ga.max(axis=1), a2)
+    np.testing.assert_array_equal(gj.max(axis=1), j2)
+    w, d, dl = ev.prepare(p[:6], np.array([1, 4]))
+    full = bv._segment_maxima(w, d, (0, 1), 3)
+    ua, uj = bv._segment_maxima(w, d, (0, 1), 3, (np.array([0, 2, 5]), np.array([1, 4])))
+    np.testing.assert_array_equal(ua, full[[0, 2, 5], :18])
+    np.testing.assert_array_equal(uj, full[[1, 4], 18:])
+    for i in range(3):  # D is affine in λ: a wide central difference (0.05) has no truncation error
+        hi, lo = p[[1, 4]].copy(), p[[1, 4]].copy()
+        hi[:, 4 + i] += 0.05
+        lo[:, 4 + i] -= 0.05
+        fd = (ev.prepare(hi)[1] - ev.prepare(lo)[1]) / 0.1
+        assert np.abs(fd - dl[:, i]).max() <= 1e-9 * np.abs(dl[:, i]).max()
+
+
 def test_solve_improves_on_the_paper_initial_guess_and_respects_eq36():
     res = bv.solve(bv.make_problem(GENERAL, 0.3))
     t6, t7, t9, t10, *lam = res.params
