@@ -24,19 +24,22 @@ only on h/b, η, and v0·T/b, v1·T/b resolved along the move (e_u), across it (
 **How the optimum is found.** Each stage of Eq. (37) is a minimax over τ, solved by SLSQP in epigraph
 form: minimise t subject to m_k(p) ≤ t, where m_k is the exact maximum of ‖a‖² (‖j‖²) on the k-th of
 three equal segments of each knot span (from the roots of its derivative: a is cubic on a span), with
-Jacobians by central differences evaluated as one numpy batch (:class:`_Evaluator`: the Taylor
-coefficients per span of the spline of Eq. 16 for many parameter vectors at once, solved in
-piecewise-Taylor form; tests hold them to the B-spline route and to scipy). F has more than one local
+Jacobians exact in λ (the path is affine in λ) and by central differences in the four knots, evaluated
+as one numpy batch (:class:`_Evaluator`: the Taylor coefficients per span of the spline of Eq. 16 for
+many parameter vectors at once, solved in piecewise-Taylor form; tests hold them to the B-spline route
+and to scipy). The cost is per numpy call rather than per vector, so SLSQP runs advance together
+(:class:`_Lockstep`: scipy's SLSQP routine stepped, one batched evaluation per round for all runs;
+a test holds each run to ``scipy.optimize.minimize``). F has more than one local
 maximum and a_max, j_max more than one local minimum, so :func:`solve` is a multi-start: the paper's
 initial guess and a quasi-random (Kronecker) sample of the feasible set are evaluated in one pass, and
 SLSQP runs from the best distinct ones (for a_max and j_max also from the best start with both end
 knots off the margin; for F from the best sampled point and from the midpoint of the two minimisers).
 Where the shipped table applies, :func:`solve_seeded` (the default "exact" solver) starts each stage
 from the table's seeds for that stage (the interpolated optimum and the 32 corner optima of the query's
-cell; the table stores the minimisers of a_max and j_max too), then screens the multi-start's starts
-(loosely) and polishes one when it beats the seed's result: about as many evaluations as running the
-multi-start and a table-seeded polish separately, and at least as good on the held-out moves (README). Reported peaks are exact
-(``bspline.norm_peaks``). A test compares with scipy's differential_evolution.
+cell; the table stores the minimisers of a_max and j_max too) and screens the multi-start's starts
+(loosely) alongside, polishing one when it beats the seed's result; the F stage starts as soon as the
+two stage-1 runs from the seeds are done. Reported peaks are exact (``bspline.norm_peaks``). A test
+compares with scipy's differential_evolution.
 
 Departures from the paper, and its slips (all documented in README):
 
@@ -1002,13 +1005,19 @@ def solve_seeded(prob: VelProblem, seeds: dict[str, np.ndarray], settings: VelSe
     and the 32 corner optima of its cell (``VelTable.seeds``), each a global optimum of a nearby problem.
 
     Each stage is solved from the seed of that stage with the best sampled objective (the table's nodes
-    carry the basins that are optimal nearby). Then other starts are screened (``screen_ftol``,
-    ``check_ratio``) and polished when the screen beats the result. Without ``check`` (the "seeded" solver) the only other start is
-    the interpolated F seed. With ``check`` (the "exact" solver) they are the multi-start's starts of
-    :func:`solve`, from its quasi-random sample evaluated in the same batch as the seeds: for a_max and
-    j_max the best sampled candidate and the best with both end knots off the margin, for F the best
-    sampled candidate (minimisers included) and the midpoint of the two minimisers. Peaks and F are
-    exact at the result."""
+    carry the basins that are optimal nearby), and other starts are screened (``screen_ftol``,
+    ``check_ratio``) at the same time; a screen that beats the seed's result is polished. Without ``check``
+    (the "seeded" solver) the only other start is the interpolated F seed. With ``check`` (the "exact"
+    solver) they are the multi-start's starts of :func:`solve`, from its quasi-random sample evaluated in
+    the same batch as the seeds: for a_max and j_max the best two distinct sampled candidates and the best
+    with both end knots off the margin, for F the best sampled candidate (minimisers included) and the
+    midpoint of the two minimisers.
+
+    All runs advance together (:class:`_Lockstep`, one batched evaluation per round). The F stage needs
+    a_min and j_min, so it starts when both stage-1 runs from the seeds are done, while the stage-1 screens
+    run on; if a screen then finds a lower minimum (its polish beats the seed's), the F stage restarts with
+    the new normalisers. A run is cut off after ``max_rounds`` rounds (its best feasible point counts).
+    Peaks and F are exact at the result."""
     ev = _Evaluator(prob)
     space = _Space(prob.lambda_free, settings.margin)
     rows = {k: np.vstack([space.clip(np.asarray(r, float)[space.free]) for r in np.atleast_2d(v)])
@@ -1163,8 +1172,8 @@ def optimum(task: Task, duration: float, solver: str = "exact", table: str | Non
 
     * "exact" (default) — where the table applies, :func:`solve_seeded` with its check: the three stages
       started from the table's seeds (interpolated and corner optima of the query's cell, for each stage)
-      then the multi-start's starts (screened, polished when better); about the evaluations of the
-      multi-start plus seeded polish it replaces, and at least as good (README: held-out accuracy). Elsewhere the global multi-start (:func:`solve`).
+      and from the multi-start's starts (screened, polished when better), at least as good as the
+      multi-start on the held-out moves (README). Elsewhere the global multi-start (:func:`solve`).
     * "seeded" — only the table's seeds, one SLSQP run per stage (F may also screen the interpolated
       seed): faster, exact to the optimum of its basin.
     * "table" — the table's answer alone (instant, approximate: README).
