@@ -1043,13 +1043,16 @@ def solve_seeded(prob: VelProblem, seeds: dict[str, np.ndarray], settings: VelSe
 
         def __init__(self, stage: _Stage, first: np.ndarray, others: list[np.ndarray], norms: tuple, bound: float):
             self.stage, self.norms = stage, norms
-            _eval_stages([(stage, x0) for x0 in [first, *others]])  # the starts' objectives in one batch
+            others = [x0 for x0 in others if np.max(np.abs(x0 - first)) > 1e-3]
+            if math.isfinite(bound):  # check_ratio: the starts' objectives (in one batch)
+                _eval_stages([(stage, x0) for x0 in others])
+                others = [x0 for x0 in others if stage.objective(x0, *norms) < bound]
+            # (the runs' first evaluations come with the next round's batch)
             self.lead = lock.add(stage.run(first, *norms, max_rounds=settings.max_rounds))
             self.screens = [
                 lock.add(stage.run(x0, *norms, ftol=settings.screen_ftol, maxiter=settings.screen_maxiter,
                                    max_rounds=settings.max_rounds))
                 for x0 in others
-                if np.max(np.abs(x0 - first)) > 1e-3 and stage.objective(x0, *norms) < bound
             ]
             self.polishes: list[_LockstepSLSQP] = []
             self.best: tuple[np.ndarray, float] | None = None
