@@ -199,6 +199,14 @@ _SHIFT_POWER = np.clip(np.subtract.outer(np.arange(6), np.arange(6)).T, 0, None)
 _SHIFT_MASK = np.triu(np.ones((6, 6), bool))  # the Taylor shift of a quintic's state is upper triangular
 _SHIFT_INDEX = np.where(_SHIFT_MASK, _SHIFT_POWER, 6)  # index 6: the zero below the diagonal
 _INV_COUNT = 1.0 / np.arange(1, 6)  # step^k / k! as a running product
+_UNIT = np.eye(16)  # y's unit rows
+_START = np.zeros((6, 16))  # the state at τ = 0 in terms of y: s0, v0, 0, 0 known, snap and crackle unknown
+_START[np.arange(4), np.arange(8, 12)] = 1.0
+_START[4, 0] = _START[5, 1] = 1.0
+_END = np.zeros((6, 16))  # the state at τ = 1: s4, v1, 0, 0 known, snap and crackle unknown
+_END[np.arange(4), np.arange(12, 16)] = 1.0
+_END[4, 4] = _END[5, 5] = 1.0
+_DIAG3 = (np.arange(3), np.arange(3, 6))
 
 
 class _Evaluator:
@@ -208,6 +216,9 @@ class _Evaluator:
     def __init__(self, prob: VelProblem) -> None:
         self.prob = prob
         self.count = 0  # parameter vectors evaluated (for the benchmark)
+        # the known end states [s0, v0, 0, 0, s4, v1, 0, 0] (the last 8 entries of prepare's y)
+        self.known = np.zeros((8, 3))
+        self.known[0], self.known[1], self.known[4], self.known[5] = prob.base[0], prob.v_start, prob.base[4], prob.v_end
 
     @staticmethod
     def knots(p: np.ndarray) -> np.ndarray:
@@ -274,35 +285,29 @@ class _Evaluator:
         np.cumprod(step[..., None] * _INV_COUNT, axis=2, out=powers[:, :, 1:6])
         shift = powers[:, :, _SHIFT_INDEX]  # (P, 6, 6, 6): [k, r, q] = step_k^(q−r) / (q−r)! for q ≥ r
         # y = [z (8 unknowns), s0, v0, 0, 0, s4, v1, 0, 0]; G[:, k] maps y to the state at the start of span k
-        G = np.zeros((P, 6, 6, 16))
-        G[:, 0, np.arange(4), np.arange(8, 12)] = 1.0
-        G[:, 0, 4, 0] = G[:, 0, 5, 1] = 1.0  # snap, crackle at τ = 0
+        G = np.empty((P, 6, 6, 16))
+        G[:, 0] = _START  # s0, v0, 0, 0 and the unknown snap, crackle at τ = 0
         for k in (0, 1):
             G[:, k + 1] = shift[:, k] @ G[:, k]
-            G[:, k + 1, 5] = 0.0
-            G[:, k + 1, 5, k + 2] = 1.0  # the crackle of spans 1, 2
+            G[:, k + 1, 5] = _UNIT[k + 2]  # the crackle of spans 1, 2
         half = shift[:, 2] @ G[:, 2]  # the state at ½ from the left
-        end = np.zeros((P, 6, 16))  # the state at τ = 1: s4, v1, 0, 0, snap, crackle (of span 5)
-        end[:, np.arange(4), np.arange(12, 16)] = 1.0
-        end[:, 4, 4] = end[:, 5, 5] = 1.0
+        end = _END  # the state at τ = 1: s4, v1, 0, 0, snap, crackle (of span 5)
         for k, crackle in ((5, 6), (4, 7), (3, None)):
             G[:, k] = shift[:, k] @ end  # the end of span k − 1 is the start of span k
             if crackle is not None:
                 end = G[:, k].copy()
-                end[:, 5] = 0.0
-                end[:, 5, crackle] = 1.0  # the crackle of spans 4, 3
+                end[:, 5] = _UNIT[crackle]  # the crackle of spans 4, 3
         rows = np.concatenate([G[:, 2, :1], G[:, 3, :1], G[:, 4, :1], half[:, :5] - G[:, 3, :5]], axis=1)
         prob = self.prob
         via = prob.base[1:4][None] + p[:, 4:7, None] * prob.offset[None]  # s1, s2, s3 of Eq. (25)–(27)
-        known = np.zeros((P, 8, 3))
-        known[:, 0], known[:, 1], known[:, 4], known[:, 5] = prob.base[0], prob.v_start, prob.base[4], prob.v_end
+        known = self.known
         rhs = np.zeros((P, 8, 3 if lambda_rows is None else 6))
         rhs[:, :3, :3] = via
         rhs[:, :, :3] -= rows[:, :, 8:] @ known
         if lambda_rows is not None:
-            rhs[:, np.arange(3), np.arange(3, 6)] = 1.0  # columns 0–2 of the inverse: the via points' weights
+            rhs[:, _DIAG3[0], _DIAG3[1]] = 1.0  # columns 0–2 of the inverse: the via points' weights
         z = np.linalg.solve(rows[:, :, :8], rhs)
-        d = G[:, :, 2:6] @ np.concatenate([z[:, :, :3], known], axis=1)[:, None]
+        d = G[:, :, 2:6, :8] @ z[:, None, :, :3] + G[:, :, 2:6, 8:] @ known
         if lambda_rows is None:
             return w, d
         # the path is affine in λ (Eq. 25–27: via point i moves by λ_i·offset_i): ∂d/∂λ_i exactly
