@@ -627,7 +627,7 @@ class _Stage:
         return float(vals[0].max())
 
     def run(self, x0: np.ndarray, a_min: float = 1.0, j_min: float = 1.0, ftol: float | None = None,
-            maxiter: int | None = None, max_rounds: int | None = None) -> "_Run":
+            maxiter: int | None = None, max_rounds: int | None = None) -> _Run:
         """One SLSQP run from x0 (to pass to :func:`_run_slsqp` or :class:`_Lockstep`)."""
         r = _Run(self, np.asarray(x0, float), a_min, j_min, ftol or self.s.ftol, maxiter or self.s.maxiter)
         if max_rounds is not None:
@@ -797,7 +797,7 @@ class _Lockstep:
         self.routine = slsqp
         self.active: list[_LockstepSLSQP] = []
 
-    def add(self, run: _Run) -> "_LockstepSLSQP":
+    def add(self, run: _Run) -> _LockstepSLSQP:
         st = _LockstepSLSQP(run, self.routine)
         if self.routine is None:
             st.finish_serial()
@@ -805,7 +805,7 @@ class _Lockstep:
             self.active.append(st)
         return st
 
-    def drop(self, states: list["_LockstepSLSQP"]) -> None:
+    def drop(self, states: list[_LockstepSLSQP]) -> None:
         self.active = [st for st in self.active if st not in states]
 
     def step(self) -> None:

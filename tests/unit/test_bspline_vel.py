@@ -211,7 +211,7 @@ def test_segment_maxima_jacobian_exact_in_lambda_central_in_knots(free):
     space, st = _stages(prob)
     x = space.from_unit(bv._quasi_random(3, space.n))[2]
     for kind in "ajF":
-        vals, jacs = st[kind]._eval(x)
+        _, jacs = st[kind]._eval(x)
         for q, jac in enumerate(jacs):
             fd = np.zeros_like(jac)
             for k in range(space.n):
