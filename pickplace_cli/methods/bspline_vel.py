@@ -786,15 +786,12 @@ class _Lockstep:
     Each run is exactly scipy's SLSQP (``minimize(method="SLSQP")``: the same reverse-communication
     routine, bounds and tolerances, driven as ``scipy.optimize._minimize_slsqp`` drives it), cut off after
     ``_Run.max_rounds`` evaluation rounds (then its best feasible point counts). That routine is private
-    scipy API (scipy ≥ 1.16); where it is missing each run goes through ``minimize`` when added — the
-    same results, slower."""
+    scipy API: it is used only on the scipy versions this driver was checked against
+    (``_SLSQP_VERSIONS``; a test compares it with ``minimize``); on any other version, or where it is
+    missing, each run goes through ``minimize`` when added — the same results, slower."""
 
     def __init__(self) -> None:
-        try:
-            from scipy.optimize._slsqplib import slsqp
-        except ImportError:  # older scipy: one run at a time through the public API
-            slsqp = None
-        self.routine = slsqp
+        self.routine = _slsqp_routine()
         self.active: list[_LockstepSLSQP] = []
 
     def add(self, run: _Run) -> _LockstepSLSQP:
@@ -818,6 +815,28 @@ class _Lockstep:
             else:
                 st.done = True
         self.active = still
+
+
+#: scipy (major, minor) versions whose private SLSQP routine the lockstep driver was checked against
+#: (scipy 1.16 rewrote SLSQP; 1.17.1 tested): [first, last)
+_SLSQP_VERSIONS = ((1, 16), (1, 18))
+
+
+def _slsqp_routine():
+    """scipy's private SLSQP routine on a checked scipy version, else None (then the public ``minimize``)."""
+    import scipy
+
+    try:
+        version = tuple(int(x) for x in scipy.__version__.split(".")[:2])
+    except ValueError:
+        return None
+    if not (_SLSQP_VERSIONS[0] <= version < _SLSQP_VERSIONS[1]):
+        return None
+    try:
+        from scipy.optimize._slsqplib import slsqp
+    except ImportError:
+        return None
+    return slsqp
 
 
 def _run_one(r: _Run, y0: np.ndarray) -> np.ndarray:

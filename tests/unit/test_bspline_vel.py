@@ -187,6 +187,27 @@ def test_lockstep_runs_are_scipys_slsqp():
         assert r.stage.objective(x, r.a_min, r.j_min) < r.stage.objective(r.x0, r.a_min, r.j_min)
 
 
+def test_lockstep_uses_the_private_routine_only_on_checked_scipy_versions(monkeypatch):
+    """The private SLSQP routine is used on the checked versions (the installed one in CI: this test and
+    the one above then compare it with minimize); on any other version the runs go through minimize and
+    give the same results."""
+    import scipy
+
+    version = tuple(int(x) for x in scipy.__version__.split(".")[:2])
+    in_range = bv._SLSQP_VERSIONS[0] <= version < bv._SLSQP_VERSIONS[1]
+    assert (bv._slsqp_routine() is not None) == in_range
+    prob = bv.make_problem(GENERAL, 0.3)
+    space, st = _stages(prob)
+    x0 = space.from_unit(bv._quasi_random(2, space.n))
+    fast = bv._run_slsqp([st["a"].run(x0[0]), st["j"].run(x0[1])])
+    monkeypatch.setattr(scipy, "__version__", "9.0.0")  # an unchecked scipy
+    assert bv._slsqp_routine() is None
+    _, st2 = _stages(prob)
+    slow = bv._run_slsqp([st2["a"].run(x0[0]), st2["j"].run(x0[1])])
+    for a, b in zip(fast, slow):
+        np.testing.assert_allclose(a, b, atol=1e-9)
+
+
 def test_cut_off_run_returns_its_best_feasible_point():
     """A run stopped after ``max_rounds`` evaluation rounds returns the best feasible point it evaluated:
     feasible (Eq. 36 with the margin) and no worse than its start."""
