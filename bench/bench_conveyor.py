@@ -168,12 +168,17 @@ def main() -> int:
         results["build"] = {"seconds": time.perf_counter() - t0, "workers": os.cpu_count(),
                             "solved_nodes": built.meta["solved_nodes"]}
         print(f"{'table build, all cores':<52} {results['build']['seconds']:.1f} s ({built.meta['solved_nodes']} solves, {os.cpu_count()} workers)")
+    write_results(results, "conveyor.json")
+    return 0
+
+
+def write_results(results: dict, name: str) -> None:
+    """Record the end load average and write ``results`` to bench/results/``name`` (JSON)."""
     results["machine"]["load_avg_end"] = os.getloadavg()
-    out = Path(__file__).resolve().parent / "results" / "conveyor.json"
+    out = Path(__file__).resolve().parent / "results" / name
     out.parent.mkdir(exist_ok=True)
     out.write_text(json.dumps(results, indent=2) + "\n")
     print(f"written {out}")
-    return 0
 
 
 if __name__ == "__main__":

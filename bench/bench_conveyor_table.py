@@ -21,7 +21,6 @@ Writes bench/results/conveyor_table.json. Not a test: timings depend on the mach
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import sys
 import time
@@ -47,7 +46,7 @@ def main() -> int:
     from scipy.interpolate import RegularGridInterpolator
 
     sys.path.insert(0, str(Path(__file__).resolve().parent))
-    from bench_conveyor import random_moves
+    from bench_conveyor import random_moves, write_results
 
     from pickplace_cli.methods import bspline_vel as bv
     from pickplace_cli.table_vel import _order_knots, load_vel_table
@@ -120,11 +119,7 @@ def main() -> int:
     ta = np.array(t_answer)
     results["answer time"] = {"median": float(np.median(ta)), "p95": float(np.percentile(ta, 95)), "n": len(ta)}
     print(f"answer (lookup) time: median {1e3 * np.median(ta):.3f} ms, p95 {1e3 * np.percentile(ta, 95):.3f} ms")
-    results["machine"]["load_avg_end"] = os.getloadavg()
-    out = Path(__file__).resolve().parent / "results" / "conveyor_table.json"
-    out.parent.mkdir(exist_ok=True)
-    out.write_text(json.dumps(results, indent=2) + "\n")
-    print(f"written {out}")
+    write_results(results, "conveyor_table.json")
     return 0
 
 
