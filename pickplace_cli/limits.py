@@ -258,7 +258,7 @@ class MotionModel:
         self.rotor = np.array([d.rotor_inertia if d else 0.0 for d in drives])
 
     # --------------------------------------------------------------------------------- evaluation
-    def _torques(self, tau: np.ndarray, rates: bool = False, motion: tuple | None = None):
+    def _torques(self, tau: np.ndarray, rates: bool = False, motion: tuple | None = None, singularity: bool = True):
         robot = self.robot
         p, v, a, j = motion if motion is not None else (self.path(tau, k) for k in range(4))
         dA = dG = sing = None
@@ -272,7 +272,7 @@ class MotionModel:
             A = full - G
             if rates:
                 dA, dG = robot.torque_rate(q, qd, qdd, qddd, p, v, a, j)
-            if hasattr(robot, "singularity_measure"):
+            if singularity and hasattr(robot, "singularity_measure"):
                 sing = robot.singularity_measure(q, p)
         ng = self.gear * self.eff
         Am = A / ng + self.rotor * self.gear * qdd
@@ -296,8 +296,8 @@ class MotionModel:
             raise ValueError("motion= needs a robot with an analytic torque_rate")
         p, v, a, j, q, qd, qdd, qddd, A, G, Am, Gm, dAm, dGm, sing = self._torques(tau, rates=analytic, motion=motion)
         if derivatives and not analytic:
-            hi = self._torques(tau + DTAU)
-            lo = self._torques(tau - DTAU)
+            hi = self._torques(tau + DTAU, singularity=False)
+            lo = self._torques(tau - DTAU, singularity=False)
             dAm = (hi[10] - lo[10]) / (2 * DTAU)
             dGm = (hi[11] - lo[11]) / (2 * DTAU)
         return Parts(tau, p, v, a, j, q, qd, qdd, qddd, A, G, Am, Gm, dAm, dGm, sing)
@@ -314,30 +314,8 @@ class MotionModel:
         if not meta:
             return meta, np.zeros((len(parts.tau), 0))
         Tc = T if np.ndim(T) == 0 else np.asarray(T)[:, None]
-        cols = []
-        for kind, idx in groups:  # one array operation per quantity, all joints at once
-            if kind == "position max":
-                cols.append(parts.q[:, idx])
-            elif kind == "position min":
-                cols.append(-parts.q[:, idx])
-            elif kind == "velocity":
-                cols.append(np.abs(parts.qd1[:, idx]) / Tc)
-            elif kind == "acceleration":
-                cols.append(np.abs(parts.qdd1[:, idx]) / Tc**2)
-            elif kind == "jerk":
-                cols.append(np.abs(parts.qddd1[:, idx]) / Tc**3)
-            elif kind == "motor speed":
-                cols.append(np.abs(self.gear[idx] * parts.qd1[:, idx]) / Tc)
-            elif kind == "motor torque":
-                cols.append(np.abs(parts.Am[:, idx] / Tc**2 + parts.Gm[:, idx]))
-            elif kind == "motor torque rate":
-                cols.append(np.abs(parts.dAm[:, idx] / Tc**3 + parts.dGm[:, idx] / Tc))
-            elif kind == "singularity":
-                cols.append(-parts.singularity[:, None])
-            elif kind == "workcell max":
-                cols.append(parts.p[:, idx])
-            else:  # workcell min
-                cols.append(-parts.p[:, idx])
+        # one array operation per quantity, all joints at once
+        cols = [_COLUMNS[kind](parts, idx, Tc, self.gear) for kind, idx in groups]
         return list(meta), np.concatenate(cols, axis=1)[:, perm]
 
     def _column_plan(self, rates: bool, singularity: bool) -> tuple[list[tuple], list[tuple], np.ndarray]:
@@ -399,6 +377,22 @@ class MotionModel:
         integral = T * (w @ tm**2 if w is not None else np.trapezoid(tm**2, tau, axis=0))
         hold = parts.Gm[0] ** 2 + parts.Gm[-1] ** 2
         return np.sqrt((2 * integral + dwell * hold) / (2 * T + 2 * dwell))
+
+
+#: each limited quantity as columns (N, len(idx)) of the joints (or axes) ``idx``: (parts, idx, T, gear) → values
+_COLUMNS = {
+    "position max": lambda pr, idx, T, gear: pr.q[:, idx],
+    "position min": lambda pr, idx, T, gear: -pr.q[:, idx],
+    "velocity": lambda pr, idx, T, gear: np.abs(pr.qd1[:, idx]) / T,
+    "acceleration": lambda pr, idx, T, gear: np.abs(pr.qdd1[:, idx]) / T**2,
+    "jerk": lambda pr, idx, T, gear: np.abs(pr.qddd1[:, idx]) / T**3,
+    "motor speed": lambda pr, idx, T, gear: np.abs(gear[idx] * pr.qd1[:, idx]) / T,
+    "motor torque": lambda pr, idx, T, gear: np.abs(pr.Am[:, idx] / T**2 + pr.Gm[:, idx]),
+    "motor torque rate": lambda pr, idx, T, gear: np.abs(pr.dAm[:, idx] / T**3 + pr.dGm[:, idx] / T),
+    "singularity": lambda pr, idx, T, gear: -pr.singularity[:, None],
+    "workcell max": lambda pr, idx, T, gear: pr.p[:, idx],
+    "workcell min": lambda pr, idx, T, gear: -pr.p[:, idx],
+}
 
 
 def _parabolic_peak(x: np.ndarray, y: np.ndarray, i: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
