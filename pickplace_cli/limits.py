@@ -134,9 +134,12 @@ def check_grid_index(tau: np.ndarray, breakpoints: np.ndarray) -> tuple[np.ndarr
 DTAU = 1e-5
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class LimitRow:
-    """One checked limit: the peak of a quantity over the move, its limit and where the peak is."""
+    """One checked limit: the peak of a quantity over the move, its limit and where the peak is.
+
+    (A plain slotted record, not a frozen dataclass: a report has ~25 rows per move and a frozen
+    dataclass costs 5× as much to build, which the single-plan target of < 1 ms notices.)"""
 
     joint: str  # "q1" … or "tool"
     quantity: str
@@ -206,6 +209,19 @@ class LimitReport:
             "rows": [r.as_dict() for r in self.rows],
             "notes": list(self.notes),
         }
+
+
+@dataclass(frozen=True)
+class _ReportPlan:
+    """:meth:`MotionModel.report_plan`: limits (column sign convention), exact-refinement bands and signs per
+    column; rows as ("single", column, (joint, quantity, unit, limit, kind, lower)), ("range", (column of the
+    max, of the min), (joint, base, unit, kind, lo, hi)) or ("rms", joint index, (joint, rated torque))."""
+
+    limits: np.ndarray
+    band: np.ndarray
+    signs: np.ndarray
+    rows: tuple
+    rms: bool
 
 
 @dataclass(frozen=True)
@@ -365,6 +381,48 @@ class MotionModel:
         plans[key] = ([e[0] for e in entries], groups, perm)
         return plans[key]
 
+    def report_plan(self, rates: bool, singularity: bool) -> _ReportPlan:
+        """How :func:`check_limits` turns the columns' peaks into report rows (memoised: it depends only on
+        the robot, specs, margin and box): the limits and exact-refinement bands per column, and every row
+        in report order (joint by joint, its position range first, then the tool's rows)."""
+        key = ("report", rates, singularity)
+        if key in self.memo:
+            return self.memo[key]
+        meta = self._column_plan(rates, singularity)[0]
+        entries: list[tuple] = []  # (joint, quantity) sort key fields, then the row plan
+        ranges: dict[tuple[str, str], dict[str, int]] = {}
+        for c, (joint, quantity, unit, limit, kind, sign) in enumerate(meta):
+            base, _, side = quantity.rpartition(" ")
+            if side in ("max", "min") and base.startswith(("position", "workcell")):
+                if (joint, base) not in ranges:
+                    ranges[(joint, base)] = {}
+                    entries.append((joint, base, "range", None, (joint, base, unit, kind)))
+                ranges[(joint, base)][side] = c
+            else:
+                entries.append((joint, quantity, "single", c, (joint, quantity, unit, float(limit), kind, sign < 0)))
+        rows = []
+        for joint, base, kind, c, spec in entries:
+            if kind == "range":
+                cols = ranges[(joint, base)]
+                spec = (*spec, float(meta[cols["min"]][3]), float(meta[cols["max"]][3]))
+                c = (cols["max"], cols["min"])
+            rows.append((joint, base, kind, c, spec))
+        for i, (name, spec) in enumerate(zip(self.robot.joint_names, self.specs)):
+            if spec.drive is not None and spec.drive.rated_torque is not None:
+                rows.append((name, "rms motor torque", "rms", i, (name, float(spec.drive.rated_torque))))
+        order = {name: i for i, name in enumerate(list(self.robot.joint_names) + ["tool"])}
+        rows.sort(key=lambda r: (order.get(r[0], 99), 0 if r[1].startswith("position") else 1))
+        limits = np.array([m[3] * m[5] for m in meta], dtype=float)
+        plan = _ReportPlan(
+            limits=limits,
+            band=EXACT_BAND * np.maximum(np.abs(limits), 1e-12),
+            signs=np.array([m[5] for m in meta], dtype=float),
+            rows=tuple((kind, c, spec) for _, _, kind, c, spec in rows),
+            rms=any(r[2] == "rms" for r in rows),
+        )
+        self.memo[key] = plan
+        return plan
+
     def rms_motor_torque(self, parts: Parts, T: float, dwell: float) -> np.ndarray:
         """RMS motor torque (n,) [N·m] over the duty cycle move–dwell–back–dwell (see module docstring).
 
@@ -442,16 +500,15 @@ def check_limits(
         parts = model.parts(tau)
     x = parts.tau
     meta, data = model.columns(parts, T)
+    plan = model.report_plan(parts.dAm is not None, parts.singularity is not None)
     rows: list[LimitRow] = []
     if data.shape[1]:
         imax = np.argmax(data, axis=0)
         peak, at = _parabolic_peak(x, data, imax)
-        limits = np.array([m[3] * m[5] for m in meta])  # in column sign convention
+        limits = plan.limits  # in column sign convention
         # refine exactly every peak near its limit or apparently beyond it (a violation is always confirmed
         # on the model itself, never taken from an interpolated estimate)
-        near = np.flatnonzero(
-            (np.abs(peak - limits) <= EXACT_BAND * np.maximum(np.abs(limits), 1e-12)) | (peak > limits)
-        )
+        near = np.flatnonzero((np.abs(peak - limits) <= plan.band) | (peak > limits))
         if near.size:
 
             def fun(s: np.ndarray) -> np.ndarray:
@@ -463,44 +520,31 @@ def check_limits(
             exact, exact_at = refine_max(fun, x, data[:, near])
             peak[near] = exact
             at[near] = exact_at
-        ranges: dict[tuple[str, str], dict[str, tuple]] = {}
-        values = (np.array([m[5] for m in meta]) * peak).tolist()
+        values = (plan.signs * peak).tolist()
         times = (at * T).tolist()
-        for c, (joint, quantity, unit, limit, kind, sign) in enumerate(meta):
+    rms = model.rms_motor_torque(rms_parts if rms_parts is not None else parts, T, dwell) if plan.rms else None
+    # the rows in report order (joint by joint, its position range first), as planned once per profile
+    for kind, c, spec in plan.rows:
+        if kind == "single":
+            joint, quantity, unit, limit, reach, lower = spec
             value = values[c]
-            t_at = times[c]
-            if quantity.endswith(" max") or quantity.endswith(" min"):
-                base, side = quantity.rsplit(" ", 1)
-                if base.startswith(("position", "workcell")):
-                    ranges.setdefault((joint, base), {})[side] = (value, float(limit), t_at, unit, kind)
-                    continue
-            if sign < 0:  # a minimum that must stay above the limit (singularity measure)
+            if lower:  # a minimum that must stay above the limit (singularity measure)
                 util = limit / value if value > 0 else float("inf")
-                ok = value >= limit
+                rows.append(LimitRow(joint, quantity, unit, value, limit, util, times[c], value >= limit, reach, "lower"))
             else:
-                util = value / limit
-                ok = value <= limit
-            bound = "lower" if sign < 0 else "upper"
-            rows.append(LimitRow(joint, quantity, unit, value, float(limit), float(util), t_at, bool(ok), kind, bound))
-        for (joint, base), sides in ranges.items():
-            rows.append(_range_row(joint, base, sides))
-    # RMS over the duty cycle
-    rp = rms_parts if rms_parts is not None else parts
-    rms = model.rms_motor_torque(rp, T, dwell)
-    for i, (name, spec) in enumerate(zip(model.robot.joint_names, model.specs)):
-        if spec.drive is not None and spec.drive.rated_torque is not None:
-            r = float(rms[i])
-            lim = spec.drive.rated_torque
-            rows.append(LimitRow(name, "rms motor torque", "N·m", r, lim, r / lim, None, r <= lim))
-    order = {name: i for i, name in enumerate(list(model.robot.joint_names) + ["tool"])}
-    rows.sort(key=lambda r: (order.get(r.joint, 99), 0 if r.quantity.startswith("position") else 1))
+                rows.append(LimitRow(joint, quantity, unit, value, limit, value / limit, times[c], value <= limit, reach))
+        elif kind == "range":
+            rows.append(_range_row(spec, values[c[0]], values[c[1]], times[c[0]], times[c[1]]))
+        else:  # RMS over the duty cycle
+            joint, lim = spec
+            r = float(rms[c])
+            rows.append(LimitRow(joint, "rms motor torque", "N·m", r, lim, r / lim, None, r <= lim))
     return LimitReport(tuple(rows), T, dwell, notes)
 
 
-def _range_row(joint: str, base: str, sides: dict[str, tuple]) -> LimitRow:
+def _range_row(spec: tuple, vmax: float, vmin: float, tmax: float, tmin: float) -> LimitRow:
     """One row for a [min, max] range: the side nearer its bound; utilisation = |x − mid| / half-range."""
-    vmax, hi, tmax, unit, kind = sides["max"]
-    vmin, lo, tmin, _, _ = sides["min"]
+    joint, base, unit, kind, lo, hi = spec
     mid, half = (lo + hi) / 2, (hi - lo) / 2
     u_hi, u_lo = (vmax - mid) / half, (mid - vmin) / half
     ok = vmax <= hi + 1e-12 and vmin >= lo - 1e-12

@@ -29,6 +29,7 @@ and can resume from a checkpoint of finished rows.
 
 from __future__ import annotations
 
+import bisect
 import csv
 import functools
 import hashlib
@@ -528,7 +529,11 @@ class Table:
                 f"eta = {eta:g}: the table {self.source} was built for eta = {self.eta:g}; "
                 f"build one with `pickplace build-table --eta {eta:g}` or give --k1 and --k2"
             )
-        return float(np.interp(lam, self.lam, self.column("k1"))), float(np.interp(lam, self.lam, self.column("k2")))
+        lists = self._columns.get("lists")  # type: ignore[attr-defined]
+        if lists is None:
+            lists = self._columns["lists"] = tuple(self.column(c).tolist() for c in ("lam", "k1", "k2"))  # type: ignore[attr-defined]
+        xp, k1, k2 = lists
+        return _interp(lam, xp, k1), _interp(lam, xp, k2)
 
     def fit(self, lam_min: float | None = None, degree: int = 3) -> tuple[np.ndarray, np.ndarray, float]:
         """Least-squares cubic of Eq. (23) over the rows with λ ≥ ``lam_min`` (default: the ``fit_lambda_min``
@@ -872,6 +877,19 @@ def parse_table(text: str, source: str = "<table>") -> Table:
 
 
 _CACHE: dict[tuple, object] = {}
+
+
+def _interp(x: float, xp: list[float], fp: list[float]) -> float:
+    """``np.interp(x, xp, fp)`` for one x, bitwise (the same search and the same slope·(x − xp[j]) + fp[j] as
+    numpy's compiled loop; tested), without numpy's per-call cost: the planner looks up one λ per move."""
+    if x >= xp[-1]:
+        return fp[-1]
+    if x < xp[0]:
+        return fp[0]
+    j = bisect.bisect_right(xp, x) - 1
+    if xp[j] == x:
+        return fp[j]
+    return (fp[j + 1] - fp[j]) / (xp[j + 1] - xp[j]) * (x - xp[j]) + fp[j]
 
 
 def read_table_file(path: Path, parse: Callable[[str, str], object], source: str, build_hint: str):

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -25,6 +26,8 @@ class Task:
     ``height`` [m] is the clearance of the path's midpoint P3 above the *higher* of the two end points;
     ``eta`` is the lift-off/set-down ratio η of [Li2018, Eq. (11)]; ``v_from``/``v_to`` [m/s] are the tool
     velocities at the ends (zero for a move from rest to rest).
+
+    Immutable: the derived quantities (b, γ, λ, the via points) are computed once, on first use.
     """
 
     p_from: np.ndarray
@@ -53,12 +56,12 @@ class Task:
             )
 
     # --- local frame P1-uv [Li2018, Eq. (1)]
-    @property
+    @cached_property
     def b(self) -> float:
         """Horizontal width of the move b [m] (Eq. 2)."""
         return float(np.hypot(*(self.p_to[:2] - self.p_from[:2])))
 
-    @property
+    @cached_property
     def gamma(self) -> float:
         """Direction of the move in the x-y plane γ [rad] (Eq. 1); 0 for a purely vertical move."""
         d = self.p_to[:2] - self.p_from[:2]
@@ -70,12 +73,12 @@ class Task:
         g = self.gamma
         return np.array([np.cos(g), np.sin(g), 0.0])
 
-    @property
+    @cached_property
     def lam(self) -> float:
         """Width/height ratio λ = b/h (Eq. 2), h = clearance above the higher end point."""
         return self.b / self.height
 
-    @property
+    @cached_property
     def z_top(self) -> float:
         """Height of the path's midpoint P3 [m]."""
         return max(self.p_from[2], self.p_to[2]) + self.height
@@ -86,6 +89,10 @@ class Task:
         With unequal end heights each end lifts off at η of its own rise to P3 (the clearance is measured
         from the higher end), which reduces to Eq. (11) when z_from = z_to.
         """
+        return self._via.copy()
+
+    @cached_property
+    def _via(self) -> np.ndarray:
         p1, p5 = self.p_from, self.p_to
         zt = self.z_top
         p2 = p1 + np.array([0.0, 0.0, self.eta * (zt - p1[2])])

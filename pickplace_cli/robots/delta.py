@@ -78,53 +78,50 @@ def _local(x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return rt[:3], rt[3:], x[:, 2]
 
 
-def _gram_extremes(dx: np.ndarray, dy: np.ndarray, dz: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Smallest and largest eigenvalue (N,) of the Gram matrix G = AAᵀ whose rows are the vectors
-    (dx, dy, dz)[i] (each (3, N)), in closed form (trigonometric solution of the characteristic cubic of a
-    symmetric 3×3 matrix; Smith 1961). The largest comes from the cubic, the smallest from
-    λ_min λ_mid = det G / λ_max and λ_min + λ_mid = tr G − λ_max in the cancellation-free form."""
-    def dot(i: int, k: int) -> np.ndarray:
-        return dx[i] * dx[k] + dy[i] * dy[k] + dz[i] * dz[k]
-
-    g01, g02, g12 = dot(0, 1), dot(0, 2), dot(1, 2)  # G is symmetric: six distinct entries
-    g = [[dot(0, 0), g01, g02], [g01, dot(1, 1), g12], [g02, g12, dot(2, 2)]]
-    m = (g[0][0] + g[1][1] + g[2][2]) / 3.0
-    off = g[0][1] ** 2 + g[0][2] ** 2 + g[1][2] ** 2
-    a0, a1, a2 = g[0][0] - m, g[1][1] - m, g[2][2] - m
+def _gram_extremes(d: np.ndarray, det_a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Smallest and largest eigenvalue (N,) of the Gram matrix G = AAᵀ whose rows are the vectors d[:, i]
+    (``d`` (3 components, 3 rows, N); ``det_a`` = det A (N,)), in closed form (trigonometric solution of the
+    characteristic cubic of a symmetric 3×3 matrix; Smith 1961). The largest comes from the cubic, the
+    smallest from λ_min λ_mid = det G / λ_max and λ_min + λ_mid = tr G − λ_max in the cancellation-free form."""
+    g00, g11, g22, g01, g02, g12 = (d[:, _GRAM_I] * d[:, _GRAM_J]).sum(axis=0)  # G is symmetric: six entries
+    m = (g00 + g11 + g22) / 3.0
+    off = g01 * g01 + g02 * g02 + g12 * g12
+    a0, a1, a2 = g00 - m, g11 - m, g22 - m
     pp = np.sqrt(np.maximum((a0 * a0 + a1 * a1 + a2 * a2 + 2.0 * off) / 6.0, 1e-300))
-    detb = (a0 * (a1 * a2 - g[1][2] ** 2) - g[0][1] * (g[0][1] * a2 - g[1][2] * g[0][2])
-            + g[0][2] * (g[0][1] * g[1][2] - a1 * g[0][2])) / pp**3
+    detb = (a0 * (a1 * a2 - g12 * g12) - g01 * (g01 * a2 - g12 * g02) + g02 * (g01 * g12 - a1 * g02)) / pp**3
     phi = np.arccos(np.minimum(np.maximum(detb / 2.0, -1.0), 1.0)) / 3.0
     hi = m + 2.0 * pp * np.cos(phi)
-    # det G = (det A)², exact from the rows
-    det_a = (dx[0] * (dy[1] * dz[2] - dz[1] * dy[2]) - dy[0] * (dx[1] * dz[2] - dz[1] * dx[2])
-             + dz[0] * (dx[1] * dy[2] - dy[1] * dx[2]))
-    prod = det_a * det_a / hi
+    prod = det_a * det_a / hi  # det G = (det A)²
     rest = 3.0 * m - hi
     lo = 2.0 * prod / (rest + np.sqrt(np.maximum(rest * rest - 4.0 * prod, 0.0)))
     return lo, hi
+
+
+_GRAM_I = np.array([0, 1, 2, 0, 0, 1])  # the entries (0,0), (1,1), (2,2), (0,1), (0,2), (1,2) of G
+_GRAM_J = np.array([0, 1, 2, 1, 2, 2])
 
 
 class _Arms:
     """Arm-wise quantities of one (q, p) configuration, each (3, N): cos q, sin q and the forearm vector d in
     the arm frame (radial dr, tangential dt, vertical dz), D = d·E′ and D2 = d·E″ (see module docstring)."""
 
-    __slots__ = ("c", "s", "dr", "dt", "dz", "D", "D2", "_base")
+    __slots__ = ("c", "s", "dr", "dt", "dz", "D", "D2", "_base", "_recip")
 
     def __init__(self, L: float, c: np.ndarray, s: np.ndarray, dr: np.ndarray, dt: np.ndarray, dz: np.ndarray):
         self.c, self.s, self.dr, self.dt, self.dz = c, s, dr, dt, dz
         self.D = -L * (s * dr + c * dz)
         self.D2 = L * (s * dz - c * dr)
         self._base = None
+        self._recip = None
 
-    def base_frame(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """d in the base frame: (dx, dy, dz), each (3, N) (computed once per configuration)."""
+    def base_frame(self) -> np.ndarray:
+        """d in the base frame, (3 components x, y, z; 3 arms; N) (computed once per configuration)."""
         if self._base is None:
-            self._base = (
-                self.dr * _COS_PHI - self.dt * _SIN_PHI,
-                self.dr * _SIN_PHI + self.dt * _COS_PHI,
-                self.dz,
-            )
+            d = np.empty((3, *self.dr.shape))
+            d[0] = self.dr * _COS_PHI - self.dt * _SIN_PHI
+            d[1] = self.dr * _SIN_PHI + self.dt * _COS_PHI
+            d[2] = self.dz
+            self._base = d
         return self._base
 
 
@@ -343,22 +340,21 @@ class DeltaRobot:
         q = _samples(q, "q")
         p = _samples(p, "p")
         arms = self._arms(q, p)
-        cx, cy, cz, det = self._reciprocal(arms)
+        (cx, cy, cz), det = self._reciprocal(arms)
         # column i of A⁻¹ is c_i/det; J = A⁻¹ B scales column i by B_ii
         k = arms.D / det
         return np.stack(((cx * k).T, (cy * k).T, (cz * k).T), axis=1)
 
     @staticmethod
-    def _reciprocal(arms: _Arms) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """c_i = d_{i+1} × d_{i+2} (components (3, N) each) and det A = d_1 · (d_2 × d_3) (N,)."""
-        dx, dy, dz = arms.base_frame()
-        x1, y1, z1 = dx[_NEXT], dy[_NEXT], dz[_NEXT]
-        x2, y2, z2 = dx[_NEXT2], dy[_NEXT2], dz[_NEXT2]
-        cx = y1 * z2 - z1 * y2
-        cy = z1 * x2 - x1 * z2
-        cz = x1 * y2 - y1 * x2
-        det = dx[0] * cx[0] + dy[0] * cy[0] + dz[0] * cz[0]
-        return cx, cy, cz, det
+    def _reciprocal(arms: _Arms) -> tuple[np.ndarray, np.ndarray]:
+        """The reciprocal basis c_i = d_{i+1} × d_{i+2} as (3 components, 3 arms, N) and det A = d_1 · (d_2 × d_3)
+        (N,) (computed once per configuration: the dynamics and the singularity measure both use them)."""
+        if arms._recip is None:
+            d = arms.base_frame()
+            d1, d2 = d[:, _NEXT], d[:, _NEXT2]
+            c = d1[_NEXT] * d2[_NEXT2] - d1[_NEXT2] * d2[_NEXT]  # (y1 z2 − z1 y2, z1 x2 − x1 z2, x1 y2 − y1 x2)
+            arms._recip = (c, (d[:, 0] * c[:, 0]).sum(axis=0))
+        return arms._recip
 
     def joint_motion(
         self, p: np.ndarray, v: np.ndarray, a: np.ndarray, j: np.ndarray
@@ -448,8 +444,7 @@ class DeltaRobot:
 
     def _singularity(self, arms: _Arms) -> np.ndarray:
         serial = np.abs(arms.D).min(axis=0) / (self.l * self.L)
-        dx, dy, dz = arms.base_frame()
-        lo, hi = _gram_extremes(dx, dy, dz)
+        lo, hi = _gram_extremes(arms.base_frame(), self._reciprocal(arms)[1])
         parallel = np.sqrt(np.maximum(lo, 0.0) / hi)
         return np.minimum(serial, parallel)
 
@@ -482,7 +477,7 @@ class DeltaRobot:
         p = _samples(p, "p")
         a = _samples(a, "a")
         arms = self._arms(q, p)
-        cx, cy, cz, det = self._reciprocal(arms)
+        (cx, cy, cz), det = self._reciprocal(arms)
         mp = self.platform_mass
         Fx, Fy, Fz = mp * a[:, 0], mp * a[:, 1], mp * (a[:, 2] + self.g)
         lam = (Fx * cx + Fy * cy + Fz * cz) / det
@@ -526,31 +521,36 @@ class DeltaRobot:
         return A.T.copy(), G.T.copy(), None if dA is None else dA.T.copy(), None if dG is None else dG.T.copy()
 
     def _dynamics(self, arms: _Arms, qd, qdd, qddd, v, a, j, rates: bool):
-        """(A, G, dA, dG) of :meth:`split_dynamics`, arm-major (3, N), from the arm geometry; q̇, q̈, q⃛ (3, N)."""
-        cx, cy, cz, det = self._reciprocal(arms)
+        """(A, G, dA, dG) of :meth:`split_dynamics`, arm-major (3, N), from the arm geometry; q̇, q̈, q⃛ (3, N).
+
+        The inertial load m_p p̈ and the static load m_p g e_z go through the same reciprocal basis as one
+        stacked (2 loads, 3 components, N) array (numpy's cost is per call at these sizes)."""
+        C, det = self._reciprocal(arms)  # (3 components, 3 arms, N), (N,)
         L, mp, g, M = self.L, self.platform_mass, self.g, self.arm_gravity_moment
-        lam_a = mp * (a[:, 0] * cx + a[:, 1] * cy + a[:, 2] * cz) / det
-        lam_g = (mp * g) * cz / det
-        A = self.arm_inertia * qdd + arms.D * lam_a
-        G = -(g * M) * arms.c + arms.D * lam_g
+        F = np.zeros((2, 3, len(det)))  # forces on the plate [N]: inertial, static
+        F[0] = mp * a.T
+        F[1, 2] = mp * g
+        lam = (F[:, :, None] * C).sum(axis=1) / det  # (2, 3 arms, N): λ_i = F·c_i / det A
+        Dlam = arms.D * lam
+        A = self.arm_inertia * qdd + Dlam[0]
+        G = Dlam[1] - (g * M) * arms.c
         if not rates:
             return A, G, None, None
         w = qd
         vr, vt, vz = _local(v)
         d1r = vr + arms.s * L * w
-        d1z = vz + arms.c * L * w
-        Ddot = -L * (arms.s * d1r + arms.c * d1z) + arms.D2 * w
-        d1x = d1r * _COS_PHI - vt * _SIN_PHI  # ḋ in the base frame (3 arms × N)
-        d1y = d1r * _SIN_PHI + vt * _COS_PHI
-
-        def lam_dot(lam: np.ndarray, dF: tuple) -> np.ndarray:
-            rx = dF[0] - (d1x * lam).sum(axis=0)
-            ry = dF[1] - (d1y * lam).sum(axis=0)
-            rz = dF[2] - (d1z * lam).sum(axis=0)
-            return (rx * cx + ry * cy + rz * cz) / det
-
-        dA = self.arm_inertia * qddd + Ddot * lam_a + arms.D * lam_dot(lam_a, (mp * j[:, 0], mp * j[:, 1], mp * j[:, 2]))
-        dG = (g * M) * arms.s * w + Ddot * lam_g + arms.D * lam_dot(lam_g, (0.0, 0.0, 0.0))
+        d1 = np.empty((3, *d1r.shape))  # ḋ = v − E′q̇ in the base frame (3 components, 3 arms, N)
+        d1[2] = vz + arms.c * L * w
+        Ddot = -L * (arms.s * d1r + arms.c * d1[2]) + arms.D2 * w
+        d1[0] = d1r * _COS_PHI - vt * _SIN_PHI
+        d1[1] = d1r * _SIN_PHI + vt * _COS_PHI
+        # Aᵀλ̇ = Ḟ − Σ_k ḋ_k λ_k with Ḟ = m_p p⃛ (inertial) and 0 (static)
+        R = -(d1[None] * lam[:, None]).sum(axis=2)  # (2, 3 components, N)
+        R[0] += mp * j.T
+        lam_dot = (R[:, :, None] * C).sum(axis=1) / det
+        rate = Ddot * lam + arms.D * lam_dot
+        dA = self.arm_inertia * qddd + rate[0]
+        dG = rate[1] + (g * M) * arms.s * w
         return A, G, dA, dG
 
     def kinetic_energy(self, q: np.ndarray, qd: np.ndarray, v: np.ndarray) -> np.ndarray:

@@ -49,6 +49,18 @@ def test_lookup_interpolates_and_refuses_outside():
         tab.lookup(10, eta=0.6)
 
 
+def test_scalar_lookup_is_numpy_interp_bitwise():
+    """Table.lookup (one λ, plain floats) must give np.interp's bits: the batch verdict engine interpolates
+    thousands of λ with np.interp, and a move planned alone must equal the same move in a batch."""
+    tab = T.load_table()
+    xp = tab.lam
+    rng = np.random.default_rng(7)
+    xs = np.concatenate([rng.uniform(xp[0], xp[-1], 5000), xp, np.nextafter(xp[1:], -np.inf), np.nextafter(xp[:-1], np.inf)])
+    got = np.array([tab.lookup(float(x)) for x in xs])
+    want = np.stack([np.interp(xs, xp, tab.column("k1")), np.interp(xs, xp, tab.column("k2"))], axis=1)
+    assert np.array_equal(got, want)
+
+
 GOOD = "# eta: 0.5\nlambda,k1,k2\n1,0.5,0.4\n2,0.55,0.3\n"
 
 
