@@ -3,6 +3,7 @@ and the shipped table (provenance, a rebuilt sample, accuracy against the exact 
 
 from __future__ import annotations
 
+import dataclasses
 import time
 
 import numpy as np
@@ -192,6 +193,11 @@ def test_shipped_table_provenance(shipped):
     for key in ("# method: bspline-vel", "# eta: 0.5", "# margin: 0.01", "# tool_version:", "# solver:", "# units:"):
         assert key in text
     assert shipped.grid == VelGrid()
+    # built with today's solver settings (a settings change must come with a rebuilt table: the stage-1 seed
+    # columns depend on them, and `pickplace build-table --method bspline-vel` must reproduce the file)
+    settings = bv.VelSettings(margin=shipped.grid.margin)
+    solver = ", ".join(f"{k}={v}" for k, v in dataclasses.asdict(settings).items())
+    assert f"# solver: {solver}\n" in text
 
 
 def test_shipped_table_sample_rebuilds(shipped):
