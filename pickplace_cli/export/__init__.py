@@ -2,12 +2,15 @@
 
 ``atomic_output(path)`` writes to a temporary file in the target's directory and renames it over the
 target only when the writer finished: a failed or interrupted run leaves the old file (or none), never a
-truncated one.
+truncated one. A symbolic link is followed (the file it points to is replaced; the link stays). A device,
+named pipe or socket (``/dev/null``, ``/dev/stdout``, a FIFO a PLC gateway reads) cannot be replaced by a
+rename, and must not be: it is written in place. A directory or an empty path is an ExportError.
 """
 
 from __future__ import annotations
 
 import os
+import stat
 import sys
 import tempfile
 from contextlib import contextmanager
@@ -24,20 +27,28 @@ FLOAT_FORMAT = "%.12g"
 
 @contextmanager
 def atomic_output(path: str | Path | None, binary: bool = False) -> Iterator[IO]:
-    """Yield a stream: stdout for None or '-', else a temp file renamed onto ``path`` on success."""
+    """Yield a stream: stdout for None or '-'; else a temp file renamed onto ``path`` (onto the file a symbolic
+    link points to) on success; a device or named pipe is written in place (see the module docstring)."""
     if path is None or str(path) == "-":
         stream = sys.stdout.buffer if binary else sys.stdout
         yield stream
         stream.flush()
         return
-    target = Path(path)
-    directory = target.parent if str(target.parent) else Path(".")
-    if not directory.is_dir():
-        raise ExportError(f"output {target}: directory {directory} does not exist")
+    target, in_place = _output_target(path)
+    if in_place:
+        try:
+            fh = open(target, "wb" if binary else "w", newline="" if not binary else None, encoding=None if binary else "utf-8")
+        except OSError as exc:
+            raise ExportError(f"output {path}: cannot open for writing: {exc.strerror}") from None
+        with fh:
+            yield fh
+            fh.flush()
+        return
+    directory = target.parent
     try:
         fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=directory)
     except OSError as exc:
-        raise ExportError(f"output {target}: cannot create a file in {directory}: {exc.strerror}") from None
+        raise ExportError(f"output {path}: cannot create a file in {directory}: {exc.strerror}") from None
     try:
         with os.fdopen(fd, "wb" if binary else "w", newline="" if not binary else None, encoding=None if binary else "utf-8") as fh:
             yield fh
@@ -53,6 +64,33 @@ def atomic_output(path: str | Path | None, binary: bool = False) -> Iterator[IO]
         raise
 
 
+def _output_target(path: str | Path) -> tuple[Path, bool]:
+    """(the file to write, whether to write it in place) for an output path; ExportError for a path that
+    cannot be written (empty, a directory, a missing directory). Symbolic links are followed; a device,
+    named pipe or socket — or anything under /dev or /proc, e.g. /dev/stdout, which may resolve to the
+    caller's redirected file — is written in place."""
+    given = str(path)
+    if not given.strip():
+        raise ExportError("output '': an empty path (give a file name, or - for standard output)")
+    if given.startswith(("/dev/", "/proc/")):
+        return Path(given), True
+    target = Path(os.path.realpath(given)) if os.path.islink(given) else Path(given)
+    try:
+        mode = os.stat(target).st_mode
+    except FileNotFoundError:
+        mode = None
+    except OSError as exc:
+        raise ExportError(f"output {given}: {exc.strerror}") from None
+    if mode is not None and stat.S_ISDIR(mode):
+        raise ExportError(f"output {given}: is a directory (give a file name, e.g. {Path(given) / 'out.csv'})")
+    if mode is not None and not stat.S_ISREG(mode):
+        return target, True
+    directory = target.parent if str(target.parent) else Path(".")
+    if not directory.is_dir():
+        raise ExportError(f"output {given}: directory {directory} does not exist")
+    return target, False
+
+
 def _mode_for(target: Path) -> int:
     """The existing file's mode, else what a plain open() would give (0666 less the umask)."""
     try:
@@ -64,12 +102,11 @@ def _mode_for(target: Path) -> int:
 
 
 def check_writable(path: str | Path | None) -> None:
-    """Fail early (before anything is written) when ``path``'s directory does not exist."""
+    """Fail early (before anything is computed or written) when ``path`` cannot be an output file: empty,
+    a directory, or in a directory that does not exist (the checks of :func:`atomic_output`)."""
     if path is None or str(path) == "-":
         return
-    directory = Path(path).parent if str(Path(path).parent) else Path(".")
-    if not directory.is_dir():
-        raise ExportError(f"output {path}: directory {directory} does not exist")
+    _output_target(path)
 
 
 def plan_columns(plan) -> tuple[list[str], np.ndarray]:

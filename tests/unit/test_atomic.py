@@ -147,3 +147,52 @@ def test_success_replaces_and_keeps_mode(tmp_path):
     assert target.read_bytes() == b"new\r\n"  # newline='' : line ends unchanged
     assert target.stat().st_mode & 0o777 == 0o640
     assert [p.name for p in tmp_path.iterdir()] == ["out.csv"]
+
+
+def test_symlink_is_followed_and_kept(tmp_path):
+    """-o LINK replaces the file the link points to (atomically) and leaves the link a link."""
+    (tmp_path / "real").mkdir()
+    real = tmp_path / "real" / "target.csv"
+    real.write_bytes(OLD)
+    link = tmp_path / "link.csv"
+    link.symlink_to(real)
+    with atomic_output(link) as fh:
+        fh.write("new\n")
+    assert link.is_symlink() and os.readlink(link) == str(real)
+    assert real.read_bytes() == b"new\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["link.csv", "real"]
+
+
+def test_named_pipe_is_written_in_place(tmp_path):
+    """A FIFO (e.g. read by a PLC gateway) cannot be replaced by a rename: it is written in place and stays
+    a FIFO. (Writing /dev/null is the same case; not tested on the device itself: a regression run as root
+    would replace the machine's /dev/null.)"""
+    import stat
+    import threading
+
+    fifo = tmp_path / "pipe"
+    os.mkfifo(fifo)
+    got: list[bytes] = []
+    reader = threading.Thread(target=lambda: got.append(fifo.read_bytes()))
+    reader.start()
+    with atomic_output(fifo) as fh:
+        fh.write("t[s]\n0\n")
+    reader.join(timeout=10)
+    assert got == [b"t[s]\n0\n"]
+    assert stat.S_ISFIFO(os.stat(fifo).st_mode)
+    assert [p.name for p in tmp_path.iterdir()] == ["pipe"]
+
+
+@pytest.mark.parametrize("make,match", [
+    (lambda d: d, "is a directory"),
+    (lambda d: "", "empty path"),
+    (lambda d: d / "missing" / "out.csv", "does not exist"),
+])
+def test_unwritable_paths_are_one_line_errors(tmp_path, make, match):
+    from pickplace_cli.export import check_writable
+
+    path = make(tmp_path)
+    for call in (lambda: check_writable(path), lambda: atomic_output(path).__enter__()):
+        with pytest.raises(ExportError, match=match):
+            call()
+    assert [p.name for p in tmp_path.iterdir()] == []
