@@ -274,9 +274,14 @@ def plan(
 
     _finite("height", height)
     _finite("rate", rate)
-    for name, k in (("k1", k1), ("k2", k2)):
-        if k is not None and not (0 < k < 1):
-            raise TaskError(f"{name} = {k!r}: time-ratio factors must lie strictly between 0 and 1")
+    if rate is not None and not (0 < rate <= 1e6):
+        raise TaskError(f"rate = {rate!r} Hz: the output rate must lie in (0, 1e6] Hz (as the profile's planning.rate)")
+    if k1 is not None or k2 is not None:
+        from .methods.bspline import check_k
+
+        for name, k in (("k1", k1), ("k2", k2)):
+            if k is not None:
+                check_k(name, k)
     if eta is not None and not (0 < eta < 1):
         raise TaskError(f"eta = {eta!r}: the lift-off/set-down ratio η must lie strictly between 0 and 1")
     if batch is not None and (from_ is not None or to is not None):
@@ -364,14 +369,15 @@ def plan(
     if report is not None:
         _write_report(legs, report)
     if json_summary:
-        doc = _json_summary(legs, cycle, code)
+        doc = _json_summary(legs, cycle, code, exit_code=0 if report_only else code)
         if workspace_fit is not None:
             doc["workspace_fit"] = workspace_fit.as_dict()
         _emit_json(doc)
     if code and not report_only:
-        sys.stderr.write(
-            "pickplace: trajectory not written (a limit is exceeded); --report-only writes it anyway\n"
-        )
+        if output is not None:
+            sys.stderr.write(
+                "pickplace: trajectory not written (a limit is exceeded); --report-only writes it anyway\n"
+            )
         raise typer.Exit(code)
     if output is not None:
         if round_trip:
@@ -448,8 +454,9 @@ def _writer(fmt, dialect, flavor, compression) -> Callable:
     return write
 
 
-def _json_summary(legs, cycle: float, code: int) -> dict:
-    """The --json document: per-move summaries plus the cycle and the verdict."""
+def _json_summary(legs, cycle: float, code: int, exit_code: int) -> dict:
+    """The --json document: per-move summaries plus the cycle and the verdict. ``exit_code`` is the process's
+    own (0 with --report-only); ``limits_ok`` says whether every limit holds."""
     moves = []
     for leg in legs:
         s = leg.summary()
@@ -460,7 +467,7 @@ def _json_summary(legs, cycle: float, code: int) -> dict:
         "cycle_time_s": cycle,
         "picks_per_minute": 60.0 / cycle,
         "limits_ok": code == 0,
-        "exit_code": code,
+        "exit_code": exit_code,
     })
     return doc
 
@@ -485,7 +492,7 @@ def _plan_batch(source, prof, options, height, eta, fail_fast, writer, output, r
         rows, bad = read_batch(sys.stdin, name)
     else:
         try:
-            with open(source, encoding="utf-8", newline="") as fh:
+            with open(source, encoding="utf-8-sig", newline="") as fh:  # -sig: Excel's BOM
                 rows, bad = read_batch(fh, name)
         except OSError as exc:
             raise TaskError(f"batch = {source}: cannot read it: {exc.strerror}") from None
@@ -501,7 +508,7 @@ def _plan_batch(source, prof, options, height, eta, fail_fast, writer, output, r
         while pending and pending[0].row < upto:
             b = pending.pop(0)
             results[b.row] = b
-            sys.stderr.write(f"pickplace: {b.error}\n")
+            sys.stderr.write("".join(f"pickplace: {ln}\n" for ln in b.error.splitlines()))
 
     progress = None
     if not quiet and total >= 50 and sys.stderr.isatty():
@@ -528,8 +535,8 @@ def _plan_batch(source, prof, options, height, eta, fail_fast, writer, output, r
             results[res.row] = res
             if progress is not None:
                 progress.advance(bar)
-            if res.error is not None:
-                sys.stderr.write(f"pickplace: {res.error}\n")
+            if res.error is not None:  # one line per problem (a limit row: one per exceeded limit)
+                sys.stderr.write("".join(f"pickplace: {ln}\n" for ln in res.error.splitlines()))
                 if fail_fast:
                     stopped = True
                     break
@@ -655,12 +662,10 @@ def _print_verdict(report, quiet: bool, with_cycle: bool = True) -> None:
         if not quiet:
             sys.stderr.write(f"verdict: all limits hold; {cycle}\n")
         return
+    from .batch import violation_text  # the same words as a batch row's limit lines
+
     for r in report.violations:
-        when = f" at t = {r.t_peak:.4f} s" if r.t_peak is not None else " over the duty cycle"
-        sys.stderr.write(
-            f"pickplace: limit exceeded: {r.joint} {r.quantity} = {_fmt(r.peak)} {r.unit}{when}; "
-            f"limit {_fmt(r.limit)} {r.unit} (by {_fmt(abs(r.excess))} {r.unit}, {100 * r.utilisation:.1f} %)\n"
-        )
+        sys.stderr.write(f"pickplace: {violation_text(r)}\n")
     if not quiet:
         sys.stderr.write(f"verdict: {len(report.violations)} limit(s) exceeded; {cycle}\n")
 

@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from .errors import UnreachableError
+from .errors import TableError, UnreachableError
 from .limits import LimitReport, MotionModel, check_grid_index, check_limits, reach_error
 from .methods import Method, depends_on_duration, path_factory, plan_path
 from .profile import Profile
@@ -79,6 +79,11 @@ class Plan:
 def motion_model(path, profile: Profile) -> MotionModel:
     """The path on the profile's robot, with its joint specs, singularity margin and workcell box (built
     once per profile: a profile is immutable)."""
+    return MotionModel(path, *motion_model_static(profile))
+
+
+def motion_model_static(profile: Profile) -> tuple:
+    """(robot, joint specs, singularity margin, workcell box, memo) of ``profile``, built once per profile."""
     hit = _STATIC.get(id(profile))
     if hit is None or hit[0] is not profile:
         robot = build_robot(profile.robot)
@@ -87,11 +92,23 @@ def motion_model(path, profile: Profile) -> MotionModel:
         if len(_STATIC) > 32:
             _STATIC.clear()
         _STATIC[id(profile)] = hit
-    return MotionModel(path, *hit[1:])
+    return hit[1:]
 
 
 _STATIC: dict[int, tuple] = {}
 _OUTPUT_PARTS = ("p", "v1", "a1", "j1", "q", "qd1", "qdd1", "qddd1", "A", "G", "Am", "Gm")  # id(profile) → (profile, robot, specs, margin, box, memo); holds the profile
+
+
+def check_ends_reachable(task: Task, profile: Profile) -> None:
+    """UnreachableError (exit 4) naming the end point outside the robot's workspace, if one is."""
+    robot = motion_model_static(profile)[0]
+    for name, p in (("from", task.p_from), ("to", task.p_to)):
+        try:
+            robot.inverse_kinematics(p[None])
+        except UnreachableError as exc:
+            xyz = ",".join(f"{c:g}" for c in p)
+            why = str(exc).replace("sample 0 at ", "").replace(" (sample 0)", "")  # the robot's message names its sample; here it is the point
+            raise UnreachableError(f"{name} = {xyz} m: outside the workspace of profile {profile.name} ({why})") from None
 
 
 def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions()) -> Plan:
@@ -107,11 +124,16 @@ def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions()) -> 
     rate = options.rate if options.rate is not None else profile.planning.rate
     first_spec = "auto" if options.time == "fit" else options.time
     factory = None
-    if depends_on_duration(options.method):  # the path is planned for a duration (e.g. conveyor tracking)
-        factory = path_factory(task, options.method, **options.method_params)
-        first, path = choose_duration_for(factory, profile.capacity, first_spec)
-    else:
-        path = plan_path(task, options.method, **options.method_params)
+    try:
+        if depends_on_duration(options.method):  # the path is planned for a duration (e.g. conveyor tracking)
+            factory = path_factory(task, options.method, **options.method_params)
+            first, path = choose_duration_for(factory, profile.capacity, first_spec)
+        else:
+            path = plan_path(task, options.method, **options.method_params)
+    except TableError:
+        # a move the table does not cover is often one the robot cannot make at all: say that first (exit 4)
+        check_ends_reachable(task, profile)
+        raise
     model = motion_model(path, profile)
     # reachability first, on the output samples of the auto (or given) duration, so an error names a time
     if factory is None:

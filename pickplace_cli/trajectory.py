@@ -15,6 +15,10 @@ import numpy as np
 Evaluator = Callable[[np.ndarray, int], np.ndarray]
 
 
+#: most output samples of one move (1 s at the profile's highest rate, 1 MHz; ~1.5 GB of model arrays)
+MAX_SAMPLES = 1_000_000
+
+
 @dataclass(frozen=True)
 class CartesianPath:
     """Geometry + motion law on normalised time ``tau`` ∈ [0, 1] (duration T = 1).
@@ -67,7 +71,15 @@ class CartesianTrajectory:
         """Times from 0 to T inclusive at ``rate`` Hz; the last interval may be shorter so T is always a sample."""
         if not (np.isfinite(rate) and rate > 0):
             raise ValueError(f"rate must be a finite positive number of Hz, got {rate!r}")
-        n = int(np.floor(self.duration * rate + 1e-9))
+        n = self.duration * rate + 1e-9
+        if not n <= MAX_SAMPLES:
+            from .errors import TaskError
+
+            raise TaskError(
+                f"rate = {rate:g} Hz: the move of T = {self.duration:.6g} s would have {n + 1:.4g} samples; "
+                f"at most {MAX_SAMPLES:,} per move (lower --rate, or check the duration)"
+            )
+        n = int(np.floor(n))
         t = np.arange(n + 1) / rate
         if self.duration - t[-1] > 1e-9 * min(1.0 / rate, self.duration):
             t = np.append(t, self.duration)

@@ -41,6 +41,18 @@ def bspline_control_points(task: Task, k1: float, k2: float) -> tuple[np.ndarray
     return knots, solve_control_points(knots, via_tau, task.via_points() - task.p_from)
 
 
+#: range of the time-ratio factors k1, k2 (Eq. 14 needs 0 < k < 1; toward 0 or 1 a knot span shrinks to
+#: nothing, the jerk and the duration grow without bound and the control-point solve becomes singular; the
+#: table build's own floor for k2 is 1e-4)
+K_RANGE = (1e-4, 1.0 - 1e-4)
+
+
+def check_k(name: str, k: float) -> None:
+    """TaskError unless ``k`` lies in :data:`K_RANGE`."""
+    if not (np.isfinite(k) and K_RANGE[0] <= k <= K_RANGE[1]):
+        raise TaskError(f"{name} = {k!r}: time-ratio factors must lie in [{K_RANGE[0]:g}, {K_RANGE[1]:g}]")
+
+
 def plan_bspline(
     task: Task, k1: float | None = None, k2: float | None = None, table: str | Path | None = None
 ) -> CartesianPath:
@@ -60,8 +72,7 @@ def plan_bspline(
         k1, k2 = tab.lookup(task.lam, eta=task.eta)
         source = f"table {tab.source}"
     for name, k in (("k1", k1), ("k2", k2)):
-        if not (np.isfinite(k) and 0 < k < 1):
-            raise TaskError(f"{name} = {k!r}: time-ratio factors must lie strictly between 0 and 1")
+        check_k(name, k)
     # numpy only (no scipy import on the online path), and the very arithmetic of the batch verdict
     # engine (P = 1): control points, the exact polynomial of every piece, the exact peaks
     via = (task.via_points() - task.p_from)[None]

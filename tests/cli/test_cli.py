@@ -102,6 +102,10 @@ BAD = [
     ([*ADEPT, "--k1", "1.3", "--k2", "0.1"], "k1 = 1.3"),
     (["--from", "1,2", "--to", "0.1,0,-0.8"], "three coordinates"),
     (["--from", "-0.6,0,-0.8", "--to", "0.6,0,-0.8"], "outside the table's range"),
+    ([*ADEPT, "--rate", "1e9"], "rate = 1000000000.0 Hz: the output rate must lie in (0, 1e6] Hz"),
+    ([*ADEPT, "--k1", "1e-300", "--k2", "0.1"], "k1 = 1e-300: time-ratio factors must lie in [0.0001, 0.9999]"),
+    # inside the k range, but the knot spans are so short that the duration (~2e5 s) needs 1.8e8 samples
+    ([*ADEPT, "--k1", "1e-4", "--k2", "0.5"], "at most 1,000,000 per move"),
 ]
 
 
@@ -160,6 +164,15 @@ def test_unreachable_exit_4():
     assert "outside the travel of axis z" in r.stderr and "at t = " in r.stderr
 
 
+def test_unreachable_end_point_is_named_before_the_table_range():
+    """A move the table does not cover because an end point is out of reach: exit 4 naming that point
+    (not the table's λ range, which would send the user to change --height)."""
+    r = run("plan", "--from", "-0.1525,0,-0.8", "--to", "2,0,-0.8")
+    assert r.exit_code == 4
+    assert r.stderr.strip().startswith("pickplace: error: to = 2,0,-0.8 m: outside the workspace of profile delta-su2018")
+    assert len(r.stderr.strip().splitlines()) == 1
+
+
 def test_build_table_small(tmp_path):
     out = tmp_path / "t.csv"
     r = run("build-table", "--lambda-min", "27", "--lambda-max", "28", "--lambda-step", "0.5", "-o", str(out), "-j", "1", "-q")
@@ -200,3 +213,15 @@ def test_help_imports_no_heavy_modules():
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip().splitlines()[-1] == "HEAVY="
+
+
+def test_json_exit_code_is_the_process_exit_code():
+    """--json: exit_code is what the process returns (0 with --report-only), limits_ok the verdict; without
+    -o nothing claims a trajectory was not written."""
+    r = run("plan", *ADEPT, "--time", "0.1", "--json", "-q")
+    doc = json.loads(r.stdout)
+    assert r.exit_code == 3 and doc["exit_code"] == 3 and doc["limits_ok"] is False
+    assert "trajectory not written" not in r.stderr
+    r = run("plan", *ADEPT, "--time", "0.1", "--json", "-q", "--report-only")
+    doc = json.loads(r.stdout)
+    assert r.exit_code == 0 and doc["exit_code"] == 0 and doc["limits_ok"] is False
