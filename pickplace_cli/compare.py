@@ -423,8 +423,10 @@ def parse_methods(spec: str | Iterable[str] | None) -> list:
     against the registry (TaskError naming the unknown one and the choices)."""
     from .methods import Method
 
-    if spec is None or (isinstance(spec, str) and spec.strip().lower() in ("", "all")):
+    if spec is None or (isinstance(spec, str) and spec.strip().lower() == "all"):
         return list(Method)
+    if isinstance(spec, str) and not spec.strip():
+        raise TaskError("methods = '': empty; give 'all' or method names separated by commas")
     names = [s.strip() for s in spec.split(",")] if isinstance(spec, str) else [str(s) for s in spec]
     out = []
     for n in names:

@@ -74,6 +74,7 @@ def test_compare_csv_stdout_and_json_file(tmp_path):
     "args, code, text",
     [
         (["-m", "bspline,nope"], 1, "methods = 'nope': unknown method"),
+        (["-m", ""], 1, "methods = '': empty"),
         (["-m", "bspline", "--eta", "1.5"], 1, "eta = 1.5"),
         (["-m", "bspline", "--time", "soon"], 1, "time = 'soon'"),
         (["-m", "bspline", "-o", "x.csv"], 1, "--format table prints to stderr"),
