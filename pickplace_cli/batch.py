@@ -4,7 +4,10 @@ Input: a header row, then one move per row. Required columns ``from_x, from_y, f
 [m, base frame]; optional ``height`` [m], ``eta`` [-], ``v_from_x … v_from_z``, ``v_to_x … v_to_z``
 [m/s] and ``time`` [s, or "auto"/"fit"]. An empty optional cell takes the command-line/profile value.
 Blank lines and lines starting with ``#`` are skipped. Rows are numbered from 1 (the first data row),
-which is the number every message and the output's ``move`` column use.
+which is the number every message and the output's ``move`` column use. The cells may be separated by
+``,``, ``;`` or a tab (:func:`sniff_delimiter`, as ``pickplace check`` reads), the decimal mark is ``.``,
+and a UTF-8 byte-order mark before the header (Excel's "CSV UTF-8") is ignored. A header with no move
+after it is an error.
 
 A row that cannot be planned is a result (``RowResult.error``), not an exception: the batch goes on
 (unless the caller stops at the first failure) and the exit code is the worst of all rows.
@@ -35,7 +38,9 @@ class BatchRow:
 
 @dataclass(frozen=True)
 class RowResult:
-    """The outcome of one row: a plan, or an error with its exit code (1 input, 3 limit, 4 unreachable)."""
+    """The outcome of one row: a plan, or an error with its exit code (1 input, 3 limit, 4 unreachable).
+    ``error`` is one line per problem ("row N (FILE:LINE): …"): a row that exceeds several limits has
+    several lines, one per exceeded limit."""
 
     row: int
     plan: Any = None
@@ -44,14 +49,43 @@ class RowResult:
     text: str | None = None  # the plan's CSV rows, when formatted in a worker (see plan_rows_parallel)
 
 
+#: cell separators a batch or a checked trajectory may use (spreadsheets write ';' where ',' is the decimal mark)
+DELIMITERS = (",", ";", "\t")
+
+
+def sniff_delimiter(header: str) -> str:
+    """The cell separator of a CSV file from its header line: the most frequent of ``,`` ``;`` and tab
+    (``,`` on a tie or when there is none). Shared by the batch reader and ``pickplace check``."""
+    counts = [header.count(d) for d in DELIMITERS]
+    best = max(counts)
+    return DELIMITERS[counts.index(best)] if best else ","
+
+
+def violation_text(r) -> str:
+    """The one line that says a limit is exceeded (a :class:`~pickplace_cli.limits.LimitRow` that is not
+    ok), as a single plan and every batch row print it: joint, quantity, peak [unit], when (t [s] or the
+    duty cycle), limit, excess and utilisation, e.g. ``limit exceeded: q1 motor torque = 2.584 N·m at
+    t = 0.0479 s; limit 2 N·m (by 0.584 N·m, 129.2 %)``."""
+    when = f" at t = {r.t_peak:.4f} s" if r.t_peak is not None else " over the duty cycle"
+    return (
+        f"limit exceeded: {r.joint} {r.quantity} = {r.peak:.4g} {r.unit}{when}; "
+        f"limit {r.limit:.4g} {r.unit} (by {abs(r.excess):.4g} {r.unit}, {100 * r.utilisation:.1f} %)"
+    )
+
+
 def read_batch(stream: IO[str], source: str = "batch") -> tuple[list[BatchRow], list[RowResult]]:
-    """Parse the batch CSV → (good rows, rows that failed to parse). A bad header raises TaskError."""
-    lines = [(n, text) for n, text in enumerate(stream.read().splitlines(), start=1)]
+    """Parse the batch CSV → (good rows, rows that failed to parse). A bad header, or a header with no
+    row after it, raises TaskError."""
+    text = stream.read()
+    if text.startswith("\ufeff"):  # a BOM (the CLI opens files as utf-8-sig; stdin and strings keep it)
+        text = text[1:]
+    lines = [(n, t) for n, t in enumerate(text.splitlines(), start=1)]
     lines = [(n, t) for n, t in lines if t.strip() and not t.lstrip().startswith("#")]
     if not lines:
         raise TaskError(f"{source}: no header row (need columns {', '.join(REQUIRED)})")
     header_line, header_text = lines[0]
-    header = [h.strip() for h in next(csv.reader([header_text]))]
+    sep = sniff_delimiter(header_text)
+    header = [h.strip() for h in next(csv.reader([header_text], delimiter=sep))]
     unknown = [h for h in header if h not in REQUIRED + OPTIONAL]
     if unknown:
         raise TaskError(
@@ -63,10 +97,14 @@ def read_batch(stream: IO[str], source: str = "batch") -> tuple[list[BatchRow], 
     dup = sorted({h for h in header if header.count(h) > 1})
     if dup:
         raise TaskError(f"{source}:{header_line}: column {dup[0]!r} appears twice")
+    if len(lines) == 1:
+        raise TaskError(
+            f"{source}:{header_line}: no moves after the header (need one row per move with {', '.join(REQUIRED)})"
+        )
     rows: list[BatchRow] = []
     bad: list[RowResult] = []
     for number, (line, text) in enumerate(lines[1:], start=1):
-        cells = [c.strip() for c in next(csv.reader([text]))]
+        cells = [c.strip() for c in next(csv.reader([text], delimiter=sep))]
         try:
             if len(cells) != len(header):
                 raise TaskError(f"has {len(cells)} cells, the header has {len(header)}")
@@ -82,7 +120,8 @@ def read_batch(stream: IO[str], source: str = "batch") -> tuple[list[BatchRow], 
                 try:
                     x = float(cell)
                 except ValueError:
-                    raise TaskError(f"{name} = {cell!r}: not a number") from None
+                    hint = " (the decimal mark is '.')" if "," in cell and sep != "," else ""
+                    raise TaskError(f"{name} = {cell!r}: not a number{hint}") from None
                 if not math.isfinite(x):
                     raise TaskError(f"{name} = {cell!r}: must be finite")
                 values[name] = x
@@ -120,13 +159,9 @@ def plan_rows(
             result = plan(task, profile, opts)
             code = result.report.exit_code()
             err = None
-            if code:
-                worst = result.report.violations[0]
-                err = (f"row {r.row} ({source}:{r.line}): limit exceeded: {worst.joint} {worst.quantity} "
-                       f"= {worst.peak:.4g} {worst.unit}, limit {worst.limit:.4g} {worst.unit}"
-                       + (f" at t = {worst.t_peak:.4f} s" if worst.t_peak is not None else ""))
-                if len(result.report.violations) > 1:
-                    err += f" (+{len(result.report.violations) - 1} more)"
+            if code:  # every exceeded limit, one line each, in the single plan's words
+                err = "\n".join(f"row {r.row} ({source}:{r.line}): {violation_text(x)}"
+                                 for x in result.report.violations)
             yield RowResult(r.row, result, err, code)
         except PickplaceError as exc:
             yield RowResult(r.row, None, f"row {r.row} ({source}:{r.line}): {exc}", exc.exit_code)

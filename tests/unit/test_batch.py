@@ -1,0 +1,116 @@
+"""pickplace_cli.batch: reading the batch CSV (BOM, delimiters, header-only files) and the per-row limit
+messages. The CLI side (exit codes, files written) is in tests/cli/test_batch_cli.py."""
+
+from __future__ import annotations
+
+import pytest
+
+from pickplace_cli.batch import plan_rows, read_batch_text, sniff_delimiter, violation_text
+from pickplace_cli.errors import TaskError
+from pickplace_cli.planner import PlanOptions, plan
+from pickplace_cli.profile import load_profile
+from pickplace_cli.task import Task
+
+DELTA = load_profile("delta-su2018")
+OPTS = PlanOptions(fit=False)
+MOVES = (
+    "from_x,from_y,from_z,to_x,to_y,to_z,height,time\n"
+    "-0.1525,0,-0.8,0.1525,0,-0.8,,\n"
+    "0.1,0.1,-0.8,-0.1,-0.1,-0.8,0.03,0.2\n"
+)
+
+
+def parsed(text: str, source: str = "m") -> list[tuple[int, int, dict]]:
+    rows, bad = read_batch_text(text, source)
+    assert not bad, [b.error for b in bad]
+    return [(r.row, r.line, r.values) for r in rows]
+
+
+def test_a_bom_before_the_header_is_not_part_of_the_first_column():
+    """Excel's "CSV UTF-8" starts the file with U+FEFF; it used to become part of 'from_x'."""
+    assert parsed("\ufeff" + MOVES) == parsed(MOVES)
+
+
+@pytest.mark.parametrize("sep", [";", "\t"])
+def test_semicolon_and_tab_separated_batches_read_like_commas(sep):
+    assert parsed(MOVES.replace(",", sep)) == parsed(MOVES)
+
+
+def test_semicolons_with_decimal_commas_say_what_is_wrong():
+    """A German-locale Excel writes ';' and decimal commas: the cell is refused (no guessing of the
+    decimal mark) with a hint, on its row."""
+    rows, bad = read_batch_text("from_x;from_y;from_z;to_x;to_y;to_z\n-0,1525;0;-0,8;0,1525;0;-0,8\n", "de.csv")
+    assert not rows and len(bad) == 1
+    assert bad[0].error == "row 1 (de.csv:2): from_x = '-0,1525': not a number (the decimal mark is '.')"
+
+
+@pytest.mark.parametrize(
+    "header, sep",
+    [
+        ("from_x,from_y,from_z,to_x,to_y,to_z", ","),
+        ("from_x;from_y;from_z;to_x;to_y;to_z", ";"),
+        ("from_x\tfrom_y\tfrom_z\tto_x\tto_y\tto_z", "\t"),
+        ("t,q1,q2,q3", ","),
+        ("t;q1[rad];q2[rad];q3[rad]", ";"),
+        ("t", ","),  # nothing to tell: the default
+        ("t,q1;q2,q3", ","),  # the most frequent wins
+    ],
+)
+def test_sniff_delimiter(header, sep):
+    assert sniff_delimiter(header) == sep
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        "from_x,from_y,from_z,to_x,to_y,to_z\n",
+        "from_x,from_y,from_z,to_x,to_y,to_z",
+        "# moves\nfrom_x,from_y,from_z,to_x,to_y,to_z\n\n# none yet\n",
+        "\ufefffrom_x;from_y;from_z;to_x;to_y;to_z\r\n",
+    ],
+)
+def test_a_header_without_moves_is_an_error_naming_the_file_and_rule(text):
+    with pytest.raises(TaskError) as exc:
+        read_batch_text(text, "moves.csv")
+    line = 2 if text.startswith("#") else 1
+    assert str(exc.value) == (
+        f"moves.csv:{line}: no moves after the header (need one row per move with from_x, from_y, from_z, "
+        "to_x, to_y, to_z)"
+    )
+    assert exc.value.exit_code == 1
+
+
+def test_a_limit_row_lists_every_violation_in_the_single_plan_format():
+    """The Adept cycle in 0.1 s breaks five limits on the default Delta (three torque rates, two RMS
+    torques: measured, and the count is the single plan's own). The batch row gives each of them in the
+    words a single plan uses, with the excess and utilisation, prefixed by row and file line."""
+    text = "from_x,from_y,from_z,to_x,to_y,to_z,time\n0.1,0.1,-0.8,-0.1,-0.1,-0.8,0.1\n"
+    rows, _ = read_batch_text(text, "moves.csv")
+    (res,) = plan_rows(rows, DELTA, OPTS, source="moves.csv")
+    single = plan(Task([0.1, 0.1, -0.8], [-0.1, -0.1, -0.8], DELTA.planning.height, DELTA.planning.eta),
+                  DELTA, PlanOptions(fit=False, time=0.1))
+    assert res.code == single.report.exit_code() == 3
+    want = [f"row 1 (moves.csv:2): {violation_text(v)}" for v in single.report.violations]
+    assert len(want) >= 2  # the point of the test: more than one violation on the row
+    assert res.error.splitlines() == want
+    for ln in want:
+        assert "(by " in ln and " %)" in ln
+
+
+def test_violation_text_wording():
+    """The one line per exceeded limit (README "How to read the limit table"): quantity, peak, time or
+    duty cycle, limit, excess and utilisation, numbers to 4 significant digits."""
+    from pickplace_cli.limits import LimitRow
+
+    r = LimitRow("q1", "motor torque", "N·m", 2.5841, 2.0, 1.29205, 0.04791, False)
+    assert violation_text(r) == (
+        "limit exceeded: q1 motor torque = 2.584 N·m at t = 0.0479 s; limit 2 N·m (by 0.5841 N·m, 129.2 %)"
+    )
+    rms = LimitRow("q3", "rms motor torque", "N·m", 3.405, 2.39, 3.405 / 2.39, None, False)
+    assert violation_text(rms) == (
+        "limit exceeded: q3 rms motor torque = 3.405 N·m over the duty cycle; limit 2.39 N·m (by 1.015 N·m, 142.5 %)"
+    )
+    low = LimitRow("q1", "position", "rad", -0.61, -0.5, 1.2, 0.01, False, kind="reach", bound="lower")
+    assert violation_text(low) == (
+        "limit exceeded: q1 position = -0.61 rad at t = 0.0100 s; limit -0.5 rad (by 0.11 rad, 120.0 %)"
+    )
