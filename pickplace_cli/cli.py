@@ -764,8 +764,9 @@ def profile_show(
     from rich.markup import escape
 
     from .profile import load_profile
-    from .robots import build_robot, radial_reach
+    from .robots import build_robot
 
+    _finite("z", z, "in m (no NaN or inf)")
     prof = load_profile(profile)
     robot = build_robot(prof.robot)
     specs = prof.robot.joint_specs()
@@ -792,17 +793,12 @@ def profile_show(
     if z is None:
         box = prof.workcell.box
         z = (box.min[2] + box.max[2]) / 2 if box else (-0.8 if kind == "delta" else (robot.z0 - 0.1 if kind == "scara" else 0.0))
-    margin = getattr(prof.robot, "singularity_margin", None)
     if kind == "gantry":
         out.print("workspace: the travel box " + ", ".join(f"{n} [{a.travel[0]:g}, {a.travel[1]:g}] m" for n, a in zip("xyz", prof.robot.axes)))
     else:
-        inner, outer, n = radial_reach(robot, specs, z, margin)
-        where = "every direction" if n == 72 else f"{n} of 72 directions (joint ranges limit the rest)"
-        lim = f"joint limits{' and singularity margin ' + format(margin, 'g') if margin is not None else ''}"
-        if n == 0 or outer < inner:
-            out.print(f"workspace at z = {z:g} m: no common radius is reachable in {where} ({lim})")
-        else:
-            out.print(f"workspace at z = {z:g} m: radius {inner:.3f} … {outer:.3f} m reachable in {where} ({lim})")
+        from .workspace import radial_extent
+
+        out.print(escape(f"workspace at z = {z:g} m: {radial_extent(prof, z).describe()}"))
     def g(x, unit: str = "") -> str:
         return "–" if x is None else f"{x:g}{unit}"
 

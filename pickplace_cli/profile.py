@@ -7,7 +7,7 @@ one-line message ``FILE:LINE: FIELD = VALUE: RULE``.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated, Any, Literal, Union
+from typing import Annotated, Any, Literal, Union, get_origin
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
@@ -47,6 +47,15 @@ class Drive(_Model):
     peak_torque: float | None = Field(default=None, gt=0, description="Peak motor torque in N·m")
     max_speed: float | None = Field(default=None, gt=0, description="Max motor speed in rad/s (6000 rpm = 628.3 rad/s)")
     torque_rate: float | None = Field(default=None, gt=0, description="Max |d(motor torque)/dt| in N·m/s (Yang 2022 Eq. 38)")
+
+    @model_validator(mode="after")
+    def _rated_within_peak(self) -> "Drive":
+        if self.rated_torque is not None and self.peak_torque is not None and self.rated_torque > self.peak_torque:
+            raise ValueError(
+                f"rated_torque = {self.rated_torque:g} N·m is above peak_torque = {self.peak_torque:g} N·m: a drive's "
+                "continuous (RMS) rating cannot exceed its peak torque"
+            )
+        return self
 
 
 class JointSpec(_Model):
@@ -306,11 +315,21 @@ def _yaml_with_lines(text: str, source: str) -> tuple[Any, dict[tuple, int]]:
     return data, lines
 
 
-def _describe(err: dict, data: Any, lines: dict[tuple, int], source: str) -> str:
-    # pydantic puts the discriminator tag into loc for tagged unions: keep only parts that are real keys
+_ABSENT = object()  # a key or tuple element the document does not have
+
+
+def _resolve(loc: tuple, data: Any, kind: str = "") -> tuple[list, Any, int | None]:
+    """(real path, the value there or _ABSENT, index in loc of the last (innermost) union tag or None).
+
+    pydantic puts union branch names (``JointSpec``, ``list[JointSpec]``) and the discriminator tag
+    (``scara``) into ``loc``; only parts that are keys or indices of the document are kept. A key missing
+    from a mapping (``kind`` "missing" or "extra_forbidden": the last part of ``loc`` is a key), or an index
+    past the end of a list (a tuple that is too short), ends the path."""
+    names_key = kind in ("missing", "extra_forbidden")
     real: list = []
-    node = data
-    loc = list(err.get("loc", ()))
+    node: Any = data
+    tag: int | None = None
+    loc = list(loc)
     for n, part in enumerate(loc):
         last = n == len(loc) - 1
         if isinstance(node, dict) and part in node:
@@ -319,25 +338,197 @@ def _describe(err: dict, data: Any, lines: dict[tuple, int], source: str) -> str
         elif isinstance(node, (list, tuple)) and isinstance(part, int) and 0 <= part < len(node):
             real.append(part)
             node = node[part]
-        elif last and isinstance(node, dict):
+        elif last and names_key and isinstance(node, dict):
             real.append(part)  # a missing or unknown key: name it
-        # else: a union/discriminator tag pydantic inserted into loc; not a key of the document
+            node = _ABSENT
+        elif last and names_key and isinstance(node, (list, tuple)) and isinstance(part, int):
+            real.append(part)  # an element a fixed-length list lacks
+            node = _ABSENT
+        else:
+            tag = n  # a union branch / discriminator tag pydantic inserted; not a key of the document
+    return real, node, tag
+
+
+def _prune_union_branches(errors: list[dict], data: Any) -> list[dict]:
+    """Of the errors a union produced (one set per branch it tried), keep the branch that got furthest
+    into the document: for ``joints: [ {...} ]`` the list branch's own problem, not "should be a mapping"
+    from the single-spec branch."""
+    best: dict[tuple, tuple[int, Any]] = {}  # union site → (depth, branch tag)
+    info = []
+    for e in errors:
+        loc = tuple(e.get("loc", ()))
+        _, _, tag = _resolve(loc, data, e["type"])
+        if tag is None:
+            info.append(None)
+            continue
+        site, branch = loc[:tag], loc[tag]
+        info.append((site, branch))
+        if site not in best or len(loc) > best[site][0]:
+            best[site] = (len(loc), branch)
+    return [e for e, i in zip(errors, info) if i is None or best[i[0]][1] == i[1]]
+
+
+def _unwrap(ann: Any, node: Any) -> Any:
+    """The model class or container type of annotation ``ann`` that validates ``node`` (picks the branch
+    of a union by the node's shape and, for robots, its ``kind``)."""
+    import types
+    import typing
+
+    while True:
+        origin = typing.get_origin(ann)
+        if origin is Annotated:
+            ann = typing.get_args(ann)[0]
+        elif origin is Union or origin is types.UnionType:
+            options = [a for a in typing.get_args(ann) if a is not type(None)]
+            pick = options[0]
+            for a in options:
+                o = typing.get_origin(a)
+                if isinstance(node, (list, tuple)) and o in (list, tuple):
+                    pick = a
+                    break
+                if isinstance(node, dict) and isinstance(a, type) and issubclass(a, BaseModel):
+                    kind = a.model_fields.get("kind")
+                    if kind is None or node.get("kind") in typing.get_args(kind.annotation):
+                        pick = a
+                        break
+            ann = pick
+        else:
+            return ann
+
+
+def _field_of(path: list, data: Any) -> tuple[Any, Any]:
+    """(FieldInfo of the last key in ``path`` or None, the model class holding the last part or None)."""
+    import typing
+
+    ann: Any = Profile
+    node: Any = data
+    info = None
+    holder = None
+    for part in path:
+        cur = _unwrap(ann, node)
+        holder = cur if isinstance(cur, type) and issubclass(cur, BaseModel) else None
+        if isinstance(part, str):
+            if holder is None or part not in holder.model_fields:
+                return info, holder
+            info = holder.model_fields[part]
+            ann = info.annotation
+        else:
+            args = typing.get_args(cur)
+            if typing.get_origin(cur) is list and args:
+                ann = args[0]
+            elif typing.get_origin(cur) is tuple and args:
+                ann = args[0] if args[-1] is Ellipsis else (args[part] if part < len(args) else None)
+            else:
+                return info, None
+        node = node[part] if isinstance(node, (dict, list, tuple)) and _has(node, part) else None
+    return info, holder
+
+
+def _has(node: Any, part: Any) -> bool:
+    if isinstance(node, dict):
+        return part in node
+    return isinstance(part, int) and 0 <= part < len(node)
+
+
+def _show(value: Any, limit: int = 60) -> str:
+    """A value as the YAML it came from, shortened to ``limit`` characters."""
+
+    def fmt(v: Any) -> str:
+        if isinstance(v, bool):
+            return "true" if v else "false"
+        if v is None:
+            return "null"
+        if isinstance(v, str):
+            return repr(v)
+        if isinstance(v, dict):
+            return "{" + ", ".join(f"{k}: {fmt(x)}" for k, x in v.items()) + "}"
+        if isinstance(v, (list, tuple)):
+            return "[" + ", ".join(fmt(x) for x in v) + "]"
+        return repr(v)
+
+    text = fmt(value)
+    return text if len(text) <= limit else text[: limit - 1] + "…"
+
+
+#: what a pydantic type error expects, in words
+_EXPECTED = {
+    "float_type": "a number", "float_parsing": "a number", "int_type": "a whole number", "int_parsing": "a whole number",
+    "finite_number": "a finite number", "string_type": "text", "tuple_type": "a list [ … ]", "list_type": "a list [ … ]",
+    "dict_type": "a mapping of keys", "model_type": "a mapping of keys", "model_attributes_type": "a mapping of keys",
+}
+
+
+def _describe(err: dict, data: Any, lines: dict[tuple, int], source: str, errors: list[dict]) -> str:
+    """One line: ``FILE:LINE: FIELD = VALUE: RULE`` (FIELD a dotted path, list indices as numbers)."""
+    real, node, _ = _resolve(tuple(err.get("loc", ())), data, err["type"])
     probe = tuple(real)
     while probe not in lines and probe:
         probe = probe[:-1]
     line = lines.get(probe)
     where = f"{source}:{line}" if line else source
     field = ".".join(str(p) for p in real) or "(top level)"
-    msg = err["msg"]
-    if err["type"] == "extra_forbidden":
-        return f"{where}: unknown key {field!r}: not a field of this section (check spelling; keys are case-sensitive)"
-    if err["type"] == "missing":
-        return f"{where}: {field}: required field is missing"
+    info, holder = _field_of(real, data)
+    about = ""
+    if info is not None and info.description:
+        d = info.description
+        about = "; expected: " + (d[0].lower() + d[1:] if d[:2].istitle() and d[1:2].islower() else d)
+    kind = err["type"]
+    if kind == "extra_forbidden":
+        known = f"; fields here: {', '.join(holder.model_fields)}" if holder is not None else ""
+        return (f"{where}: unknown key {field!r}: not a field of this section (check spelling; keys are "
+                f"case-sensitive{known})")
+    if kind == "missing" and real and isinstance(real[-1], int):
+        # an element of a fixed-length list is absent: the list is too short
+        parent = tuple(err["loc"])[:-1]
+        absent = sum(1 for e in errors if e["type"] == "missing" and tuple(e["loc"])[:-1] == parent)
+        given = err.get("input")
+        n_given = len(given) if isinstance(given, (list, tuple)) else 0
+        name = ".".join(str(p) for p in real[:-1])  # ``about`` is the list's field: an index is not a key
+        return f"{where}: {name} = {_show(given)}: needs {n_given + absent} values, got {n_given}{about}"
+    if kind == "missing":
+        return f"{where}: {field}: required field is missing{about}"
     value = err.get("input")
-    msg = msg.removeprefix("Value error, ")
-    if isinstance(value, (dict, list)):
-        return f"{where}: {field}: {msg}"
-    return f"{where}: {field} = {value!r}: {msg}"
+    ctx = err.get("ctx") or {}
+    if kind in ("too_long", "too_short"):
+        n = ctx.get("max_length" if kind == "too_long" else "min_length")
+        got = ctx.get("actual_length", len(value) if isinstance(value, (list, tuple)) else "?")
+        return f"{where}: {field} = {_show(value)}: needs {n} values, got {got}{about}"
+    if kind in _EXPECTED:
+        what = _EXPECTED[kind]
+        if isinstance(value, (list, tuple)) and not what.startswith("a list"):
+            rule = f"must be {what}, not a list"
+        elif isinstance(value, dict) and not what.startswith("a mapping"):
+            rule = f"must be {what}, not a mapping"
+        else:
+            rule = f"must be {what}"
+        return f"{where}: {field} = {_show(value)}: {rule}{about}"
+    if kind == "union_tag_invalid":
+        line = lines.get(probe + ("kind",), line)
+        where = f"{source}:{line}" if line else source
+        return f"{where}: {field}.kind = {_show(ctx.get('tag'))}: must be one of {ctx.get('expected_tags')}"
+    msg = err["msg"].removeprefix("Value error, ")
+    if kind == "value_error":
+        if isinstance(value, dict):  # a rule across fields (a model validator): its message names the values
+            return f"{where}: {field}: {msg}"
+        return f"{where}: {field} = {_show(value)}: {msg}"
+    return f"{where}: {field} = {_show(value)}: {msg}{about}"
+
+
+def _reject_flags(node: Any, path: tuple, data: Any, lines: dict[tuple, int], source: str) -> None:
+    """No field of a profile is a flag: YAML's true/false/yes/no/on/off would pass pydantic's lax mode as
+    1.0/0.0 (or fail with a confusing message for text), so any of them is refused here, naming the field."""
+    if isinstance(node, bool):
+        info, _ = _field_of(list(path), data)
+        what = "text (quote it)" if info is not None and (info.annotation is str or get_origin(info.annotation) is Literal) else "a number"
+        field = ".".join(str(p) for p in path)
+        where = f"{source}:{lines[path]}" if path in lines else source
+        raise ProfileError(f"{where}: {field} = {_show(node)}: must be {what}, not a flag (YAML reads true/false/yes/no/on/off as one)")
+    if isinstance(node, dict):
+        for k, v in node.items():
+            _reject_flags(v, path + (k,), data, lines, source)
+    elif isinstance(node, list):
+        for i, v in enumerate(node):
+            _reject_flags(v, path + (i,), data, lines, source)
 
 
 def parse_profile(text: str, source: str = "<profile>") -> Profile:
@@ -345,11 +536,12 @@ def parse_profile(text: str, source: str = "<profile>") -> Profile:
     data, lines = _yaml_with_lines(text, source)
     if not isinstance(data, dict):
         raise ProfileError(f"{source}: a profile must be a YAML mapping of keys (name, robot, capacity, planning)")
+    _reject_flags(data, (), data, lines, source)
     try:
         return Profile.model_validate(data)
     except ValidationError as exc:
-        errors = exc.errors()
-        first = _describe(errors[0], data, lines, source)
+        errors = _prune_union_branches(exc.errors(), data)
+        first = _describe(errors[0], data, lines, source, errors)
         more = f" (and {len(errors) - 1} more problem{'s' if len(errors) > 2 else ''})" if len(errors) > 1 else ""
         raise ProfileError(first + more) from None
 

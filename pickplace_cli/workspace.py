@@ -141,6 +141,14 @@ class Workspace:
             return np.ones(len(np.atleast_2d(P)), bool)
         return np.all(g > 0, axis=1) if strict else np.all(g >= -INSIDE_TOL, axis=1)
 
+    def reachable(self, P: np.ndarray) -> np.ndarray:
+        """(N,) True where the inverse kinematics has a solution, every joint is in its range and the
+        singularity measure is at least the margin (the workcell box is not considered)."""
+        P = np.atleast_2d(np.asarray(P, float))
+        if self._n_kin:
+            return np.all(self.slacks(P)[:, : self._n_kin] >= -INSIDE_TOL, axis=1)
+        return self._ik(P)[1]
+
     def violation(self, p: np.ndarray) -> str | None:
         """The most violated constraint at the single point p, as words; None when p is inside."""
         g = self.slacks(np.asarray(p, float)[None, :])[0]
@@ -175,6 +183,124 @@ class Workspace:
             d = np.where(norm > 0, g0 / norm, np.inf)
         k = int(np.argmin(d))
         return float(d[k]), (grad[:, k] / norm[k] if norm[k] > 0 else np.zeros(3))
+
+
+@dataclass(frozen=True)
+class RadialExtent:
+    """Where the tool can be at height ``z`` [m]: along ``directions`` rays from the base z axis (azimuth
+    measured from +x toward +y), the radius interval [m] each ray reaches (its longest run of reachable
+    points on the scan grid; None when it reaches nothing), and the band from the smallest to the largest of
+    those radii. ``within`` names what limits it (for the sentence)."""
+
+    z: float
+    azimuth: np.ndarray  # (D,) rad
+    runs: tuple[tuple[float, float] | None, ...]  # per direction, m
+    band: tuple[float, float] | None  # m
+    full: np.ndarray  # (D,) bool: the direction reaches the whole band
+    within: str
+
+    @property
+    def reached(self) -> int:
+        return sum(r is not None for r in self.runs)
+
+    def sectors(self) -> list[tuple[float, float]]:
+        """The azimuth intervals [deg] of consecutive directions that reach the whole band (a sector through
+        0° starts at a negative angle)."""
+        full = self.full
+        n = len(full)
+        if full.all() or not full.any():
+            return []
+        deg = np.degrees(self.azimuth)
+        start = int(np.flatnonzero(~full)[0])  # begin the circular walk at a direction outside every sector
+        out, run = [], []
+        for k in range(start, start + n + 1):
+            i = k % n
+            if full[i] and k < start + n:
+                run.append(i)
+            elif run:
+                a, b = deg[run[0]], deg[run[-1]]
+                out.append((a - 360.0 if a > b else a, b))
+                run = []
+        return sorted(out)
+
+    def describe(self) -> str:
+        """One sentence for ``profile show``: which radii are reachable, and in which directions."""
+        n = len(self.runs)
+        if self.band is None:
+            return f"nothing is reachable at this height ({self.within})"
+        found = [r for r in self.runs if r is not None]
+        inner = (min(r[0] for r in found), max(r[0] for r in found))  # m: the nearest reachable radius varies in here
+        outer = (min(r[1] for r in found), max(r[1] for r in found))  # m: the farthest one in here
+        if self.reached == n:
+            if inner[1] <= outer[0]:  # a ring (or disc) common to every direction
+                text = f"radius {inner[1]:.3f} … {outer[0]:.3f} m reachable in every direction"
+                more = []
+                if inner[0] < inner[1]:
+                    more.append(f"from {inner[0]:.3f} m")
+                if outer[1] > outer[0]:
+                    more.append(f"out to {outer[1]:.3f} m")
+                if more:
+                    text += f"; in some directions {' and '.join(more)}"
+            else:
+                text = (f"reachable in every direction, but over radii that depend on it: from {inner[0]:.3f} … "
+                        f"{inner[1]:.3f} m out to {outer[0]:.3f} … {outer[1]:.3f} m, no radius in all of them")
+            return f"{text} ({self.within})"
+        lo, hi = self.band
+        k = int(self.full.sum())
+        partial = self.reached - k
+        none = n - self.reached
+        if k:
+            where = ", ".join(f"{a:g}° … {b:g}°" if a != b else f"{a:g}°" for a, b in self.sectors())
+            text = f"radius {lo:.3f} … {hi:.3f} m reachable in {k} of {n} directions (azimuth {where}, every {360.0 / n:g}°)"
+            rest = ([f"{partial} more reach only part of that range"] if partial else []) + ([f"{none} reach nothing"] if none else [])
+            if rest:
+                text += "; " + " and ".join(rest)
+        else:
+            text = (f"reachable in {self.reached} of {n} directions over radii that depend on the direction, from "
+                    f"{inner[0]:.3f} … {inner[1]:.3f} m out to {outer[0]:.3f} … {outer[1]:.3f} m; {none} reach nothing")
+        return f"{text} ({self.within})"
+
+
+def radial_extent(profile, z: float, directions: int = 72, step: float = 0.001, max_radius: float = 2.0) -> RadialExtent:
+    """The reachable radii at height ``z`` [m] along ``directions`` rays from the base z axis, scanned every
+    ``step`` [m] from 0 to ``max_radius`` (doubled while a ray is still reachable at the end of the scan).
+    Reachable means :meth:`Workspace.reachable`: inverse kinematics, joint ranges, singularity margin (not
+    the workcell box). Raises TaskError for a non-finite ``z``."""
+    if not np.isfinite(z):
+        raise TaskError(f"z = {z!r}: must be a finite height in m")
+    ws = Workspace(profile)
+    az = np.linspace(0.0, 2 * np.pi, directions, endpoint=False)
+    while True:
+        rho = np.arange(0.0, max_radius + step / 2, step)
+        P = np.stack([np.outer(np.cos(az), rho), np.outer(np.sin(az), rho), np.full((directions, len(rho)), z)], axis=-1)
+        ok = ws.reachable(P.reshape(-1, 3)).reshape(directions, len(rho))
+        runs: list[tuple[int, int] | None] = []
+        for row in ok:
+            idx = np.flatnonzero(row)
+            if idx.size == 0:
+                runs.append(None)
+                continue
+            cut = np.flatnonzero(np.diff(idx) > 1)
+            starts, ends = np.r_[idx[0], idx[cut + 1]], np.r_[idx[cut], idx[-1]]
+            longest = int(np.argmax(ends - starts))
+            runs.append((int(starts[longest]), int(ends[longest])))
+        if max_radius >= 64.0 or not any(r is not None and r[1] == len(rho) - 1 for r in runs):
+            break
+        max_radius *= 2
+    found = [r for r in runs if r is not None]
+    band = (min(r[0] for r in found), max(r[1] for r in found)) if found else None
+    full = np.array([r is not None and band is not None and r[0] <= band[0] and r[1] >= band[1] for r in runs])
+    specs = profile.robot.joint_specs()
+    limits = ["the arm's reach"]
+    if any(s.limits.position is not None for s in specs):
+        limits.append("the joint ranges")
+    if ws.margin is not None and hasattr(ws.robot, "singularity_measure"):
+        limits.append(f"the singularity margin {ws.margin:g}")
+    within = "within " + (", ".join(limits[:-1]) + " and " + limits[-1] if len(limits) > 1 else limits[0])
+    return RadialExtent(
+        float(z), az, tuple(None if r is None else (float(rho[r[0]]), float(rho[r[1]])) for r in runs),
+        None if band is None else (float(rho[band[0]]), float(rho[band[1]])), full, within,
+    )
 
 
 @dataclass(frozen=True)

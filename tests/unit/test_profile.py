@@ -71,3 +71,64 @@ def test_profile_is_frozen():
     prof = parse_profile(GANTRY)
     with pytest.raises(Exception):
         prof.name = "other"  # type: ignore[misc]
+
+
+# ---------------------------------------------------------------- messages that name field, value and rule
+
+
+def _edit(name: str, old: str, new: str) -> str:
+    from pickplace_cli.profile import resolve_profile_path
+
+    text = resolve_profile_path(name).read_text()
+    assert old in text, old
+    return text.replace(old, new, 1)
+
+
+@pytest.mark.parametrize(
+    "name,old,new,expect",
+    [
+        # a one-element range in a per-joint list: was "robot.joints: Input should be a valid dictionary" (the
+        # single-spec branch of the union) or "required field is missing"
+        ("scara-600", "position: [-2.3038346, 2.3038346]", "position: [-0.6981317]",
+         "<p>:18: robot.joints.0.limits.position = [-0.6981317]: needs 2 values, got 1; expected: joint range [min, max] in rad"),
+        ("delta-su2018", "position: [-0.6981317, 1.5707963]", "position: [-0.6981317]",
+         "robot.joints.limits.position = [-0.6981317]: needs 2 values, got 1; expected: joint range [min, max] in rad"),
+        ("scara-600", "position: [-2.3038346, 2.3038346]", "position: [-1, 0, 1]",
+         "robot.joints.0.limits.position = [-1, 0, 1]: needs 2 values, got 3"),
+        ("scara-600", "position: [-2.3038346, 2.3038346]", "position: [a, 1]",
+         "robot.joints.0.limits.position.0 = 'a': must be a number"),
+        ("scara-600", "frequency: [12.0, 12.0, 30.0]", "frequency: [12.0, 12.0]",
+         "vibration.frequency = [12.0, 12.0]: needs 3 values, got 2; expected: natural frequency f_n of the mode along x, y, z in Hz"),
+        ("scara-600", "frequency: [12.0, 12.0, 30.0]", "frequency: 12",
+         "vibration.frequency = 12: must be a list"),
+        ("scara-600", "length: 0.325", "length: [0.325]",
+         "<p>:10: robot.link1.length = [0.325]: must be a number, not a list; expected: link length in m"),
+        ("delta-su2018", "L: 0.325", "L: [0.325]", "robot.geometry.L = [0.325]: must be a number, not a list; expected: upper arm length"),
+        ("scara-600", "velocity: 4.0", "velocity: {a: 1}", "capacity.velocity = {a: 1}: must be a number, not a mapping"),
+        ("scara-600", "  payload: 1.0 ", "  payload: true ", "<p>:15: robot.payload = true: must be a number, not a flag"),
+        ("scara-600", "elbow: right", "elbow: yes", "robot.elbow = true: must be text (quote it), not a flag"),
+        ("scara-600", "kind: scara", "kind: robot", "<p>:9: robot.kind = 'robot': must be one of 'gantry', 'delta', 'scara'"),
+        ("scara-600", "  z_mass: 1.5", "  z_mass: 1.5\n  colour: red",
+         "unknown key 'robot.colour': not a field of this section (check spelling; keys are case-sensitive; fields here: kind, link1"),
+        ("scara-600", "gear_ratio: 80.0, ", "", "robot.joints.0.drive.gear_ratio: required field is missing; expected: N: motor angle"),
+    ],
+)
+def test_profile_errors_name_field_value_and_rule(name, old, new, expect):
+    with pytest.raises(ProfileError) as ei:
+        parse_profile(_edit(name, old, new), "<p>")
+    msg = str(ei.value)
+    assert expect in msg
+    assert "\n" not in msg and "Input should be a valid dictionary" not in msg
+
+
+@pytest.mark.parametrize("rated,peak,ok", [(20, 8.36, False), (8.36, 8.36, True), (2.39, 8.36, True)])
+def test_rated_torque_above_peak_is_refused(rated, peak, ok):
+    text = _edit("delta-su2018", "rated_torque: 2.39", f"rated_torque: {rated}").replace("peak_torque: 8.36", f"peak_torque: {peak}", 1)
+    if ok:
+        assert parse_profile(text).robot.joint_specs()[0].drive.rated_torque == rated
+        return
+    with pytest.raises(ProfileError) as ei:
+        parse_profile(text, "<p>")
+    msg = str(ei.value)
+    assert "robot.joints.drive: rated_torque = 20 N·m is above peak_torque = 8.36 N·m" in msg
+    assert "cannot exceed its peak" in msg and "\n" not in msg

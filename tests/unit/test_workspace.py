@@ -177,3 +177,54 @@ def test_a_move_that_cannot_be_planned_keeps_its_own_error(delta):
 
     with pytest.raises(TableError, match="lambda = b/h = 60"):
         fit_workspace(Task([-0.15, 0, -0.8], [0.15, 0, -0.8], 0.005), delta)
+
+
+# ------------------------------------------------------------------ radial extent (profile show's sentence)
+
+
+def test_radial_extent_scara_matches_the_closed_form():
+    """SCARA at its default height: the band is r_min (q2 at its ±150° stop) … r_max (|sin q2| = the margin
+    0.05), and a direction reaches the whole band iff q1 = θ + β(r) stays within ±132° for every r in it,
+    β(r) = atan2(l2·sin|q2|, l1 + l2·cos q2) (elbow right, q2 < 0). Tolerance: the 1 mm scan grid."""
+    from pickplace_cli.workspace import radial_extent
+
+    prof = load_profile("scara-600")
+    l1, l2 = prof.robot.link1.length, prof.robot.link2.length
+    q2_stop, margin = prof.robot.joint_specs()[1].limits.position[1], prof.robot.singularity_margin
+    r_min = np.sqrt(l1**2 + l2**2 + 2 * l1 * l2 * np.cos(q2_stop))
+    r_max = np.sqrt(l1**2 + l2**2 + 2 * l1 * l2 * np.cos(np.arcsin(margin)))
+    ext = radial_extent(prof, -0.1)
+    assert ext.band[0] == pytest.approx(r_min, abs=1e-3) and ext.band[1] == pytest.approx(r_max, abs=1e-3)
+
+    def beta(r):
+        c2 = (r**2 - l1**2 - l2**2) / (2 * l1 * l2)
+        return np.arctan2(l2 * np.sqrt(1 - c2**2), l1 + l2 * c2)
+
+    q1_max = prof.robot.joint_specs()[0].limits.position[1]
+    lo, hi = ext.band
+    theta = np.degrees((ext.azimuth + np.pi) % (2 * np.pi) - np.pi)
+    expect = (np.radians(theta) + beta(lo) <= q1_max) & (np.radians(theta) + beta(hi) >= -q1_max)
+    np.testing.assert_array_equal(ext.full, expect)
+    assert ext.full.sum() == 42 and ext.sectors() == [(-135.0, 70.0)]
+    text = ext.describe()
+    assert text.startswith("radius 0.163 … 0.599 m reachable in 42 of 72 directions (azimuth -135° … 70°, every 5°)")
+    assert "21 more reach only part of that range and 9 reach nothing" in text and "no common radius" not in text
+
+
+def test_radial_extent_delta_disc_and_errors(delta):
+    from pickplace_cli.workspace import radial_extent
+
+    from pickplace_cli.robots import build_robot, radial_reach
+
+    ext = radial_extent(delta, -0.825, directions=12)
+    # the common disc agrees with robots.radial_reach, an independent scan of the same constraints (same 1 mm
+    # grid, so exactly; 12 directions: its point-by-point fallback is slow)
+    inner, outer, n = radial_reach(build_robot(delta.robot), delta.robot.joint_specs(), -0.825,
+                                   delta.robot.singularity_margin, directions=12)
+    assert ext.reached == n == 12
+    assert max(r[0] for r in ext.runs) == inner and min(r[1] for r in ext.runs) == pytest.approx(outer, abs=1e-12)
+    assert ext.describe().startswith(f"radius {inner:.3f} … {outer:.3f} m reachable in every direction; in some directions out to ")
+    assert radial_extent(delta, 0.5).describe().startswith("nothing is reachable at this height")
+    for z in (float("nan"), float("inf")):
+        with pytest.raises(TaskError, match=r"z = (nan|inf): must be a finite height in m"):
+            radial_extent(delta, z)
