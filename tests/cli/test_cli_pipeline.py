@@ -24,7 +24,7 @@ BATCH = """from_x,from_y,from_z,to_x,to_y,to_z,height,time
 -0.1525,0,-0.8,0.1525,0,-0.8,,
 0.1,0.1,-0.8,-0.1,-0.1,-0.8,0.03,0.2
 # a comment line, skipped
-0,0,-0.8,3,0,-0.8,,
+0,0,-0.8,0.3,0,-0.8,0.002,
 0,0,-0.8,0.1,0,-0.8,,0.01
 1,2,x,4,5,6,,
 -0.1525,0,-0.8,0.1525,0,-0.8,,fit
@@ -45,7 +45,7 @@ def test_batch_reports_rows_plans_the_rest_and_exits_with_the_worst(tmp_path):
     src.write_text(BATCH)
     out = tmp_path / "out.csv"
     r = run("plan", "--batch", str(src), "-o", str(out))
-    # row 3: λ out of the table (1), row 4: 10 ms is far too fast (3), row 5: not a number (1)
+    # row 3: λ = 0.3/0.002 = 150, out of the table (1), row 4: 10 ms is far too fast (3), row 5: not a number (1)
     assert r.exit_code == 3
     err = r.stderr
     assert f"row 3 ({src}:5)" in err and "outside the table's range" in err
@@ -236,7 +236,7 @@ def test_batch_on_two_processes_writes_the_same_bytes(tmp_path):
     for j in ("1", "2"):
         out = tmp_path / f"o{j}.csv"
         r = run("plan", "--batch", str(src), "-j", j, "-o", str(out), "-q")
-        assert r.exit_code in (1, 3, 4) and "row 31 " in r.stderr  # 9 m away: out of the table; others may break limits
+        assert r.exit_code in (1, 3, 4) and "row 31 " in r.stderr  # 9 m away: unreachable (4); others may break limits
         outs.append(out.read_bytes())
     assert outs[0] == outs[1] and len(outs[0]) > 0
 
