@@ -40,3 +40,79 @@ def test_profile_validate_names_a_short_range(tmp_path):
     r = run("profile", "validate", str(prof))
     assert r.exit_code == 1 and len(r.stderr.strip().splitlines()) == 1
     assert f"{prof}:28: robot.joints.limits.position = [-0.6981317]: needs 2 values, got 1" in r.stderr
+
+
+def _batch(tmp_path, second_time: str = "") -> tuple:
+    moves = tmp_path / "moves.csv"
+    moves.write_text(
+        "from_x,from_y,from_z,to_x,to_y,to_z,height,time\n"
+        "-0.1525,0,-0.8,0.1525,0,-0.8,,\n"
+        f"0.1,0.1,-0.8,-0.1,-0.1,-0.8,0.03,{second_time}\n"
+    )
+    out = tmp_path / "batch.csv"
+    r = run("plan", "--batch", str(moves), "-q", "--report-only", "-o", str(out))
+    assert r.exit_code == 0, r.stderr
+    return out
+
+
+def test_check_batch_output_move_by_move(tmp_path):
+    out = _batch(tmp_path)
+    rep = tmp_path / "r.json"
+    r = run("check", str(out), "--report", str(rep))
+    # was exit 1: "t must increase strictly from row to row" where move 2 starts again at t = 0
+    assert r.exit_code == 0, r.stderr
+    assert "--- move 1 (lines 2–" in r.stderr and "--- move 2 (lines " in r.stderr
+    assert r.stderr.rstrip().endswith("checked 2 move(s): 2 within every limit, 0 exceed one")
+    doc = json.loads(rep.read_text())
+    assert [m["move"] for m in doc["moves"]] == [1, 2] and all(m["limits"]["ok"] for m in doc["moves"])
+    assert doc["moves"][1]["lines"][0] == doc["moves"][0]["lines"][1] + 1
+
+
+def test_check_batch_names_the_move_that_fails(tmp_path):
+    out = _batch(tmp_path, second_time="0.08")
+    r = run("check", str(out), "-q")
+    assert r.exit_code == 3
+    lines = r.stderr.strip().splitlines()
+    assert lines[0].startswith("--- move 2 (lines ") and "limit exceeded: q" in lines[1]
+    assert "move 1" not in r.stderr  # -q: only the failing move
+
+
+def test_check_round_trip_output(tmp_path):
+    out = tmp_path / "rt.csv"
+    assert run("plan", *ADEPT, "--round-trip", "-q", "-o", str(out)).exit_code == 0
+    r = run("check", str(out))
+    assert r.exit_code == 0
+    assert "--- move 2 (lines " in r.stderr and "trailing samples at rest set aside as the dwell" in r.stderr
+
+
+def test_check_reports_positions_as_given(tmp_path):
+    """A Delta file with q1 shifted by a whole turn: the same pose, but q1 = 2π + … is outside [−0.698, 1.571] rad
+    and is reported as the file's value (was the IK's wrapped value, inside the range: exit 0)."""
+    import math
+
+    out = tmp_path / "a.csv"
+    assert run("plan", *ADEPT, "-q", "-o", str(out)).exit_code == 0
+    lines = out.read_text().splitlines()
+    col = lines[0].split(",").index("q1[rad]")
+    rows = [ln.split(",") for ln in lines[1:]]
+    q1_max = max(float(c[col]) for c in rows) + 2 * math.pi
+    for c in rows:
+        c[col] = repr(float(c[col]) + 2 * math.pi)
+    out.write_text("\n".join([lines[0]] + [",".join(c) for c in rows]) + "\n")
+    r = run("check", str(out), "-q")
+    assert r.exit_code == 4
+    assert f"limit exceeded: q1 position = {q1_max:.4g} rad" in r.stderr and "limit 1.571 rad" in r.stderr
+
+
+def test_check_not_a_number_names_column_row_and_value(tmp_path):
+    bad = tmp_path / "bad.csv"
+    bad.write_text("t,q1,q2,q3\n" + "".join(f"{i * 0.01},0.3,{'x1' if i == 3 else 0.3},0.3\n" for i in range(8)))
+    r = run("check", str(bad))
+    assert r.exit_code == 1
+    assert r.stderr.strip() == f"pickplace: error: {bad}:5: q2 = 'x1': not a number (column 3, 'q2')"
+
+
+def test_check_help_names_the_argument():
+    r = run("check", "--help")
+    assert r.exit_code == 0 and "{TRAJECTORY}" in r.stdout and "{trajectory}" not in r.stdout
+    assert "move by move" in r.stdout
