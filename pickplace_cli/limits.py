@@ -460,7 +460,7 @@ def _parabolic_peak(x: np.ndarray, y: np.ndarray, i: np.ndarray) -> tuple[np.nda
     peak = y[i, cols].copy()
     at = x[i].copy()
     inner = (i > 0) & (i < n - 1)
-    if np.any(inner):
+    if inner.any():
         c = cols[inner]
         k = i[inner]
         x0, x1, x2 = x[k - 1], x[k], x[k + 1]

@@ -113,7 +113,7 @@ def check_ends_reachable(task: Task, profile: Profile) -> None:
 
 def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions()) -> Plan:
     """Plan ``task`` on ``profile``: path, duration, samples, joint motion, limit report."""
-    if (np.any(task.v_from) or np.any(task.v_to)) and not depends_on_duration(options.method):
+    if (task.v_from.any() or task.v_to.any()) and not depends_on_duration(options.method):
         from .errors import TaskError
 
         raise TaskError(

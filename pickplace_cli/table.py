@@ -243,7 +243,7 @@ def unit_peaks(h: np.ndarray, coef: np.ndarray, lam: float, orders: tuple[int, .
     d[..., 1, :] *= 1.0 / lam
     sq = (d[..., :, None] * d[..., None, :]).sum(axis=3).reshape(nr, n, 3, k * k) @ ads  # lowest power first
     ds = sq[..., 1:] * ramp  # derivative, lowest power first
-    hf = np.zeros_like(ds)  # highest power first, times x^z
+    hf = np.zeros(ds.shape)  # highest power first, times x^z
     for i, z in enumerate(shifts):
         hf[i, ..., : m - z] = ds[i, ..., m - z - 1 :: -1]
     hf = hf.reshape(-1, m)

@@ -110,7 +110,7 @@ def plan_bspline(
         for col in range(1, DEGREE + 1):  # one Horner pass for all four orders
             acc = acc * dx + c[..., col]
         # the end states exactly as de Boor gives them (v = a = 0 without round-off)
-        if tau[0] <= 0.0 or tau[-1] >= 1.0 or np.any((tau <= 0.0) | (tau >= 1.0)):
+        if tau[0] <= 0.0 or tau[-1] >= 1.0 or ((tau <= 0.0) | (tau >= 1.0)).any():
             acc[tau <= 0.0] = ends[0]
             acc[tau >= 1.0] = ends[1]
         return [acc[:, k] for k in range(4)]
@@ -171,7 +171,7 @@ def _symmetric(k1: np.ndarray, via: np.ndarray) -> np.ndarray:
     """Rows whose via points are those of Task.via_points for end points at the same height (P5 − P1
     horizontal, P2 and P4 straight above the ends at one height, P3 above the midpoint) with b > 0."""
     d = via[:, 4]
-    expect = np.zeros_like(via)  # the via points of a symmetric move with this P5 − P1, clearance and lift
+    expect = np.zeros(via.shape)  # the via points of a symmetric move with this P5 − P1, clearance and lift
     expect[:, 1:4, 2] = via[:, [1, 2, 1], 2]
     expect[:, 2, :2] = d[:, :2] / 2
     expect[:, 3:, :2] = d[:, None, :2]

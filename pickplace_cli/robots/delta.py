@@ -420,8 +420,9 @@ class DeltaRobot:
         from the inverse kinematics, so values agree to round-off, not bitwise.)"""
         q, arms, (qd, qdd, qddd), (v, a, j) = self._motion(p, v, a, j)
         A, G, dA, dG = self._dynamics(arms, qd, qdd, qddd, v, a, j, rates)
-        out = [x.T.copy() for x in (q, qd, qdd, qddd, A, G)]
-        out += [None if x is None else x.T.copy() for x in (dA, dG)]
+        # (N, 3) views of the arm-major (3, N) arrays, not copies: the caller combines and indexes them anyway
+        out = [x.T for x in (q, qd, qdd, qddd, A, G)]
+        out += [None if x is None else x.T for x in (dA, dG)]
         return (*out, self._singularity(arms))
 
     def singularity_measure(self, q: np.ndarray, p: np.ndarray) -> np.ndarray:
