@@ -95,7 +95,9 @@ class Task:
     def _via(self) -> np.ndarray:
         p1, p5 = self.p_from, self.p_to
         zt = self.z_top
-        p2 = p1 + np.array([0.0, 0.0, self.eta * (zt - p1[2])])
-        p4 = p5 + np.array([0.0, 0.0, self.eta * (zt - p5[2])])
-        p3 = np.array([(p1[0] + p5[0]) / 2, (p1[1] + p5[1]) / 2, zt])
-        return np.vstack([p1, p2, p3, p4, p5])
+        via = np.empty((5, 3))
+        via[0], via[1], via[3], via[4] = p1, p1, p5, p5
+        via[1, 2] = p1[2] + self.eta * (zt - p1[2])  # P2, P4 straight above the ends
+        via[3, 2] = p5[2] + self.eta * (zt - p5[2])
+        via[2] = ((p1[0] + p5[0]) / 2, (p1[1] + p5[1]) / 2, zt)  # P3 above the midpoint
+        return via

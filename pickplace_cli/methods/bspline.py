@@ -78,7 +78,7 @@ def plan_bspline(
     via = (task.via_points() - task.p_from)[None]
     b_all, c_all, pk_all = batch_paths(np.array([float(k1)]), np.array([float(k2)]), via)
     breaks, coef = b_all[0], c_all[0]  # (m+1,), (m, 3, 6): the exact polynomial of each piece
-    peaks = tuple(float(x) for x in pk_all[0])
+    peaks = tuple(pk_all[0].tolist())
     # the end states exactly (clamped ends, Eq. 9: Q1 = … = Q4 and Q8 = … = Q11, so the derivatives there
     # are differences of equal control points, zero without round-off, as de Boor gives them)
     ends = np.zeros((2, 4, 3))  # (τ = 0, τ = 1) × (p, p′, p″, p‴)
