@@ -77,8 +77,7 @@ def read_batch(stream: IO[str], source: str = "batch") -> tuple[list[BatchRow], 
     """Parse the batch CSV → (good rows, rows that failed to parse). A bad header, or a header with no
     row after it, raises TaskError."""
     text = stream.read()
-    if text.startswith("\ufeff"):  # a BOM (the CLI opens files as utf-8-sig; stdin and strings keep it)
-        text = text[1:]
+    text = text.removeprefix("\ufeff")  # a BOM (the CLI opens files as utf-8-sig; stdin and strings keep it)
     lines = [(n, t) for n, t in enumerate(text.splitlines(), start=1)]
     lines = [(n, t) for n, t in lines if t.strip() and not t.lstrip().startswith("#")]
     if not lines:
@@ -131,6 +130,24 @@ def read_batch(stream: IO[str], source: str = "batch") -> tuple[list[BatchRow], 
     return rows, bad
 
 
+def row_task(values: dict, profile, height: float | None = None, eta: float | None = None):
+    """The Task of one batch row: its cells, else ``height``/``eta`` (the command line), else the profile's
+    planning defaults; end velocities [m/s] default to 0. TaskError for an invalid move."""
+    import numpy as np
+
+    from .task import Task
+
+    v = values
+    return Task(
+        [v["from_x"], v["from_y"], v["from_z"]],
+        [v["to_x"], v["to_y"], v["to_z"]],
+        v.get("height", height if height is not None else profile.planning.height),
+        v.get("eta", eta if eta is not None else profile.planning.eta),
+        v_from=np.array([v.get(f"v_from_{c}", 0.0) for c in "xyz"]),
+        v_to=np.array([v.get(f"v_to_{c}", 0.0) for c in "xyz"]),
+    )
+
+
 def plan_rows(
     rows: list[BatchRow], profile, options, height: float | None = None, eta: float | None = None,
     fail_fast: bool = False, source: str = "batch",
@@ -139,22 +156,12 @@ def plan_rows(
     a row's ``time`` replaces its duration. Stops after the first failing row when ``fail_fast``."""
     from dataclasses import replace
 
-    import numpy as np
-
     from .planner import plan
-    from .task import Task
 
     for r in rows:
         v = r.values
         try:
-            task = Task(
-                [v["from_x"], v["from_y"], v["from_z"]],
-                [v["to_x"], v["to_y"], v["to_z"]],
-                v.get("height", height if height is not None else profile.planning.height),
-                v.get("eta", eta if eta is not None else profile.planning.eta),
-                v_from=np.array([v.get(f"v_from_{c}", 0.0) for c in "xyz"]),
-                v_to=np.array([v.get(f"v_to_{c}", 0.0) for c in "xyz"]),
-            )
+            task = row_task(v, profile, height, eta)
             opts = replace(options, time=v["time"]) if "time" in v else options
             result = plan(task, profile, opts)
             code = result.report.exit_code()

@@ -43,7 +43,7 @@ from typing import Any
 
 import numpy as np
 
-from .batch import BatchRow, RowResult, plan_rows, run_chunks_in_order
+from .batch import BatchRow, RowResult, plan_rows, row_task, run_chunks_in_order
 from .bspline import DEGREE
 from .methods.bspline import batch_paths
 from .errors import PickplaceError, UnreachableError
@@ -281,7 +281,6 @@ def decide(rows: list[BatchRow], profile, options, height: float | None = None, 
     from types import SimpleNamespace
 
     from .planner import Plan, motion_model
-    from .task import Task
     from .timing import choose_duration
     from .trajectory import CartesianPath, CartesianTrajectory
 
@@ -316,12 +315,7 @@ def decide(rows: list[BatchRow], profile, options, height: float | None = None, 
         if spec == "fit" or any(v.get(f"v_{e}_{c}", 0.0) for e in ("from", "to") for c in "xyz"):
             continue
         try:
-            task = Task(
-                [v["from_x"], v["from_y"], v["from_z"]],
-                [v["to_x"], v["to_y"], v["to_z"]],
-                v.get("height", height if height is not None else profile.planning.height),
-                v.get("eta", eta if eta is not None else profile.planning.eta),
-            )
+            task = row_task(v, profile, height, eta)
         except PickplaceError:
             continue
         cand.append((r, task, spec))
