@@ -123,15 +123,6 @@ _DROW = np.array([[math.perm(k, r) for k in range(_NC)] for r in range(_NC)], fl
 _CONDITIONS = np.array([[0, 1, 3, 5], [0, 1, 2, 4]])
 
 
-@functools.lru_cache(maxsize=None)
-def _anti_diagonal(k: int) -> np.ndarray:
-    """(k², 2k−1) 0/1 matrix summing c_i c_j into the coefficient of power i + j."""
-    s = np.zeros((k * k, 2 * k - 1))
-    i, j = np.divmod(np.arange(k * k), k)
-    s[np.arange(k * k), i + j] = 1.0
-    return s
-
-
 def unit_pieces(
     k1: np.ndarray | float, k2: np.ndarray | float, eta: float | np.ndarray, rowwise: bool = False
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -214,40 +205,55 @@ _A_POWERS, _A_TERMS = _piece_terms()
 
 @functools.lru_cache(maxsize=None)
 def _peak_plan(orders: tuple[int, ...]) -> tuple:
-    """Constants of :func:`unit_peaks` for one tuple of derivative orders (built once)."""
+    """Constants of :func:`unit_peaks` for one tuple of derivative orders (built once).
+
+    ``maps`` (36, nr·(2k−1) + nr·m) takes the products c_i c_j of a piece's position coefficients (Taylor,
+    lowest power first; i, j = 0 … 5) to, per order r, the coefficients of ‖·^(r)‖² (2k−1, lowest power
+    first) and then of its derivative times x^z (m, highest power first; z brings every order to the
+    common degree m − 1 of the lowest order, only adding roots at x = 0, an end of the piece)."""
+    nr = len(orders)
     k = _NC - min(orders)  # coefficients of the highest-degree derivative
     m = 2 * k - 2  # coefficients of the derivative of its square
+    n_sq = 2 * k - 1
+    maps = np.zeros((_NC, _NC, nr * n_sq + nr * m))
+    for o, r in enumerate(orders):
+        z = 2 * (r - min(orders))
+        for i in range(r, _NC):
+            for j in range(r, _NC):
+                w = math.perm(i, r) * math.perm(j, r)  # (c_i x^(i−r) perm(i, r)) (c_j x^(j−r) perm(j, r))
+                power = i + j - 2 * r
+                maps[i, j, o * n_sq + power] += w
+                if power:
+                    maps[i, j, nr * n_sq + o * m + (m - power - z)] += w * power  # x^(power−1+z), highest first
     companion = np.zeros((m - 1, m - 1))
     companion[np.arange(1, m - 1), np.arange(m - 2)] = 1.0
-    shifts = tuple(2 * (r - min(orders)) for r in orders)  # x^z brings order r to the common degree
-    return k, m, np.arange(1.0, m + 1), np.arange(2 * k - 1), companion, shifts, _anti_diagonal(k)
+    return k, m, n_sq, maps.reshape(_NC * _NC, -1), np.arange(n_sq), companion
 
 
 def unit_peaks(h: np.ndarray, coef: np.ndarray, lam: float, orders: tuple[int, ...] = (1, 2, 3)) -> np.ndarray:
     """(N, len(orders)) exact max over τ ∈ [0, 1] of ‖(s_u^(r), s_v^(r)/λ)‖ for the pieces of
-    :func:`unit_pieces` (Eq. 17–19 with b = 1, T = 1; the symmetric half is enough).
+    :func:`unit_pieces` (Eq. 17–19 with b = 1, T = 1; the symmetric half is enough). ``lam`` is a number or
+    an (N, 1, 1) array (one λ per row).
 
     On each piece ‖·‖² is a polynomial; its maximum is at an end or at a real root of its derivative.
-    The roots are eigenvalues of companion matrices, all pieces and orders in one batched call (a
-    lower-degree derivative is multiplied by a power of x: extra roots at x = 0, an end that is a
-    candidate anyway). Every candidate is clipped into its piece and the square norm is evaluated there:
-    a complex root's real part is then just another point of the piece, never above the maximum, so no
-    test for real roots is needed. (Written for small N, where numpy's per-call cost dominates: the
-    optimiser calls it with one point a few hundred times per λ.)"""
+    The square norms and their derivatives come from the products of the position coefficients by one
+    constant linear map (:func:`_peak_plan`); the roots are eigenvalues of companion matrices, all pieces
+    and orders in one batched call (a lower-degree derivative is multiplied by a power of x: extra roots at
+    x = 0, an end that is a candidate anyway). Every candidate is clipped into its piece and the square
+    norm is evaluated there: a complex root's real part is then just another point of the piece, never
+    above the maximum, so no test for real roots is needed. Every row by operations on that row alone
+    (stacked products), so a row's peaks do not depend on the batch it is in. (Written for small N, where
+    numpy's per-call cost dominates: the optimiser calls it with one point a few hundred times per λ.)"""
     n = h.shape[0]
     nr = len(orders)
-    k, m, ramp, expo, companion, shifts, ads = _peak_plan(tuple(orders))
-    d = np.zeros((nr, n, 3, 2, k))
-    for i, r in enumerate(orders):
-        d[i, ..., : _NC - r] = coef[..., r:] * _DROW[r, r:]
-    d[..., 1, :] *= 1.0 / lam
-    sq = (d[..., :, None] * d[..., None, :]).sum(axis=3).reshape(nr, n, 3, k * k) @ ads  # lowest power first
-    ds = sq[..., 1:] * ramp  # derivative, lowest power first
-    hf = np.zeros(ds.shape)  # highest power first, times x^z
-    for i, z in enumerate(shifts):
-        hf[i, ..., : m - z] = ds[i, ..., m - z - 1 :: -1]
-    hf = hf.reshape(-1, m)
-    hh = h.ravel() if nr == 1 else np.concatenate([h.ravel()] * nr)
+    k, m, n_sq, maps, expo, companion = _peak_plan(tuple(orders))
+    scaled = coef.copy()  # (N, 3 pieces, 2 axes, 6)
+    scaled[..., 1, :] *= 1.0 / lam
+    prod = (scaled[..., :, None] * scaled[..., None, :]).sum(axis=2).reshape(n, 3, _NC * _NC)
+    both = prod @ maps  # (N, 3 pieces, nr·n_sq + nr·m)
+    sq = both[..., : nr * n_sq].reshape(-1, n_sq, 1)  # rows (N, piece, order), lowest power first
+    hf = both[..., nr * n_sq :].reshape(-1, m)  # derivative, highest power first
+    hh = np.repeat(h.ravel(), nr)
     lead = hf[:, 0]
     full = np.abs(lead) > 1e-12 * np.abs(hf).max(axis=1)
     comp = np.empty((hf.shape[0], m - 1, m - 1))
@@ -265,8 +271,8 @@ def unit_peaks(h: np.ndarray, coef: np.ndarray, lam: float, orders: tuple[int, .
             v = np.roots(hf[i]).real if np.any(hf[i]) else np.zeros(0)
             x[i, 2:] = 0.0
             x[i, 2 : 2 + v.size] = np.minimum(np.maximum(v, 0.0), hh[i])
-    vals = ((x[..., None] ** expo) @ sq.reshape(-1, 2 * k - 1, 1)).reshape(nr, n, -1)
-    return np.sqrt(np.maximum(vals.max(axis=2), 0.0)).T
+    vals = ((x[..., None] ** expo) @ sq).reshape(n, 3, nr, m + 1)
+    return np.sqrt(np.maximum(vals.max(axis=(1, 3)), 0.0))
 
 
 def fast_peaks(k1, k2, lam: float, eta: float = 0.5, orders: tuple[int, ...] = (1, 2, 3)) -> np.ndarray:

@@ -78,41 +78,52 @@ def _local(x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return rt[:3], rt[3:], x[:, 2]
 
 
-def _gram_extremes(d: np.ndarray, det_a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Smallest and largest eigenvalue (N,) of the Gram matrix G = AAᵀ whose rows are the vectors d[:, i]
-    (``d`` (3 components, 3 rows, N); ``det_a`` = det A (N,)), in closed form (trigonometric solution of the
-    characteristic cubic of a symmetric 3×3 matrix; Smith 1961). The largest comes from the cubic, the
-    smallest from λ_min λ_mid = det G / λ_max and λ_min + λ_mid = tr G − λ_max in the cancellation-free form."""
-    g00, g11, g22, g01, g02, g12 = (d[:, _GRAM_I] * d[:, _GRAM_J]).sum(axis=0)  # G is symmetric: six entries
-    m = (g00 + g11 + g22) / 3.0
-    off = g01 * g01 + g02 * g02 + g12 * g12
-    a0, a1, a2 = g00 - m, g11 - m, g22 - m
-    pp = np.sqrt(np.maximum((a0 * a0 + a1 * a1 + a2 * a2 + 2.0 * off) / 6.0, 1e-300))
-    detb = (a0 * (a1 * a2 - g12 * g12) - g01 * (g01 * a2 - g12 * g02) + g02 * (g01 * g12 - a1 * g02)) / pp**3
-    phi = np.arccos(np.minimum(np.maximum(detb / 2.0, -1.0), 1.0)) / 3.0
-    hi = m + 2.0 * pp * np.cos(phi)
+def _gram_extremes(d: np.ndarray, det_a: np.ndarray, l2: float) -> tuple[np.ndarray, np.ndarray]:
+    """Smallest and largest eigenvalue (N,) of the Gram matrix G = AAᵀ whose rows are the forearm vectors
+    d[:, i] (``d`` (3 components, 3 arms, N); ``det_a`` = det A (N,)), in closed form (trigonometric solution
+    of the characteristic cubic of a symmetric 3×3 matrix; Smith 1961).
+
+    Every forearm has length l, so the diagonal of G is l² (``l2``) and B = G − l²I has a zero diagonal:
+    the cubic then needs only the three dot products g_ij = d_i·d_j of different arms. The largest
+    eigenvalue comes from the cubic, the smallest from λ_min λ_mid = det G / λ_max and
+    λ_min + λ_mid = tr G − λ_max in the cancellation-free form."""
+    g = (d[:, _GRAM_I] * d[:, _GRAM_J]).sum(axis=0)  # (3, N): g01, g02, g12
+    pp = np.sqrt(np.maximum((g * g).sum(axis=0) / 3.0, 1e-300))  # √(tr B² / 6)
+    half_det = g.prod(axis=0) / (pp * pp * pp)  # det(B/pp) / 2 = g01 g02 g12 / pp³
+    phi = np.arccos(np.minimum(np.maximum(half_det, -1.0), 1.0)) / 3.0
+    hi = l2 + 2.0 * pp * np.cos(phi)
     prod = det_a * det_a / hi  # det G = (det A)²
-    rest = 3.0 * m - hi
+    rest = 3.0 * l2 - hi
     lo = 2.0 * prod / (rest + np.sqrt(np.maximum(rest * rest - 4.0 * prod, 0.0)))
     return lo, hi
 
 
-_GRAM_I = np.array([0, 1, 2, 0, 0, 1])  # the entries (0,0), (1,1), (2,2), (0,1), (0,2), (1,2) of G
-_GRAM_J = np.array([0, 1, 2, 1, 2, 2])
+_GRAM_I = np.array([0, 0, 1])  # the off-diagonal entries (0,1), (0,2), (1,2) of G
+_GRAM_J = np.array([1, 2, 2])
+#: gather indices of the reciprocal basis c[k, i] = d[k+1, i+1] d[k+2, i+2] − d[k+2, i+1] d[k+1, i+2]
+#: (component k, arm i, indices mod 3): the four factors in one fancy index, (4, 3, 3)
+_K = np.arange(3)[:, None]
+_I = np.arange(3)[None, :]
+_CROSS_ROWS = np.stack(np.broadcast_arrays((_K + 1) % 3, (_K + 2) % 3, (_K + 2) % 3, (_K + 1) % 3))
+_CROSS_COLS = np.stack(np.broadcast_arrays((_I + 1) % 3, (_I + 2) % 3, (_I + 1) % 3, (_I + 2) % 3))
+del _K, _I
 
 
 class _Arms:
     """Arm-wise quantities of one (q, p) configuration, each (3, N): cos q, sin q and the forearm vector d in
-    the arm frame (radial dr, tangential dt, vertical dz), D = d·E′ and D2 = d·E″ (see module docstring)."""
+    the arm frame (radial dr, tangential dt, vertical dz), D = d·E′ and D2 = d·E″ (see module docstring).
+    ``rates``: (v_r, v_t, v_z, ḋ_r, ḋ_z) once :meth:`DeltaRobot._joint_rates` ran (the torque rates reuse them)."""
 
-    __slots__ = ("c", "s", "dr", "dt", "dz", "D", "D2", "_base", "_recip")
+    __slots__ = ("c", "s", "dr", "dt", "dz", "D", "D2", "_base", "_recip", "rates")
 
-    def __init__(self, L: float, c: np.ndarray, s: np.ndarray, dr: np.ndarray, dt: np.ndarray, dz: np.ndarray):
+    def __init__(self, L: float, c: np.ndarray, s: np.ndarray, dr: np.ndarray, dt: np.ndarray, dz: np.ndarray,
+                 D: np.ndarray | None = None, D2: np.ndarray | None = None):
         self.c, self.s, self.dr, self.dt, self.dz = c, s, dr, dt, dz
-        self.D = -L * (s * dr + c * dz)
-        self.D2 = L * (s * dz - c * dr)
+        self.D = -L * (s * dr + c * dz) if D is None else D
+        self.D2 = L * (s * dz - c * dr) if D2 is None else D2
         self._base = None
         self._recip = None
+        self.rates = None
 
     def base_frame(self) -> np.ndarray:
         """d in the base frame, (3 components x, y, z; 3 arms; N) (computed once per configuration)."""
@@ -192,15 +203,15 @@ class DeltaRobot:
         return self.plate_mass + self.payload + self.forearm_mass
 
     # ------------------------------------------------------------------ kinematics
-    def _ik(self, p: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """(a, y′, K, discriminant, z) of :meth:`inverse_kinematics`, arm-wise (3, N) except z (N,)."""
+    def _ik(self, p: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(a, y′, K, discriminant, z, ρ²) of :meth:`inverse_kinematics`, arm-wise (3, N) except z (N,)."""
         xr, yt, z = _local(p)
         e = self.R - self.r
         a = xr - e
         c0 = ((p * p).sum(axis=1) + e * e + self.L**2 - self.l**2) / (2.0 * self.L)
         K = c0 - (e / self.L) * xr  # = (a² + y′² + z² + L² − l²) / (2L)
-        disc = a * a + z * z - K * K
-        return a, yt, K, disc, z
+        rho2 = a * a + z * z
+        return a, yt, K, rho2 - K * K, z, rho2
 
     def reachable(self, p: np.ndarray) -> np.ndarray:
         """Boolean mask (N,): True where every arm of the knee-out branch can reach p (N, 3) [m]."""
@@ -210,7 +221,7 @@ class DeltaRobot:
 
     def _solve(self, p: np.ndarray) -> tuple[np.ndarray, _Arms]:
         """q (3, N) and the arm quantities at p (N, 3); UnreachableError for the first bad sample."""
-        a, yt, K, disc, z = self._ik(p)
+        a, yt, K, disc, z, rho2 = self._ik(p)
         bad = ~(disc >= 0.0)  # also catches NaN
         if bad.any():
             n = int(np.argmax(bad.any(axis=0)))
@@ -222,14 +233,16 @@ class DeltaRobot:
                 index=int(n),
             )
         root = np.sqrt(disc)
-        rho2 = a * a + z * z
+        L = self.L
         # q = θ − ψ with cos θ = K/ρ, sin θ = −√disc/ρ, cos ψ = a/ρ, sin ψ = z/ρ
         S = -root * a - K * z  # ρ² sin q
         C = K * a - root * z  # ρ² cos q
         q = np.arctan2(S, C)
         c = C / rho2
         s = S / rho2
-        arms = _Arms(self.L, c, s, a - self.L * c, yt, z + self.L * s)
+        # on this branch D = d·E′ = −L (s a + c z) = L √disc and D₂ = d·E″ = L (s z − c a + L) = L (L − K)
+        # (expand S, C: s a + c z = −√disc, s z − c a = −K): exact, and free of the cancellation near D = 0
+        arms = _Arms(L, c, s, a - L * c, yt, z + L * s, D=L * root, D2=L * (L - K))
         return q, arms
 
     def inverse_kinematics(self, p: np.ndarray) -> np.ndarray:
@@ -351,8 +364,8 @@ class DeltaRobot:
         (N,) (computed once per configuration: the dynamics and the singularity measure both use them)."""
         if arms._recip is None:
             d = arms.base_frame()
-            d1, d2 = d[:, _NEXT], d[:, _NEXT2]
-            c = d1[_NEXT] * d2[_NEXT2] - d1[_NEXT2] * d2[_NEXT]  # (y1 z2 − z1 y2, z1 x2 − x1 z2, x1 y2 − y1 x2)
+            f = d[_CROSS_ROWS, _CROSS_COLS]  # (4, 3, 3, N): the four factors of every cross-product entry
+            c = f[0] * f[1] - f[2] * f[3]  # (y1 z2 − z1 y2, z1 x2 − x1 z2, x1 y2 − y1 x2)
             arms._recip = (c, (d[:, 0] * c[:, 0]).sum(axis=0))
         return arms._recip
 
@@ -408,6 +421,7 @@ class DeltaRobot:
             + dz * jz
             + qd * (D * qd * qd - 3.0 * D2 * qdd)
         ) / D
+        arms.rates = (vr, vt, vz, d1r, d1z)
         return qd, qdd, qddd
 
     def motion_and_dynamics(
@@ -445,7 +459,7 @@ class DeltaRobot:
 
     def _singularity(self, arms: _Arms) -> np.ndarray:
         serial = np.abs(arms.D).min(axis=0) / (self.l * self.L)
-        lo, hi = _gram_extremes(arms.base_frame(), self._reciprocal(arms)[1])
+        lo, hi = _gram_extremes(arms.base_frame(), self._reciprocal(arms)[1], self.l * self.l)
         parallel = np.sqrt(np.maximum(lo, 0.0) / hi)
         return np.minimum(serial, parallel)
 
@@ -538,10 +552,14 @@ class DeltaRobot:
         if not rates:
             return A, G, None, None
         w = qd
-        vr, vt, vz = _local(v)
-        d1r = vr + arms.s * L * w
+        if arms.rates is not None:  # from _joint_rates at the same configuration and velocity
+            vr, vt, vz, d1r, d1z = arms.rates
+        else:
+            vr, vt, vz = _local(v)
+            d1r = vr + arms.s * L * w
+            d1z = vz + arms.c * L * w
         d1 = np.empty((3, *d1r.shape))  # ḋ = v − E′q̇ in the base frame (3 components, 3 arms, N)
-        d1[2] = vz + arms.c * L * w
+        d1[2] = d1z
         Ddot = -L * (arms.s * d1r + arms.c * d1[2]) + arms.D2 * w
         d1[0] = d1r * _COS_PHI - vt * _SIN_PHI
         d1[1] = d1r * _SIN_PHI + vt * _COS_PHI
