@@ -108,7 +108,18 @@ _EXTRA: dict = {}
 
 
 def check_grid_index(tau: np.ndarray, breakpoints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`check_grid` and the index of every output sample ``tau`` (sorted) in it.
+    """:func:`check_grid` (sorted) and the index of every output sample ``tau`` (sorted) in it."""
+    grid, order = check_grid_order(tau, breakpoints)
+    index = np.empty(len(grid), int)
+    index[order] = np.arange(len(grid))
+    return grid[order], index[: len(tau)]
+
+
+def check_grid_order(tau: np.ndarray, breakpoints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The check grid with the output samples ``tau`` (sorted) first, then the extra points, and the
+    permutation ``order`` that sorts it (``grid[order]`` is :func:`check_grid`). The model evaluated on this
+    grid gives the output samples as its first ``len(tau)`` rows (views, no gather); pass ``order`` to
+    :meth:`MotionModel.parts` so the check sorts what it needs.
 
     Extra points within 1e-9 of an output sample or of each other (round-off twins) are dropped, so
     every output sample is in the grid exactly. When the output samples already cover [0, 1] at least as
@@ -125,11 +136,9 @@ def check_grid_index(tau: np.ndarray, breakpoints: np.ndarray) -> tuple[np.ndarr
     pos = np.minimum(np.maximum(np.searchsorted(tau, extra), 1), len(tau) - 1) if len(tau) > 1 else np.zeros(len(extra), int)
     near = np.minimum(np.abs(extra - tau[pos - 1 if len(tau) > 1 else 0]), np.abs(extra - tau[pos]))
     grid = np.concatenate([tau, extra[near > 1e-9]])
-    order = np.argsort(grid, kind="stable")
-    grid = grid[order]
-    index = np.empty(len(grid), int)
-    index[order] = np.arange(len(grid))
-    return grid, index[: len(tau)]
+    return grid, np.argsort(grid, kind="stable")
+
+
 #: central-difference step in τ for d/dτ of the torques (truncation ~1e-10 relative, round-off ~1e-10)
 DTAU = 1e-5
 
@@ -244,6 +253,7 @@ class Parts:
     dAm: np.ndarray | None = None  # d/dτ of Am
     dGm: np.ndarray | None = None
     singularity: np.ndarray | None = None  # (N,)
+    order: np.ndarray | None = None  # the permutation that sorts ``tau`` (None: ``tau`` is sorted)
 
 
 @dataclass
@@ -299,13 +309,15 @@ class MotionModel:
             dGm = dG / ng
         return p, v, a, j, q, qd, qdd, qddd, A, G, Am, Gm, dAm, dGm, sing
 
-    def parts(self, tau: np.ndarray, derivatives: bool = True, motion: tuple | None = None) -> Parts:
+    def parts(self, tau: np.ndarray, derivatives: bool = True, motion: tuple | None = None,
+              order: np.ndarray | None = None) -> Parts:
         """Evaluate at τ; ``derivatives`` adds d/dτ of the motor torques.
 
         The robot's analytic ``torque_rate`` gives them when it has one; otherwise central differences of
         the model (step ``DTAU``, two more evaluations). ``motion`` = (p, v, a, j), each (N, 3) at T = 1 s,
         gives the Cartesian motion at τ directly instead of evaluating ``path`` (the batched verdict engine
-        stacks many moves' samples into one call; needs the analytic rates)."""
+        stacks many moves' samples into one call; needs the analytic rates). ``order``: the permutation that
+        sorts an unsorted ``tau`` (:func:`check_grid_order`), kept in the Parts for the check."""
         tau = np.asarray(tau, float)
         analytic = derivatives and hasattr(self.robot, "torque_rate")
         if motion is not None and derivatives and not analytic:
@@ -316,7 +328,7 @@ class MotionModel:
             lo = self._torques(tau - DTAU, singularity=False)
             dAm = (hi[10] - lo[10]) / (2 * DTAU)
             dGm = (hi[11] - lo[11]) / (2 * DTAU)
-        return Parts(tau, p, v, a, j, q, qd, qdd, qddd, A, G, Am, Gm, dAm, dGm, sing)
+        return Parts(tau, p, v, a, j, q, qd, qdd, qddd, A, G, Am, Gm, dAm, dGm, sing, order)
 
     # ------------------------------------------------------------------------- scaled quantities
     def columns(self, parts: Parts, T: float) -> tuple[list[tuple], np.ndarray]:
@@ -431,9 +443,21 @@ class MotionModel:
         it does not depend on which other points the grid has; otherwise the trapezoid rule."""
         tau = parts.tau
         tm = parts.Am / T**2 + parts.Gm
-        w = quadrature_weights(tau, self.path.breakpoints)
-        integral = T * (w @ tm**2 if w is not None else np.trapezoid(tm**2, tau, axis=0))
-        hold = parts.Gm[0] ** 2 + parts.Gm[-1] ** 2
+        order = parts.order
+        if order is None:
+            w = quadrature_weights(tau, self.path.breakpoints)
+            first, last = 0, -1
+        else:  # an unsorted grid: the weights of the sorted one, put back in place
+            w = quadrature_weights(tau[order], self.path.breakpoints)
+            if w is not None:
+                w[order] = w.copy()
+            first, last = order[0], order[-1]
+        if w is not None:
+            integral = T * (w @ tm**2)
+        else:
+            sq = tm**2 if order is None else (tm**2)[order]
+            integral = T * np.trapezoid(sq, tau if order is None else tau[order], axis=0)
+        hold = parts.Gm[first] ** 2 + parts.Gm[last] ** 2
         return np.sqrt((2 * integral + dwell * hold) / (2 * T + 2 * dwell))
 
 
@@ -500,6 +524,9 @@ def check_limits(
         parts = model.parts(tau)
     x = parts.tau
     meta, data = model.columns(parts, T)
+    if parts.order is not None:  # the grid is unsorted (output samples first): peaks need neighbours in τ
+        x = x[parts.order]
+        data = data[parts.order]
     plan = model.report_plan(parts.dAm is not None, parts.singularity is not None)
     rows: list[LimitRow] = []
     if data.shape[1]:

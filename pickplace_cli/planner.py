@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from .errors import TableError, UnreachableError
-from .limits import LimitReport, MotionModel, check_grid_index, check_limits, reach_error
+from .limits import LimitReport, MotionModel, check_grid_order, check_limits, reach_error
 from .methods import Method, depends_on_duration, path_factory, plan_path
 from .profile import Profile
 from .robots import build_robot
@@ -99,6 +99,17 @@ _STATIC: dict[int, tuple] = {}
 _OUTPUT_PARTS = ("p", "v1", "a1", "j1", "q", "qd1", "qdd1", "qddd1", "A", "G", "Am", "Gm")  # id(profile) → (profile, robot, specs, margin, box, memo); holds the profile
 
 
+def _first_unreachable(exc: UnreachableError, model: MotionModel, grid, order, T: float) -> UnreachableError:
+    """:func:`reach_error` for the earliest unreachable sample: the grid has the output samples first, so
+    the one the robot named need not be the first in time; the sorted grid finds that one."""
+    sorted_grid = grid[order]
+    try:
+        model.parts(sorted_grid)
+    except UnreachableError as first:
+        return reach_error(first, sorted_grid, T)
+    return reach_error(exc, grid, T)  # pragma: no cover - the same points, sorted, fail the same way
+
+
 def check_ends_reachable(task: Task, profile: Profile) -> None:
     """UnreachableError (exit 4) naming the end point outside the robot's workspace, if one is."""
     robot = motion_model_static(profile)[0]
@@ -141,11 +152,12 @@ def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions()) -> 
     # one evaluation of the model on the check grid (output samples ∪ a dense uniform grid ∪ knots)
     t = CartesianTrajectory(path, first.seconds).sample_times(rate)
     tau = t / first.seconds
-    grid, index = check_grid_index(tau, path.breakpoints)
+    # the output samples first, then the check's extra points: the outputs are the first len(t) rows
+    grid, order = check_grid_order(tau, path.breakpoints)
     try:
-        grid_parts = model.parts(grid)
+        grid_parts = model.parts(grid, order=order)
     except UnreachableError as exc:
-        raise reach_error(exc, grid, first.seconds) from None
+        raise _first_unreachable(exc, model, grid, order, first.seconds) from None
     if factory is not None and options.time == "fit":
         duration, path = choose_duration_for(
             factory, profile.capacity, "fit", model_of=lambda p: motion_model(p, profile), dwell=dwell,
@@ -161,14 +173,15 @@ def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions()) -> 
     if T != first.seconds:
         t = traj.sample_times(rate)
         tau = t / T
-        grid, index = check_grid_index(tau, path.breakpoints)
+        grid, order = check_grid_order(tau, path.breakpoints)
         try:
-            grid_parts = model.parts(grid)
+            grid_parts = model.parts(grid, order=order)
         except UnreachableError as exc:  # a path planned for another duration can take another route
-            raise reach_error(exc, grid, T) from None
+            raise _first_unreachable(exc, model, grid, order, T) from None
     report = check_limits(model, T, parts=grid_parts, dwell=dwell)
-    # the output samples of the quantities written out (the grid also holds the check's extra points)
-    out = {name: getattr(grid_parts, name)[index] for name in _OUTPUT_PARTS}
+    # the output samples of the quantities written out: the first len(t) rows of the grid (views)
+    n = len(t)
+    out = {name: getattr(grid_parts, name)[:n] for name in _OUTPUT_PARTS}
     robot = model.robot
     joint = JointTrajectory(
         t,

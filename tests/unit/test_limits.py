@@ -278,3 +278,30 @@ def test_rms_does_not_depend_on_the_other_grid_points():
     vals = [model.rms_motor_torque(model.parts(g), 0.2, 0.1) for g in grids]
     for v in vals[1:]:
         np.testing.assert_allclose(v, vals[0], rtol=1e-12)
+
+
+def test_unreachable_mid_move_names_the_earliest_time():
+    """The planner evaluates the check grid with the output samples first (unsorted); an IK failure must
+    still name the earliest unreachable point in time, as on the sorted grid."""
+    import re
+
+    from pickplace_cli.errors import UnreachableError
+    from pickplace_cli.limits import check_grid
+    from pickplace_cli.methods import plan_path
+    from pickplace_cli.planner import PlanOptions, motion_model_static, plan
+    from pickplace_cli.profile import load_profile
+    from pickplace_cli.task import Task
+    from pickplace_cli.timing import choose_duration
+    from pickplace_cli.trajectory import CartesianTrajectory
+
+    prof = load_profile("delta-su2018")
+    task = Task([-0.1, 0, -0.8], [0.1, 0, -0.8], 0.45, 0.5)  # the lift leaves the workspace mid-move
+    with pytest.raises(UnreachableError) as info:
+        plan(task, prof, PlanOptions(method="ph", fit=False, rate=20.0))  # sparse outputs: extra points first
+    said = float(re.search(r"at t = ([0-9.e-]+) s", str(info.value)).group(1))
+    path = plan_path(task, "ph")
+    T = choose_duration(path, prof.capacity, "auto").seconds
+    grid = check_grid(CartesianTrajectory(path, T).sample_times(20.0) / T, path.breakpoints)
+    ok = motion_model_static(prof)[0].reachable(path(grid, 0))
+    assert not ok.all() and ok[0]
+    assert said == pytest.approx(grid[np.argmax(~ok)] * T, abs=5e-7)  # printed with 6 digits
