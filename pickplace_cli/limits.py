@@ -84,9 +84,7 @@ def quadrature_weights(tau: np.ndarray, breakpoints: np.ndarray) -> np.ndarray |
     i = np.where(np.abs(tau[i - 1] - nodes) < np.abs(tau[i] - nodes), i - 1, i)
     if len(tau) < 2 or np.abs(tau[i] - nodes).max() > 1e-9:
         return None
-    out = np.zeros(len(tau))
-    np.add.at(out, i, w)
-    return out
+    return np.bincount(i, weights=w, minlength=len(tau))
 
 
 def _extra_points(breakpoints: np.ndarray, uniform: bool) -> np.ndarray:
@@ -286,7 +284,7 @@ class MotionModel:
     # --------------------------------------------------------------------------------- evaluation
     def _torques(self, tau: np.ndarray, rates: bool = False, motion: tuple | None = None, singularity: bool = True):
         robot = self.robot
-        p, v, a, j = motion if motion is not None else (self.path(tau, k) for k in range(4))
+        p, v, a, j = motion if motion is not None else self.path.all_orders(tau)
         dA = dG = sing = None
         if hasattr(robot, "motion_and_dynamics"):  # one pass over the geometry (Delta)
             q, qd, qdd, qddd, A, G, dA, dG, sing = robot.motion_and_dynamics(p, v, a, j, rates=rates)
@@ -386,7 +384,10 @@ class MotionModel:
         order: list[int] = []  # entry index of each computed column, in group order
         for kind in dict.fromkeys(e[1] for e in entries):
             members = [k for k, e in enumerate(entries) if e[1] == kind]
-            groups.append((kind, np.array([entries[k][2] for k in members])))
+            idx = [entries[k][2] for k in members]
+            width = 3 if kind.startswith("workcell") else len(self.robot.joint_names)
+            # every joint (axis) in order: a plain slice, a view instead of a gather
+            groups.append((kind, slice(None) if idx == list(range(width)) else np.array(idx)))
             order += members
         position = {k: n for n, k in enumerate(order)}
         perm = np.array([position[k] for k in range(len(entries))], dtype=int)
@@ -478,28 +479,29 @@ _COLUMNS = {
 
 
 def _parabolic_peak(x: np.ndarray, y: np.ndarray, i: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Vertex of the parabola through samples i−1, i, i+1 of each column (falls back to the sample)."""
+    """Vertex of the parabola through samples i−1, i, i+1 of each column (falls back to the sample: at an
+    end of the grid, where the parabola opens upwards, or where its vertex lies below the sample)."""
     n = len(x)
     cols = np.arange(y.shape[1])
-    peak = y[i, cols].copy()
-    at = x[i].copy()
-    inner = (i > 0) & (i < n - 1)
-    if inner.any():
-        c = cols[inner]
-        k = i[inner]
-        x0, x1, x2 = x[k - 1], x[k], x[k + 1]
-        y0, y1, y2 = y[k - 1, c], y[k, c], y[k + 1, c]
-        d1 = (y1 - y0) / (x1 - x0)
-        d2 = (y2 - y1) / (x2 - x1)
-        curv = (d2 - d1) / (x2 - x0)  # = a of a(x-x1)^2 + ...
-        ok = curv < 0
-        slope = d1 + curv * (x1 - x0)  # derivative at x1
-        xv = np.where(ok, x1 - slope / (2 * np.where(ok, curv, -1.0)), x1)
-        xv = np.minimum(np.maximum(xv, x0), x2)
-        yv = np.where(ok, y1 - slope**2 / (4 * np.where(ok, curv, -1.0)), y1)
-        peak[inner] = np.maximum(yv, y1)
-        at[inner] = np.where(yv >= y1, xv, x1)
-    return peak, at
+    top, at_top = y[i, cols], x[i]
+    if n < 3:
+        return top, at_top
+    k = np.minimum(np.maximum(i, 1), n - 2)  # the middle of the three samples (i itself inside the grid)
+    three = k + _NEIGHBOURS  # (3, n_cols)
+    (x0, x1, x2), (y0, y1, y2) = x[three], y[three, cols]
+    d1 = (y1 - y0) / (x1 - x0)
+    d2 = (y2 - y1) / (x2 - x1)
+    curv = (d2 - d1) / (x2 - x0)  # = a of a(x-x1)^2 + ...
+    ok = (curv < 0) & (k == i)
+    slope = d1 + curv * (x1 - x0)  # derivative at x1
+    safe = np.where(ok, curv, -1.0)
+    xv = np.minimum(np.maximum(x1 - slope / (2 * safe), x0), x2)
+    yv = y1 - slope**2 / (4 * safe)
+    use = ok & (yv >= top)
+    return np.where(use, yv, top), np.where(use, xv, at_top)
+
+
+_NEIGHBOURS = np.array([-1, 0, 1])[:, None]
 
 
 def check_limits(

@@ -39,11 +39,21 @@ class CartesianPath:
     peaks: tuple[float, float, float]
     breakpoints: np.ndarray = field(default_factory=lambda: np.array([0.0, 1.0]))
     max_order: int = 3
+    #: optional (tau (N,)) → [p, p′, p″, p‴] in one pass (new arrays); :meth:`all_orders` falls back to
+    #: ``evaluate`` per order without it
+    evaluate_all: Callable[[np.ndarray], list] | None = None
 
     def __call__(self, tau: np.ndarray, order: int = 0) -> np.ndarray:
         if not 0 <= order <= self.max_order:
             raise ValueError(f"order must be in 0..{self.max_order}, got {order}")
         return self.evaluate(np.atleast_1d(np.asarray(tau, dtype=float)), order)
+
+    def all_orders(self, tau: np.ndarray) -> list[np.ndarray]:
+        """[p, p′, p″, p‴] at τ (each (N, 3)), as four calls of the path would give them."""
+        tau = np.atleast_1d(np.asarray(tau, dtype=float))
+        if self.evaluate_all is not None:
+            return self.evaluate_all(tau)
+        return [self.evaluate(tau, k) for k in range(4)]
 
 
 @dataclass(frozen=True)

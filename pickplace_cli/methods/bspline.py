@@ -76,7 +76,9 @@ def plan_bspline(
     # numpy only (no scipy import on the online path), and the very arithmetic of the batch verdict
     # engine (P = 1): control points, the exact polynomial of every piece, the exact peaks
     via = (task.via_points() - task.p_from)[None]
-    b_all, c_all, pk_all = batch_paths(np.array([float(k1)]), np.array([float(k2)]), via)
+    k1a, k2a = np.array([float(k1)]), np.array([float(k2)])
+    sym = np.array([_symmetric_one(k1a[0], via[0])])  # _symmetric's decision, on floats (one move)
+    b_all, c_all, pk_all = batch_paths(k1a, k2a, via, symmetric=sym)
     breaks, coef = b_all[0], c_all[0]  # (m+1,), (m, 3, 6): the exact polynomial of each piece
     peaks = tuple(pk_all[0].tolist())
     # the end states exactly (clamped ends, Eq. 9: Q1 = … = Q4 and Q8 = … = Q11, so the derivatives there
@@ -85,38 +87,46 @@ def plan_bspline(
     ends[0, 0], ends[1, 0] = via[0, 0], via[0, -1]
 
     origin = task.p_from
-    # the polynomials of p, p′, p″, p‴ on every piece, (m, 4, 3, 6), highest power first, the derivatives
-    # padded with leading zeros (Horner then gives each order bitwise as its own shorter Horner would)
-    stacked = np.zeros((len(coef), 4, 3, DEGREE + 1))
-    stacked[:, 0] = coef
+    # the polynomials of p, p′, p″, p‴ on every piece, highest power first, the derivatives padded with
+    # leading zeros (Horner then gives each order bitwise as its own shorter Horner would), stored power-major
+    # as (6 powers, m pieces, 12 = 4 orders × 3 axes) so every Horner step reads one contiguous (N, 12) block
+    stacked = np.zeros((DEGREE + 1, len(coef), 4, 3))
+    stacked[:, :, 0] = coef.transpose(2, 0, 1)
     for k in range(1, 4):
-        stacked[:, k, :, k:] = coef[..., : DEGREE + 1 - k] * _FALLING[k]
-    memo: list = [None]  # one entry (τ, [p, p′, p″, p‴]): the pipeline asks orders 0…3 at the same τ in turn
+        stacked[k:, :, k] = (coef[..., : DEGREE + 1 - k] * _FALLING[k]).transpose(2, 0, 1)
+    by_power = stacked.reshape(DEGREE + 1, len(coef), 12)
+    ends12 = ends.reshape(2, 12)
+    memo: list = [None]  # one entry (τ, (N, 4, 3)): the pipeline asks orders 0…3 at the same τ in turn
 
     def evaluate(tau: np.ndarray, order: int) -> np.ndarray:
         entry = memo[0]
         if entry is None or entry[0] is not tau:
             entry = (tau, _all_orders(tau))
             memo[0] = entry
-        out = entry[1][order]
+        out = entry[1][:, order]
         return out + origin if order == 0 else out.copy()
 
-    def _all_orders(tau: np.ndarray) -> list[np.ndarray]:
-        """p, p′, p″, p‴ (each (N, 3)) by Horner on the piece polynomials (one search for every order)."""
+    def evaluate_all(tau: np.ndarray) -> list[np.ndarray]:
+        acc = _all_orders(tau)  # a new array: its views are the caller's alone
+        return [acc[:, 0] + origin, acc[:, 1], acc[:, 2], acc[:, 3]]
+
+    def _all_orders(tau: np.ndarray) -> np.ndarray:
+        """(N, 4, 3): p, p′, p″, p‴ by Horner on the piece polynomials (one search for every order)."""
         i = np.minimum(np.maximum(np.searchsorted(breaks, tau, side="right") - 1, 0), len(coef) - 1)
-        dx = (tau - breaks[i])[:, None, None]
-        c = stacked[i]  # (N, 4, 3, 6)
-        acc = c[..., 0]
+        dx = (tau - breaks[i])[:, None]
+        c = by_power[:, i]  # (6, N, 12)
+        acc = c[0]
         for col in range(1, DEGREE + 1):  # one Horner pass for all four orders
-            acc = acc * dx + c[..., col]
+            acc = acc * dx + c[col]
         # the end states exactly as de Boor gives them (v = a = 0 without round-off)
         if tau[0] <= 0.0 or tau[-1] >= 1.0 or ((tau <= 0.0) | (tau >= 1.0)).any():
-            acc[tau <= 0.0] = ends[0]
-            acc[tau >= 1.0] = ends[1]
-        return [acc[:, k] for k in range(4)]
+            acc[tau <= 0.0] = ends12[0]
+            acc[tau >= 1.0] = ends12[1]
+        return acc.reshape(-1, 4, 3)
 
     return CartesianPath(
         evaluate=evaluate,
+        evaluate_all=evaluate_all,
         method="bspline",
         parameters={"k1": float(k1), "k2": float(k2), "k_source": source, "lambda": task.lam, "eta": task.eta},
         peaks=peaks,  # type: ignore[arg-type]
@@ -141,7 +151,7 @@ _FALLING = [_falling(np.arange(DEGREE, -1, -1.0)[: DEGREE + 1 - k], k) for k in 
 UNIT_K1 = (0.1, 0.9)
 
 
-def batch_paths(k1: np.ndarray, k2: np.ndarray, via: np.ndarray):
+def batch_paths(k1: np.ndarray, k2: np.ndarray, via: np.ndarray, symmetric: np.ndarray | None = None):
     """The B-spline paths of P moves: (breaks (P, 7), position coefficients (P, 6, 3, 6) [displacement from
     P1, highest power first], peaks (P, 3) of ‖p′‖, ‖p″‖, ‖p‴‖ at T = 1). ``via`` (P, 5, 3) are the via
     points minus P1.
@@ -150,11 +160,12 @@ def batch_paths(k1: np.ndarray, k2: np.ndarray, via: np.ndarray):
     τ = 1/2) use the closed form of the table build (:func:`pickplace_cli.table.unit_pieces`, ~20 numpy
     calls instead of the ~300 of the Cox–de Boor recursion); the others, and k1 outside ``UNIT_K1``, the
     batched de Boor path. Either way every row is computed by operations on that row alone, so one move
-    planned alone and the same move in a batch of thousands get bitwise the same path (tested)."""
+    planned alone and the same move in a batch of thousands get bitwise the same path (tested).
+    ``symmetric``: the rows' :func:`_symmetric` when the caller knows it already."""
     k1 = np.asarray(k1, float)
     k2 = np.asarray(k2, float)
     via = np.asarray(via, float)
-    sym = _symmetric(k1, via)
+    sym = _symmetric(k1, via) if symmetric is None else symmetric
     if sym.all():
         return _unit_paths(k1, k2, via)
     if not sym.any():
@@ -184,6 +195,17 @@ def _symmetric(k1: np.ndarray, via: np.ndarray) -> np.ndarray:
         & (k1 >= UNIT_K1[0])
         & (k1 <= UNIT_K1[1])
     )
+
+
+def _symmetric_one(k1: float, via: np.ndarray) -> bool:
+    """:func:`_symmetric` of one move (``via`` (5, 3)) in Python floats: the same IEEE operations on the same
+    numbers (the same decision, bitwise), without the ~20 numpy calls of a one-row array."""
+    (x0, y0, z0), (x1, y1, z1), (x2, y2, z2), (x3, y3, z3), (x4, y4, z4) = via.tolist()
+    scale = abs(x4) + abs(y4) + abs(z4) + abs(z2)
+    off = max(abs(x0), abs(y0), abs(z0), abs(x1), abs(y1), abs(x2 - x4 / 2), abs(y2 - y4 / 2),
+              abs(x3 - x4), abs(y3 - y4), abs(z3 - z1), abs(z4))
+    return bool(off <= 1e-13 * scale and z2 > 0.0 and np.hypot(x4, y4) > 1e-9 * scale
+                and UNIT_K1[0] <= k1 <= UNIT_K1[1])
 
 
 def _unit_paths(k1: np.ndarray, k2: np.ndarray, via: np.ndarray):

@@ -290,3 +290,32 @@ def test_online_bspline_path_loads_no_scipy():
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "[]"
+
+
+def test_symmetric_one_is_the_batched_decision():
+    """plan_bspline decides on floats (_symmetric_one) what the batch engine decides on arrays (_symmetric):
+    both must agree on every move, or one move planned alone and in a batch would take different paths."""
+    from pickplace_cli.methods.bspline import UNIT_K1, _symmetric, _symmetric_one
+    from pickplace_cli.task import Task
+
+    rng = np.random.default_rng(7)
+    vias, k1s = [], []
+    for i in range(3000):
+        scale = 10.0 ** rng.uniform(-4, 2)  # from sub-mm moves to 100 m coordinates
+        p1 = rng.uniform(-1, 1, 3) * scale
+        p5 = p1 + rng.uniform(-1, 1, 3) * 10.0 ** rng.uniform(-6, 0)
+        if i % 2:
+            p5[2] = p1[2]  # equal heights (the symmetric case) for half of them
+        if i % 7 == 0:
+            p5[2] = np.nextafter(p1[2], np.inf)  # one ulp apart
+        try:
+            task = Task(p1, p5, 10.0 ** rng.uniform(-7, 0), rng.uniform(0.05, 0.95))
+        except Exception:  # end points too close: not a move
+            continue
+        vias.append(task.via_points() - task.p_from)
+        k1s.append(rng.choice([rng.uniform(0.01, 0.99), UNIT_K1[0], UNIT_K1[1]]))
+    vias, k1s = np.array(vias), np.array(k1s)
+    batch = _symmetric(k1s, vias)
+    one = np.array([_symmetric_one(k, v) for k, v in zip(k1s, vias)])
+    assert batch.any() and not batch.all()
+    np.testing.assert_array_equal(one, batch)
