@@ -88,13 +88,13 @@ def plan_bspline(
 
     origin = task.p_from
     # the polynomials of p, p′, p″, p‴ on every piece, highest power first, the derivatives padded with
-    # leading zeros (Horner then gives each order bitwise as its own shorter Horner would), stored power-major
-    # as (6 powers, m pieces, 12 = 4 orders × 3 axes) so every Horner step reads one contiguous (N, 12) block
-    stacked = np.zeros((DEGREE + 1, len(coef), 4, 3))
-    stacked[:, :, 0] = coef.transpose(2, 0, 1)
+    # leading zeros (Horner then gives each order bitwise as its own shorter Horner would), stored as
+    # (m pieces, 6 powers, 12 = 4 orders × 3 axes): one gather per sample, then Horner on (N, 12) blocks
+    stacked = np.zeros((len(coef), DEGREE + 1, 4, 3))
+    stacked[:, :, 0] = coef.transpose(0, 2, 1)
     for k in range(1, 4):
-        stacked[k:, :, k] = (coef[..., : DEGREE + 1 - k] * _FALLING[k]).transpose(2, 0, 1)
-    by_power = stacked.reshape(DEGREE + 1, len(coef), 12)
+        stacked[:, k:, k] = (coef[..., : DEGREE + 1 - k] * _FALLING[k]).transpose(0, 2, 1)
+    by_piece = stacked.reshape(len(coef), DEGREE + 1, 12)
     ends12 = ends.reshape(2, 12)
     memo: list = [None]  # one entry (τ, (N, 4, 3)): the pipeline asks orders 0…3 at the same τ in turn
 
@@ -113,11 +113,13 @@ def plan_bspline(
     def _all_orders(tau: np.ndarray) -> np.ndarray:
         """(N, 4, 3): p, p′, p″, p‴ by Horner on the piece polynomials (one search for every order)."""
         i = np.minimum(np.maximum(np.searchsorted(breaks, tau, side="right") - 1, 0), len(coef) - 1)
-        dx = (tau - breaks[i])[:, None]
-        c = by_power[:, i]  # (6, N, 12)
-        acc = c[0]
-        for col in range(1, DEGREE + 1):  # one Horner pass for all four orders
-            acc = acc * dx + c[col]
+        dx = np.repeat((tau - breaks[i])[:, None], 12, axis=1)  # (N, 12): no broadcasting in the loop
+        c = by_piece[i]  # (N, 6, 12)
+        acc = c[:, 0] * dx
+        acc += c[:, 1]
+        for col in range(2, DEGREE + 1):  # one Horner pass for all four orders, in place
+            acc *= dx
+            acc += c[:, col]
         # the end states exactly as de Boor gives them (v = a = 0 without round-off)
         if tau[0] <= 0.0 or tau[-1] >= 1.0 or ((tau <= 0.0) | (tau >= 1.0)).any():
             acc[tau <= 0.0] = ends12[0]
