@@ -270,16 +270,24 @@ class MotionModel:
     gear: np.ndarray = field(init=False)
     eff: np.ndarray = field(init=False)
     rotor: np.ndarray = field(init=False)
+    _ng: np.ndarray = field(init=False, repr=False)
+    _rotor_gear: np.ndarray = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         n = len(self.robot.joint_names)
         if len(self.specs) != n:
             raise ValueError(f"{len(self.specs)} joint specs for {n} joints")
-        drives = [s.drive for s in self.specs]
-        self.has_drives = all(d is not None for d in drives)
-        self.gear = np.array([d.gear_ratio if d else 1.0 for d in drives])
-        self.eff = np.array([d.efficiency if d else 1.0 for d in drives])
-        self.rotor = np.array([d.rotor_inertia if d else 0.0 for d in drives])
+        hit = self.memo.get("drives")  # the memo is shared per profile: the drive arrays are built once
+        if hit is None:
+            drives = [s.drive for s in self.specs]
+            gear = np.array([d.gear_ratio if d else 1.0 for d in drives])
+            eff = np.array([d.efficiency if d else 1.0 for d in drives])
+            rotor = np.array([d.rotor_inertia if d else 0.0 for d in drives])
+            arrays = (gear, eff, rotor, gear * eff, rotor * gear)
+            for a in arrays:
+                a.flags.writeable = False  # shared by every model of the profile
+            hit = self.memo["drives"] = (all(d is not None for d in drives), *arrays)
+        self.has_drives, self.gear, self.eff, self.rotor, self._ng, self._rotor_gear = hit
 
     # --------------------------------------------------------------------------------- evaluation
     def _torques(self, tau: np.ndarray, rates: bool = False, motion: tuple | None = None, singularity: bool = True):
@@ -298,12 +306,12 @@ class MotionModel:
                 dA, dG = robot.torque_rate(q, qd, qdd, qddd, p, v, a, j)
             if singularity and hasattr(robot, "singularity_measure"):
                 sing = robot.singularity_measure(q, p)
-        ng = self.gear * self.eff
-        Am = A / ng + self.rotor * self.gear * qdd
+        ng, rg = self._ng, self._rotor_gear  # N·η and J_rotor·N per joint
+        Am = A / ng + rg * qdd
         Gm = G / ng
         dAm = dGm = None
         if rates:
-            dAm = dA / ng + self.rotor * self.gear * qddd
+            dAm = dA / ng + rg * qddd
             dGm = dG / ng
         return p, v, a, j, q, qd, qdd, qddd, A, G, Am, Gm, dAm, dGm, sing
 
