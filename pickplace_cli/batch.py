@@ -66,10 +66,12 @@ def violation_text(r) -> str:
     ok), as a single plan and every batch row print it: joint, quantity, peak [unit], when (t [s] or the
     duty cycle), limit, excess and utilisation, e.g. ``limit exceeded: q1 motor torque = 2.584 N·m at
     t = 0.0479 s; limit 2 N·m (by 0.584 N·m, 129.2 %)``."""
+    from .limits import percent
+
     when = f" at t = {r.t_peak:.4f} s" if r.t_peak is not None else " over the duty cycle"
     return (
         f"limit exceeded: {r.joint} {r.quantity} = {r.peak:.4g} {r.unit}{when}; "
-        f"limit {r.limit:.4g} {r.unit} (by {abs(r.excess):.4g} {r.unit}, {100 * r.utilisation:.1f} %)"
+        f"limit {r.limit:.4g} {r.unit} (by {abs(r.excess):.4g} {r.unit}, {percent(r.utilisation)} %)"
     )
 
 

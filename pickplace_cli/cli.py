@@ -84,10 +84,15 @@ def _handle_errors(fn: Callable) -> Callable:
     def wrapper(*args, **kwargs):
         from .errors import PickplaceError
 
+        _JSON_ERRORS[0] = False
         try:
             return fn(*args, **kwargs)
         except PickplaceError as exc:
             _err(str(exc))
+            if _JSON_ERRORS[0]:  # `plan --json`: stdout still carries one JSON document, like a batch row's
+                import json
+
+                sys.stdout.write(json.dumps({"exit_code": exc.exit_code, "error": str(exc)}) + "\n")
             raise typer.Exit(exc.exit_code) from None
         except KeyboardInterrupt:
             _err("interrupted; no output file was changed")
@@ -100,6 +105,11 @@ def _handle_errors(fn: Callable) -> Callable:
                 raise typer.Exit(0) from None
 
     return wrapper
+
+
+#: set by `plan --json` (one move or a round trip) once its options are read: an error after that also
+#: goes to stdout as {"exit_code", "error"}, so a script reading the summary always gets a JSON document
+_JSON_ERRORS = [False]
 
 
 def _version_callback(value: bool) -> None:
@@ -120,6 +130,13 @@ def _root(
 def _usage(message: str) -> None:
     """A usage error (exit 2), reported like any other misuse of the options."""
     raise typer.BadParameter(message)
+
+
+def _given(ctx: typer.Context, name: str) -> bool:
+    """True when the option (its Python parameter name) was given on the command line or by environment,
+    not left at its default."""
+    source = ctx.get_parameter_source(name)
+    return source is not None and source.name not in ("DEFAULT", "DEFAULT_MAP")
 
 
 def _parse_point(name: str, text: str, unit: str = "m"):
@@ -168,6 +185,7 @@ def _complete_profile(incomplete: str) -> list[str]:
 @app.command()
 @_handle_errors
 def plan(
+    ctx: typer.Context,
     from_: Optional[str] = typer.Option(None, "--from", help="Pick point X,Y,Z in m (base frame), e.g. -0.1525,0,-0.8."),
     to: Optional[str] = typer.Option(None, "--to", help="Place point X,Y,Z in m (base frame)."),
     profile: Optional[str] = typer.Option(
@@ -292,10 +310,21 @@ def plan(
         _usage("--round-trip is not available with --batch (give each leg as a row)")
     if fail_fast and batch is None:
         _usage("--fail-fast only applies to --batch")
+    if batch is None and _given(ctx, "workers"):
+        _usage("-j/--workers only applies to --batch")
+    # format options that do not apply to the chosen format are mistakes, not silently ignored
+    if fmt != OutputFormat.mcap and (_given(ctx, "mcap_flavor") or compression != Compression.none):
+        what = "--mcap-flavor" if _given(ctx, "mcap_flavor") else f"--compression {compression.value}"
+        _usage(f"{what} only applies to --format mcap (the format is {fmt.value})")
+    if fmt != OutputFormat.csv and csv_dialect != CsvDialectName.default:
+        _usage(f"--csv-dialect {csv_dialect.value} only applies to --format csv (the format is {fmt.value})")
+    if _given(ctx, "max_shift") and not adjust_points:
+        _usage("--max-shift only applies with --adjust-points")
     if json_summary and output == "-":
         _usage("-o -: with --json stdout carries the summary; give -o a file for the trajectory")
     if output is None and not json_summary:
         output = "-"
+    _JSON_ERRORS[0] = json_summary and batch is None  # a batch prints its own line per row
     _check_output_paths(output, report)
     prof = load_profile(profile)
     params: dict = _parse_params(param or [])
@@ -634,10 +663,12 @@ def _print_limit_table(report) -> None:
     from rich.markup import escape
     from rich.table import Table
 
+    from .limits import percent
+
     table = Table(title=None, box=None, pad_edge=False, show_header=True, header_style="bold")
     for col, just in (("joint", "left"), ("quantity", "left"), ("peak", "right"), ("limit", "right"),
                       ("use %", "right"), ("t peak [s]", "right"), ("", "left")):
-        table.add_column(col, justify=just)  # type: ignore[arg-type]
+        table.add_column(escape(col), justify=just)  # type: ignore[arg-type]  ("[s]" is not rich markup)
     for r in report.rows:
         mark = "ok" if r.ok else "[bold red]EXCEEDED[/]"
         quantity = r.quantity
@@ -645,10 +676,12 @@ def _print_limit_table(report) -> None:
             quantity += " min" if r.bound == "lower" else " max"
         table.add_row(
             r.joint, escape(f"{quantity} [{r.unit}]"), _fmt(r.peak),
-            ("≥ " if r.bound == "lower" else "≤ ") + _fmt(r.limit), f"{100 * r.utilisation:.1f}",
+            ("≥ " if r.bound == "lower" else "≤ ") + _fmt(r.limit), percent(r.utilisation),
             "" if r.t_peak is None else f"{r.t_peak:.4f}", mark,
         )
-    Console(stderr=True, highlight=False, soft_wrap=True).print(table)
+    # a terminal wraps at its width; a pipe or log file gets whole rows (rich would assume 80 columns)
+    width = None if sys.stderr.isatty() else 200
+    Console(stderr=True, highlight=False, soft_wrap=True, width=width).print(table)
 
 
 def _print_verdict(report, quiet: bool, with_cycle: bool = True) -> None:

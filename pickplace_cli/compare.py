@@ -468,7 +468,7 @@ def paper_duration(method, task, profile) -> tuple[float, str] | None:
 
 def compare_row(task, profile, method, params: Mapping[str, Any] | None = None, time: str | float = "auto") -> CompareRow:
     """One method on ``task``/``profile`` → :class:`CompareRow` (errors of that method become the row's error)."""
-    from .limits import check_grid
+    from .limits import check_grid, percent
     from .planner import PlanOptions, motion_model, plan
     from .vibration import residual_vibration
 
@@ -549,7 +549,7 @@ def compare_row(task, profile, method, params: Mapping[str, Any] | None = None, 
         motor_torque_use=util["motor torque"],
         torque_rate_use=util["motor torque rate"],
         limits_ok=result.report.ok,
-        worst_limit=None if worst is None else f"{worst.joint} {worst.quantity} {100 * worst.utilisation:.1f} %",
+        worst_limit=None if worst is None else f"{worst.joint} {worst.quantity} {percent(worst.utilisation)} %",
         geometry=path_geometry(path, task, grid, samples[0]),
         continuity=continuity(path, rest_ends=rest, samples=samples, grid=grid),
         vibration=vib,

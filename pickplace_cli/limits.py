@@ -141,6 +141,13 @@ def check_grid_order(tau: np.ndarray, breakpoints: np.ndarray) -> tuple[np.ndarr
 DTAU = 1e-5
 
 
+def percent(utilisation: float) -> str:
+    """A utilisation as a percentage for people: one decimal up to 9999.9 %, then 3 significant digits
+    (2.92e+07), so a wildly infeasible move does not print 29178779.3."""
+    p = 100.0 * utilisation
+    return f"{p:.1f}" if abs(p) < 9999.95 else f"{p:.3g}"
+
+
 @dataclass(slots=True)
 class LimitRow:
     """One checked limit: the peak of a quantity over the move, its limit and where the peak is.

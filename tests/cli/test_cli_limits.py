@@ -161,3 +161,40 @@ def test_tiny_rate_keeps_both_ends():
     r = run("plan", *ADEPT, "--rate", "1e-9", "-q", "--time", "0.25")
     rows = r.stdout.strip().splitlines()[1:]
     assert [float(x.split(",")[0]) for x in rows] == [0.0, 0.25]
+
+
+def test_wildly_infeasible_move_prints_readable_percentages_and_whole_rows():
+    """T = 2 ms: utilisations of 10⁵–10⁷ % print with 3 significant digits, and the limit table is not
+    wrapped at 80 columns when stderr is not a terminal (a log file gets one row per line)."""
+    r = run("plan", *ADEPT, "--time", "0.002")
+    assert r.exit_code == 3
+    rows = [line for line in r.stderr.splitlines() if line.startswith("q1     motor torque rate")]
+    assert len(rows) == 1 and "[N·m/s]" in rows[0] and "EXCEEDED" in rows[0]  # one line, unit included
+    assert "2.92e+07" in rows[0] and "29178779" not in r.stderr
+    assert "t peak [s]" in r.stderr  # the unit of the header is text, not rich markup ("[s]" = strike)
+    assert "limit exceeded: q1 motor torque rate" in r.stderr and "2.92e+07 %" in r.stderr
+
+
+def test_percent_format():
+    from pickplace_cli.limits import percent
+
+    assert percent(0.5) == "50.0" and percent(99.9994) == "9999.9" and percent(99.9999) == "1e+04" and percent(100.0) == "1e+04"
+    assert percent(291787.793) == "2.92e+07" and percent(-0.25) == "-25.0" and percent(float("inf")) == "inf"
+
+
+def test_json_summary_on_error_is_still_one_json_document(tmp_path):
+    """`plan --json` whose move fails (no feasible --time fit, an unreachable point) prints
+    {"exit_code", "error"} on stdout, as a batch row does, besides the one-line error on stderr."""
+    doc = yaml.safe_load(resolve_profile_path("delta-su2018").read_text())
+    doc["robot"]["payload"] = 300.0  # the holding torque alone exceeds the rated torque: no duration fits
+    heavy = tmp_path / "heavy.yaml"
+    heavy.write_text(yaml.safe_dump(doc))
+    r = run("plan", *ADEPT, "--json", "-t", "fit", "-p", str(heavy))
+    out = json.loads(r.stdout)
+    assert r.exit_code == 3 and out["exit_code"] == 3 and "time = fit" in out["error"]
+    assert out["error"] in r.stderr
+    r = run("plan", "--from", "0,0,-0.8", "--to", "2,0,-0.8", "--json")
+    out = json.loads(r.stdout)
+    assert r.exit_code == 4 and out == {"exit_code": 4, "error": out["error"]} and "outside the workspace" in out["error"]
+    r = run("plan", "--from", "0,0,-0.8", "--to", "2,0,-0.8")  # without --json stdout stays empty
+    assert r.exit_code == 4 and r.stdout == ""

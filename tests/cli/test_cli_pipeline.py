@@ -174,11 +174,30 @@ def test_usage_errors_exit_2(args):
     assert r.exit_code == 2
 
 
-def test_format_options_that_do_not_apply_are_refused():
-    r = run("plan", *ADEPT, "--compression", "zstd")
-    assert r.exit_code == 1 and "only MCAP output is compressed" in r.stderr
-    r = run("plan", *ADEPT, "--format", "json", "--csv-dialect", "tsv")
-    assert r.exit_code == 1 and "only applies to --format csv" in r.stderr
+@pytest.mark.parametrize(
+    "args, says",
+    [
+        (["--compression", "zstd"], "--compression zstd only applies to --format mcap"),
+        (["--mcap-flavor", "foxglove"], "--mcap-flavor only applies to --format mcap"),
+        (["--mcap-flavor", "ros2", "-f", "json"], "--mcap-flavor only applies to --format mcap"),
+        (["--format", "json", "--csv-dialect", "tsv"], "--csv-dialect tsv only applies to --format csv"),
+        (["-j", "2"], "-j/--workers only applies to --batch"),
+        (["--max-shift", "0.02"], "--max-shift only applies with --adjust-points"),
+    ],
+)
+def test_options_that_do_not_apply_are_usage_errors(args, says, tmp_path):
+    """An option that has no effect in this combination is a mistake (exit 2, one message), never ignored;
+    nothing is written."""
+    out = tmp_path / "x.out"
+    r = run("plan", *ADEPT, *args, "-o", str(out))
+    assert r.exit_code == 2 and says in r.stderr and not out.exists()
+
+
+def test_format_options_that_apply_are_accepted(tmp_path):
+    for args in (["-f", "mcap", "--compression", "zstd", "--mcap-flavor", "foxglove"], ["--csv-dialect", "tsv"],
+                 ["--compression", "none"], ["--csv-dialect", "default", "-f", "mcap"]):
+        r = run("plan", *ADEPT, *args, "-q", "-o", str(tmp_path / "x.out"))
+        assert r.exit_code == 0, (args, r.stderr)
 
 
 def test_shell_completion_script_and_profile_names():
