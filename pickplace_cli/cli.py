@@ -57,6 +57,10 @@ class McapFlavor(str, Enum):
     foxglove = "foxglove"
 
 
+#: --max-shift default [m]
+MAX_SHIFT = 0.01
+
+
 class Compression(str, Enum):
     none = "none"
     zstd = "zstd"
@@ -132,13 +136,6 @@ def _usage(message: str) -> None:
     raise typer.BadParameter(message)
 
 
-def _given(ctx: typer.Context, name: str) -> bool:
-    """True when the option (its Python parameter name) was given on the command line or by environment,
-    not left at its default."""
-    source = ctx.get_parameter_source(name)
-    return source is not None and source.name not in ("DEFAULT", "DEFAULT_MAP")
-
-
 def _parse_point(name: str, text: str, unit: str = "m"):
     from .errors import TaskError
 
@@ -185,7 +182,6 @@ def _complete_profile(incomplete: str) -> list[str]:
 @app.command()
 @_handle_errors
 def plan(
-    ctx: typer.Context,
     from_: Optional[str] = typer.Option(None, "--from", help="Pick point X,Y,Z in m (base frame), e.g. -0.1525,0,-0.8."),
     to: Optional[str] = typer.Option(None, "--to", help="Place point X,Y,Z in m (base frame)."),
     profile: Optional[str] = typer.Option(
@@ -275,7 +271,7 @@ def plan(
         "inside point by Su 2018's potential field (Eq. 25), and report the distance. Never done silently."
     ),
     max_shift: float = typer.Option(
-        0.01, "--max-shift", help="With --adjust-points: the largest allowed move of a point in m (farther: exit 4)."
+        MAX_SHIFT, "--max-shift", help="With --adjust-points: the largest allowed move of a point in m (farther: exit 4)."
     ),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="Nothing on stderr but errors and exceeded limits."),
 ) -> None:
@@ -290,6 +286,7 @@ def plan(
     from .planner import PlanOptions
     from .profile import load_profile
 
+    _JSON_ERRORS[0] = json_summary and batch is None  # a batch prints its own line per row
     _finite("height", height)
     _finite("rate", rate)
     if rate is not None and not (0 < rate <= 1e6):
@@ -308,23 +305,28 @@ def plan(
         _usage(f"missing --{'to' if from_ is not None else 'from'}: give both --from X,Y,Z and --to X,Y,Z in m (or --batch FILE)")
     if batch is not None and round_trip:
         _usage("--round-trip is not available with --batch (give each leg as a row)")
-    if fail_fast and batch is None:
-        _usage("--fail-fast only applies to --batch")
-    if batch is None and _given(ctx, "workers"):
-        _usage("-j/--workers only applies to --batch")
-    # format options that do not apply to the chosen format are mistakes, not silently ignored
-    if fmt != OutputFormat.mcap and (_given(ctx, "mcap_flavor") or compression != Compression.none):
-        what = "--mcap-flavor" if _given(ctx, "mcap_flavor") else f"--compression {compression.value}"
+    # an option set to anything but its default where it has no effect is a mistake: refused, not ignored
+    if batch is None and (fail_fast or workers != 0):
+        _usage(f"{'--fail-fast' if fail_fast else '-j/--workers'} only applies to --batch")
+    if batch is not None and (v_from is not None or v_to is not None):
+        _usage("--v-from/--v-to: with --batch give the velocities of each row as columns v_from_x … v_to_z")
+    if fmt != OutputFormat.mcap and (mcap_flavor != McapFlavor.ros2 or compression != Compression.none):
+        what = f"--mcap-flavor {mcap_flavor.value}" if mcap_flavor != McapFlavor.ros2 else f"--compression {compression.value}"
         _usage(f"{what} only applies to --format mcap (the format is {fmt.value})")
     if fmt != OutputFormat.csv and csv_dialect != CsvDialectName.default:
         _usage(f"--csv-dialect {csv_dialect.value} only applies to --format csv (the format is {fmt.value})")
-    if _given(ctx, "max_shift") and not adjust_points:
+    if json_summary and output is None and (fmt != OutputFormat.csv or csv_dialect != CsvDialectName.default):
+        _usage("--format/--csv-dialect: with --json and no -o FILE no trajectory is written (stdout carries the summary)")
+    if adjust_points and not fit_ws:
+        _usage("--adjust-points only applies with --fit-workspace")
+    if max_shift != MAX_SHIFT and not adjust_points:
         _usage("--max-shift only applies with --adjust-points")
+    if json_summary and report == "-":
+        _usage("--report -: with --json stdout carries the summary; give --report a file")
     if json_summary and output == "-":
         _usage("-o -: with --json stdout carries the summary; give -o a file for the trajectory")
     if output is None and not json_summary:
         output = "-"
-    _JSON_ERRORS[0] = json_summary and batch is None  # a batch prints its own line per row
     _check_output_paths(output, report)
     prof = load_profile(profile)
     params: dict = _parse_params(param or [])
@@ -375,8 +377,6 @@ def plan(
         for line in workspace_fit.changes():
             sys.stderr.write(f"pickplace: {line}\n")
         task = workspace_fit.task
-    elif adjust_points:
-        _usage("--adjust-points only applies with --fit-workspace")
     legs = [_run_plan(task, prof, options)]
     if round_trip:
         legs.append(_run_plan(Task(task.p_to, task.p_from, task.height, task.eta), prof, options))
@@ -397,6 +397,16 @@ def plan(
         )
     if report is not None:
         _write_report(legs, report)
+    # the trajectory before the JSON summary: a failed write is then the one JSON document on stdout
+    if output is not None and (code == 0 or report_only):
+        if round_trip:
+            from .timeline import round_trip as make_round_trip
+
+            rate_hz = rate if rate is not None else prof.planning.rate
+            samples = make_round_trip(legs[0], legs[1], dwell, rate_hz)
+        else:
+            samples = legs[0]
+        writer(samples, output)
     if json_summary:
         doc = _json_summary(legs, cycle, code, exit_code=0 if report_only else code)
         if workspace_fit is not None:
@@ -408,15 +418,6 @@ def plan(
                 "pickplace: trajectory not written (a limit is exceeded); --report-only writes it anyway\n"
             )
         raise typer.Exit(code)
-    if output is not None:
-        if round_trip:
-            from .timeline import round_trip as make_round_trip
-
-            rate_hz = rate if rate is not None else prof.planning.rate
-            samples = make_round_trip(legs[0], legs[1], dwell, rate_hz)
-        else:
-            samples = legs[0]
-        writer(samples, output)
 
 
 def _parse_params(items: list[str]) -> dict:

@@ -40,9 +40,14 @@ def atomic_output(path: str | Path | None, binary: bool = False) -> Iterator[IO]
             fh = open(target, "wb" if binary else "w", newline="" if not binary else None, encoding=None if binary else "utf-8")
         except OSError as exc:
             raise ExportError(f"output {path}: cannot open for writing: {exc.strerror}") from None
-        with fh:
-            yield fh
-            fh.flush()
+        try:
+            with fh:
+                yield fh
+                fh.flush()
+        except BrokenPipeError:  # the reader of a pipe went away: the CLI's own handling (exit 0)
+            raise
+        except OSError as exc:  # e.g. /dev/full: no space left
+            raise ExportError(f"output {path}: write failed: {exc.strerror or exc}") from None
         return
     directory = target.parent
     try:
@@ -56,11 +61,13 @@ def atomic_output(path: str | Path | None, binary: bool = False) -> Iterator[IO]
             os.fsync(fh.fileno())
         os.chmod(tmp, _mode_for(target))
         os.replace(tmp, target)
-    except BaseException:
+    except BaseException as exc:
         try:
             os.unlink(tmp)
         except FileNotFoundError:
             pass
+        if isinstance(exc, OSError) and not isinstance(exc, BrokenPipeError):  # disk full, quota, I/O error
+            raise ExportError(f"output {path}: write failed, nothing changed: {exc.strerror or exc}") from None
         raise
 
 
@@ -103,10 +110,15 @@ def _mode_for(target: Path) -> int:
 
 def check_writable(path: str | Path | None) -> None:
     """Fail early (before anything is computed or written) when ``path`` cannot be an output file: empty,
-    a directory, or in a directory that does not exist (the checks of :func:`atomic_output`)."""
+    a directory, in a directory that does not exist or cannot be written (read-only file system, no
+    permission), or a device/FIFO that cannot be written."""
     if path is None or str(path) == "-":
         return
-    _output_target(path)
+    target, in_place = _output_target(path)
+    # the temp file is created in the directory (the rename needs it writable); in place, the file itself
+    where = target if in_place else (target.parent if str(target.parent) else Path("."))
+    if not os.access(where, os.W_OK):
+        raise ExportError(f"output {path}: {'not writable' if in_place else f'directory {where} is not writable'}")
 
 
 def plan_columns(plan) -> tuple[list[str], np.ndarray]:

@@ -78,22 +78,33 @@ def _local(x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return rt[:3], rt[3:], x[:, 2]
 
 
-def _gram_extremes(d: np.ndarray, det_a: np.ndarray, l2: float) -> tuple[np.ndarray, np.ndarray]:
+def _gram_extremes(d: np.ndarray, det_a: np.ndarray, l2: float | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Smallest and largest eigenvalue (N,) of the Gram matrix G = AAᵀ whose rows are the forearm vectors
     d[:, i] (``d`` (3 components, 3 arms, N); ``det_a`` = det A (N,)), in closed form (trigonometric solution
-    of the characteristic cubic of a symmetric 3×3 matrix; Smith 1961).
+    of the characteristic cubic of a symmetric 3×3 matrix, B = G − mI with m = tr G / 3; Smith 1961).
 
-    Every forearm has length l, so the diagonal of G is l² (``l2``) and B = G − l²I has a zero diagonal:
-    the cubic then needs only the three dot products g_ij = d_i·d_j of different arms. The largest
-    eigenvalue comes from the cubic, the smallest from λ_min λ_mid = det G / λ_max and
-    λ_min + λ_mid = tr G − λ_max in the cancellation-free form."""
+    ``l2``: when every forearm has length l (q and p from the inverse kinematics), the diagonal of G is
+    l² and B has a zero diagonal, so the cubic needs only the dot products g_ij = d_i·d_j of different
+    arms. Without it (any q, p a caller passes) the diagonal is computed. The largest eigenvalue comes from
+    the cubic, the smallest from λ_min λ_mid = det G / λ_max and λ_min + λ_mid = tr G − λ_max in the
+    cancellation-free form."""
     g = (d[:, _GRAM_I] * d[:, _GRAM_J]).sum(axis=0)  # (3, N): g01, g02, g12
-    pp = np.sqrt(np.maximum((g * g).sum(axis=0) / 3.0, 1e-300))  # √(tr B² / 6)
-    half_det = g.prod(axis=0) / (pp * pp * pp)  # det(B/pp) / 2 = g01 g02 g12 / pp³
+    if l2 is not None:
+        m = l2
+        pp = np.sqrt(np.maximum((g * g).sum(axis=0) / 3.0, 1e-300))  # √(tr B² / 6)
+        half_det = g.prod(axis=0) / (pp * pp * pp)  # det(B/pp) / 2 = g01 g02 g12 / pp³
+    else:
+        diag = (d * d).sum(axis=0)  # (3, N): g00, g11, g22
+        m = diag.sum(axis=0) / 3.0
+        a0, a1, a2 = diag - m
+        g01, g02, g12 = g
+        pp = np.sqrt(np.maximum((a0 * a0 + a1 * a1 + a2 * a2 + 2.0 * (g * g).sum(axis=0)) / 6.0, 1e-300))
+        det_b = a0 * (a1 * a2 - g12 * g12) - g01 * (g01 * a2 - g12 * g02) + g02 * (g01 * g12 - a1 * g02)
+        half_det = det_b / (2.0 * pp * pp * pp)
     phi = np.arccos(np.minimum(np.maximum(half_det, -1.0), 1.0)) / 3.0
-    hi = l2 + 2.0 * pp * np.cos(phi)
+    hi = m + 2.0 * pp * np.cos(phi)
     prod = det_a * det_a / hi  # det G = (det A)²
-    rest = 3.0 * l2 - hi
+    rest = 3.0 * m - hi
     lo = 2.0 * prod / (rest + np.sqrt(np.maximum(rest * rest - 4.0 * prod, 0.0)))
     return lo, hi
 
@@ -455,11 +466,13 @@ class DeltaRobot:
         """
         q = _samples(q, "q")
         p = _samples(p, "p")
-        return self._singularity(self._arms(q, p))
+        return self._singularity(self._arms(q, p), from_ik=False)
 
-    def _singularity(self, arms: _Arms) -> np.ndarray:
+    def _singularity(self, arms: _Arms, from_ik: bool = True) -> np.ndarray:
+        """The measure of :meth:`singularity_measure`; ``from_ik``: the arms come from the inverse kinematics
+        (every forearm of length l, which the Gram extremes then use); else the caller's q, p."""
         serial = np.abs(arms.D).min(axis=0) / (self.l * self.L)
-        lo, hi = _gram_extremes(arms.base_frame(), self._reciprocal(arms)[1], self.l * self.l)
+        lo, hi = _gram_extremes(arms.base_frame(), self._reciprocal(arms)[1], self.l * self.l if from_ik else None)
         parallel = np.sqrt(np.maximum(lo, 0.0) / hi)
         return np.minimum(serial, parallel)
 

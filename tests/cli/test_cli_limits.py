@@ -198,3 +198,18 @@ def test_json_summary_on_error_is_still_one_json_document(tmp_path):
     assert r.exit_code == 4 and out == {"exit_code": 4, "error": out["error"]} and "outside the workspace" in out["error"]
     r = run("plan", "--from", "0,0,-0.8", "--to", "2,0,-0.8")  # without --json stdout stays empty
     assert r.exit_code == 4 and r.stdout == ""
+
+
+def test_json_summary_gets_exactly_one_document_when_an_option_or_the_write_fails(tmp_path):
+    """An invalid value (exit 1) before anything is planned, and a trajectory write that fails after the
+    plan succeeded (/dev/full: no space), both leave exactly one JSON document on stdout: the error."""
+    r = run("plan", *ADEPT, "--json", "--eta", "1.5")
+    assert r.exit_code == 1 and json.loads(r.stdout)["exit_code"] == 1 and "eta = 1.5" in json.loads(r.stdout)["error"]
+    import os
+
+    if os.path.exists("/dev/full"):
+        r = run("plan", *ADEPT, "--json", "-q", "-o", "/dev/full")
+        lines = r.stdout.splitlines()
+        assert r.exit_code == 1 and len(lines) == 1
+        doc = json.loads(lines[0])
+        assert doc["exit_code"] == 1 and "write failed" in doc["error"] and "Traceback" not in r.stderr

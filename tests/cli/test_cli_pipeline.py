@@ -178,24 +178,40 @@ def test_usage_errors_exit_2(args):
     "args, says",
     [
         (["--compression", "zstd"], "--compression zstd only applies to --format mcap"),
-        (["--mcap-flavor", "foxglove"], "--mcap-flavor only applies to --format mcap"),
-        (["--mcap-flavor", "ros2", "-f", "json"], "--mcap-flavor only applies to --format mcap"),
+        (["--mcap-flavor", "foxglove"], "--mcap-flavor foxglove only applies to --format mcap"),
+        (["--mcap-flavor", "foxglove", "-f", "json"], "--mcap-flavor foxglove only applies to --format mcap"),
         (["--format", "json", "--csv-dialect", "tsv"], "--csv-dialect tsv only applies to --format csv"),
         (["-j", "2"], "-j/--workers only applies to --batch"),
         (["--max-shift", "0.02"], "--max-shift only applies with --adjust-points"),
+        (["--adjust-points"], "--adjust-points only applies with --fit-workspace"),
+        (["--json", "-f", "mcap"], "with --json and no -o FILE no trajectory is written"),
+        (["--json", "--report", "-"], "--report -: with --json stdout carries the summary"),
     ],
 )
 def test_options_that_do_not_apply_are_usage_errors(args, says, tmp_path):
     """An option that has no effect in this combination is a mistake (exit 2, one message), never ignored;
     nothing is written."""
     out = tmp_path / "x.out"
-    r = run("plan", *ADEPT, *args, "-o", str(out))
-    assert r.exit_code == 2 and says in r.stderr and not out.exists()
+    to_file = [] if "no -o FILE" in says else ["-o", str(out)]
+    r = run("plan", *ADEPT, *args, *to_file)
+    assert r.exit_code == 2 and says in r.stderr and not out.exists() and r.stdout == ""
 
 
-def test_format_options_that_apply_are_accepted(tmp_path):
+def test_batch_options_that_do_not_apply_are_usage_errors(tmp_path):
+    moves = tmp_path / "m.csv"
+    moves.write_text("from_x,from_y,from_z,to_x,to_y,to_z\n-0.1525,0,-0.8,0.1525,0,-0.8\n")
+    for args, says in ((["--v-from", "0.3,0,0"], "--v-from/--v-to: with --batch give the velocities"),
+                       (["--adjust-points"], "--adjust-points only applies with --fit-workspace")):
+        r = run("plan", "--batch", str(moves), "--json", *args)
+        assert r.exit_code == 2 and says in r.stderr and r.stdout == "", args
+
+
+def test_format_options_that_apply_or_keep_their_default_are_accepted(tmp_path):
+    """The rule: a non-default value where the option has no effect is refused; the default value itself
+    (e.g. written out by a script) is accepted."""
     for args in (["-f", "mcap", "--compression", "zstd", "--mcap-flavor", "foxglove"], ["--csv-dialect", "tsv"],
-                 ["--compression", "none"], ["--csv-dialect", "default", "-f", "mcap"]):
+                 ["--compression", "none"], ["--csv-dialect", "default", "-f", "mcap"],
+                 ["--mcap-flavor", "ros2"], ["-j", "0"], ["--max-shift", "0.01"]):
         r = run("plan", *ADEPT, *args, "-q", "-o", str(tmp_path / "x.out"))
         assert r.exit_code == 0, (args, r.stderr)
 

@@ -365,3 +365,17 @@ def test_motion_and_dynamics_is_the_separate_methods_in_one_pass():
     no_rates = DELTA.motion_and_dynamics(p, v, a, j, rates=False)
     assert no_rates[6] is None and no_rates[7] is None
     np.testing.assert_array_equal(no_rates[4], one[4])
+
+
+def test_singularity_measure_of_any_q_p_matches_svd():
+    """singularity_measure(q, p) is public: for a (q, p) pair that does not belong together the forearm
+    vectors are not of length l. The measure must still be min(|B_ii|/(lL), σ_min/σ_max of A), as for a
+    matching pair; the planner's inverse-kinematics path may use ‖d_i‖ = l, this one must not."""
+    rng = np.random.default_rng(11)
+    p = np.column_stack([rng.uniform(-0.15, 0.15, 300), rng.uniform(-0.15, 0.15, 300), rng.uniform(-0.9, -0.7, 300)])
+    q = DELTA.inverse_kinematics(p) + rng.normal(0.0, 0.2, (300, 3))
+    A, B = DELTA.constraint_matrices(q, p)
+    assert np.abs(np.linalg.norm(A, axis=2) - DELTA.l).max() > 0.05  # really not of length l
+    sv = np.linalg.svd(A, compute_uv=False)
+    ref = np.minimum(np.abs(B).min(axis=1) / (DELTA.l * DELTA.L), sv[:, -1] / sv[:, 0])
+    np.testing.assert_allclose(DELTA.singularity_measure(q, p), ref, rtol=1e-9, atol=1e-12)
