@@ -20,6 +20,10 @@ default Delta profile ``delta-su2018``, output at 1 kHz):
   Ruckig (jerk-limited state-to-state segments chained through the lift-off and set-down points), with
   our cycle time and compute time as ratios to theirs.
 
+Every section header also prints the machine's speed at that moment, the median time of
+``sum(range(1000))`` in µs (about 10–11 µs on this VM when it is quiet): the VM's speed drifts by up to
+1.6× within minutes, and a section measured in a slow phase shows it there.
+
 Norm limits and per-axis tools. The profile limits the *norm* |v| ≤ [v], |a| ≤ [a]; TOPP-RA and Ruckig
 take per-axis bounds. For TOPP-RA the path (which lies in the vertical plane of the move) is given as its
 projections on K = 36 directions of that plane, each bounded by [v]·cos(π/2K) and [a]·cos(π/2K): the
@@ -84,8 +88,22 @@ def note(name: str, text: str) -> None:
     print(f"  {name:<58} {text}")
 
 
+#: speed of this machine at each section: median time of sum(range(1000)) [µs] (the VM's speed drifts by up
+#: to 1.6× within minutes; a section run in a slow phase shows a larger number here, not a regression)
+CALIBRATION: dict = {}
+
+
+def calibration_us() -> float:
+    import statistics
+    import timeit as _timeit
+
+    return statistics.median(_timeit.repeat("sum(range(1000))", number=200, repeat=15)) / 200 * 1e6
+
+
 def section(title: str) -> None:
-    print(f"\n{title}  [load average {os.getloadavg()[0]:.2f}]")
+    c = calibration_us()
+    CALIBRATION[title.split(",")[0]] = c
+    print(f"\n{title}  [load average {os.getloadavg()[0]:.2f}; machine speed: sum(range(1000)) {c:.1f} µs]")
 
 
 def machine() -> dict:
@@ -468,6 +486,7 @@ def main() -> None:
     results["toppra"] = bench_toppra(2 if q else 5)
     results["ruckig"] = bench_ruckig(2 if q else 5)
     results["load_average_end"] = os.getloadavg()
+    results["calibration_sum_range_1000_us"] = CALIBRATION
     results["wall_s"] = time.time() - started
     args.output.parent.mkdir(parents=True, exist_ok=True)
     args.output.write_text(json.dumps(results, indent=2, default=float) + "\n")
