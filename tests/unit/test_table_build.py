@@ -141,13 +141,17 @@ GRID = ["--lambda-min", "1", "--lambda-max", "12", "--lambda-step", "0.5"]  # 23
 
 
 #: 391 rows, ~10 s with 2 workers: a build that is interrupted must still be running when its first rows
-#: are checkpointed (the 23-row GRID can finish within the polling interval once the build is fast)
+#: are checkpointed, with seconds to spare however fast the machine or the build is
 LONG_GRID = ["--lambda-min", "1", "--lambda-max", "40", "--lambda-step", "0.1"]
 
 
 def _start_build(out: Path, *extra: str, grid: list[str] = GRID) -> subprocess.Popen:
     cmd = [sys.executable, "-m", "pickplace_cli", "build-table", *grid, "-q", "-o", str(out), *extra]
-    return subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    # the build starts with SIGINT at its default, as a command typed at a terminal does: a test run
+    # started in the background by a non-interactive shell (`cmd &`) inherits SIGINT *ignored*, and Python
+    # then (rightly) installs no KeyboardInterrupt handler, so Ctrl-C would not reach the build at all
+    return subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
 
 
 def _wait_for_rows(proc: subprocess.Popen, ckpt: Path, rows: int, timeout: float = 60.0) -> int:
