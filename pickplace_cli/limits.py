@@ -50,7 +50,8 @@ SPAN_SAMPLES = 8
 
 def check_grid(tau: np.ndarray, breakpoints: np.ndarray) -> np.ndarray:
     """The τ grid the limit check samples: output samples ∪ uniform grid ∪ breakpoints ∪ points per span."""
-    return check_grid_index(tau, breakpoints)[0]
+    grid, order = check_grid_order(tau, breakpoints)
+    return grid[order]
 
 
 def span_nodes(breakpoints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -103,14 +104,6 @@ def _extra_points(breakpoints: np.ndarray, uniform: bool) -> np.ndarray:
 
 
 _EXTRA: dict = {}
-
-
-def check_grid_index(tau: np.ndarray, breakpoints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`check_grid` (sorted) and the index of every output sample ``tau`` (sorted) in it."""
-    grid, order = check_grid_order(tau, breakpoints)
-    index = np.empty(len(grid), int)
-    index[order] = np.arange(len(grid))
-    return grid[order], index[: len(tau)]
 
 
 def check_grid_order(tau: np.ndarray, breakpoints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
