@@ -218,7 +218,8 @@ def check_samples(s: Samples, profile: Profile, smoothing: float = 0.0, source: 
     def evaluate(tau: np.ndarray, order: int) -> np.ndarray:
         return ev(np.clip(tau, 0.0, 1.0) * T, order) * T**order
 
-    cpath = CartesianPath(evaluate, "checked", {"source": source}, (0.0, 0.0, 0.0), t / T)
+    # the quintic spline is C⁴ across the samples (its knots): nothing jumps, peaks are fitted across them
+    cpath = CartesianPath(evaluate, "checked", {"source": source}, (0.0, 0.0, 0.0), t / T, jumps=())
     margin = getattr(profile.robot, "singularity_margin", None)
     specs = profile.robot.joint_specs()
     model = MotionModel(cpath, robot, specs, margin, profile.workcell.box)
@@ -228,7 +229,7 @@ def check_samples(s: Samples, profile: Profile, smoothing: float = 0.0, source: 
         f"{s.where(source)}: {len(t)} samples over {T:.6g} s{rest}; derivatives from {how}; joint positions "
         "checked as given in the file",
     )
-    grid = check_grid(tau, tau)
+    grid = check_grid(tau, tau, jumps=())
     report = check_limits(model, T, parts=model.parts(grid), dwell=profile.planning.dwell, notes=notes)
     # the position ranges on the file's own values (the model's inverse kinematics wraps revolute joints)
     given = {}

@@ -505,9 +505,9 @@ def compare_row(task, profile, method, params: Mapping[str, Any] | None = None, 
     norm = (vn / b, an / b, jn / b) if b > 0 else (None, None, None)
     if b == 0:
         notes.append("b = 0 (vertical move): normalised peaks (b = 1) are undefined")
-    # joint torque on the limit check's grid (129 uniform points, the knots and 8 Gauss–Legendre nodes per span)
+    # joint torque on the limit check's grid (129 uniform points, knots, Kronrod nodes per span, jump sides)
     model = motion_model(path, profile)
-    tq_grid = check_grid(np.array([0.0, 1.0]), path.breakpoints)
+    tq_grid = check_grid(np.array([0.0, 1.0]), path.breakpoints, path.jumps)
     parts = model.parts(tq_grid, derivatives=False)
     torque = parts.A / T**2 + parts.G
     unit = "N" if all(u == "m" for u in model.robot.joint_units) else "N·m"

@@ -154,6 +154,7 @@ def refine_max(
     *,
     max_candidates: int = 8,
     iterations: int = 26,
+    segments: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Refine the maxima of each column of ``fun`` beyond the samples ``x`` (N,).
 
@@ -162,7 +163,9 @@ def refine_max(
     (bracket shrinks by 0.618 per iteration: 26 iterations leave 3.8e-6 of it, i.e. ~1e-8 in x for a
     bracket of two 1e-3 sample steps; the value error of a smooth maximum is quadratic in that, ~1e-14
     relative for a peak of width ~0.1). Returns
-    (peak (n_cols,), x_peak (n_cols,)). Never lower than the sampled maximum.
+    (peak (n_cols,), x_peak (n_cols,)). Never lower than the sampled maximum. ``segments`` (N,): a label
+    per sample of the piece it lies on (:func:`pickplace_cli.limits.segment_ids`); a bracket never reaches
+    into a neighbour of another label, so a search never straddles a jump of ``fun``.
     """
     x = np.asarray(x, dtype=float)
     if y is None:
@@ -187,8 +190,12 @@ def refine_max(
     for c in range(ncol):
         idx = np.flatnonzero(is_peak[:, c])
         idx = idx[np.argsort(y[idx, c])[::-1][:max_candidates]]
-        lo_list.append(x[np.maximum(idx - 1, 0)])
-        hi_list.append(x[np.minimum(idx + 1, n - 1)])
+        lo, hi = np.maximum(idx - 1, 0), np.minimum(idx + 1, n - 1)
+        if segments is not None:
+            lo = np.where(segments[lo] == segments[idx], lo, idx)
+            hi = np.where(segments[hi] == segments[idx], hi, idx)
+        lo_list.append(x[lo])
+        hi_list.append(x[hi])
         col_list.append(np.full(idx.size, c))
     a = np.concatenate(lo_list)
     b = np.concatenate(hi_list)

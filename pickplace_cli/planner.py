@@ -153,7 +153,7 @@ def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions()) -> 
     t = CartesianTrajectory(path, first.seconds).sample_times(rate)
     tau = t / first.seconds
     # the output samples first, then the check's extra points: the outputs are the first len(t) rows
-    grid, order = check_grid_order(tau, path.breakpoints)
+    grid, order = check_grid_order(tau, path.breakpoints, path.jumps)
     try:
         grid_parts = model.parts(grid, order=order)
     except UnreachableError as exc:
@@ -173,7 +173,7 @@ def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions()) -> 
     if T != first.seconds:
         t = traj.sample_times(rate)
         tau = t / T
-        grid, order = check_grid_order(tau, path.breakpoints)
+        grid, order = check_grid_order(tau, path.breakpoints, path.jumps)
         try:
             grid_parts = model.parts(grid, order=order)
         except UnreachableError as exc:  # a path planned for another duration can take another route

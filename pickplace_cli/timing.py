@@ -97,22 +97,18 @@ def choose_duration(
     return Duration(float(spec), "given", tv, ta, tj, "given", t_fit)
 
 
-#: normalised samples used by fit_duration (plus the path's breakpoints); sampled peaks of these smooth
-#: functions are within ~1e-6 relative of the true ones, and the result is then verified exactly
-FIT_SAMPLES = 1001
-
-
 def _worst_utilisation(model, dwell: float = 0.0):
     """(worst, parts) for a fixed ``model``: worst(T) = (max utilisation − 1 over every T-dependent limit at
     duration T, its name), from one evaluation of the model (``parts``); None when no limit depends on T."""
     import numpy as np
 
-    from .limits import _parabolic_peak, span_nodes
+    from .limits import _parabolic_peak, fit_grid, interior_jumps, segment_ids
 
-    # the Gauss nodes of every span too: the RMS torque is then integrated by the same rule as the check's
-    tau = np.unique(np.concatenate([np.linspace(0.0, 1.0, FIT_SAMPLES), model.path.breakpoints,
-                                    span_nodes(model.path.breakpoints)[0]]))
-    tau = tau[np.concatenate([[True], np.diff(tau) > 1e-9])]  # merge round-off twins
+    # 1,001 uniform points and the check's own extra points (knots, points per span, both sides of every
+    # jump); the parabolic estimate never spans a jump, as in the check; the RMS is the model's exact integral
+    path = model.path
+    tau = fit_grid(path.breakpoints, path.jumps)
+    seg = segment_ids(tau, interior_jumps(path.breakpoints, path.jumps))
     parts = model.parts(tau)
     meta, _ = model.columns(parts, 1.0)
     timed = [c for c, m in enumerate(meta) if not (m[1].startswith("position") or m[4] == "reach")]
@@ -126,10 +122,10 @@ def _worst_utilisation(model, dwell: float = 0.0):
         m, data = model.columns(parts, T)
         if timed:
             d = data[:, timed]
-            util = _parabolic_peak(tau, d, np.argmax(d, axis=0))[0] / limits
+            util = _parabolic_peak(tau, d, np.argmax(d, axis=0), seg)[0] / limits
         else:
             util = np.zeros(0)
-        rms = (model.rms_motor_torque(parts, T, dwell) / rated)[has_rated]
+        rms = (model.rms_motor_torque(T, dwell, parts) / rated)[has_rated] if has_rated.any() else np.zeros(0)
         names = [f"{m[c][0]} {m[c][1]}" for c in timed] + [
             f"{n} rms motor torque" for n, h in zip(model.robot.joint_names, has_rated) if h
         ]

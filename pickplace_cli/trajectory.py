@@ -30,7 +30,10 @@ class CartesianPath:
     ``max_order`` is the highest derivative that exists and is continuous (3 = jerk for every method here).
     ``peaks`` are the exact maxima of ‖d^k p/dτ^k‖ for k = 1, 2, 3 on τ ∈ [0, 1] (m/1^k), computed by the
     method itself from its own closed form (not from samples); ``breakpoints`` are the τ where the pieces
-    of the curve join (knots), useful to samplers.
+    of the curve join (knots), useful to samplers. ``jumps`` are the τ where a derivative up to jerk may
+    step (a motion law's jerk, a corner's curvature rate): the limit check samples both one-sided limits
+    there and never interpolates across them. None (the default) takes every breakpoint as a possible
+    jump, the safe choice; a path that is C⁴ across its knots (an interpolating quintic spline) passes ().
     """
 
     evaluate: Evaluator
@@ -39,9 +42,16 @@ class CartesianPath:
     peaks: tuple[float, float, float]
     breakpoints: np.ndarray = field(default_factory=lambda: np.array([0.0, 1.0]))
     max_order: int = 3
+    jumps: np.ndarray | tuple | None = None
     #: optional (tau (N,)) → [p, p′, p″, p‴] in one pass (new arrays); :meth:`all_orders` falls back to
     #: ``evaluate`` per order without it
     evaluate_all: Callable[[np.ndarray], list] | None = None
+
+    @property
+    def jump_points(self) -> np.ndarray:
+        """Interior τ where a derivative up to jerk may step (``jumps``, or every breakpoint when None)."""
+        j = np.asarray(self.breakpoints if self.jumps is None else self.jumps, float)
+        return j[(j > 0.0) & (j < 1.0)]
 
     def __call__(self, tau: np.ndarray, order: int = 0) -> np.ndarray:
         if not 0 <= order <= self.max_order:

@@ -351,7 +351,8 @@ def decide(rows: list[BatchRow], profile, options, height: float | None = None, 
         for i, (r, task, spec) in enumerate(part):
             parameters = {"k1": float(kb1[i]), "k2": float(kb2[i]), "k_source": source, "lambda": task.lam,
                           "eta": task.eta}
-            path = CartesianPath(_no_evaluation, "bspline", parameters, tuple(float(x) for x in peaks[i]), breaks[i])
+            path = CartesianPath(_no_evaluation, "bspline", parameters, tuple(float(x) for x in peaks[i]), breaks[i],
+                                 jumps=())
             try:
                 duration = choose_duration(path, profile.capacity, spec)
                 traj = CartesianTrajectory(path, duration.seconds)

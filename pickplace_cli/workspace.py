@@ -491,7 +491,7 @@ def fit_workspace(
             if t is base:
                 raise  # the requested move itself cannot be planned: not a workspace problem
             return None, f"cannot plan at h = {t.height:.4g} m: {exc}"
-        grid = check_grid(np.array([0.0, 1.0]), path.breakpoints)
+        grid = check_grid(np.array([0.0, 1.0]), path.breakpoints, path.jumps)
         P = path(grid, 0)
         inside = ws.inside(P)
         if not inside.all():

@@ -438,4 +438,7 @@ def to_cartesian(
         parameters=parameters,
         peaks=tuple(float(p) for p in peaks),  # type: ignore[arg-type]
         breakpoints=np.asarray(breakpoints, float),
+        # where the jerk steps (the law's ends, a PH corner's joints, an axis law's start or end): the limit
+        # check samples both sides there; without the declaration every breakpoint counts as one
+        jumps=parameters.get("jerk_jumps_at"),
     )

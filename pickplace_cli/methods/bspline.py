@@ -133,6 +133,7 @@ def plan_bspline(
         parameters={"k1": float(k1), "k2": float(k2), "k_source": source, "lambda": task.lam, "eta": task.eta},
         peaks=peaks,  # type: ignore[arg-type]
         breakpoints=breaks,
+        jumps=(),  # a quintic B-spline on simple knots is C⁴: nothing steps at its knots
     )
 
 

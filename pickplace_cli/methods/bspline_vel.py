@@ -1320,6 +1320,7 @@ def plan_bspline_vel(
         parameters=parameters,
         peaks=peaks,  # type: ignore[arg-type]
         breakpoints=np.unique(spline.t),
+        jumps=(),  # C⁴ inside the move: nothing steps at the knots
     )
 
 
