@@ -505,9 +505,10 @@ def compare_row(task, profile, method, params: Mapping[str, Any] | None = None, 
     norm = (vn / b, an / b, jn / b) if b > 0 else (None, None, None)
     if b == 0:
         notes.append("b = 0 (vertical move): normalised peaks (b = 1) are undefined")
-    # joint torque on the limit check's grid (129 uniform points, knots, Kronrod nodes per span, jump sides)
+    # joint torque (sampled) on the dense grid plus the limit check's extra points (knots, Kronrod nodes per
+    # span, both sides of every jump)
     model = motion_model(path, profile)
-    tq_grid = check_grid(np.array([0.0, 1.0]), path.breakpoints, path.jumps)
+    tq_grid = check_grid(grid, path.breakpoints, path.jumps)
     parts = model.parts(tq_grid, derivatives=False)
     torque = parts.A / T**2 + parts.G
     unit = "N" if all(u == "m" for u in model.robot.joint_units) else "N·m"
