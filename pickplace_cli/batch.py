@@ -115,7 +115,7 @@ def read_batch(stream: IO[str], source: str = "batch") -> tuple[list[BatchRow], 
                     if name in REQUIRED:
                         raise TaskError(f"{name} is empty: give a number in metres")
                     continue
-                if name == "time" and cell in ("auto", "fit"):
+                if name == "time" and cell in ("auto", "fit", "optimal"):
                     values[name] = cell
                     continue
                 try:

@@ -18,6 +18,12 @@ class ProfileError(PickplaceError):
     """The robot/workcell profile is missing, unparsable or violates a rule."""
 
 
+class UsageError(PickplaceError):
+    """An option that cannot apply to this request (e.g. a time law for a method whose path depends on T)."""
+
+    exit_code = 2
+
+
 class TaskError(PickplaceError):
     """The requested move (points, height, η, duration …) is invalid."""
 

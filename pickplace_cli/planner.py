@@ -133,10 +133,17 @@ def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions()) -> 
         )
     dwell = profile.planning.dwell
     rate = options.rate if options.rate is not None else profile.planning.rate
-    first_spec = "auto" if options.time == "fit" else options.time
+    first_spec = "auto" if options.time in ("fit", "optimal") else options.time
     factory = None
     try:
         if depends_on_duration(options.method):  # the path is planned for a duration (e.g. conveyor tracking)
+            if options.time == "optimal":
+                from .errors import UsageError
+
+                raise UsageError(
+                    f"--time optimal: method {Method(options.method).value} plans its path for a duration (the end "
+                    "velocities enter as v·T), so a time law would change the path; use --time fit"
+                )
             factory = path_factory(task, options.method, **options.method_params)
             first, path = choose_duration_for(factory, profile.capacity, first_spec)
         else:
@@ -146,6 +153,8 @@ def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions()) -> 
         check_ends_reachable(task, profile)
         raise
     model = motion_model(path, profile)
+    notes: tuple[str, ...] = ()
+    retimed = False
     # reachability first, on the output samples of the auto (or given) duration, so an error names a time
     if factory is None:
         first = choose_duration(path, profile.capacity, first_spec)
@@ -164,13 +173,21 @@ def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions()) -> 
             start=first.seconds,
         )
         model = motion_model(path, profile)
+    elif options.time == "optimal":
+        from .timing import choose_optimal
+
+        duration, path, law_note = choose_optimal(path, profile, model, dwell, lambda p: motion_model(p, profile))
+        notes = (law_note,)
+        if path is not model.path:  # the composed path: evaluated below
+            model = motion_model(path, profile)
+            retimed = True
     elif factory is None and (options.fit or options.time == "fit"):
         duration = choose_duration(path, profile.capacity, options.time, model=model, dwell=dwell)
     else:
         duration = first
     T = duration.seconds
     traj = CartesianTrajectory(path, T)
-    if T != first.seconds:
+    if T != first.seconds or retimed:
         t = traj.sample_times(rate)
         tau = t / T
         grid, order = check_grid_order(tau, path.breakpoints, path.jumps)
@@ -178,7 +195,7 @@ def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions()) -> 
             grid_parts = model.parts(grid, order=order)
         except UnreachableError as exc:  # a path planned for another duration can take another route
             raise _first_unreachable(exc, model, grid, order, T) from None
-    report = check_limits(model, T, parts=grid_parts, dwell=dwell)
+    report = check_limits(model, T, parts=grid_parts, dwell=dwell, notes=notes)
     # the output samples of the quantities written out: the first len(t) rows of the grid (views)
     n = len(t)
     out = {name: getattr(grid_parts, name)[:n] for name in _OUTPUT_PARTS}

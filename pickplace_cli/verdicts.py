@@ -115,7 +115,7 @@ def engine_applies(profile, options) -> bool:
     except ValueError:
         return False
     params = _given(options.method_params)
-    if options.fit or options.time == "fit" or not set(params) <= _PARAMS or ("k1" in params) != ("k2" in params):
+    if options.fit or options.time in ("fit", "optimal") or not set(params) <= _PARAMS or ("k1" in params) != ("k2" in params):
         return False
     try:
         robot = build_robot(profile.robot)
@@ -312,7 +312,7 @@ def decide(rows: list[BatchRow], profile, options, height: float | None = None, 
     for r in rows:
         v = r.values
         spec = v.get("time", options.time)
-        if spec == "fit" or any(v.get(f"v_{e}_{c}", 0.0) for e in ("from", "to") for c in "xyz"):
+        if spec in ("fit", "optimal") or any(v.get(f"v_{e}_{c}", 0.0) for e in ("from", "to") for c in "xyz"):
             continue
         try:
             task = row_task(v, profile, height, eta)

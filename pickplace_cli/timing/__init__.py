@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
-from .errors import TaskError
-from .profile import Capacity
-from .trajectory import CartesianPath
+from ..errors import TaskError
+from ..profile import Capacity
+from ..trajectory import CartesianPath
 
 
 @dataclass(frozen=True)
@@ -26,6 +26,9 @@ class Duration:
     t_jerk: float | None
     binding: str
     t_fit: float | None = None  # smallest duration at which every motor/joint limit holds (when computed)
+    #: --time optimal: the duration of the non-uniform law (None otherwise) and what the optimiser said
+    t_optimal: float | None = None
+    law: str | None = None
 
     @property
     def t_auto(self) -> float:
@@ -39,6 +42,8 @@ class Duration:
             "fit_s": self.t_fit,
             "auto_bounds_s": {"velocity": self.t_velocity, "acceleration": self.t_acceleration, "jerk": self.t_jerk},
             "binding": self.binding,
+            "optimal_s": self.t_optimal,
+            "time_law": self.law or "uniform",
         }
 
 
@@ -59,12 +64,12 @@ def parse_time(spec: str | float) -> str | float:
     """``auto`` | ``fit`` | seconds (> 0, finite) → the spec; TaskError naming the rule otherwise."""
     if isinstance(spec, str):
         s = spec.strip().lower()
-        if s in ("auto", "fit"):
+        if s in ("auto", "fit", "optimal"):
             return s
         try:
             value = float(s)
         except ValueError:
-            raise TaskError(f"time = {spec!r}: give 'auto', 'fit' or a duration in seconds (e.g. 0.25)") from None
+            raise TaskError(f"time = {spec!r}: give 'auto', 'fit', 'optimal' or a duration in seconds (e.g. 0.25)") from None
     else:
         value = float(spec)
     if not (math.isfinite(value) and value > 0):
@@ -85,7 +90,7 @@ def choose_duration(
         t_fit, fit_binding = fit_duration(model, dwell, start=t_auto)
     if spec == "auto":
         return Duration(t_auto, "auto", tv, ta, tj, binding, t_fit)
-    if spec == "fit":
+    if spec in ("fit", "optimal"):
         if model is None:
             raise TaskError("time = fit: needs the robot model (plan through pickplace_cli.planner.plan)")
         if t_fit is None:
@@ -102,7 +107,7 @@ def _worst_utilisation(model, dwell: float = 0.0):
     duration T, its name), from one evaluation of the model (``parts``); None when no limit depends on T."""
     import numpy as np
 
-    from .limits import _parabolic_peak, fit_grid, interior_jumps, segment_ids
+    from ..limits import _parabolic_peak, fit_grid, interior_jumps, segment_ids
 
     # 1,001 uniform points and the check's own extra points (knots, points per span, both sides of every
     # jump); the parabolic estimate never spans a jump, as in the check; the RMS is the model's exact integral
@@ -148,8 +153,8 @@ def fit_duration(model, dwell: float = 0.0, start: float = 0.1) -> tuple[float |
     """
     from scipy.optimize import brentq
 
-    from .errors import NoFeasibleDuration
-    from .limits import check_limits
+    from ..errors import NoFeasibleDuration
+    from ..limits import check_limits
 
     found = _worst_utilisation(model, dwell)
     if found is None:
@@ -199,7 +204,7 @@ def _smallest_feasible(g, start: float, factor: float, rtol: float, what: str) -
     steps of ``factor`` and root-finding the crossing (brentq): every scanned T above it is feasible."""
     from scipy.optimize import brentq
 
-    from .errors import NoFeasibleDuration
+    from ..errors import NoFeasibleDuration
 
     T = float(start)
     if g(T) > 0:
@@ -286,7 +291,7 @@ def fit_duration_for(factory, model_of, dwell: float = 0.0, start: float = 0.1, 
     """(T, binding, path): the smallest T [s] at which every T-dependent limit holds on the path planned
     for T [Yang2022, Eq. (38)] (see :func:`choose_duration_for`); (None, None, path) when no limit depends
     on T. Each trial T plans its own path and evaluates the model once on it."""
-    from .limits import check_limits
+    from ..limits import check_limits
 
     def worst(T: float):
         found = _worst_utilisation(model_of(factory(T)), dwell)
@@ -306,3 +311,25 @@ def fit_duration_for(factory, model_of, dwell: float = 0.0, start: float = 0.1, 
         T *= max(r.utilisation for r in bad) * (1.0 + 1e-9)
     binding = worst(T * (1 - 1e-9))[1]
     return float(T), binding, factory(T)
+
+
+def choose_optimal(path: CartesianPath, profile, model, dwell: float, model_of) -> tuple[Duration, CartesianPath, str]:
+    """``--time optimal``: the fit of the uniform law, then the optimised non-uniform law on the same path
+    (:mod:`pickplace_cli.timing.optimal`), whose duration is fitted again by the continuous check on the
+    composed path. Returns (Duration, the path to sample — the composed one, or ``path`` itself when the law
+    is not faster than uniform scaling —, a note for the user)."""
+    from .optimal import optimal_law
+
+    fit = choose_duration(path, profile.capacity, "fit", model=model, dwell=dwell)
+    law = optimal_law(model, dwell, fit.seconds)
+    composed = law.path
+    t_opt, binding = fit_duration(model_of(composed), dwell, start=max(law.t_estimate, 1e-3))
+    if t_opt is None or not t_opt < fit.seconds * (1 - 1e-6):
+        note = (f"time = optimal: the optimised law ({t_opt:.6g} s) is not faster than uniform scaling "
+                f"({fit.seconds:.6g} s); the uniform law of --time fit is used")
+        return replace(fit, mode="optimal", t_optimal=fit.seconds, law="uniform (fallback)"), path, note
+    note = (f"time = optimal: {t_opt:.4f} s = {t_opt / fit.seconds:.3f} × fit ({fit.seconds:.4f} s), "
+            f"{t_opt / fit.t_auto:.3f} × auto; optimiser: {law.iterations} SLSQP iterations, {law.message}")
+    return (replace(fit, seconds=t_opt, mode="optimal", binding=binding, t_optimal=t_opt,
+                    law=f"cubic B-spline b(τ), {composed.parameters['law_coefficients']} coefficients"),
+            composed, note)
