@@ -318,15 +318,22 @@ def choose_optimal(path: CartesianPath, profile, model, dwell: float, model_of) 
     (:mod:`pickplace_cli.timing.optimal`), whose duration is fitted again by the continuous check on the
     composed path. Returns (Duration, the path to sample — the composed one, or ``path`` itself when the law
     is not faster than uniform scaling —, a note for the user)."""
+    from ..errors import PickplaceError
     from .optimal import optimal_law
 
     fit = choose_duration(path, profile.capacity, "fit", model=model, dwell=dwell)
     law = optimal_law(model, dwell, fit.seconds)
     composed = law.path
-    t_opt, binding = fit_duration(model_of(composed), dwell, start=max(law.t_estimate, 1e-3))
+    try:
+        t_opt, binding = fit_duration(model_of(composed), dwell, start=max(law.t_estimate, 1e-3))
+    except PickplaceError as exc:  # the composed path cannot be fitted: keep the uniform law, say why
+        t_opt, binding, why = None, None, f" ({exc})"
+    else:
+        why = ""
     if t_opt is None or not t_opt < fit.seconds * (1 - 1e-6):
-        note = (f"time = optimal: the optimised law ({t_opt:.6g} s) is not faster than uniform scaling "
-                f"({fit.seconds:.6g} s); the uniform law of --time fit is used")
+        got = f"{t_opt:.6g} s" if t_opt is not None else "no duration"
+        note = (f"time = optimal: the optimised law ({got}{why}; {law.message}) is not faster than uniform "
+                f"scaling ({fit.seconds:.6g} s); the uniform law of --time fit is used")
         return replace(fit, mode="optimal", t_optimal=fit.seconds, law="uniform (fallback)"), path, note
     note = (f"time = optimal: {t_opt:.4f} s = {t_opt / fit.seconds:.3f} × fit ({fit.seconds:.4f} s), "
             f"{t_opt / fit.t_auto:.3f} × auto; optimiser: {law.iterations} SLSQP iterations, {law.message}")

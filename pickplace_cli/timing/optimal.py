@@ -37,6 +37,10 @@ LAW_COEFFICIENTS = 20
 LAW_GRID = 161
 #: the optimiser keeps every constraint this far below its limit (the continuous check decides)
 LAW_MARGIN = 0.0
+#: bounds of the law's coefficients relative to the uniform law (b between 1/100 and 100 times 1/T_fit²:
+#: the tool at most 10× slower or faster than uniform anywhere; keeps SLSQP away from b → 0 or ∞ at the
+#: path's ends, where the rest-to-rest path leaves b nearly free)
+LAW_BOUNDS = (1e-2, 1e2)
 #: grid rows used from the start: those above this fraction of their limit on the uniform law
 LAW_ACTIVE = 0.35
 #: points of the table that inverts t(τ) for the composed path
@@ -210,7 +214,7 @@ def optimal_law(model, dwell: float, t_fit: float, coefficients: int = LAW_COEFF
     rounds: list[int] = []
     for _ in range(5):
         cache.clear()
-        res = minimize(lambda x: tuple(v / t_fit for v in objective(x)), x, jac=True, method="SLSQP", bounds=[(1e-3, None)] * len(x0),
+        res = minimize(lambda x: tuple(v / t_fit for v in objective(x)), x, jac=True, method="SLSQP", bounds=[(LAW_BOUNDS[0], LAW_BOUNDS[1])] * len(x0),
                        constraints=[{"type": "ineq", "fun": lambda x: cons(x)[0], "jac": lambda x: cons(x)[1]}],
                        options={"maxiter": 300, "ftol": 1e-10})
         nit += int(res.nit)
@@ -223,8 +227,13 @@ def optimal_law(model, dwell: float, t_fit: float, coefficients: int = LAW_COEFF
         if not broken.any():
             break
         keep |= v < 1.0 - LAW_ACTIVE / 2
+    # a law that breaks its own grid constraints (the solver stopped somewhere infeasible) is not used
+    worst = float(constraints(x)[0].min()) if np.all(np.isfinite(x)) else -np.inf
+    if worst < -1e-6:
+        message = f"{message}; the solver's point breaks a limit on its grid by {-worst:.2g}: the uniform law is kept"
+        x = x0
     res = type("R", (), {"nit": nit, "message": f"{message} ({len(rounds)} round(s), {int(keep.sum())} of {len(keep)} rows)", "x": x})
-    x = res.x if np.all(np.isfinite(res.x)) else x0
+    x = res.x
     b_of = _law_spline(knots, scale * x)
     composed = compose(path, b_of)
     return LawResult(composed, float(objective(x)[0]), int(res.nit), str(res.message))
