@@ -1125,7 +1125,7 @@ def compare(
     profile: Optional[str] = typer.Option(None, "--profile", "-p", help="Profile YAML file or shipped name. [default: delta-su2018]"),
     height: Optional[float] = typer.Option(None, "--height", help="Clearance h in m above the higher end point. [default: profile]"),
     eta: Optional[float] = typer.Option(None, "--eta", help="Lift-off/set-down ratio η, 0 < η < 1. [default: profile]"),
-    time: str = typer.Option("auto", "--time", "-t", help="Duration for the peaks and torques: 'auto', 'fit' or seconds."),
+    time: str = typer.Option("auto", "--time", "-t", help="Duration for the peaks and torques: 'auto', 'fit', 'optimal' (non-uniform time law) or seconds."),
     fmt: CompareFormat = typer.Option(CompareFormat.table, "--format", "-f", help="table (stderr only), csv or json (stdout or -o)."),
     output: str = typer.Option("-", "--output", "-o", help="Output file for csv/json ('-' = stdout). Written atomically."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No table on stderr with csv/json (errors still print)."),
@@ -1168,7 +1168,7 @@ def plot(
     profile: Optional[str] = typer.Option(None, "--profile", "-p", help="Profile YAML file or shipped name. [default: delta-su2018]"),
     height: Optional[float] = typer.Option(None, "--height", help="Clearance h in m above the higher end point. [default: profile]"),
     eta: Optional[float] = typer.Option(None, "--eta", help="Lift-off/set-down ratio η, 0 < η < 1. [default: profile]"),
-    time: str = typer.Option("auto", "--time", "-t", help="Duration of each method's move: 'auto', 'fit' or seconds."),
+    time: str = typer.Option("auto", "--time", "-t", help="Duration of each method's move: 'auto', 'fit', 'optimal' (non-uniform time law, same path) or seconds."),
     normalised: bool = typer.Option(False, "--normalised", help="Plot with b = 1 and T = 1 against τ (like Li 2018 Fig. 5)."),
     fmt: Optional[str] = typer.Option(None, "--format", "-f", help="png or svg. [default: from the file's suffix]"),
 ) -> None:
