@@ -276,11 +276,50 @@ def resolve_profile_path(name_or_path: str | Path | None) -> Path:
     raise ProfileError(f"profile {str(name_or_path)!r}: no such file, and no shipped profile of that name (shipped: {names})")
 
 
+#: a profile is a few kilobytes; anything larger than this is refused before it is parsed [bytes]
+PROFILE_MAX_BYTES = 1 << 20
+#: deepest nesting of mappings and sequences a profile may have (the real ones use 5)
+PROFILE_MAX_DEPTH = 32
+
+
+def _safe_loader(text: str, source: str):
+    """A yaml.SafeLoader that refuses aliases and anchors (a recursive alias or a "billion laughs" profile
+    must not exhaust the stack or the memory) and nesting deeper than ``PROFILE_MAX_DEPTH``, each with one
+    line naming the file, the line and the rule."""
+    import yaml
+
+    class Loader(yaml.SafeLoader):
+        depth = 0
+
+        def compose_node(self, parent, index):  # noqa: ANN001 - PyYAML's signature
+            if self.check_event(yaml.AliasEvent):
+                ev = self.peek_event()
+                raise ProfileError(f"{source}:{ev.start_mark.line + 1}: YAML alias *{ev.anchor} is not allowed in a "
+                                   "profile (write the value out; aliases can expand without bound)")
+            ev = self.peek_event()
+            if getattr(ev, "anchor", None):
+                raise ProfileError(f"{source}:{ev.start_mark.line + 1}: YAML anchor &{ev.anchor} is not allowed in a "
+                                   "profile (write the value out; aliases can expand without bound)")
+            self.depth += 1
+            try:
+                if self.depth > PROFILE_MAX_DEPTH:
+                    raise ProfileError(f"{source}:{ev.start_mark.line + 1}: nested deeper than {PROFILE_MAX_DEPTH} "
+                                       "levels (a profile needs 5)")
+                return super().compose_node(parent, index)
+            finally:
+                self.depth -= 1
+
+    return Loader(text)
+
+
 def _yaml_with_lines(text: str, source: str) -> tuple[Any, dict[tuple, int]]:
     """Parse YAML; return the data and a map from each value's path (keys/indices) to its 1-based line."""
     import yaml
 
-    loader = yaml.SafeLoader(text)
+    if len(text) > PROFILE_MAX_BYTES:
+        raise ProfileError(f"{source}: {len(text)} characters; a profile may have at most {PROFILE_MAX_BYTES} "
+                           "(1 MiB): is this the right file?")
+    loader = _safe_loader(text, source)
     try:
         node = loader.get_single_node()
         if node is None:
@@ -550,7 +589,14 @@ def load_profile(name_or_path: str | Path | None = None) -> Profile:
     """Load and validate a profile from a path or a shipped profile name (default: the default profile)."""
     path = resolve_profile_path(name_or_path)
     try:
-        text = path.read_text(encoding="utf-8")
+        with open(path, "rb") as fh:  # bounded: a huge file is refused without reading it all
+            raw = fh.read(PROFILE_MAX_BYTES + 1)
+        if len(raw) > PROFILE_MAX_BYTES:
+            raise ProfileError(f"{path}: larger than {PROFILE_MAX_BYTES} bytes (1 MiB); a profile is a few kB: is "
+                               "this the right file?")
+        if b"\0" in raw:
+            raise ProfileError(f"{path}: a binary file (NUL bytes), not a YAML profile")
+        text = raw.decode("utf-8")
     except OSError as exc:
         raise ProfileError(f"{path}: cannot read profile: {exc.strerror or exc}") from None
     except UnicodeDecodeError:
