@@ -129,12 +129,10 @@ def optimal_law(model, dwell: float, t_fit: float, coefficients: int = LAW_COEFF
                 rows.append(("rate", (pr.dAm[:, i], pr.Am[:, i] + dm[:, i] / 2, m[:, i] / 2, pr.dGm[:, i]),
                              drv.torque_rate))
     if capacity is not None:
-        n1, n2 = np.linalg.norm(p1, axis=1), p2
-        rows.append(("speed", n1, capacity.velocity))
+        rows.append(("speed", np.linalg.norm(p1, axis=1), capacity.velocity))
         rows.append(("vaffine", (p2, p1 / 2), capacity.acceleration))
         if capacity.jerk:
             rows.append(("vrate", (p3, 1.5 * p2, p1 / 2), capacity.jerk))
-        del n2
     rated = [(i, s.drive.rated_torque) for i, s in enumerate(model.specs) if s.drive and s.drive.rated_torque]
 
     def state(x):
@@ -232,11 +230,9 @@ def optimal_law(model, dwell: float, t_fit: float, coefficients: int = LAW_COEFF
     if worst < -1e-6:
         message = f"{message}; the solver's point breaks a limit on its grid by {-worst:.2g}: the uniform law is kept"
         x = x0
-    res = type("R", (), {"nit": nit, "message": f"{message} ({len(rounds)} round(s), {int(keep.sum())} of {len(keep)} rows)", "x": x})
-    x = res.x
-    b_of = _law_spline(knots, scale * x)
-    composed = compose(path, b_of)
-    return LawResult(composed, float(objective(x)[0]), int(res.nit), str(res.message))
+    message = f"{message} ({len(rounds)} round(s), {int(keep.sum())} of {len(keep)} rows)"
+    composed = compose(path, _law_spline(knots, scale * x))
+    return LawResult(composed, float(objective(x)[0]), nit, message)
 
 
 def _law_spline(knots: np.ndarray, coef: np.ndarray):
@@ -290,7 +286,6 @@ def compose(path, b) -> object:
                           jumps=tuple(jumps.tolist()), evaluate_all=orders)
     peaks = true_peaks(shell, np.unique(np.concatenate([dense, shell.breakpoints])))
     params = dict(path.parameters)
-    params.update(time_law="optimal", law_coefficients=len(b.c), law_duration_at_knots_s=None)
-    params.pop("law_duration_at_knots_s")
+    params.update(time_law="optimal", law_coefficients=len(b.c))
     return CartesianPath(evaluate, path.method, params, tuple(float(x) for x in peaks), shell.breakpoints,
                          max_order=path.max_order, jumps=shell.jumps, evaluate_all=orders)

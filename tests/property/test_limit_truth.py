@@ -100,6 +100,12 @@ def _rate_reference(t: np.ndarray, y: np.ndarray, cuts: np.ndarray) -> float:
     return best
 
 
+def _duty_rms(t: np.ndarray, y: np.ndarray, dwell: float) -> float:
+    """RMS of a written motor-torque column over move, dwell, return (the move mirrored), dwell."""
+    move = np.trapezoid(y**2, t)
+    return float(np.sqrt((2 * move + dwell * (y[0] ** 2 + y[-1] ** 2)) / (2 * (t[-1] - t[0]) + 2 * dwell)))
+
+
 CASES = [(name, m, seed) for name in REGIONS for m in Method for seed in (1, 2)]
 
 
@@ -124,10 +130,7 @@ def test_every_reported_peak_matches_the_written_output(name, method, seed):
             ref[(joint, "motor speed")] = np.max(np.abs(cols[f"motor_speed{k}"]))
             ref[(joint, "motor torque")] = np.max(np.abs(mt))
             ref[(joint, "motor torque rate")] = _rate_reference(t, mt, cuts)
-            move = np.trapezoid(mt**2, t)
-            ref[(joint, "rms motor torque")] = np.sqrt(
-                (2 * move + dwell * (mt[0] ** 2 + mt[-1] ** 2)) / (2 * (t[-1] - t[0]) + 2 * dwell)
-            )
+            ref[(joint, "rms motor torque")] = _duty_rms(t, mt, dwell)
     checked = 0
     for rate in RATES:
         result = first if rate == RATES[0] else plan(task, prof, PlanOptions(method=method, fit=False, time=T, rate=rate))

@@ -13,7 +13,7 @@ from pickplace_cli.cli import app
 from pickplace_cli.planner import PlanOptions, motion_model, plan
 from pickplace_cli.profile import load_profile
 from pickplace_cli.task import Task
-from tests.property.test_limit_truth import _rate_reference, _written
+from tests.property.test_limit_truth import _duty_rms, _rate_reference, _written
 
 ADEPT = Task([-0.1525, 0, -0.8], [0.1525, 0, -0.8], 0.025, 0.5)
 
@@ -64,8 +64,7 @@ def test_optimal_written_output_holds_every_limit_independently(adept):
             np.max(np.abs(cols[f"motor_speed{k}"])) / drv.max_speed,
             np.max(np.abs(mt)) / drv.peak_torque,
             _rate_reference(t, mt, cuts) / drv.torque_rate,
-            np.sqrt((2 * np.trapezoid(mt**2, t) + dwell * (mt[0] ** 2 + mt[-1] ** 2)) / (2 * T + 2 * dwell))
-            / drv.rated_torque,
+            _duty_rms(t, mt, dwell) / drv.rated_torque,
         ]
         assert max(uses) <= 1.005, (k, uses)
         worst = max(worst, max(uses))
