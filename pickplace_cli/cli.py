@@ -77,6 +77,11 @@ class MethodName(str, Enum):
     bspline_vel = "bspline-vel"
 
 
+class OptimizeWhat(str, Enum):
+    none = "none"
+    shape = "shape"
+
+
 def _err(message: str) -> None:
     sys.stderr.write(f"pickplace: error: {message}\n")
 
@@ -223,6 +228,12 @@ def plan(
         "or 'optimal' (the same path with a non-uniform, jerk-bounded time law that minimises the duration under the "
         "same joint and motor limits, RMS included; ~0.3 s more; not for bspline-vel).",
     ),
+    optimize: OptimizeWhat = typer.Option(
+        OptimizeWhat.none, "--optimize", help="'shape' (--method bspline): also choose the path's k1, k2 and η "
+        "(η within [0.1, 0.9]; give --eta to hold it) for the smallest duration on this robot's limits, instead of "
+        "the table's values (Li 2018's Cartesian optimum); with --time fit or optimal (the fit and the law are then "
+        "those of the chosen shape). The summary compares it with the table's shape. ~0.5-1 s more.",
+    ),
     show_fit: bool = typer.Option(
         False, "--show-fit", help="With --time auto or seconds: also compute the fitted duration (the smallest at "
         "which every joint and motor limit holds) and report it next to the chosen one (fit_s in --json). Costs "
@@ -341,9 +352,17 @@ def plan(
     writer = _writer(fmt, csv_dialect, mcap_flavor, compression)
     if batch is not None and fit_ws:
         _usage("--fit-workspace is not available with --batch")
+    shape = optimize == OptimizeWhat.shape
+    if shape and method != MethodName.bspline:
+        _usage(f"--optimize shape chooses k1, k2, η of --method bspline; method {method.value} has no such shape")
+    if shape and time not in ("fit", "optimal"):
+        _usage(f"--optimize shape minimises the fitted duration on the robot's limits: use it with --time fit or "
+               f"--time optimal (not --time {time})")
+    if shape and (k1 is not None or k2 is not None):
+        _usage("--optimize shape chooses k1 and k2 itself: drop --k1/--k2 (or drop --optimize)")
     if batch is not None:
         options = PlanOptions(method=method.value, method_params=params, time=time, rate=rate,
-                              fit=time == "fit" or show_fit)
+                              fit=time == "fit" or show_fit, shape=shape, hold_eta=eta is not None)
         if workers < 0:
             raise TaskError(f"workers = {workers}: must be 0 (automatic) or a positive number of processes")
         _plan_batch(batch, prof, options, height, eta, fail_fast, writer, output, report, report_only, json_summary,
@@ -355,7 +374,8 @@ def plan(
     p_to = _parse_point("to", to)
     h = height if height is not None else prof.planning.height
     e = eta if eta is not None else prof.planning.eta
-    options = PlanOptions(method=method.value, method_params=params, time=time, rate=rate, fit=time == "fit" or show_fit)
+    options = PlanOptions(method=method.value, method_params=params, time=time, rate=rate, fit=time == "fit" or show_fit,
+                          shape=shape, hold_eta=eta is not None)
     wc = prof.workcell
     vel_from = _parse_point("v-from", v_from, "m/s") if v_from is not None else (getattr(wc, "conveyor_pick_velocity", None) or (0.0, 0.0, 0.0))
     vel_to = _parse_point("v-to", v_to, "m/s") if v_to is not None else (getattr(wc, "conveyor_place_velocity", None) or (0.0, 0.0, 0.0))
@@ -718,6 +738,14 @@ def _print_summary(result) -> None:
             f"{k} = {v:.4g}" if isinstance(v, float) else f"{k} = {v}"
             for k, v in par.items() if k not in skip and isinstance(v, (int, float, str)) and not isinstance(v, bool)
         )
+    shape = par.get("shape")
+    if shape:
+        t_shape = d.t_fit if d.t_fit is not None else shape["screened_fit_s"]
+        tab = shape["table"]
+        versus = (f"the table's k1 = {tab['k1']:.4f}, k2 = {tab['k2']:.4f}, η = {tab['eta']:g} fits in {tab['fit_s']:.4f} s "
+                  f"→ {t_shape:.4f} s = {t_shape / tab['fit_s']:.3f} × table" if tab and tab.get("fit_s")
+                  else "the table has no shape for this move")
+        ks += f"\nshape: η = {shape['eta']:.4g} chosen with k1, k2 for this robot's limits (fit, uniform law): {versus}; {shape['note']}"
     bounds = f"v {d.t_velocity:.4f} s, a {d.t_acceleration:.4f} s" + (f", j {d.t_jerk:.4f} s" if d.t_jerk else "")
     fit = f"; fit {d.t_fit:.4f} s" if d.t_fit is not None else ""
     if d.t_optimal is not None and d.t_fit:

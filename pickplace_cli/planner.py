@@ -31,6 +31,8 @@ class PlanOptions:
     rate: float | None = None  # Hz; None → profile.planning.rate
     fit: bool = True  # also compute the fitted duration (reported next to auto); for a method whose path
     # depends on the duration (bspline-vel) only with time="fit": each trial duration re-plans the path
+    shape: bool = False  # bspline: choose k1, k2 (and η unless hold_eta) for the smallest duration on the robot
+    hold_eta: bool = False  # with shape: keep the task's η (the user gave it), search k1, k2 only
 
 
 @dataclass(frozen=True)
@@ -122,6 +124,47 @@ def check_ends_reachable(task: Task, profile: Profile) -> None:
             raise UnreachableError(f"{name} = {xyz} m: outside the workspace of profile {profile.name} ({why})") from None
 
 
+def _optimised_shape(task: Task, profile: Profile, options: PlanOptions) -> tuple[Task, PlanOptions, dict]:
+    """``--optimize shape``: the task with the chosen η, the options with the chosen k1, k2
+    (:func:`pickplace_cli.timing.shape.optimise_shape`), and what the search found for the path parameters
+    (``shape``: the chosen shape, its screened duration, the table's shape and its exact fit duration)."""
+    from dataclasses import replace
+
+    from .errors import PickplaceError, UsageError
+    from .timing import fit_duration
+    from .timing.shape import optimise_shape
+
+    if Method(options.method) is not Method.bspline:
+        raise UsageError(f"--optimize shape: method {Method(options.method).value} has no shape parameters to choose; "
+                         "it chooses k1, k2, η of --method bspline")
+    if options.time not in ("fit", "optimal"):
+        raise UsageError(f"--optimize shape minimises the fitted duration: use it with time fit or optimal "
+                         f"(not {options.time})")
+    given = {k for k, v in options.method_params.items() if v is not None and k in ("k1", "k2")}
+    if given:
+        raise UsageError(f"--optimize shape chooses k1, k2 itself: drop --{'/--'.join(sorted(given))}")
+    base = {k: v for k, v in options.method_params.items() if v is not None and k not in ("k1", "k2")}
+
+    def model_of(p):
+        return motion_model(p, profile)
+
+    table_shape, t_table = None, None
+    try:
+        ref = plan_path(task, Method.bspline, **base)
+        table_shape = (float(ref.parameters["k1"]), float(ref.parameters["k2"]), float(task.eta))
+        t_table = fit_duration(model_of(ref), profile.planning.dwell)[0]
+    except PickplaceError:  # outside the table, or the table's shape cannot be fitted: search without it
+        pass
+    found = optimise_shape(task, profile, model_of, eta_fixed=task.eta if options.hold_eta else None,
+                           table_shape=table_shape)
+    shaped = Task(task.p_from, task.p_to, task.height, found.eta, task.v_from, task.v_to)
+    info = {"k1": found.k1, "k2": found.k2, "eta": found.eta, "screened_fit_s": found.t_screen,
+            "shapes_screened": found.evaluations, "note": found.note,
+            "table": None if table_shape is None else {"k1": table_shape[0], "k2": table_shape[1],
+                                                        "eta": table_shape[2], "fit_s": t_table}}
+    return shaped, replace(options, method_params={**base, "k1": found.k1, "k2": found.k2}, shape=False), info
+
+
 def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions()) -> Plan:
     """Plan ``task`` on ``profile``: path, duration, samples, joint motion, limit report."""
     if (task.v_from.any() or task.v_to.any()) and not depends_on_duration(options.method):
@@ -133,6 +176,9 @@ def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions()) -> 
         )
     dwell = profile.planning.dwell
     rate = options.rate if options.rate is not None else profile.planning.rate
+    shape = None
+    if options.shape:
+        task, options, shape = _optimised_shape(task, profile, options)
     first_spec = "auto" if options.time in ("fit", "optimal") else options.time
     factory = None
     try:
@@ -148,6 +194,10 @@ def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions()) -> 
             first, path = choose_duration_for(factory, profile.capacity, first_spec)
         else:
             path = plan_path(task, options.method, **options.method_params)
+            if shape is not None:
+                from dataclasses import replace
+
+                path = replace(path, parameters={**path.parameters, "k_source": "--optimize shape", "shape": shape})
     except TableError:
         # a move the table does not cover is often one the robot cannot make at all: say that first (exit 4)
         check_ends_reachable(task, profile)

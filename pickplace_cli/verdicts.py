@@ -115,7 +115,7 @@ def engine_applies(profile, options) -> bool:
     except ValueError:
         return False
     params = _given(options.method_params)
-    if options.fit or options.time in ("fit", "optimal") or not set(params) <= _PARAMS or ("k1" in params) != ("k2" in params):
+    if options.fit or options.shape or options.time in ("fit", "optimal") or not set(params) <= _PARAMS or ("k1" in params) != ("k2" in params):
         return False
     try:
         robot = build_robot(profile.robot)

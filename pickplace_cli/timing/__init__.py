@@ -102,9 +102,10 @@ def choose_duration(
     return Duration(float(spec), "given", tv, ta, tj, "given", t_fit)
 
 
-def _worst_utilisation(model, dwell: float = 0.0):
+def _worst_utilisation(model, dwell: float = 0.0, tau=None):
     """(worst, parts) for a fixed ``model``: worst(T) = (max utilisation − 1 over every T-dependent limit at
-    duration T, its name), from one evaluation of the model (``parts``); None when no limit depends on T."""
+    duration T, its name), from one evaluation of the model (``parts``) on ``tau`` (default: the fit grid);
+    None when no limit depends on T."""
     import numpy as np
 
     from ..limits import _parabolic_peak, fit_grid, interior_jumps, segment_ids
@@ -112,7 +113,8 @@ def _worst_utilisation(model, dwell: float = 0.0):
     # 1,001 uniform points and the check's own extra points (knots, points per span, both sides of every
     # jump); the parabolic estimate never spans a jump, as in the check; the RMS is the model's exact integral
     path = model.path
-    tau = fit_grid(path.breakpoints, path.jumps)
+    if tau is None:
+        tau = fit_grid(path.breakpoints, path.jumps)
     seg = segment_ids(tau, interior_jumps(path.breakpoints, path.jumps))
     parts = model.parts(tau)
     meta, _ = model.columns(parts, 1.0)
@@ -141,25 +143,12 @@ def _worst_utilisation(model, dwell: float = 0.0):
     return worst, parts
 
 
-def fit_duration(model, dwell: float = 0.0, start: float = 0.1) -> tuple[float | None, str | None]:
-    """Smallest T [s] such that every T-dependent limit holds at T and at every longer duration.
-
-    Velocity-type limits scale as 1/T^k (monotone). The peak motor torque max_τ |A_m s + G_m| is convex
-    in s = 1/T², so its feasible set is an interval containing s = 0 when the holding torque fits. So
-    scanning T down from a feasible value and root-finding the first crossing (brentq) gives the true
-    minimum. Position, singularity and workcell limits do not depend on T and are not fitted (the limit
-    report shows them). The result is nudged up until the exact (refined) check passes.
-    Returns (T, the binding quantity "joint quantity"), or (None, None) when no limit depends on T.
-    """
+def screened_root(worst, start: float = 0.1, rtol: float = 1e-10) -> float:
+    """The smallest T [s] with worst(T)[0] ≤ 0 on the screening grid: doubled up from ``start`` until feasible,
+    scanned down in steps of 0.85 while feasible, then the crossing root-found (brentq, relative ``rtol``)."""
     from scipy.optimize import brentq
 
     from ..errors import NoFeasibleDuration
-    from ..limits import check_limits
-
-    found = _worst_utilisation(model, dwell)
-    if found is None:
-        return None, None
-    worst, parts = found
 
     hi = max(start, 1e-3)
     while worst(hi)[0] > 0:
@@ -177,7 +166,28 @@ def fit_duration(model, dwell: float = 0.0, start: float = 0.1) -> tuple[float |
     if lo * 0.85 < 1e-4:
         T = lo
     else:
-        T = brentq(lambda x: worst(x)[0], lo * 0.85, lo, xtol=1e-12, rtol=1e-10)
+        T = brentq(lambda x: worst(x)[0], lo * 0.85, lo, xtol=1e-12, rtol=rtol)
+    return float(T)
+
+
+def fit_duration(model, dwell: float = 0.0, start: float = 0.1) -> tuple[float | None, str | None]:
+    """Smallest T [s] such that every T-dependent limit holds at T and at every longer duration.
+
+    Velocity-type limits scale as 1/T^k (monotone). The peak motor torque max_τ |A_m s + G_m| is convex
+    in s = 1/T², so its feasible set is an interval containing s = 0 when the holding torque fits. So
+    scanning T down from a feasible value and root-finding the first crossing (brentq) gives the true
+    minimum. Position, singularity and workcell limits do not depend on T and are not fitted (the limit
+    report shows them). The result is nudged up until the exact (refined) check passes.
+    Returns (T, the binding quantity "joint quantity"), or (None, None) when no limit depends on T.
+    """
+    from ..limits import check_limits
+
+    found = _worst_utilisation(model, dwell)
+    if found is None:
+        return None, None
+    worst, parts = found
+
+    T = screened_root(worst, start)
     # the sampled peaks can sit a hair under the continuous ones (~1e-8 relative on this grid): start the
     # exact check 1e-7 above the sampled root (far inside the 0.1 % criterion), nudge up until it passes
     binding = worst(T * (1 - 1e-9))[1]

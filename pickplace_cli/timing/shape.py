@@ -1,0 +1,174 @@
+"""``--optimize shape``: choose the B-spline path's own parameters — the time-ratio factors k1, k2 and the
+lift-off/set-down ratio η of [Li2018] — for the smallest duration under the robot's limits.
+
+Li 2018's table picks (k1, k2) for a Cartesian objective (Eq. 22: weighted peak acceleration and jerk at
+unit b, h), the same for every robot. Here the objective is the robot's own: the duration ``--time fit``
+would give the path (uniform scaling until the first joint, motor or RMS limit touches), screened on a
+coarse grid (``SHAPE_SAMPLES`` uniform points ∪ knots ∪ the points the check adds per span, ~3 ms per
+shape); a shape that breaks a limit no duration fixes (a joint range, the workcell box, the singularity
+margin — the shape moves the path) ranks below every shape that keeps them. The landscape has several local minima (and its minimum often lies on the η bound), so the search
+is global in two steps: a coarse grid over (k1, k2, η), then Nelder-Mead (scipy, with bounds) from the best
+``SHAPE_STARTS`` distinct grid points and from the table's own shape. The winner is then planned as usual
+(the exact fit, or ``--time optimal``'s law, judged by the continuous check).
+
+With ``--time optimal`` the shape is the one that is fastest for the *uniform* law; the time law is then
+optimised on that shape (choosing both at once would need a law solve per trial shape, ~100× the cost). The
+benchmark (``bench/bench_shape.py``) compares the result with a slower search.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+#: uniform points of the screening grid (plus the knots and the check's points per span)
+SHAPE_SAMPLES = 101
+#: default range searched for η (Li 2018 uses 0.5; the λ × η table covers 0.1 … 0.9); k1, k2 in K_SEARCH
+ETA_RANGE = (0.1, 0.9)
+K_SEARCH = (0.01, 0.99)
+#: the coarse grid: points per axis (k1, k2, η)
+SHAPE_GRID = (5, 5, 4)
+#: Nelder-Mead runs from this many best grid points (plus the table's shape); bench/bench_shape.py compares
+#: this budget (~250 shapes) with a slower search
+SHAPE_STARTS = 1
+#: Nelder-Mead stopping tolerances: on (k1, k2, η) and on the screened duration [s]
+SHAPE_XATOL = 2e-3
+SHAPE_FATOL = 1e-6
+SHAPE_MAXFEV = 80
+
+
+#: a shape that breaks a limit no duration fixes (joint range, workcell box, singularity margin) is screened
+#: as T + INFEASIBLE·(1 + its relative excess): worse than every feasible shape, better the less it breaks
+INFEASIBLE = 1e3
+
+
+def _static_excess(model, parts) -> float:
+    """The largest relative excess over the duration-independent limits (joint position range, workcell box,
+    singularity margin: kind "reach") on the screening grid; ≤ 0 when they all hold."""
+    meta, data = model.columns(parts, 1.0)
+    worst = 0.0
+    for c, m in enumerate(meta):
+        if m[4] == "reach":
+            lim = m[3] * m[5]  # the column's sign convention: max of the column ≤ lim
+            worst = max(worst, (float(data[:, c].max()) - lim) / max(abs(m[3]), 1e-3))
+    return worst
+
+
+@dataclass(frozen=True)
+class ShapeResult:
+    """The chosen (k1, k2, η), its screened fit duration [s] (None when no shape keeps the duration-independent
+    limits), the table's shape and its screened duration (None when the table has no entry or its shape breaks
+    such a limit), the number of shapes screened and a note for the user."""
+
+    k1: float
+    k2: float
+    eta: float
+    t_screen: float | None
+    table: tuple[float, float, float] | None
+    t_table_screen: float | None
+    evaluations: int
+    note: str
+
+
+def optimise_shape(task, profile, model_of, eta_fixed: float | None = None,
+                   eta_range: tuple[float, float] = ETA_RANGE,
+                   table_shape: tuple[float, float, float] | None = None) -> ShapeResult:
+    """The (k1, k2, η) of the B-spline path of ``task`` with the smallest screened ``--time fit`` duration on
+    ``profile`` (module docstring). ``model_of(path)``: the path's motion model on the profile's robot.
+    ``eta_fixed``: hold η (search k1, k2 only). ``table_shape``: (k1, k2, η) of the look-up table, screened
+    and used as one more start."""
+    from scipy.optimize import minimize
+
+    from ..errors import PickplaceError
+    from ..limits import _extra_points
+    from ..methods import plan_path
+    from ..task import Task
+    from . import _worst_utilisation, screened_root
+
+    dwell = profile.planning.dwell
+    seen: dict[tuple, float] = {}
+    last_t = [0.1]
+
+    def screen(k1: float, k2: float, eta: float) -> float:
+        key = (round(k1, 12), round(k2, 12), round(eta, 12))
+        hit = seen.get(key)
+        if hit is not None:
+            return hit
+        try:
+            t = Task(task.p_from, task.p_to, task.height, eta)
+            path = plan_path(t, "bspline", k1=k1, k2=k2)
+            model = model_of(path)
+            tau = _extra_points(path.breakpoints, path.jumps, SHAPE_SAMPLES)
+            found = _worst_utilisation(model, dwell, tau)
+            if found is None:
+                val = np.inf
+            else:
+                excess = _static_excess(model, found[1])
+                val = screened_root(found[0], last_t[0], rtol=1e-6)
+                last_t[0] = val
+                if excess > 0:  # ranked by its excess (rounded: the same excess ranks by duration), then T
+                    val += INFEASIBLE * (1.0 + round(excess, 6))
+        except PickplaceError:  # a shape the robot cannot follow (out of reach, no feasible duration)
+            val = np.inf
+        seen[key] = val
+        return val
+
+    lo_e, hi_e = (eta_fixed, eta_fixed) if eta_fixed is not None else eta_range
+    n1, n2, ne = SHAPE_GRID
+    k_axis = np.linspace(K_SEARCH[0] + 0.05, K_SEARCH[1] - 0.05, n1)
+    k2_axis = np.linspace(K_SEARCH[0] + 0.05, K_SEARCH[1] - 0.05, n2)
+    e_axis = np.linspace(lo_e, hi_e, ne) if eta_fixed is None else np.array([eta_fixed])
+    grid = [(a, b, e) for e in e_axis for a in k_axis for b in k2_axis]
+    vals = np.array([screen(*g) for g in grid])
+    order = np.argsort(vals)
+    starts: list[tuple[float, float, float]] = []
+    for i in order:  # the best grid points that are not neighbours of a start already taken
+        if not np.isfinite(vals[i]):
+            break  # sorted: the rest cannot be planned at all
+        g = np.array(grid[i])
+        step = np.array([k_axis[1] - k_axis[0], k2_axis[1] - k2_axis[0], (e_axis[1] - e_axis[0]) if len(e_axis) > 1 else 1.0])
+        if all(np.any(np.abs(g - np.array(s)) > 1.01 * step) for s in starts):
+            starts.append(tuple(g))
+        if len(starts) >= SHAPE_STARTS:
+            break
+    t_table = None
+    if table_shape is not None:
+        t_table = screen(*table_shape) if eta_fixed is None else screen(table_shape[0], table_shape[1], eta_fixed)
+        if np.isfinite(t_table):
+            starts.append(table_shape if eta_fixed is None else (table_shape[0], table_shape[1], eta_fixed))
+    if not starts:
+        from ..errors import NoFeasibleDuration
+
+        raise NoFeasibleDuration(
+            f"--optimize shape: no (k1, k2, η) on the search grid gives a feasible move on profile {profile.name}")
+
+    best = min(((screen(*s), s) for s in starts), key=lambda x: x[0])
+    if not np.isfinite(best[0]):  # pragma: no cover - the starts are finite by construction
+        best = (np.inf, starts[0])
+    bounds = [K_SEARCH, K_SEARCH] + ([] if eta_fixed is not None else [(lo_e, hi_e)])
+    for s in starts:
+        x0 = np.array(s[:2] if eta_fixed is not None else s)
+
+        def f(x: np.ndarray) -> float:
+            e = eta_fixed if eta_fixed is not None else float(x[2])
+            v = screen(float(x[0]), float(x[1]), e)
+            return v if np.isfinite(v) else 1e12
+
+        res = minimize(f, x0, method="Nelder-Mead", bounds=bounds,
+                       options={"xatol": SHAPE_XATOL, "fatol": SHAPE_FATOL, "maxfev": SHAPE_MAXFEV})
+        x = res.x
+        cand = (float(x[0]), float(x[1]), eta_fixed if eta_fixed is not None else float(x[2]))
+        v = screen(*cand)
+        if v < best[0]:
+            best = (v, cand)
+    t_best, (k1, k2, eta) = best
+    if t_best >= INFEASIBLE:
+        note_static = ("; no shape keeps the joint ranges, the workcell box and the singularity margin: the one "
+                       "that breaks them least is planned and the check reports it")
+    else:
+        note_static = ""
+    what = "k1, k2" if eta_fixed is not None else f"k1, k2, η ∈ [{lo_e:g}, {hi_e:g}]"
+    note = f"{what} searched: {len(seen)} shapes screened, {len(starts)} Nelder-Mead starts{note_static}"
+    return ShapeResult(float(k1), float(k2), float(eta), float(t_best) if t_best < INFEASIBLE else None,
+                       table_shape, None if t_table is None or t_table >= INFEASIBLE else float(t_table), len(seen), note)
