@@ -1100,6 +1100,7 @@ def _print_comparison(comparison) -> None:
         ("duration T [s]", lambda r: f"{r.duration:.4f} ({r.duration_mode})"),
         ("auto (true peaks) [s]", lambda r: _opt(r.auto, "{:.4f}")),
         ("fit (motor limits) [s]", lambda r: _opt(r.fit, "{:.4f}")),
+        ("optimal law / fit [1]", lambda r: "–" if r.optimal is None or not r.fit else f"{r.optimal / r.fit:.3f}"),
         ("paper formula [s]", lambda r: _opt(r.paper_duration, "{:.4f}")),
         ("v_max (b = 1, T = 1)", lambda r: _opt(r.v_norm)),
         ("a_max (b = 1, T = 1)", lambda r: _opt(r.a_norm)),
@@ -1119,6 +1120,8 @@ def _print_comparison(comparison) -> None:
         ("residual vibration [m]", vib("max_amplitude")),
         ("residual acceleration [m/s²]", vib("max_acceleration_amplitude")),
     ]
+    if not any(r.optimal is not None for r in rows):  # the law's row only with --time optimal
+        lines = [ln for ln in lines if not ln[0].startswith("optimal law")]
     table = Table(box=None, pad_edge=False, show_header=True, header_style="bold")
     table.add_column("quantity", justify="left")
     for r in rows:
@@ -1198,10 +1201,14 @@ def plot(
     eta: Optional[float] = typer.Option(None, "--eta", help="Lift-off/set-down ratio η, 0 < η < 1. [default: profile]"),
     time: str = typer.Option("auto", "--time", "-t", help="Duration of each method's move: 'auto', 'fit', 'optimal' (non-uniform time law, same path) or seconds."),
     normalised: bool = typer.Option(False, "--normalised", help="Plot with b = 1 and T = 1 against τ (like Li 2018 Fig. 5)."),
+    motors: bool = typer.Option(
+        False, "--motors", help="Add each motor's speed, torque and torque rate against time in % of its limit "
+        "(line style per joint), and the round trip's RMS motor torque in % of rated: where the motors idle."),
     fmt: Optional[str] = typer.Option(None, "--format", "-f", help="png or svg. [default: from the file's suffix]"),
 ) -> None:
     """Draw the path in the vertical plane (u along the move, z) and |v|, |a|, |j| against time for one or
-    several methods (PNG or SVG; needs the optional extra: pip install 'pickplace-cli[plot]')."""
+    several methods, and with --motors how hard each motor works (PNG or SVG; needs the optional extra:
+    pip install 'pickplace-cli[plot]')."""
     from .compare import parse_methods
     from .errors import PickplaceError
     from .export import atomic_output, check_writable
@@ -1210,6 +1217,8 @@ def plot(
     from .planner import plan as run_plan
     from .timing import parse_time
 
+    if motors and normalised:
+        _usage("--motors draws the motors at each move's duration: not with --normalised")
     require_matplotlib()
     kind = plot_format(output, fmt)
     check_writable(output)
@@ -1224,13 +1233,32 @@ def plot(
             sys.stderr.write(f"pickplace: method {m.value}: {exc}\n")
             first_error = first_error or exc
             continue
-        moves.append(PlotMove(f"{m.value} (T = {res.duration.seconds:.4f} s)", res.cartesian, task))
+        use = None
+        if motors:
+            use = _motor_use(res, prof)
+        moves.append(PlotMove(f"{m.value} (T = {res.duration.seconds:.4f} s)", res.cartesian, task, use))
     if not moves:
         _err("no method could plan this move")
         raise typer.Exit(first_error.exit_code if first_error else 1)
     title = f"{prof.name}: b = {task.b:.4g} m, h = {task.height:.4g} m, λ = {task.lam:.4g}"
     with atomic_output(output, binary=True) as stream:
         write_plot(moves, stream, kind, normalised, title)
+
+
+def _motor_use(res, prof) -> tuple:
+    """(t [s], motor curves in % of limit, RMS % of rated) of a planned move for ``plot --motors``."""
+    import numpy as np
+
+    from .export.plot import PLOT_SAMPLES
+    from .limits import jump_sides, limit_use
+    from .planner import motion_model
+
+    path, T = res.cartesian.path, res.duration.seconds
+    bp = np.asarray(path.breakpoints, float)
+    tau = np.unique(np.clip(np.concatenate([np.linspace(0.0, 1.0, PLOT_SAMPLES), bp,
+                                            jump_sides(bp, path.jumps)]), 0.0, 1.0))
+    curves, rms = limit_use(motion_model(path, prof), T, tau, dwell=prof.planning.dwell)
+    return tau * T, curves, rms
 
 
 def _checkpointed_rows(ckpt, settings) -> int:

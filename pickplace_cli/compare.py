@@ -330,6 +330,7 @@ class CompareRow:
     duration_mode: str | None = None
     auto: float | None = None  # s
     fit: float | None = None  # s
+    optimal: float | None = None  # s, the non-uniform time law of --time optimal (None with other --time)
     binding: str | None = None
     paper_duration: float | None = None  # s, the paper's own formula (None: the method has none)
     paper_formula: str | None = None
@@ -365,6 +366,7 @@ class CompareRow:
             "duration_mode": self.duration_mode,
             "auto_s": self.auto,
             "fit_s": self.fit,
+            "optimal_s": self.optimal,
             "binding": self.binding,
             "paper_duration_s": self.paper_duration,
             "paper_formula": self.paper_formula,
@@ -536,6 +538,7 @@ def compare_row(task, profile, method, params: Mapping[str, Any] | None = None, 
         duration_mode=result.duration.mode,
         auto=result.duration.t_auto,
         fit=result.duration.t_fit,
+        optimal=result.duration.t_optimal,
         binding=result.duration.binding,
         paper_duration=None if paper is None else paper[0],
         paper_formula=None if paper is None else paper[1],
@@ -600,6 +603,7 @@ def _csv_columns() -> list[tuple[str, Any]]:
         ("mode", lambda r: r.duration_mode),
         ("auto[s]", lambda r: r.auto),
         ("fit[s]", lambda r: r.fit),
+        ("optimal[s]", lambda r: r.optimal),
         ("paper[s]", lambda r: r.paper_duration),
         ("v_max_norm[1]", lambda r: r.v_norm),
         ("a_max_norm[1]", lambda r: r.a_norm),

@@ -633,6 +633,26 @@ _COLUMNS = {
 }
 
 
+#: the motor quantities ``plot --motors`` draws as % of their limits
+MOTOR_QUANTITIES = ("motor speed", "motor torque", "motor torque rate")
+
+
+def limit_use(model, T: float, tau: np.ndarray, quantities: tuple[str, ...] = MOTOR_QUANTITIES,
+              dwell: float = 0.0) -> tuple[list[tuple[str, str, np.ndarray]], list[tuple[str, float]]]:
+    """How hard the motors work along the move at duration T [s]: ([(joint, quantity, |value| / limit · 100 on
+    ``tau``)] for every limited column among ``quantities``, [(joint, RMS motor torque over the round trip
+    with ``dwell`` [s] / rated · 100)] for every joint with a rated torque)."""
+    parts = model.parts(np.asarray(tau, float))
+    meta, data = model.columns(parts, T)
+    curves = [(m[0], m[1], 100.0 * data[:, c] / m[3]) for c, m in enumerate(meta) if m[1] in quantities]
+    rms = []
+    rated = [s.drive.rated_torque if s.drive is not None else None for s in model.specs]
+    if any(r for r in rated):
+        values = model.rms_motor_torque(T, dwell)
+        rms = [(name, 100.0 * float(v) / r) for name, v, r in zip(model.robot.joint_names, values, rated) if r]
+    return curves, rms
+
+
 def _parabolic_peak(x: np.ndarray, y: np.ndarray, i: np.ndarray,
                     seg: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Vertex of the parabola through samples i−1, i, i+1 of each column (falls back to the sample: at an

@@ -131,7 +131,6 @@ def _optimised_shape(task: Task, profile: Profile, options: PlanOptions) -> tupl
     from dataclasses import replace
 
     from .errors import PickplaceError, UsageError
-    from .timing import fit_duration
     from .timing.shape import optimise_shape
 
     if Method(options.method) is not Method.bspline:
@@ -148,13 +147,15 @@ def _optimised_shape(task: Task, profile: Profile, options: PlanOptions) -> tupl
     def model_of(p):
         return motion_model(p, profile)
 
-    table_shape, t_table = None, None
+    table_shape, t_table, ref = None, None, None
     try:
         ref = plan_path(task, Method.bspline, **base)
-        table_shape = (float(ref.parameters["k1"]), float(ref.parameters["k2"]), float(task.eta))
-        t_table = fit_duration(model_of(ref), profile.planning.dwell)[0]
-    except PickplaceError:  # outside the table, or the table's shape cannot be fitted: search without it
+    except PickplaceError:  # outside the table: search without it
         pass
+    if ref is not None:
+        table_shape = (float(ref.parameters["k1"]), float(ref.parameters["k2"]), float(task.eta))
+        # the table shape's fit; a profile with no duration-dependent limit is the same error as --time fit's
+        t_table = choose_duration(ref, profile.capacity, "fit", model=model_of(ref), dwell=profile.planning.dwell).seconds
     found = optimise_shape(task, profile, model_of, eta_fixed=task.eta if options.hold_eta else None,
                            table_shape=table_shape)
     shaped = Task(task.p_from, task.p_to, task.height, found.eta, task.v_from, task.v_to)

@@ -39,6 +39,8 @@ class PlotMove:
     label: str
     trajectory: object
     task: object
+    #: ``plot --motors``: (t [s] (N,), [(joint, quantity, % of limit (N,))], [(joint, RMS % of rated)]) or None
+    motors: tuple | None = None
 
 
 def plot_format(path: str | None, fmt: str | None) -> str:
@@ -71,9 +73,14 @@ def make_figure(moves: Sequence[PlotMove], normalised: bool = False, title: str 
 
     if not moves:
         raise ExportError("plot: no move to draw")
-    fig = Figure(figsize=(11.0, 7.5), layout="constrained")
-    axes = fig.subplots(2, 2)
-    ax_path, ax_v, ax_a, ax_j = axes[0, 0], axes[0, 1], axes[1, 0], axes[1, 1]
+    motors = any(mv.motors is not None for mv in moves)
+    fig = Figure(figsize=(11.0, 13.5 if motors else 7.5), layout="constrained")
+    if motors:
+        panel = fig.subplot_mosaic([["path", "v"], ["a", "j"], ["motor speed", "motor torque"],
+                                    ["motor torque rate", "rms"]])
+    else:
+        panel = fig.subplot_mosaic([["path", "v"], ["a", "j"]])
+    ax_path, ax_v, ax_a, ax_j = panel["path"], panel["v"], panel["a"], panel["j"]
     for k, mv in enumerate(moves):
         traj, task = mv.trajectory, mv.task
         path = traj.path
@@ -105,9 +112,54 @@ def make_figure(moves: Sequence[PlotMove], normalised: bool = False, title: str 
         ax.grid(True, lw=0.4, color="0.85")
         ax.set_title(f"{name}{' normalised' if normalised else ''}")
     ax_path.grid(True, lw=0.4, color="0.85")
+    if motors:
+        _motor_panels(moves, panel)
     if title:
         fig.suptitle(title)
     return fig
+
+
+_JOINT_STYLES = ("-", "--", ":", "-.")
+
+
+def _motor_panels(moves: Sequence[PlotMove], ax) -> None:
+    """Each motor's speed, torque and torque rate against time as % of its limit (colour: move, line style:
+    joint), and the RMS motor torque over the round trip as % of rated (bars): where the motors idle."""
+    rms_bars: list[tuple[int, str, float]] = []
+    for k, mv in enumerate(moves):
+        if mv.motors is None:
+            continue
+        t, curves, rms = mv.motors
+        joints = list(dict.fromkeys(j for j, _, _ in curves))
+        for joint, quantity, pct in curves:
+            style = _JOINT_STYLES[joints.index(joint) % len(_JOINT_STYLES)]
+            ax[quantity].plot(t, pct, color=f"C{k % 10}", ls=style, lw=1.1, label=f"{mv.label.split(' (')[0]} {joint}")
+        rms_bars += [(k, joint, pct) for joint, pct in rms]
+    for quantity in ("motor speed", "motor torque", "motor torque rate"):
+        a = ax[quantity]
+        a.axhline(100.0, color="k", lw=0.9)
+        a.set_xlabel("t [s]")
+        a.set_ylabel("% of limit")
+        a.set_title(f"{quantity} (|value| / limit)")
+        a.grid(True, lw=0.4, color="0.85")
+        if a.lines[:-1]:
+            a.legend(fontsize="x-small", ncol=2)
+    a = ax["rms"]
+    if rms_bars:
+        joints = list(dict.fromkeys(j for _, j, _ in rms_bars))
+        n = max(k for k, _, _ in rms_bars) + 1
+        width = 0.8 / n
+        labelled: set[int] = set()
+        for k, joint, pct in rms_bars:
+            label = None if k in labelled else moves[k].label.split(" (")[0]
+            labelled.add(k)
+            a.bar(joints.index(joint) + (k - (n - 1) / 2) * width, pct, width, color=f"C{k % 10}", label=label)
+        a.legend(fontsize="x-small")
+        a.set_xticks(range(len(joints)), joints)
+    a.axhline(100.0, color="k", lw=0.9)
+    a.set_ylabel("% of rated torque")
+    a.set_title("RMS motor torque over the round trip (with dwells)")
+    a.grid(True, axis="y", lw=0.4, color="0.85")
 
 
 def write_plot(moves: Sequence[PlotMove], stream: IO[bytes], fmt: str = "png", normalised: bool = False,

@@ -156,3 +156,41 @@ def test_plot_unreachable_exits_4(tmp_path):
     out = tmp_path / "f.png"
     r = run("plot", "--from", "0,0,-0.8", "--to", "1.0,0,-0.8", "--height", "0.05", "-o", str(out))
     assert r.exit_code == 4 and not out.exists()
+
+
+def test_plot_motors_panels(tmp_path):
+    """--motors adds the motors' use in % of their limits; the same figure without it is smaller; with
+    --normalised it is refused (exit 2, nothing written)."""
+    plain, motors = tmp_path / "p.svg", tmp_path / "m.svg"
+    assert run("plot", *ADEPT, "-m", "bspline", "-t", "fit", "-o", str(plain)).exit_code == 0
+    r = run("plot", *ADEPT, "-m", "bspline,lame", "-t", "optimal", "--motors", "-o", str(motors))
+    assert r.exit_code == 0, r.stderr
+    assert motors.read_text().startswith("<?xml") and motors.stat().st_size > plain.stat().st_size
+    bad = tmp_path / "n.png"
+    r = run("plot", *ADEPT, "--motors", "--normalised", "-o", str(bad))
+    assert r.exit_code == 2 and "--normalised" in r.output and not bad.exists()
+
+
+def test_limit_use_agrees_with_the_limit_report():
+    """The curves plot --motors draws are the check's own columns: each curve's maximum on the plot's grid is
+    within 1 % below (never above) the report's refined peak, the binding torque rate touches 100 %, and the
+    RMS bars are the report's RMS rows."""
+    import numpy as np
+
+    from pickplace_cli.limits import limit_use
+    from pickplace_cli.planner import PlanOptions, motion_model, plan
+    from pickplace_cli.profile import load_profile
+    from pickplace_cli.task import Task
+
+    prof = load_profile("delta-su2018")
+    res = plan(Task([-0.1525, 0, -0.8], [0.1525, 0, -0.8], 0.025, 0.5), prof, PlanOptions(time="fit"))
+    T = res.duration.seconds
+    curves, rms = limit_use(motion_model(res.cartesian.path, prof), T, np.linspace(0, 1, 4001), dwell=prof.planning.dwell)
+    rows = {(r.joint, r.quantity): r for r in res.report.rows}
+    assert len(curves) == 9 and len(rms) == 3
+    for joint, quantity, pct in curves:
+        ref = 100 * rows[(joint, quantity)].utilisation
+        assert ref * 0.99 <= pct.max() <= ref * (1 + 1e-6), (joint, quantity)
+    assert max(pct.max() for _, q, pct in curves if q == "motor torque rate") == pytest.approx(100, rel=5e-3)
+    for joint, pct in rms:
+        assert pct == pytest.approx(100 * rows[(joint, "rms motor torque")].utilisation, rel=1e-9)
