@@ -234,6 +234,12 @@ def plan(
         "the table's values (Li 2018's Cartesian optimum); with --time fit or optimal (the fit and the law are then "
         "those of the chosen shape). The summary compares it with the table's shape. ~0.5-1 s more.",
     ),
+    hold_capacity: bool = typer.Option(
+        False, "--hold-capacity", help="With --time fit or optimal (and --optimize shape): also hold the profile's "
+        "Cartesian capacity |v| ≤ capacity.velocity [m/s], |a| ≤ capacity.acceleration [m/s²] (and |j| ≤ capacity.jerk "
+        "[m/s³] when set), e.g. for a payload or gripper that limits the tool. Default: off, fit and optimal hold "
+        "the joint and motor limits only (auto holds the capacity only).",
+    ),
     show_fit: bool = typer.Option(
         False, "--show-fit", help="With --time auto or seconds: also compute the fitted duration (the smallest at "
         "which every joint and motor limit holds) and report it next to the chosen one (fit_s in --json). Costs "
@@ -358,11 +364,15 @@ def plan(
     if shape and time not in ("fit", "optimal"):
         _usage(f"--optimize shape minimises the fitted duration on the robot's limits: use it with --time fit or "
                f"--time optimal (not --time {time})")
+    if hold_capacity and time not in ("fit", "optimal"):
+        _usage(f"--hold-capacity applies to --time fit or optimal (--time {time} "
+               f"{'holds the capacity already' if time == 'auto' else 'is given'})")
     if shape and (k1 is not None or k2 is not None):
         _usage("--optimize shape chooses k1 and k2 itself: drop --k1/--k2 (or drop --optimize)")
     if batch is not None:
         options = PlanOptions(method=method.value, method_params=params, time=time, rate=rate,
-                              fit=time == "fit" or show_fit, shape=shape, hold_eta=eta is not None)
+                              fit=time == "fit" or show_fit, shape=shape, hold_eta=eta is not None,
+                              hold_capacity=hold_capacity)
         if workers < 0:
             raise TaskError(f"workers = {workers}: must be 0 (automatic) or a positive number of processes")
         _plan_batch(batch, prof, options, height, eta, fail_fast, writer, output, report, report_only, json_summary,
@@ -375,7 +385,7 @@ def plan(
     h = height if height is not None else prof.planning.height
     e = eta if eta is not None else prof.planning.eta
     options = PlanOptions(method=method.value, method_params=params, time=time, rate=rate, fit=time == "fit" or show_fit,
-                          shape=shape, hold_eta=eta is not None)
+                          shape=shape, hold_eta=eta is not None, hold_capacity=hold_capacity)
     wc = prof.workcell
     vel_from = _parse_point("v-from", v_from, "m/s") if v_from is not None else (getattr(wc, "conveyor_pick_velocity", None) or (0.0, 0.0, 0.0))
     vel_to = _parse_point("v-to", v_to, "m/s") if v_to is not None else (getattr(wc, "conveyor_place_velocity", None) or (0.0, 0.0, 0.0))

@@ -33,6 +33,7 @@ class PlanOptions:
     # depends on the duration (bspline-vel) only with time="fit": each trial duration re-plans the path
     shape: bool = False  # bspline: choose k1, k2 (and η unless hold_eta) for the smallest duration on the robot
     hold_eta: bool = False  # with shape: keep the task's η (the user gave it), search k1, k2 only
+    hold_capacity: bool = False  # fit/optimal also hold the profile's Cartesian capacity (|v|, |a|, |j|)
 
 
 @dataclass(frozen=True)
@@ -155,9 +156,10 @@ def _optimised_shape(task: Task, profile: Profile, options: PlanOptions) -> tupl
     if ref is not None:
         table_shape = (float(ref.parameters["k1"]), float(ref.parameters["k2"]), float(task.eta))
         # the table shape's fit; a profile with no duration-dependent limit is the same error as --time fit's
-        t_table = choose_duration(ref, profile.capacity, "fit", model=model_of(ref), dwell=profile.planning.dwell).seconds
+        t_table = choose_duration(ref, profile.capacity, "fit", model=model_of(ref), dwell=profile.planning.dwell,
+                                  hold_capacity=options.hold_capacity).seconds
     found = optimise_shape(task, profile, model_of, eta_fixed=task.eta if options.hold_eta else None,
-                           table_shape=table_shape)
+                           table_shape=table_shape, capacity=profile.capacity if options.hold_capacity else None)
     shaped = Task(task.p_from, task.p_to, task.height, found.eta, task.v_from, task.v_to)
     info = {"k1": found.k1, "k2": found.k2, "eta": found.eta, "screened_fit_s": found.t_screen,
             "shapes_screened": found.evaluations, "note": found.note,
@@ -184,6 +186,11 @@ def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions()) -> 
     factory = None
     try:
         if depends_on_duration(options.method):  # the path is planned for a duration (e.g. conveyor tracking)
+            if options.hold_capacity:
+                from .errors import UsageError
+
+                raise UsageError(f"--hold-capacity: not available for method {Method(options.method).value} (its "
+                                 "fit re-plans the path for every trial duration); use --time auto for the capacity")
             if options.time == "optimal":
                 from .errors import UsageError
 
@@ -227,13 +234,15 @@ def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions()) -> 
     elif options.time == "optimal":
         from .timing import choose_optimal
 
-        duration, path, law_note = choose_optimal(path, profile, model, dwell, lambda p: motion_model(p, profile))
+        duration, path, law_note = choose_optimal(path, profile, model, dwell, lambda p: motion_model(p, profile),
+                                                  hold_capacity=options.hold_capacity)
         notes = (law_note,)
         if path is not model.path:  # the composed path: evaluated below
             model = motion_model(path, profile)
             retimed = True
     elif factory is None and (options.fit or options.time == "fit"):
-        duration = choose_duration(path, profile.capacity, options.time, model=model, dwell=dwell)
+        duration = choose_duration(path, profile.capacity, options.time, model=model, dwell=dwell,
+                                   hold_capacity=options.hold_capacity)
     else:
         duration = first
     T = duration.seconds

@@ -78,10 +78,12 @@ def parse_time(spec: str | float) -> str | float:
 
 
 def choose_duration(
-    path: CartesianPath, capacity: Capacity, spec: str | float = "auto", model=None, dwell: float = 0.0
+    path: CartesianPath, capacity: Capacity, spec: str | float = "auto", model=None, dwell: float = 0.0,
+    hold_capacity: bool = False,
 ) -> Duration:
     """Duration of the move: explicit seconds, ``auto`` (Eq. 26), or ``fit`` (needs ``model``, a
-    :class:`~pickplace_cli.limits.MotionModel`): the smallest T at which every limit holds."""
+    :class:`~pickplace_cli.limits.MotionModel`): the smallest T at which every limit holds.
+    ``hold_capacity``: ``fit`` also holds the Cartesian capacity (T ≥ auto; the peaks scale exactly)."""
     spec = parse_time(spec)
     tv, ta, tj, binding = auto_duration(path, capacity)
     t_auto = max(tv, ta, tj or 0.0)
@@ -93,6 +95,8 @@ def choose_duration(
     if spec in ("fit", "optimal"):
         if model is None:
             raise TaskError("time = fit: needs the robot model (plan through pickplace_cli.planner.plan)")
+        if hold_capacity and (t_fit is None or t_auto > t_fit):  # the capacity binds (or nothing else does)
+            return Duration(t_auto, "fit", tv, ta, tj, f"capacity {binding}", t_auto)
         if t_fit is None:
             raise TaskError(
                 "time = fit: the profile sets no velocity, acceleration, jerk or motor limit that depends on the "
@@ -323,7 +327,8 @@ def fit_duration_for(factory, model_of, dwell: float = 0.0, start: float = 0.1, 
     return float(T), binding, factory(T)
 
 
-def choose_optimal(path: CartesianPath, profile, model, dwell: float, model_of) -> tuple[Duration, CartesianPath, str]:
+def choose_optimal(path: CartesianPath, profile, model, dwell: float, model_of,
+                   hold_capacity: bool = False) -> tuple[Duration, CartesianPath, str]:
     """``--time optimal``: the fit of the uniform law, then the optimised non-uniform law on the same path
     (:mod:`pickplace_cli.timing.optimal`), whose duration is fitted again by the continuous check on the
     composed path. Returns (Duration, the path to sample — the composed one, or ``path`` itself when the law
@@ -331,8 +336,8 @@ def choose_optimal(path: CartesianPath, profile, model, dwell: float, model_of) 
     from ..errors import PickplaceError
     from .optimal import optimal_law
 
-    fit = choose_duration(path, profile.capacity, "fit", model=model, dwell=dwell)
-    law = optimal_law(model, dwell, fit.seconds)
+    fit = choose_duration(path, profile.capacity, "fit", model=model, dwell=dwell, hold_capacity=hold_capacity)
+    law = optimal_law(model, dwell, fit.seconds, capacity=profile.capacity if hold_capacity else None)
     composed = law.path
     try:
         t_opt, binding = fit_duration(model_of(composed), dwell, start=max(law.t_estimate, 1e-3))
@@ -340,6 +345,10 @@ def choose_optimal(path: CartesianPath, profile, model, dwell: float, model_of) 
         t_opt, binding, why = None, None, f" ({exc})"
     else:
         why = ""
+        if hold_capacity:  # the composed path's exact Cartesian peaks scale as 1/T^k like any path's
+            tv, ta, tj, cap = auto_duration(composed, profile.capacity)
+            if t_opt is None or max(tv, ta, tj or 0.0) > t_opt:
+                t_opt, binding = max(tv, ta, tj or 0.0), f"capacity {cap}"
     if t_opt is None or not t_opt < fit.seconds * (1 - 1e-6):
         got = f"{t_opt:.6g} s" if t_opt is not None else "no duration"
         note = (f"time = optimal: the optimised law ({got}{why}; {law.message}) is not faster than uniform "

@@ -73,18 +73,18 @@ class ShapeResult:
 
 def optimise_shape(task, profile, model_of, eta_fixed: float | None = None,
                    eta_range: tuple[float, float] = ETA_RANGE,
-                   table_shape: tuple[float, float, float] | None = None) -> ShapeResult:
+                   table_shape: tuple[float, float, float] | None = None, capacity=None) -> ShapeResult:
     """The (k1, k2, η) of the B-spline path of ``task`` with the smallest screened ``--time fit`` duration on
     ``profile`` (module docstring). ``model_of(path)``: the path's motion model on the profile's robot.
     ``eta_fixed``: hold η (search k1, k2 only). ``table_shape``: (k1, k2, η) of the look-up table, screened
-    and used as one more start."""
+    and used as one more start. ``capacity``: also hold the Cartesian capacity (T ≥ Eq. 26's auto)."""
     from scipy.optimize import minimize
 
     from ..errors import PickplaceError
     from ..limits import _extra_points
     from ..methods import plan_path
     from ..task import Task
-    from . import _worst_utilisation, screened_root
+    from . import _worst_utilisation, auto_duration, screened_root
 
     dwell = profile.planning.dwell
     seen: dict[tuple, float] = {}
@@ -106,6 +106,8 @@ def optimise_shape(task, profile, model_of, eta_fixed: float | None = None,
             else:
                 excess = _static_excess(model, found[1])
                 val = screened_root(found[0], last_t[0], rtol=1e-6)
+                if capacity is not None:
+                    val = max(val, *(x for x in auto_duration(path, capacity)[:3] if x is not None))
                 last_t[0] = val
                 if excess > 0:  # ranked by its excess (rounded: the same excess ranks by duration), then T
                     val += INFEASIBLE * (1.0 + round(excess, 6))

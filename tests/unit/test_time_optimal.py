@@ -137,3 +137,33 @@ def test_model_inertia_along_matches_the_model():
     m = _inertia_along(model, tau, p, p1)
     np.testing.assert_allclose(direct.Am + direct.Gm, pr.Am * b[:, None] + m * (b1 / 2)[:, None] + pr.Gm,
                                rtol=1e-9, atol=1e-9)
+
+
+def test_hold_capacity_fit_and_optimal_keep_the_cartesian_capacity():
+    """--hold-capacity: fit = max(motor fit, Eq. 26 auto) (the capacity binds on the Adept cycle), and the optimal
+    law holds |v| ≤ [v] and |a| ≤ [a] on the written samples while beating Eq. 26 — but never the independent
+    floor of TOPP-RA under the same |v|, |a| alone on this path, 0.1383 s (bench/run.py; our law also holds
+    jerk-boundedness and every motor limit, so it must be slower)."""
+    prof = load_profile("delta-su2018")
+    cap = prof.capacity
+    fit = plan(ADEPT, prof, PlanOptions(time="fit", hold_capacity=True))
+    assert fit.duration.seconds == pytest.approx(fit.duration.t_auto, rel=1e-12)
+    assert fit.duration.binding.startswith("capacity")
+    opt = plan(ADEPT, prof, PlanOptions(time="optimal", hold_capacity=True, rate=20_000.0))
+    T = opt.duration.seconds
+    assert opt.report.ok
+    assert 0.1383 * 0.999 <= T <= 0.85 * fit.duration.seconds  # measured 0.1495 s = 0.831 × auto
+    assert np.linalg.norm(opt.v, axis=1).max() <= cap.velocity * (1 + 1e-6)
+    assert np.linalg.norm(opt.a, axis=1).max() <= cap.acceleration * (1 + 1e-6)
+    assert np.linalg.norm(opt.a, axis=1).max() >= 0.98 * cap.acceleration  # the capacity is used, not idle
+
+
+def test_hold_capacity_refusals():
+    runner = CliRunner()
+    r = runner.invoke(app, ["plan", "--from", "-0.1525,0,-0.8", "--to", "0.1525,0,-0.8", "--hold-capacity"])
+    assert r.exit_code == 2 and "--time fit or optimal" in r.output
+    from pickplace_cli.errors import UsageError
+
+    prof = load_profile("delta-su2018")
+    with pytest.raises(UsageError, match="bspline-vel"):
+        plan(ADEPT, prof, PlanOptions(method="bspline-vel", time="fit", hold_capacity=True))
