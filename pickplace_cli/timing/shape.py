@@ -55,6 +55,37 @@ def _static_excess(model, parts) -> float:
     return worst
 
 
+def _AXIS(n: int) -> np.ndarray:
+    """Grid values of k1 and k2: the lower end of the range (the optimum often lies there) and n − 1 points
+    spread over [0.15, 0.85]."""
+    return np.concatenate([[K_SEARCH[0]], np.linspace(0.15, 0.85, n - 1)])
+
+
+def _log_secant_root(worst, start: float, xtol: float = 1e-7, iterations: int = 30) -> float | None:
+    """The T [s] where the worst utilisation u(T) = 1 by the secant method on log u against log T (u ∝ T^-k
+    for k = 1…3 for every quantity but the gravity-loaded torque: ~4 evaluations); None when it does not
+    converge (the caller falls back to the bracketing :func:`~pickplace_cli.timing.screened_root`)."""
+    x0 = np.log(start)
+    u0 = worst(start)[0] + 1.0
+    if not (u0 > 0 and np.isfinite(u0)):
+        return None
+    x1 = x0 + 0.5 * np.log(u0)  # as if u ∝ T^-2
+    y0 = np.log(u0)
+    for _ in range(iterations):
+        u1 = worst(float(np.exp(x1)))[0] + 1.0
+        if not (u1 > 0 and np.isfinite(u1)):
+            return None
+        y1 = np.log(u1)
+        if abs(x1 - x0) < xtol and abs(y1) < 1e-6:
+            return float(np.exp(x1))
+        if y1 == y0:
+            return None
+        x0, y0, x1 = x1, y1, x1 - y1 * (x1 - x0) / (y1 - y0)
+        if not np.isfinite(x1):
+            return None
+    return None
+
+
 @dataclass(frozen=True)
 class ShapeResult:
     """The chosen (k1, k2, η), its screened fit duration [s] (None when no shape keeps the duration-independent
@@ -105,7 +136,9 @@ def optimise_shape(task, profile, model_of, eta_fixed: float | None = None,
                 val = np.inf
             else:
                 excess = _static_excess(model, found[1])
-                val = screened_root(found[0], last_t[0], rtol=1e-6)
+                val = _log_secant_root(found[0], last_t[0])
+                if val is None or found[0](val * (1 + 1e-6))[0] > 0:  # not converged, or not the last crossing
+                    val = screened_root(found[0], last_t[0], rtol=1e-6)
                 if capacity is not None:
                     val = max(val, *(x for x in auto_duration(path, capacity)[:3] if x is not None))
                 last_t[0] = val
@@ -118,8 +151,7 @@ def optimise_shape(task, profile, model_of, eta_fixed: float | None = None,
 
     lo_e, hi_e = (eta_fixed, eta_fixed) if eta_fixed is not None else eta_range
     n1, n2, ne = SHAPE_GRID
-    k_axis = np.linspace(K_SEARCH[0] + 0.05, K_SEARCH[1] - 0.05, n1)
-    k2_axis = np.linspace(K_SEARCH[0] + 0.05, K_SEARCH[1] - 0.05, n2)
+    k_axis, k2_axis = _AXIS(n1), _AXIS(n2)
     e_axis = np.linspace(lo_e, hi_e, ne) if eta_fixed is None else np.array([eta_fixed])
     grid = [(a, b, e) for e in e_axis for a in k_axis for b in k2_axis]
     vals = np.array([screen(*g) for g in grid])
