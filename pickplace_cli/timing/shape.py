@@ -61,6 +61,9 @@ def _AXIS(n: int) -> np.ndarray:
     return np.concatenate([[K_SEARCH[0]], np.linspace(0.15, 0.85, n - 1)])
 
 
+_LOG_T = (np.log(1e-4), np.log(1e4))
+
+
 def _log_secant_root(worst, start: float, xtol: float = 1e-7, iterations: int = 30) -> float | None:
     """The T [s] where the worst utilisation u(T) = 1 by the secant method on log u against log T (u ∝ T^-k
     for k = 1…3 for every quantity but the gravity-loaded torque: ~4 evaluations); None when it does not
@@ -69,7 +72,7 @@ def _log_secant_root(worst, start: float, xtol: float = 1e-7, iterations: int = 
     u0 = worst(start)[0] + 1.0
     if not (u0 > 0 and np.isfinite(u0)):
         return None
-    x1 = x0 + 0.5 * np.log(u0)  # as if u ∝ T^-2
+    x1 = float(np.clip(x0 + 0.5 * np.log(u0), *_LOG_T))  # as if u ∝ T^-2
     y0 = np.log(u0)
     for _ in range(iterations):
         u1 = worst(float(np.exp(x1)))[0] + 1.0
@@ -81,7 +84,7 @@ def _log_secant_root(worst, start: float, xtol: float = 1e-7, iterations: int = 
         if y1 == y0:
             return None
         x0, y0, x1 = x1, y1, x1 - y1 * (x1 - x0) / (y1 - y0)
-        if not np.isfinite(x1):
+        if not (np.isfinite(x1) and _LOG_T[0] < x1 < _LOG_T[1]):  # left the durations screened_root scans
             return None
     return None
 
