@@ -83,3 +83,37 @@ def test_fuzzed_profiles_are_valid_or_one_profile_error(edits):
         parse_profile(text, "fuzz.yaml")
     except ProfileError as exc:
         assert "\n" not in str(exc) and str(exc).startswith("fuzz.yaml")
+
+
+# ---------------------------------------------------------------- check input (issue 16, part 3)
+
+
+def test_check_refuses_a_binary_trajectory(tmp_path):
+    from typer.testing import CliRunner
+
+    from pickplace_cli.cli import app
+
+    f = tmp_path / "traj.csv"
+    f.write_bytes(b"t,q1,q2,q3\n0,0,0,0\n\x00\x01\x02" * 10)
+    r = CliRunner().invoke(app, ["check", str(f)])
+    assert r.exit_code == 1 and "binary file (NUL bytes)" in r.output and "Traceback" not in r.output
+    r = CliRunner().invoke(app, ["check", "-"], input=b"t,q1\n\xff\xfe\n")
+    assert r.exit_code == 1 and "not a text (UTF-8) file" in r.output
+
+
+def test_check_refuses_a_file_over_the_bound_in_one_line_without_reading_it_all(tmp_path, monkeypatch):
+    """A file over CHECK_MAX_BYTES is one line naming the file and the bound; the read stops at bound + 1
+    bytes (a /dev/zero-like endless stream does not hang)."""
+    import pickplace_cli.check as C
+    from typer.testing import CliRunner
+
+    from pickplace_cli.cli import app
+
+    monkeypatch.setattr(C, "CHECK_MAX_BYTES", 1000)
+    f = tmp_path / "big.csv"
+    f.write_text("t,q1,q2,q3\n" + "0,0,0,0\n" * 500)
+    r = CliRunner().invoke(app, ["check", str(f)])
+    lines = [ln for ln in r.output.splitlines() if ln.strip()]
+    assert r.exit_code == 1 and len(lines) == 1 and "larger than 1000 bytes" in lines[0] and str(f) in lines[0]
+    r = CliRunner().invoke(app, ["check", "/dev/zero"])
+    assert r.exit_code == 1 and "larger than" in r.output
