@@ -41,11 +41,13 @@ LAW_MARGIN = 0.0
 #: the tool at most 10× slower or faster than uniform anywhere; keeps SLSQP away from b → 0 or ∞ at the
 #: path's ends, where the rest-to-rest path leaves b nearly free)
 LAW_BOUNDS = (1e-2, 1e2)
-#: grid rows used from the start: those above this fraction of their limit on the uniform law
-LAW_ACTIVE = 0.35
-#: SLSQP's tolerance on the objective (the duration relative to T_fit): 1e-7 gives the same T to 4 digits as
-#: 1e-10 on the Adept cycle for bspline, ph and lame with 25-45 % fewer iterations (the check re-fits T anyway)
-LAW_FTOL = 1e-7
+#: grid rows used by the full solve from the start: those above this fraction of their limit at its warm start
+LAW_ACTIVE = 0.5
+#: uniform points of the coarse first phase's grid (every row used); 0: no coarse phase
+LAW_COARSE_GRID = 41
+#: SLSQP's tolerance on the objective (the duration relative to T_fit): 1e-9 gives the same T to 4 digits as
+#: 1e-10 on the Adept cycle for every method with fewer iterations (1e-7 lost up to 1 % on random moves)
+LAW_FTOL = 1e-9
 #: points of the table that inverts t(τ) for the composed path
 LAW_TABLE = 4001
 
@@ -71,12 +73,16 @@ def _basis(knots: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np
     return np.nan_to_num(spl(xc)), np.nan_to_num(spl.derivative(1)(xc)), np.nan_to_num(spl.derivative(2)(xc))
 
 
-def _law_grid(path) -> np.ndarray:
+def _law_grid(path, points: int = 0, spans: bool = True) -> np.ndarray:
+    """The optimiser's τ grid: ``points`` (default ``LAW_GRID``) uniform points, the path's knots, both sides
+    of every jump and (``spans``) the check's Gauss-Kronrod nodes of every span."""
     from ..limits import interior_jumps, jump_sides, span_nodes
 
-    g = np.concatenate([np.linspace(0.0, 1.0, LAW_GRID), np.asarray(path.breakpoints, float),
-                        jump_sides(path.breakpoints, path.jumps), span_nodes(path.breakpoints, path.jumps)[1]])
-    g = np.unique(np.clip(g, 0.0, 1.0))
+    parts = [np.linspace(0.0, 1.0, points or LAW_GRID), np.asarray(path.breakpoints, float),
+             jump_sides(path.breakpoints, path.jumps)]
+    if spans:
+        parts.append(span_nodes(path.breakpoints, path.jumps)[1])
+    g = np.unique(np.clip(np.concatenate(parts), 0.0, 1.0))
     j = interior_jumps(path.breakpoints, path.jumps)
     return g[~np.isin(g, j)]  # the jump itself is represented by its two sides
 
@@ -87,15 +93,17 @@ def _inertia_along(model, tau: np.ndarray, p: np.ndarray, p1: np.ndarray) -> np.
     return model.parts(tau, derivatives=False, motion=(p, z, p1, z), singularity=False).Am
 
 
-def optimal_law(model, dwell: float, t_fit: float, coefficients: int = LAW_COEFFICIENTS,
-                capacity=None) -> LawResult:
-    """Minimise the duration of ``model``'s path over time laws b(τ) (module docstring), warm-started at the
-    uniform law of duration ``t_fit`` [s]. ``capacity``: also hold the profile's Cartesian |v|, |a| (and |j|
-    when set) — optional, off by default. Returns the composed path (not yet checked)."""
-    from scipy.optimize import minimize
+class _Problem:
+    """The law's optimisation problem on one τ grid: ``objective(x)`` → (T/T_fit-scaled duration, gradient),
+    ``constraints(x, keep)`` → (values ≥ 0 when feasible, Jacobian) of the grid rows ``keep`` and the RMS
+    rows, ``values(x)`` → every row's value; ``n_rows`` grid rows (the RMS rows follow them)."""
 
+    def __init__(self, model, tau: np.ndarray, knots: np.ndarray, t_fit: float, dwell: float, capacity) -> None:
+        self.__dict__.update(_problem(model, tau, knots, t_fit, dwell, capacity))
+
+
+def _problem(model, tau: np.ndarray, knots: np.ndarray, t_fit: float, dwell: float, capacity) -> dict:
     path = model.path
-    tau = _law_grid(path)
     pr = model.parts(tau)
     p, p1, p2, p3 = path.all_orders(tau)
     m = _inertia_along(model, tau, p, p1)
@@ -104,7 +112,6 @@ def optimal_law(model, dwell: float, t_fit: float, coefficients: int = LAW_COEFF
     plo, phi = path.all_orders(lo), path.all_orders(hi)
     dm = (_inertia_along(model, hi, phi[0], phi[1]) - _inertia_along(model, lo, plo[0], plo[1])) / (hi - lo)[:, None]
 
-    knots = np.concatenate([[0.0] * 3, np.linspace(0.0, 1.0, coefficients - 2), [1.0] * 3])
     B0, B1, B2 = _basis(knots, tau)
     w = np.zeros(len(tau))  # trapezoid weights on the grid
     dt = np.diff(tau)
@@ -148,94 +155,152 @@ def optimal_law(model, dwell: float, t_fit: float, coefficients: int = LAW_COEFF
         g = (w * -0.5 * b**-1.5 * scale) @ B0
         return f, g
 
-    def constraints(x):
-        """(values ≥ 0 when feasible, Jacobian) over every row."""
-        b, b1, b2 = state(x)
-        vals, jacs = [], []
-        sb = np.sqrt(b)
+    zero = np.zeros(len(tau))
+
+    def pointwise(b, b1, b2):
+        """Every grid row: (values ≥ 0 when feasible, and the coefficients a0, a1, a2 of its gradient in
+        (b, b′, b″)), each (R,); the row's Jacobian in x is (a0·B0 + a1·B1 + a2·B2)·scale at its grid point."""
+        vals, a0, a1, a2 = [], [], [], []
         for kind, c, limit in rows:
+            L2 = limit**2
             if kind == "speed":  # c²·b ≤ L²
-                vals.append(1.0 - c**2 * b / limit**2)
-                jacs.append(-(c**2 / limit**2)[:, None] * B0 * scale)
+                vals.append(1.0 - c**2 * b / L2)
+                a0.append(-(c**2) / L2), a1.append(zero), a2.append(zero)
             elif kind == "affine":  # |c0 b + c1 b′ + c2| ≤ L
                 val = (c[0] * b + c[1] * b1 + c[2]) / limit
-                d = (c[0][:, None] * B0 + c[1][:, None] * B1) * scale / limit
                 vals += [1.0 - val, 1.0 + val]
-                jacs += [-d, d]
+                a0 += [-c[0] / limit, c[0] / limit]
+                a1 += [-c[1] / limit, c[1] / limit]
+                a2 += [zero, zero]
             elif kind == "rate":  # b·(c0 b + c1 b′ + c2 b″ + c3)² ≤ L²
                 y = c[0] * b + c[1] * b1 + c[2] * b2 + c[3]
-                vals.append(1.0 - b * y**2 / limit**2)
-                dy = (c[0][:, None] * B0 + c[1][:, None] * B1 + c[2][:, None] * B2) * scale
-                jacs.append(-((y**2)[:, None] * B0 * scale + (2 * b * y)[:, None] * dy) / limit**2)
+                vals.append(1.0 - b * y**2 / L2)
+                a0.append(-(y**2 + 2 * b * y * c[0]) / L2)
+                a1.append(-2 * b * y * c[1] / L2)
+                a2.append(-2 * b * y * c[2] / L2)
             elif kind == "vaffine":  # ‖c0 b + c1 b′‖² ≤ L²
                 v = c[0] * b[:, None] + c[1] * b1[:, None]
-                vals.append(1.0 - np.sum(v * v, axis=1) / limit**2)
-                dv0, dv1 = np.sum(v * c[0], axis=1), np.sum(v * c[1], axis=1)
-                jacs.append(-2 * (dv0[:, None] * B0 + dv1[:, None] * B1) * scale / limit**2)
+                vals.append(1.0 - np.sum(v * v, axis=1) / L2)
+                a0.append(-2 * np.sum(v * c[0], axis=1) / L2)
+                a1.append(-2 * np.sum(v * c[1], axis=1) / L2)
+                a2.append(zero)
             elif kind == "vrate":  # b‖c0 b + c1 b′ + c2 b″‖² ≤ L²
                 v = c[0] * b[:, None] + c[1] * b1[:, None] + c[2] * b2[:, None]
                 n2 = np.sum(v * v, axis=1)
-                vals.append(1.0 - b * n2 / limit**2)
-                dv = [np.sum(v * ck, axis=1) for ck in c]
-                jac = (n2[:, None] * B0 + 2 * b[:, None] * (dv[0][:, None] * B0 + dv[1][:, None] * B1
-                                                             + dv[2][:, None] * B2)) * scale
-                jacs.append(-jac / limit**2)
-        if rated:  # RMS over the duty cycle: (2∫τ²/√b dτ + dwell·(G0² + G1²)) / (2T + 2·dwell) ≤ rated²
-            Tn = w @ b**-0.5
-            dT = (w * -0.5 * b**-1.5 * scale) @ B0
-            for i, r in rated:
-                tq = pr.Am[:, i] * b + m[:, i] / 2 * b1 + pr.Gm[:, i]
-                I = w @ (tq**2 * b**-0.5)
-                dI = (w * (2 * tq * b**-0.5 * pr.Am[:, i] - 0.5 * tq**2 * b**-1.5)) @ B0 * scale + (
-                    w * 2 * tq * b**-0.5 * m[:, i] / 2) @ B1 * scale
-                hold = dwell * (pr.Gm[0, i] ** 2 + pr.Gm[-1, i] ** 2)
-                den = 2 * Tn + 2 * dwell
-                ms = (2 * I + hold) / den
-                dms = (2 * dI * den - (2 * I + hold) * 2 * dT) / den**2
-                vals.append(np.array([1.0 - ms / r**2]))
-                jacs.append((-dms / r**2)[None, :])
-        return np.concatenate(vals) - LAW_MARGIN, np.vstack(jacs)
+                vals.append(1.0 - b * n2 / L2)
+                a0.append(-(n2 + 2 * b * np.sum(v * c[0], axis=1)) / L2)
+                a1.append(-2 * b * np.sum(v * c[1], axis=1) / L2)
+                a2.append(-2 * b * np.sum(v * c[2], axis=1) / L2)
+        return np.concatenate(vals), np.concatenate(a0), np.concatenate(a1), np.concatenate(a2)
 
-    # active set: SLSQP's cost grows with the number of constraints, and most grid rows are far below their
-    # limits; solve on the rows above ``LAW_ACTIVE`` of their limit, add any the solution breaks, re-solve
-    x0 = np.ones(len(knots) - 4)
-    v0 = constraints(x0)[0]
-    keep = v0 < 1.0 - LAW_ACTIVE
+    n_rows = len(pointwise(*state(np.ones(B0.shape[1])))[0])
+    at = np.tile(np.arange(len(tau)), n_rows // len(tau))  # the grid point of every row
+
+    def rms_rows(x, b, b1):
+        """RMS over the duty cycle, one row per rated joint: (2∫τ²/√b dτ + dwell·(G0² + G1²)) / (2T + 2·dwell)
+        ≤ rated²: (values, Jacobian)."""
+        Tn = w @ b**-0.5
+        dT = (w * -0.5 * b**-1.5 * scale) @ B0
+        vals, jacs = [], []
+        for i, r in rated:
+            tq = pr.Am[:, i] * b + m[:, i] / 2 * b1 + pr.Gm[:, i]
+            I = w @ (tq**2 * b**-0.5)
+            dI = (w * (2 * tq * b**-0.5 * pr.Am[:, i] - 0.5 * tq**2 * b**-1.5)) @ B0 * scale + (
+                w * 2 * tq * b**-0.5 * m[:, i] / 2) @ B1 * scale
+            hold = dwell * (pr.Gm[0, i] ** 2 + pr.Gm[-1, i] ** 2)
+            den = 2 * Tn + 2 * dwell
+            ms = (2 * I + hold) / den
+            dms = (2 * dI * den - (2 * I + hold) * 2 * dT) / den**2
+            vals.append(1.0 - ms / r**2)
+            jacs.append(-dms / r**2)
+        return np.array(vals), np.array(jacs).reshape(len(vals), -1)
+
+    def constraints(x, keep=None):
+        """(values ≥ 0 when feasible, Jacobian) over the grid rows ``keep`` (all: None) and the RMS rows."""
+        b, b1, b2 = state(x)
+        v, a0, a1, a2 = pointwise(b, b1, b2)
+        if keep is not None:
+            v, a0, a1, a2, g = v[keep], a0[keep], a1[keep], a2[keep], at[keep]
+        else:
+            g = at
+        J = (a0[:, None] * B0[g] + a1[:, None] * B1[g] + a2[:, None] * B2[g]) * scale
+        rv, rJ = rms_rows(x, b, b1)
+        return np.concatenate([v, rv]) - LAW_MARGIN, np.vstack([J, rJ])
+
+    def values(x):
+        """Every row's value (grid rows, then RMS rows), no Jacobian."""
+        b, b1, b2 = state(x)
+        return np.concatenate([pointwise(b, b1, b2)[0], rms_rows(x, b, b1)[0]]) - LAW_MARGIN
+
+    return {"objective": objective, "constraints": constraints, "values": values, "n_rows": n_rows}
+
+
+def _solve(prob: _Problem, x: np.ndarray, keep: np.ndarray, t_fit: float) -> tuple[np.ndarray, int, str, int]:
+    """SLSQP on the rows ``keep`` from ``x``; rows the solution breaks are added (with every row above
+    ``LAW_ACTIVE``/2 of its limit) and the problem solved again. Returns (x, iterations, message, rounds)."""
+    from scipy.optimize import minimize
+
     cache: dict = {}
 
     def cons(x):
         key = x.tobytes()
         if key not in cache:
             cache.clear()
-            v, J = constraints(x)
-            cache[key] = (v[keep], J[keep])
+            cache[key] = prob.constraints(x, keep)
         return cache[key]
 
-    x, nit, message = x0, 0, ""
-    rounds: list[int] = []
-    for _ in range(5):
+    nit, message = 0, ""
+    for rounds in range(1, 6):
         cache.clear()
-        res = minimize(lambda x: tuple(v / t_fit for v in objective(x)), x, jac=True, method="SLSQP", bounds=[(LAW_BOUNDS[0], LAW_BOUNDS[1])] * len(x0),
+        res = minimize(lambda x: tuple(v / t_fit for v in prob.objective(x)), x, jac=True, method="SLSQP",
+                       bounds=[LAW_BOUNDS] * len(x),
                        constraints=[{"type": "ineq", "fun": lambda x: cons(x)[0], "jac": lambda x: cons(x)[1]}],
                        options={"maxiter": 300, "ftol": LAW_FTOL})
         nit += int(res.nit)
         message = str(res.message)
         if np.all(np.isfinite(res.x)):
             x = res.x
-        v = constraints(x)[0]
+        v = prob.values(x)[: prob.n_rows]
         broken = (~keep) & (v < -1e-9)
-        rounds.append(int(broken.sum()))
         if not broken.any():
             break
-        keep |= v < 1.0 - LAW_ACTIVE / 2
+        keep = keep | (v < 1.0 - LAW_ACTIVE / 2)
+    return x, nit, message, rounds
+
+
+def optimal_law(model, dwell: float, t_fit: float, coefficients: int = LAW_COEFFICIENTS,
+                capacity=None) -> LawResult:
+    """Minimise the duration of ``model``'s path over time laws b(τ) (module docstring), warm-started at the
+    uniform law of duration ``t_fit`` [s]. ``capacity``: also hold the profile's Cartesian |v|, |a| (and |j|
+    when set) — optional, off by default. Returns the composed path (not yet checked).
+
+    Two phases: every row of a coarse grid (``LAW_COARSE_GRID`` points and the path's knots and jump sides:
+    few rows, so SLSQP's subproblems are cheap) from the uniform law; then the full grid from that solution,
+    on the rows above ``LAW_ACTIVE`` of their limit there (the coarse solution already works the right rows
+    hardest), adding any row the solution breaks."""
+    path = model.path
+    knots = np.concatenate([[0.0] * 3, np.linspace(0.0, 1.0, coefficients - 2), [1.0] * 3])
+    x0 = np.ones(coefficients)
+    nit, message = 0, ""
+    x = x0
+    if LAW_COARSE_GRID:
+        coarse = _Problem(model, _law_grid(path, LAW_COARSE_GRID, spans=False), knots, t_fit, dwell, capacity)
+        xc, nit, message, _ = _solve(coarse, x0, np.ones(coarse.n_rows, bool), t_fit)
+        if coarse.values(xc).min() > -1e-3:  # a usable warm start (the fine grid may still bend it)
+            x = xc
+    fine = _Problem(model, _law_grid(path), knots, t_fit, dwell, capacity)
+    keep = fine.values(x)[: fine.n_rows] < 1.0 - LAW_ACTIVE
+    x, n2, message, rounds = _solve(fine, x, keep, t_fit)
+    nit += n2
     # a law that breaks its own grid constraints (the solver stopped somewhere infeasible) is not used
-    worst = float(constraints(x)[0].min()) if np.all(np.isfinite(x)) else -np.inf
+    worst = float(fine.values(x).min()) if np.all(np.isfinite(x)) else -np.inf
     if worst < -1e-6:
         message = f"{message}; the solver's point breaks a limit on its grid by {-worst:.2g}: the uniform law is kept"
         x = x0
-    message = f"{message} ({len(rounds)} round(s), {int(keep.sum())} of {len(keep)} rows)"
+    message = f"{message} ({rounds} round(s) on {fine.n_rows} grid rows)"
+    scale = 1.0 / t_fit**2
     composed = compose(path, _law_spline(knots, scale * x))
-    return LawResult(composed, float(objective(x)[0]), nit, message)
+    return LawResult(composed, float(fine.objective(x)[0]), nit, message)
 
 
 def _law_spline(knots: np.ndarray, coef: np.ndarray):
