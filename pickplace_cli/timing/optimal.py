@@ -61,6 +61,8 @@ class LawResult:
     t_estimate: float
     iterations: int
     message: str
+    #: the law b(τ) itself (a scipy BSpline; b = (dτ/dt)² [1/s²])
+    law: object = None
 
 
 def _basis(knots: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -269,10 +271,11 @@ def _solve(prob: _Problem, x: np.ndarray, keep: np.ndarray, t_fit: float) -> tup
 
 
 def optimal_law(model, dwell: float, t_fit: float, coefficients: int = LAW_COEFFICIENTS,
-                capacity=None) -> LawResult:
+                capacity=None, start: np.ndarray | None = None) -> LawResult:
     """Minimise the duration of ``model``'s path over time laws b(τ) (module docstring), warm-started at the
     uniform law of duration ``t_fit`` [s]. ``capacity``: also hold the profile's Cartesian |v|, |a| (and |j|
-    when set) — optional, off by default. Returns the composed path (not yet checked).
+    when set) — optional, off by default. ``start``: the law's coefficients to start from (relative to the
+    uniform law, which is all ones; the benchmark's multi-start). Returns the composed path (not yet checked).
 
     Two phases: every row of a coarse grid (``LAW_COARSE_GRID`` points and the path's knots and jump sides:
     few rows, so SLSQP's subproblems are cheap) from the uniform law; then the full grid from that solution,
@@ -282,10 +285,10 @@ def optimal_law(model, dwell: float, t_fit: float, coefficients: int = LAW_COEFF
     knots = np.concatenate([[0.0] * 3, np.linspace(0.0, 1.0, coefficients - 2), [1.0] * 3])
     x0 = np.ones(coefficients)
     nit, message = 0, ""
-    x = x0
+    x = x0 if start is None else np.clip(np.asarray(start, float), *LAW_BOUNDS)
     if LAW_COARSE_GRID:
         coarse = _Problem(model, _law_grid(path, LAW_COARSE_GRID, spans=False), knots, t_fit, dwell, capacity)
-        xc, nit, message, _ = _solve(coarse, x0, np.ones(coarse.n_rows, bool), t_fit)
+        xc, nit, message, _ = _solve(coarse, x, np.ones(coarse.n_rows, bool), t_fit)
         if coarse.values(xc).min() > -1e-3:  # a usable warm start (the fine grid may still bend it)
             x = xc
     fine = _Problem(model, _law_grid(path), knots, t_fit, dwell, capacity)
@@ -299,8 +302,8 @@ def optimal_law(model, dwell: float, t_fit: float, coefficients: int = LAW_COEFF
         x = x0
     message = f"{message} ({rounds} round(s) on {fine.n_rows} grid rows)"
     scale = 1.0 / t_fit**2
-    composed = compose(path, _law_spline(knots, scale * x))
-    return LawResult(composed, float(fine.objective(x)[0]), nit, message)
+    b = _law_spline(knots, scale * x)
+    return LawResult(compose(path, b), float(fine.objective(x)[0]), nit, message, b)
 
 
 def _law_spline(knots: np.ndarray, coef: np.ndarray):
