@@ -28,14 +28,14 @@ SHAPE_SAMPLES = 101
 ETA_RANGE = (0.1, 0.9)
 K_SEARCH = (0.01, 0.99)
 #: the coarse grid: points per axis (k1, k2, η)
-SHAPE_GRID = (5, 5, 4)
+SHAPE_GRID = (5, 5, 3)
 #: Nelder-Mead runs from this many best grid points (plus the table's shape); bench/bench_shape.py compares
 #: this budget (~250 shapes) with a slower search
-SHAPE_STARTS = 1
+SHAPE_STARTS = 2
 #: Nelder-Mead stopping tolerances: on (k1, k2, η) and on the screened duration [s]
 SHAPE_XATOL = 2e-3
 SHAPE_FATOL = 1e-6
-SHAPE_MAXFEV = 80
+SHAPE_MAXFEV = 60
 
 
 #: a shape that breaks a limit no duration fixes (joint range, workcell box, singularity margin) is screened
