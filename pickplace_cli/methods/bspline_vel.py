@@ -1354,6 +1354,11 @@ class PathFactory:
         self._results: dict[float, VelResult] = {}
         self._switches = 0
 
+    def task_at(self, duration: float) -> Task:
+        """The task planned for ``duration`` [s]: the same for every T here; a conveyor rendezvous
+        (:mod:`pickplace_cli.rendezvous`) moves its end point with T."""
+        return self.task
+
     def __call__(self, duration: float) -> CartesianPath:
         T = float(duration)
         if T not in self._cache:
@@ -1366,7 +1371,7 @@ class PathFactory:
             elif self.continuation:
                 self._cache[T] = self._exact(T, seeded=True)
             else:
-                self._cache[T] = plan_bspline_vel(self.task, T, **self.params)
+                self._cache[T] = plan_bspline_vel(self.task_at(T), T, **self.params)
         return self._cache[T]
 
     def _exact(self, T: float, warm: VelResult | None = None, seeded: bool = False) -> CartesianPath:
@@ -1375,11 +1380,11 @@ class PathFactory:
             settings = replace(settings, margin=float(self.params["margin"]))
         if warm is None:  # the first duration, or the final check: the requested solver in full
             solver = self.params.get("solver", "exact") if seeded else "exact"
-            res = optimum(self.task, T, solver, self.params.get("table"), settings)[1]
+            res = optimum(self.task_at(T), T, solver, self.params.get("table"), settings)[1]
         else:
-            res = solve(make_problem(self.task, T), settings, warm=warm)
+            res = solve(make_problem(self.task_at(T), T), settings, warm=warm)
         self._results[T] = res
-        return plan_bspline_vel(self.task, T, _result=res)
+        return plan_bspline_vel(self.task_at(T), T, _result=res)
 
     def final(self, duration: float) -> tuple[CartesianPath, bool]:
         """(the path at T from the full solve (and the continuation: the better), whether the continuation's
@@ -1402,7 +1407,7 @@ class PathFactory:
         if agreed:
             both = replace(before, a_min=both.a_min, j_min=both.j_min, F=both.a_min / before.a_max + both.j_min / before.j_max)
         self._results[T] = both  # F with the lowest normalisers either search found
-        path = plan_bspline_vel(self.task, T, _result=both)
+        path = plan_bspline_vel(self.task_at(T), T, _result=both)
         self._cache[T] = path
         if agreed or before is None:
             return path, True

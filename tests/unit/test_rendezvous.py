@@ -1,0 +1,144 @@
+"""Conveyor rendezvous (issue 17): the move meets a part on a belt with the belt's velocity."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from pickplace_cli.errors import TaskError, UnreachableError, UsageError
+from pickplace_cli.profile import load_profile
+from pickplace_cli.rendezvous import Part, find_rendezvous, plan_rendezvous
+
+#: (profile, a working point the moves stay near [m], radius of the random starts [m])
+SITES = {
+    "delta-su2018": (np.array([0.0, 0.0, -0.8]), 0.2),
+    "scara-600": (np.array([0.4, 0.0, -0.1]), 0.12),
+    "gantry": (np.array([0.0, 0.0, -0.5]), 0.3),
+}
+
+
+def random_case(rng, name):
+    """A start and a part that comes towards the working point (so a rendezvous exists): detected 0.1–0.2 m
+    upstream of it, 0.1–0.5 m/s in a random horizontal direction, latency 0–0.1 s."""
+    centre, radius = SITES[name]
+    ang, dist = rng.uniform(0, 2 * np.pi), rng.uniform(0.5, 1.0) * radius
+    start = centre + dist * np.array([np.cos(ang), np.sin(ang), 0.0])
+    d = rng.uniform(0, 2 * np.pi)
+    direction = np.array([np.cos(d), np.sin(d), 0.0])
+    part = Part(centre - rng.uniform(0.1, 0.2) * direction, rng.uniform(0.1, 0.5) * direction, rng.uniform(0, 0.1))
+    return start, part
+
+
+def assert_meets(plan, part):
+    """Position and velocity of the tool equal the part's at the meeting time T: 1e-6 m and 1e-6 m/s (the
+    issue's tolerance; the construction gives round-off, ~1e-15)."""
+    T = plan.duration.seconds
+    assert plan.t[-1] == pytest.approx(T, abs=1e-12)
+    for p, v in ((plan.p[-1], plan.v[-1]), (plan.cartesian(np.array([T]), 0)[0], plan.cartesian(np.array([T]), 1)[0])):
+        assert np.abs(p - part.at(T)).max() <= 1e-6
+        assert np.abs(v - part.velocity).max() <= 1e-6
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", sorted(SITES))
+def test_exact_meeting_random_cases(name):
+    prof = load_profile(name)
+    rng = np.random.default_rng(17)
+    rules = ["auto", 0.25] + (["fit"] if name != "gantry" else [])
+    for k in range(3):
+        start, part = random_case(rng, name)
+        plan, rv = plan_rendezvous(start, part, prof, time=rules[k % len(rules)])
+        assert_meets(plan, part)
+        assert np.allclose(rv.meeting_point, part.at(rv.seconds), atol=1e-12, rtol=0)
+        assert rv.meeting_time_since_detection == pytest.approx(part.latency + rv.seconds, abs=1e-15)
+        assert plan.parameters["rendezvous"]["meeting_time_s"] == rv.seconds
+
+
+def test_gantry_fit_has_no_timed_limit():
+    """The gantry profile has no drives and no joint velocity limits: --time fit has nothing to fit (the same
+    one-line error as for a fixed move)."""
+    start, part = random_case(np.random.default_rng(1), "gantry")
+    with pytest.raises(TaskError, match="no velocity, acceleration, jerk or motor limit"):
+        find_rendezvous(start, part, load_profile("gantry"), time="fit")
+
+
+def test_auto_is_the_fixed_point():
+    """T* = T_auto(P(T*)): re-planning the move to the meeting point with the plain --time auto (the lead's
+    search, continuation from its own start) gives T* back (relative 1e-6: both are brentq roots refined to
+    1e-8 or better and nudged to the feasible side), and the capacity bound holds at T* to round-off."""
+    from pickplace_cli.methods.bspline_vel import PathFactory
+    from pickplace_cli.timing import auto_duration, choose_duration_for
+
+    prof = load_profile("delta-su2018")
+    part = Part(np.array([0.1525, -0.1, -0.8]), np.array([0.0, 0.5, 0.0]), 0.05)
+    rv = find_rendezvous(np.array([-0.1525, 0.0, -0.8]), part, prof, "auto")
+    tv, ta, tj, _ = auto_duration(rv.path, prof.capacity)
+    assert max(tv, ta, tj or 0) <= rv.seconds * (1 + 1e-12)
+    d, _ = choose_duration_for(PathFactory(rv.task), prof.capacity, "auto")
+    assert d.seconds == pytest.approx(rv.seconds, rel=1e-6)
+
+
+def test_fit_is_the_fixed_point():
+    """T* = T_fit(P(T*)) on the Delta (relative 1e-5: the lead's fit stops at rtol 1e-7 and both are nudged
+    by the exact check), and every limit holds at T*."""
+    from pickplace_cli.methods.bspline_vel import PathFactory
+    from pickplace_cli.planner import motion_model
+    from pickplace_cli.timing import choose_duration_for
+
+    prof = load_profile("delta-su2018")
+    part = Part(np.array([0.1525, -0.1, -0.8]), np.array([0.0, 0.5, 0.0]), 0.0)
+    plan, rv = plan_rendezvous(np.array([-0.1525, 0.0, -0.8]), part, prof, "fit")
+    assert plan.report.ok
+    d, _ = choose_duration_for(PathFactory(rv.task), prof.capacity, "fit",
+                               model_of=lambda p: motion_model(p, prof), dwell=prof.planning.dwell)
+    assert d.seconds == pytest.approx(rv.seconds, rel=1e-5)
+
+
+def test_given_seconds_is_one_solve():
+    prof = load_profile("delta-su2018")
+    part = Part(np.array([0.1, -0.1, -0.8]), np.array([0.0, 0.3, 0.0]), 0.02)
+    rv = find_rendezvous(np.array([-0.15, 0.0, -0.8]), part, prof, 0.2)
+    assert rv.seconds == 0.2 and rv.duration.mode == "given"
+    assert np.allclose(rv.meeting_point, [0.1, -0.1 + 0.3 * 0.22, -0.8], atol=1e-15)
+    assert rv.evaluations == {"exact": 1}
+
+
+def test_optimal_and_explicit_shape_are_refused():
+    prof = load_profile("delta-su2018")
+    part = Part(np.array([0.1, 0.0, -0.8]), np.array([0.0, 0.3, 0.0]))
+    with pytest.raises(UsageError, match="--time optimal"):
+        find_rendezvous(np.array([-0.15, 0.0, -0.8]), part, prof, "optimal")
+    with pytest.raises(UsageError, match="shape parameters"):
+        find_rendezvous(np.array([-0.15, 0.0, -0.8]), part, prof, "auto", method_params={"params": [0.01] * 7})
+
+
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        ({"velocity": [0.0, math.nan, 0.0]}, "to-belt = .*finite"),
+        ({"velocity": [0.0, math.inf, 0.0]}, "to-belt = .*finite"),
+        ({"velocity": [0.0, 1.0]}, "to-belt = .*three"),
+        ({"latency": -0.01}, "latency = -0.01: must be a finite number of seconds >= 0"),
+        ({"latency": math.inf}, "latency = inf"),
+    ],
+)
+def test_bad_part(kwargs, match):
+    args = {"position": [0.1, 0.0, -0.8], "velocity": [0.0, 0.3, 0.0], "latency": 0.0, **kwargs}
+    with pytest.raises(TaskError, match=match):
+        Part(**args)
+
+
+@pytest.mark.parametrize("speed, match", [
+    (3.0, "the robot cannot reach it before it leaves the workspace .* no meeting time up to 20 s meets --time auto"),
+    (8.0, "it is never inside the workspace of profile delta-su2018 for the pick and 0.1 s of tracking"),
+])
+def test_belt_faster_than_the_robot_has_no_rendezvous(speed, match):
+    """A part running away at 3 m/s is never caught under the capacity; at 8 m/s the tracking segment alone
+    (0.8 m) does not fit in the workspace: one line each, exit 4."""
+    prof = load_profile("delta-su2018")
+    part = Part(np.array([0.0, 0.0, -0.8]), np.array([speed, 0.0, 0.0]))
+    with pytest.raises(UnreachableError, match=rf"part \(detected at 0,0,-0.8 m, belt {speed:g},0,0 m/s\): {match}") as exc:
+        find_rendezvous(np.array([-0.15, 0.0, -0.8]), part, prof, "auto")
+    assert "\n" not in str(exc.value) and exc.value.exit_code == 4
