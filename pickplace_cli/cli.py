@@ -187,6 +187,7 @@ def _complete_profile(incomplete: str) -> list[str]:
 @app.command()
 @_handle_errors
 def plan(
+    ctx: typer.Context,
     from_: Optional[str] = typer.Option(None, "--from", help="Pick point X,Y,Z in m (base frame), e.g. -0.1525,0,-0.8."),
     to: Optional[str] = typer.Option(None, "--to", help="Place point X,Y,Z in m (base frame)."),
     profile: Optional[str] = typer.Option(
@@ -200,12 +201,21 @@ def plan(
         None, "--eta", help="Lift-off/set-down ratio η, 0 < η < 1 (dimensionless). [default: profile]"
     ),
     v_from: Optional[str] = typer.Option(
-        None, "--v-from", help="Tool velocity VX,VY,VZ in m/s (base frame) leaving the pick point, e.g. the pick "
+        None, "--v-from", "--from-belt", help="Tool velocity VX,VY,VZ in m/s (base frame) leaving the pick point, e.g. the pick "
         "conveyor's (--method bspline-vel). [default: profile workcell.conveyor_pick_velocity, else 0]"
     ),
     v_to: Optional[str] = typer.Option(
         None, "--v-to", help="Tool velocity VX,VY,VZ in m/s arriving at the place point (--method bspline-vel). "
         "[default: profile workcell.conveyor_place_velocity, else 0]"
+    ),
+    to_belt: Optional[str] = typer.Option(
+        None, "--to-belt", help="Conveyor rendezvous: the part at --to (m, when it was detected) moves at VX,VY,VZ m/s "
+        "(base frame); the move meets it where it is after --latency + T and arrives with this velocity, then tracks it "
+        "for the profile's dwell (s). Selects --method bspline-vel.",
+    ),
+    latency: Optional[float] = typer.Option(
+        None, "--latency", help="With --to-belt: seconds (>= 0) from the part's detection to the start of the move "
+        "(vision + planning + bus); the trajectory's t = 0 is the start of the move. [default: 0]",
     ),
     method: MethodName = typer.Option(MethodName.bspline, "--method", "-m", help="Planning method."),
     k1: Optional[float] = typer.Option(None, "--k1", help="B-spline time-ratio factor k1 = τ8/τ9 (overrides the table)."),
@@ -347,6 +357,8 @@ def plan(
     if output is None and not json_summary:
         output = "-"
     _check_output_paths(output, report)
+    if to_belt is not None or latency is not None:
+        method = _belt_method(ctx, method, to_belt, latency, v_to, batch, round_trip, fit_ws, optimize)
     prof = load_profile(profile)
     params: dict = _parse_params(param or [])
     if method == MethodName.bspline:
@@ -409,7 +421,11 @@ def plan(
         for line in workspace_fit.changes():
             sys.stderr.write(f"pickplace: {line}\n")
         task = workspace_fit.task
-    legs = [_run_plan(task, prof, options)]
+    rendezvous = None
+    if to_belt is not None:
+        legs, rendezvous = _plan_to_belt(p_from, p_to, to_belt, latency, prof, time, h, e, vel_from, params, rate)
+    else:
+        legs = [_run_plan(task, prof, options)]
     if round_trip:
         legs.append(_run_plan(Task(task.p_to, task.p_from, task.height, task.eta), prof, options))
     for i, leg in enumerate(legs):
@@ -417,6 +433,8 @@ def plan(
             if round_trip:
                 sys.stderr.write(f"--- move {i + 1} ({'there' if i == 0 else 'back'}) ---\n")
             _print_summary(leg)
+            if rendezvous is not None and i == 0:
+                _print_rendezvous(rendezvous)
             _print_limit_table(leg.report)
         _print_verdict(leg.report, quiet, with_cycle=not round_trip)
     code = max(leg.report.exit_code() for leg in legs)
@@ -443,6 +461,8 @@ def plan(
         doc = _json_summary(legs, cycle, code, exit_code=0 if report_only else code)
         if workspace_fit is not None:
             doc["workspace_fit"] = workspace_fit.as_dict()
+        if rendezvous is not None:
+            doc["rendezvous"] = rendezvous.as_dict()
         _emit_json(doc)
     if code and not report_only:
         if output is not None:
@@ -474,6 +494,46 @@ def _parse_params(items: list[str]) -> dict:
             raise TaskError(f"param {name}: given twice")
         out[name] = x
     return out
+
+
+def _belt_method(ctx, method, to_belt, latency, v_to, batch, round_trip, fit_ws, optimize):
+    """--to-belt/--latency: the method that supports a moving end (bspline-vel) unless another is named; the
+    options that cannot apply to a rendezvous are refused (exit 2)."""
+    if to_belt is None:
+        _usage("--latency only applies with --to-belt (the part's detection time)")
+    for given, what in ((v_to is not None, "--v-to (the belt velocity is the arrival velocity)"),
+                        (batch is not None, "--batch"), (round_trip, "--round-trip"), (fit_ws, "--fit-workspace"),
+                        (optimize != OptimizeWhat.none, "--optimize")):
+        if given:
+            _usage(f"--to-belt: not available with {what}")
+    if method == MethodName.bspline_vel:
+        return method
+    source = ctx.get_parameter_source("method")
+    if source is None or source.name == "DEFAULT":
+        return MethodName.bspline_vel
+    from .errors import TaskError
+
+    raise TaskError(f"to-belt: method {method.value} plans moves from rest to rest; a moving end needs "
+                    "--method bspline-vel (the default with --to-belt)")
+
+
+def _plan_to_belt(p_from, p_to, to_belt, latency, prof, time, height, eta, v_from, params, rate):
+    """The rendezvous move (and its tracking segment): ([plans], Rendezvous)."""
+    from .rendezvous import Part, plan_rendezvous
+
+    part = Part(p_to, _parse_point("to-belt", to_belt, "m/s"), 0.0 if latency is None else latency)
+    plan, rv = plan_rendezvous(p_from, part, prof, time, height, eta, v_from, params, rate)
+    return [plan], rv
+
+
+def _print_rendezvous(rv) -> None:
+    xyz = ", ".join(f"{c:.4f}" for c in rv.meeting_point)
+    wait = "; waits for the window (meets the part where it enters)" if rv.waited else ""
+    sys.stderr.write(
+        f"rendezvous: meets the part at ({xyz}) m at t = {rv.seconds:.4f} s ({rv.meeting_time_since_detection:.4f} s "
+        f"after its detection), arriving with the belt velocity {rv.part.speed:.4g} m/s; allowed meeting "
+        f"t = {rv.window_s[0]:.4f} … {rv.window_s[1]:.4f} s{wait}\n"
+    )
 
 
 def _run_plan(task, prof, options):

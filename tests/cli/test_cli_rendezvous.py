@@ -1,0 +1,93 @@
+"""plan --to-belt/--latency (issue 17): exit codes, one-line errors, nothing written on error, summary line."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from pickplace_cli.cli import app
+
+runner = CliRunner()
+BELT = ["--from", "-0.1525,0,-0.8", "--to", "0.1525,-0.1,-0.8", "--to-belt", "0,0.5,0"]
+
+
+def run(*args):
+    return runner.invoke(app, list(args), catch_exceptions=False)
+
+
+def test_to_belt_meets_the_part(tmp_path):
+    out = tmp_path / "rv.csv"
+    r = run("plan", *BELT, "--latency", "0.05", "-o", str(out))
+    assert r.exit_code == 0, r.stderr
+    line = next(s for s in r.stderr.splitlines() if s.startswith("rendezvous:"))
+    assert "meets the part at (0.1525, " in line and "after its detection" in line
+    assert "/ bspline-vel:" in r.stderr  # the belt end selected the velocity-constrained method
+    rows = list(csv.reader(io.StringIO(out.read_text())))
+    head = rows[0]
+    data = np.array(rows[1:], float)
+    T = float(line.split("at t = ")[1].split(" s")[0])
+    meet = data[np.argmin(np.abs(data[:, head.index("t[s]")] - T))]
+    part = np.array([0.1525, -0.1 + 0.5 * (0.05 + meet[head.index("t[s]")]), -0.8])
+    # the CSV's fixed float format (and the summary's 4 digits for T) limit this comparison, not the solve
+    assert np.abs(meet[[head.index(c) for c in ("x[m]", "y[m]", "z[m]")]] - part).max() < 1e-6
+    assert np.abs(meet[[head.index(c) for c in ("vx[m/s]", "vy[m/s]", "vz[m/s]")]] - [0, 0.5, 0]).max() < 1e-6
+
+
+def test_json_has_the_rendezvous():
+    r = run("plan", *BELT, "--json", "-q")
+    assert r.exit_code == 0, r.stderr
+    doc = json.loads(r.stdout)
+    rv = doc["rendezvous"]
+    assert doc["method"] == "bspline-vel"
+    assert rv["meeting_time_s"] == doc["duration_s"]
+    assert rv["meeting_point_m"][1] == pytest.approx(-0.1 + 0.5 * rv["meeting_time_s"], abs=1e-12)
+
+
+def test_from_belt_is_v_from():
+    r1 = run("plan", "--from", "-0.1525,0,-0.8", "--to", "0.1525,0,-0.8", "-m", "bspline-vel", "--from-belt", "0,0.3,0",
+             "--time", "0.2", "-q")
+    r2 = run("plan", "--from", "-0.1525,0,-0.8", "--to", "0.1525,0,-0.8", "-m", "bspline-vel", "--v-from", "0,0.3,0",
+             "--time", "0.2", "-q")
+    assert r1.exit_code == r2.exit_code == 0 and r1.stdout == r2.stdout
+
+
+@pytest.mark.parametrize(
+    "extra, code, message",
+    [
+        (["--to-belt", "0,nan,0"], 1, "to-belt = '0,nan,0': every coordinate must be a finite number"),
+        (["--to-belt", "0,inf,0"], 1, "to-belt = '0,inf,0'"),
+        (["--to-belt", "0,0.5"], 1, "to-belt = '0,0.5': give three components"),
+        (["--to-belt", "0,0.5,0", "--latency", "-0.1"], 1, "latency = -0.1: must be a finite number of seconds >= 0"),
+        (["--to-belt", "0,0.5,0", "--latency", "nan"], 1, "latency = nan"),
+        (["--to-belt", "0,0.5,0", "-m", "ph"], 1, "to-belt: method ph plans moves from rest to rest"),
+        (["--to-belt", "0,0.5,0", "-t", "optimal"], 2, "--time optimal: method bspline-vel"),
+        (["--to-belt", "0,0.5,0", "--param", "tau6=0.01"], 2, "shape parameters are chosen for each trial"),
+        (["--to-belt", "0,3,0"], 4, "the robot cannot reach it before it leaves the workspace"),
+    ],
+)
+def test_bad_input_one_line_nothing_written(tmp_path, extra, code, message):
+    out = tmp_path / "x.csv"
+    r = run("plan", "--from", "-0.1525,0,-0.8", "--to", "0.1525,-0.1,-0.8", *extra, "-o", str(out))
+    assert r.exit_code == code, r.stderr
+    assert message in r.stderr
+    if code != 2:  # usage errors are click's short usage message
+        assert len(r.stderr.strip().splitlines()) == 1 and "Traceback" not in r.stderr
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("extra", [["--latency", "0.1"], ["--to-belt", "0,0.5,0", "--v-to", "0,0.5,0"],
+                                   ["--to-belt", "0,0.5,0", "--round-trip"], ["--to-belt", "0,0.5,0", "--fit-workspace"]])
+def test_usage_errors(extra):
+    r = run("plan", "--from", "-0.1525,0,-0.8", "--to", "0.1525,-0.1,-0.8", *extra)
+    assert r.exit_code == 2
+
+
+def test_help_names_units():
+    r = run("plan", "--help")
+    text = " ".join(r.stdout.split())
+    assert "--to-belt" in text and "--latency" in text and "--from-belt" in text
