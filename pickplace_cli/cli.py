@@ -421,9 +421,9 @@ def plan(
         for line in workspace_fit.changes():
             sys.stderr.write(f"pickplace: {line}\n")
         task = workspace_fit.task
-    rendezvous = None
+    rendezvous = track = None
     if to_belt is not None:
-        legs, rendezvous = _plan_to_belt(p_from, p_to, to_belt, latency, prof, time, h, e, vel_from, params, rate)
+        legs, rendezvous, track = _plan_to_belt(p_from, p_to, to_belt, latency, prof, time, h, e, vel_from, params, rate)
     else:
         legs = [_run_plan(task, prof, options)]
     if round_trip:
@@ -438,6 +438,13 @@ def plan(
             _print_limit_table(leg.report)
         _print_verdict(leg.report, quiet, with_cycle=not round_trip)
     code = max(leg.report.exit_code() for leg in legs)
+    if track is not None:  # the tracking segment after the rendezvous: checked like a move
+        if not quiet:
+            sys.stderr.write(f"--- tracking the part: t = {rendezvous.seconds:.4f} … "
+                             f"{rendezvous.seconds + track.duration.seconds:.4f} s at the belt velocity ---\n")
+            _print_limit_table(track.report)
+        _print_verdict(track.report, quiet, with_cycle=False)
+        code = max(code, track.report.exit_code())
     dwell = prof.planning.dwell
     cycle = sum(leg.report.duration for leg in legs) + len(legs) * dwell if round_trip else legs[0].report.round_trip
     if round_trip and not quiet:
@@ -446,7 +453,7 @@ def plan(
             f"= {cycle:.4f} s, {60.0 / cycle:.1f} picks/min; {'all limits hold' if code == 0 else 'LIMITS EXCEEDED'}\n"
         )
     if report is not None:
-        _write_report(legs, report)
+        _write_report(legs + ([track] if track is not None else []), report)
     # the trajectory before the JSON summary: a failed write is then the one JSON document on stdout
     if output is not None and (code == 0 or report_only):
         if round_trip:
@@ -454,6 +461,10 @@ def plan(
 
             rate_hz = rate if rate is not None else prof.planning.rate
             samples = make_round_trip(legs[0], legs[1], dwell, rate_hz)
+        elif track is not None:
+            from .rendezvous import with_tracking
+
+            samples = with_tracking(legs[0], track)
         else:
             samples = legs[0]
         writer(samples, output)
@@ -463,6 +474,10 @@ def plan(
             doc["workspace_fit"] = workspace_fit.as_dict()
         if rendezvous is not None:
             doc["rendezvous"] = rendezvous.as_dict()
+            if track is not None:
+                doc["tracking"] = {"t_start_s": rendezvous.seconds, "duration_s": track.duration.seconds,
+                                   "limits_ok": track.report.ok,
+                                   "violations": [r.as_dict() for r in track.report.violations]}
         _emit_json(doc)
     if code and not report_only:
         if output is not None:
@@ -518,12 +533,15 @@ def _belt_method(ctx, method, to_belt, latency, v_to, batch, round_trip, fit_ws,
 
 
 def _plan_to_belt(p_from, p_to, to_belt, latency, prof, time, height, eta, v_from, params, rate):
-    """The rendezvous move (and its tracking segment): ([plans], Rendezvous)."""
+    """The rendezvous move and its tracking segment (the profile's dwell; None when 0): ([plan], Rendezvous, track)."""
     from .rendezvous import Part, plan_rendezvous
 
     part = Part(p_to, _parse_point("to-belt", to_belt, "m/s"), 0.0 if latency is None else latency)
+    from .rendezvous import plan_tracking
+
     plan, rv = plan_rendezvous(p_from, part, prof, time, height, eta, v_from, params, rate)
-    return [plan], rv
+    track = plan_tracking(plan, part, prof, rate=rate) if prof.planning.dwell > 0 else None
+    return [plan], rv, track
 
 
 def _print_rendezvous(rv) -> None:

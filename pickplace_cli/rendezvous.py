@@ -489,3 +489,73 @@ def plan_rendezvous(start, part: Part, profile, time: str | float = "auto", heig
     got = plan(rv.task, profile, options)
     parameters = {**rv.path.parameters, "rendezvous": rv.as_dict()}
     return replace(got, duration=rv.duration, parameters=parameters), rv
+
+
+# ------------------------------------------------------------------------------------------ tracking
+
+
+def tracking_path(point, velocity, duration: float):
+    """CartesianPath of the tracking segment: from ``point`` [m] at constant ``velocity`` [m/s] for ``duration``
+    [s] (the tool moves with the belt while it grips the part: acceleration and jerk zero)."""
+    from .trajectory import CartesianPath
+
+    p0, d = np.asarray(point, float), np.asarray(velocity, float) * float(duration)  # d = dp/dτ
+
+    def evaluate(tau: np.ndarray, order: int) -> np.ndarray:
+        if order == 0:
+            return p0 + np.multiply.outer(tau, d)
+        return np.broadcast_to(d if order == 1 else np.zeros(3), (len(tau), 3)).copy()
+
+    params = {"velocity_m_s": np.asarray(velocity, float).tolist(), "duration_s": float(duration), "continuity": 3}
+    return CartesianPath(evaluate, "track", params, (float(np.linalg.norm(d)), 0.0, 0.0), jumps=())
+
+
+def plan_tracking(move, part: Part, profile, duration: float | None = None, rate: float | None = None):
+    """Plan of the tracking segment after the rendezvous ``move`` (a Plan ending at the part): the tool follows
+    the part for ``duration`` [s] (default: the profile's dwell), joint motion by the robot's IK and dynamics,
+    checked against every limit like a move (its RMS row covers the segment alone). Its ``t`` runs from 0."""
+    from .limits import check_grid_order, check_limits
+    from .planner import Plan, motion_model
+    from .timing import Duration
+    from .trajectory import CartesianTrajectory, JointTrajectory
+
+    D = float(profile.planning.dwell if duration is None else duration)
+    rate = float(profile.planning.rate if rate is None else rate)
+    T = float(move.duration.seconds)
+    path = tracking_path(part.at(T), part.velocity, D)
+    traj = CartesianTrajectory(path, D)
+    t = traj.sample_times(rate)
+    model = motion_model(path, profile)
+    grid, order = check_grid_order(t / D, path.breakpoints, path.jumps)
+    try:
+        parts = model.parts(grid, order=order)
+    except UnreachableError as exc:
+        raise UnreachableError(f"{part.label()}: the tracking segment (t = {T:.4f} … {T + D:.4f} s) leaves the "
+                               f"workspace: {exc}") from None
+    report = check_limits(model, D, parts=parts, dwell=0.0)
+    n = len(t)
+    out = {k: getattr(parts, k)[:n] for k in ("p", "v1", "a1", "j1", "q", "qd1", "qdd1", "qddd1", "A", "G", "Am", "Gm")}
+    robot = model.robot
+    joint = JointTrajectory(
+        t, out["q"], out["qd1"] / D, out["qdd1"] / D**2, out["qddd1"] / D**3, robot.joint_names, robot.joint_units,
+        torque=out["A"] / D**2 + out["G"],
+        motor_speed=model.gear * out["qd1"] / D if model.has_drives else None,
+        motor_torque=out["Am"] / D**2 + out["Gm"] if model.has_drives else None,
+    )
+    duration_info = Duration(D, "tracking", 0.0, 0.0, None, "belt")
+    return Plan(move.task, "track", dict(path.parameters), duration_info, traj, t, out["p"], out["v1"] / D,
+                out["a1"] / D**2, out["j1"] / D**3, joint, report, profile.name)
+
+
+def with_tracking(move, track):
+    """One trajectory: the rendezvous ``move`` (t from 0 to T) then the ``track`` segment (t from T to T + dwell,
+    its first sample — the meeting, already the move's last — left out); a Timeline with ``move`` 1 for every
+    sample and the segments "move" and "track"."""
+    from .timeline import Segment, _join, _pieces_of
+
+    T = float(move.t[-1])
+    first = _pieces_of(move, 0.0)
+    rest = _pieces_of(track, T)
+    rest = {k: ({n: None if a is None else a[1:] for n, a in v.items()} if k == "joint" else v[1:]) for k, v in rest.items()}
+    segments = [Segment(1, "move", 0.0, T), Segment(1, "track", T, T + float(track.t[-1]))]
+    return _join([first, rest], [1, 1], move.joint, segments, [move.summary()])

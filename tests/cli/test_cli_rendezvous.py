@@ -91,3 +91,22 @@ def test_help_names_units():
     r = run("plan", "--help")
     text = " ".join(r.stdout.split())
     assert "--to-belt" in text and "--latency" in text and "--from-belt" in text
+
+
+def test_csv_includes_the_tracking_segment(tmp_path):
+    """The written trajectory goes on from T to T + dwell (the profile's 0.1 s) with the tool on the part."""
+    out = tmp_path / "rv.csv"
+    r = run("plan", *BELT, "-o", str(out))
+    assert r.exit_code == 0, r.stderr
+    assert "--- tracking the part: t = " in r.stderr
+    rows = list(csv.reader(io.StringIO(out.read_text())))
+    head, data = rows[0], np.array(rows[1:], float)
+    t = data[:, head.index("t[s]")]
+    T = json.loads(run("plan", *BELT, "--json", "-q").stdout)["duration_s"]
+    assert t[-1] == pytest.approx(T + 0.1, abs=1e-9) and np.all(np.diff(t) > 0)
+    late = t > T
+    y = data[late, head.index("y[m]")]
+    assert np.abs(y - (-0.1 + 0.5 * t[late])).max() < 1e-9  # the CSV's 12 significant digits
+    assert np.all(data[late, head.index("vy[m/s]")] == 0.5)
+    r = run("check", str(out))
+    assert r.exit_code == 0, r.stderr

@@ -142,3 +142,30 @@ def test_belt_faster_than_the_robot_has_no_rendezvous(speed, match):
     with pytest.raises(UnreachableError, match=rf"part \(detected at 0,0,-0.8 m, belt {speed:g},0,0 m/s\): {match}") as exc:
         find_rendezvous(np.array([-0.15, 0.0, -0.8]), part, prof, "auto")
     assert "\n" not in str(exc.value) and exc.value.exit_code == 4
+
+
+@pytest.mark.parametrize("name", ["delta-su2018", "scara-600", "gantry"])
+def test_tracking_segment_follows_the_part(name):
+    """t from T to T + dwell: the tool is where the part is (1e-9 m: round-off of P + v·t) with its velocity,
+    zero acceleration and jerk; the joint columns come from the robot's IK (FK of q gives p back, 1e-9 m) and
+    the segment is limit-checked; the joined trajectory has strictly increasing t and no duplicate meeting."""
+    from pickplace_cli.planner import motion_model_static
+    from pickplace_cli.rendezvous import plan_tracking, with_tracking
+
+    prof = load_profile(name)
+    start, part = random_case(np.random.default_rng(5), name)
+    move, rv = plan_rendezvous(start, part, prof, "auto")
+    track = plan_tracking(move, part, prof)
+    T, D = rv.seconds, prof.planning.dwell
+    assert track.t[-1] == pytest.approx(D, abs=1e-12)
+    assert np.abs(track.p - part.at(T + track.t)).max() <= 1e-9
+    assert np.abs(track.v - part.velocity).max() <= 1e-12 and not track.a.any() and not track.j.any()
+    robot = motion_model_static(prof)[0]
+    assert np.abs(robot.forward_kinematics(track.joint.q) - track.p).max() <= 1e-9
+    assert track.report.rows and track.report.duration == D
+    tl = with_tracking(move, track)
+    assert np.all(np.diff(tl.t) > 0) and tl.t[-1] == pytest.approx(T + D, abs=1e-12)
+    assert len(tl.t) == len(move.t) + len(track.t) - 1
+    assert [s.label for s in tl.segments] == ["move", "track"]
+    after = tl.t >= T
+    assert np.abs(tl.p[after] - part.at(tl.t[after])).max() <= 1e-9
