@@ -208,6 +208,22 @@ class Workcell(_Model):
         description="Velocity of the place conveyor in m/s (base frame): the tool arrives at the place point with "
         "it (method bspline-vel; --v-to overrides it)",
     )
+    belt_window: Box | None = Field(
+        default=None,
+        description="Belt window in m (base frame), an axis-aligned box: where along the belt the robot may meet a "
+        "part (plan --to-belt) and track it for the dwell; a rendezvous or tracking segment that would leave it is "
+        "exit 4 (optional; without it the workspace alone bounds the rendezvous)",
+    )
+
+    @model_validator(mode="after")
+    def _window_in_box(self) -> "Workcell":
+        w, b = self.belt_window, self.box
+        if w is not None and b is not None and not all(max(w.min[c], b.min[c]) < min(w.max[c], b.max[c]) for c in range(3)):
+            raise ValueError(
+                f"belt_window min={list(w.min)} max={list(w.max)} m does not intersect the workcell box "
+                f"min={list(b.min)} max={list(b.max)} m: the robot could never work on the belt"
+            )
+        return self
 
 
 class Capacity(_Model):

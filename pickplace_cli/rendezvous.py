@@ -394,10 +394,12 @@ def find_rendezvous(
             T0 = min(max(0.2, a), b)
             break
     T_screen = _first_feasible(screen, a, b, T0, 0.9, 1e-6)
-    if T_screen is None:
-        _missed(part, screen, a, b, what, spec)
-    assert T_screen is not None
     rule = _Rule(spec, profile, exact, plan_dwell)
+    if T_screen is None:  # by how much: the first feasible T beyond b, screened, then on the exact shape
+        beyond = _first_feasible(screen, b, HORIZON, b, 0.8, 1e-6) if b < HORIZON else None
+        if beyond is not None and math.isfinite(beyond):
+            beyond = _first_feasible(rule, b, HORIZON, beyond, 0.98, 1e-10)
+        _missed(part, rule, a, b, what, spec, known=beyond if beyond is not None else math.inf)
     T = _first_feasible(rule, a, b, T_screen, 0.98, 1e-10)
     if T is not None and T > a:
         path, agreed = exact.final(T)  # a global solve confirms the continued shape at the root
@@ -459,7 +461,7 @@ def _outside(part: Part, T: float, a: float, b: float, what: str, rule: str) -> 
 def _missed(part: Part, rule: _Rule, a: float, b: float, what: str, spec: str, known: float | None = None) -> None:
     """UnreachableError: the robot cannot meet the part by ``b``; by how much (``known``, or the first feasible
     T beyond b by ``rule``, when there is one within the horizon)."""
-    T_f = known if known is not None else (_first_feasible(rule, b, HORIZON, b, 0.8, 1e-6) if b < HORIZON else None)
+    T_f = (known if math.isfinite(known) else None) if known is not None else (_first_feasible(rule, b, HORIZON, b, 0.8, 1e-6) if b < HORIZON else None)
     place = {"window": "the belt window", "workspace": "the workspace", "horizon": "the workspace"}[what]
     if T_f is None or not math.isfinite(T_f):
         raise UnreachableError(

@@ -110,3 +110,19 @@ def test_csv_includes_the_tracking_segment(tmp_path):
     assert np.all(data[late, head.index("vy[m/s]")] == 0.5)
     r = run("check", str(out))
     assert r.exit_code == 0, r.stderr
+
+
+def test_window_miss_is_exit_4_nothing_written(tmp_path):
+    from pickplace_cli.resources import data_dir
+
+    text = (data_dir("profiles") / "delta-su2018.yaml").read_text()
+    anchor = "  box: {min: [-0.6, -0.6, -1.1], max: [0.6, 0.6, -0.55]}"
+    assert anchor in text
+    prof = tmp_path / "belt.yaml"
+    prof.write_text(text.replace(anchor, anchor + "\n  belt_window: {min: [0.0, -0.3, -0.9], max: [0.3, 0.0, -0.7]}"))
+    out = tmp_path / "x.csv"
+    r = run("plan", *BELT, "-p", str(prof), "-o", str(out))
+    assert r.exit_code == 4
+    assert len(r.stderr.strip().splitlines()) == 1
+    assert "the part leaves the belt window 4" in r.stderr and "mm before the robot can reach it" in r.stderr
+    assert not out.exists()

@@ -169,3 +169,76 @@ def test_tracking_segment_follows_the_part(name):
     assert [s.label for s in tl.segments] == ["move", "track"]
     after = tl.t >= T
     assert np.abs(tl.p[after] - part.at(tl.t[after])).max() <= 1e-9
+
+
+# ------------------------------------------------------------------------------------------ belt window
+
+START = np.array([-0.1525, 0.0, -0.8])
+
+
+def with_window(lo_y, hi_y, name="delta-su2018"):
+    """The profile with a belt window x ∈ [0, 0.3], y ∈ [lo_y, hi_y], z ∈ [-0.9, -0.7] m (a belt along +y)."""
+    from pickplace_cli.profile import Box
+
+    prof = load_profile(name)
+    wc = prof.workcell.model_copy(update={"belt_window": Box(min=(0.0, lo_y, -0.9), max=(0.3, hi_y, -0.7))})
+    return prof.model_copy(update={"workcell": wc})
+
+
+def test_window_inside_changes_nothing():
+    part = Part(np.array([0.1525, -0.1, -0.8]), np.array([0.0, 0.5, 0.0]))
+    free = find_rendezvous(START, part, load_profile("delta-su2018"), "auto")
+    win = find_rendezvous(START, part, with_window(-0.3, 0.1), "auto")
+    assert win.seconds == pytest.approx(free.seconds, rel=1e-9)
+    assert win.window_s[1] == pytest.approx((0.1 + 0.1) / 0.5 - 0.1, abs=1e-12)  # exit at y = 0.1, minus the dwell
+
+
+def test_part_leaves_the_window_before_the_robot_reaches_it():
+    """Window exit at y = 0 (t = 0.2 s): with 0.1 s of tracking the last meeting is t = 0.1 s; the earliest
+    feasible meeting is T ≈ 0.18 s, so the part is missed by 0.5 m/s × (0.18 − 0.1) s ≈ 40 mm."""
+    part = Part(np.array([0.1525, -0.1, -0.8]), np.array([0.0, 0.5, 0.0]))
+    T = find_rendezvous(START, part, load_profile("delta-su2018"), "auto").seconds
+    with pytest.raises(UnreachableError) as exc:
+        find_rendezvous(START, part, with_window(-0.3, 0.0), "auto")
+    msg = str(exc.value)
+    assert f"the part leaves the belt window {0.5 * (T - 0.1) * 1e3:.0f} mm before the robot can reach it" in msg, msg
+    assert msg.startswith("part (detected at 0.1525,-0.1,-0.8 m, belt 0,0.5,0 m/s)") and "\n" not in msg
+
+
+def test_part_already_past_the_window():
+    part = Part(np.array([0.1525, 0.2, -0.8]), np.array([0.0, 0.5, 0.0]), latency=0.05)
+    with pytest.raises(UnreachableError, match=r"already past the belt window when the move starts \(latency 0.05 s\): "
+                       r"it leaves the window \d+ mm before"):
+        find_rendezvous(START, part, with_window(-0.3, 0.1), "auto")
+
+
+def test_window_missed_by_the_path():
+    part = Part(np.array([0.5, -0.1, -0.8]), np.array([0.0, 0.5, 0.0]))  # x = 0.5: beside the window
+    with pytest.raises(UnreachableError, match="its path never crosses the belt window"):
+        find_rendezvous(START, part, with_window(-0.3, 0.1), "auto")
+
+
+def test_robot_waits_for_a_part_upstream_of_the_window():
+    """The part enters the window (y = −0.1) at t = 0.8 s, long after the robot could be there: the robot meets
+    it exactly at the window's edge, on time, with its velocity (a longer move that still meets the rule)."""
+    part = Part(np.array([0.1525, -0.5, -0.8]), np.array([0.0, 0.5, 0.0]))
+    plan, rv = plan_rendezvous(START, part, with_window(-0.1, 0.3), "auto")
+    assert rv.waited and rv.seconds == pytest.approx(0.8, abs=1e-9)
+    assert rv.meeting_point[1] == pytest.approx(-0.1, abs=1e-9)
+    assert_meets(plan, part)
+
+
+def test_given_time_outside_the_window():
+    part = Part(np.array([0.1525, -0.1, -0.8]), np.array([0.0, 0.5, 0.0]))
+    with pytest.raises(UnreachableError, match=r"--time 0.15 s meets it at t = 0.1500 s, 25 mm after the last point"):
+        find_rendezvous(START, part, with_window(-0.3, 0.0), 0.15)
+
+
+def test_window_must_intersect_the_box():
+    from pydantic import ValidationError
+
+    from pickplace_cli.profile import Box, Workcell
+
+    box = load_profile("delta-su2018").workcell.box
+    with pytest.raises(ValidationError, match="does not intersect the workcell box"):
+        Workcell(box=box, belt_window=Box(min=(0.0, 0.7, -0.9), max=(0.3, 0.9, -0.7)))
