@@ -400,11 +400,11 @@ def find_rendezvous(
         if beyond is not None and math.isfinite(beyond):
             beyond = _first_feasible(rule, b, HORIZON, beyond, 0.98, 1e-10)
         _missed(part, rule, a, b, what, spec, known=beyond if beyond is not None else math.inf)
-    T = _first_feasible(rule, a, b, T_screen, 0.98, 1e-10)
+    T = _first_feasible(rule, a, b, T_screen, 0.98, 1e-8)
     if T is not None and T > a:
         path, agreed = exact.final(T)  # a global solve confirms the continued shape at the root
         if not agreed:  # the continuation had followed a worse branch: search again on the better one
-            T = _first_feasible(rule, a, b, T, 0.98, 1e-10)
+            T = _first_feasible(rule, a, b, T, 0.98, 1e-8)
     if T is None:
         _missed(part, rule, a, b, what, spec)
     T = _nudge(rule, exact, profile, spec, T, plan_dwell)
@@ -466,7 +466,7 @@ def _missed(part: Part, rule: _Rule, a: float, b: float, what: str, spec: str, k
     if T_f is None or not math.isfinite(T_f):
         raise UnreachableError(
             f"{part.label()}: the robot cannot reach it before it leaves {place} (last possible meeting "
-            f"t = {b:.4f} s after the move starts); no meeting time up to {HORIZON:g} s meets --time {spec}"
+            f"t = {b:.4f} s after the move starts; --time {spec} needs longer)"
         )
     raise UnreachableError(
         f"{part.label()}: the part leaves {place} {part.speed * (T_f - b) * 1e3:.0f} mm before the robot can reach "
