@@ -216,7 +216,10 @@ def test_format_options_that_apply_or_keep_their_default_are_accepted(tmp_path):
         assert r.exit_code == 0, (args, r.stderr)
 
 
-def test_shell_completion_script_and_profile_names():
+def test_shell_completion_script_and_profile_names(monkeypatch):
+    # name the shell: without it Typer detects the parent shell, and a run without one (a CI job, a
+    # background run) gets "Shell  not supported"
+    monkeypatch.setenv("_TYPER_COMPLETE_TEST_DISABLE_SHELL_DETECTION", "1")
     r = run("--show-completion", "bash")
     assert r.exit_code == 0 and "complete" in r.stdout and "pickplace" in r.stdout.lower()
     from pickplace_cli.cli import _complete_profile
