@@ -75,60 +75,103 @@ def violation_text(r) -> str:
     )
 
 
-def read_batch(stream: IO[str], source: str = "batch") -> tuple[list[BatchRow], list[RowResult]]:
-    """Parse the batch CSV → (good rows, rows that failed to parse). A bad header, or a header with no
-    row after it, raises TaskError."""
-    text = stream.read()
-    text = text.removeprefix("\ufeff")  # a BOM (the CLI opens files as utf-8-sig; stdin and strings keep it)
-    lines = [(n, t) for n, t in enumerate(text.splitlines(), start=1)]
-    lines = [(n, t) for n, t in lines if t.strip() and not t.lstrip().startswith("#")]
-    if not lines:
+#: the longest line a batch may have [characters]: a row is one move, a few hundred characters; a longer line
+#: (a binary file, a file with no line breaks) is one error line, never a read of the whole input into memory
+BATCH_MAX_LINE = 1 << 16
+
+
+def iter_batch(stream: IO[str], source: str = "batch") -> Iterator[BatchRow | RowResult]:
+    """Parse the batch CSV lazily, one line at a time: a :class:`BatchRow` per good row, a :class:`RowResult`
+    (with its error) per row that failed to parse, each as soon as its line is read (a pipe is answered row
+    by row). A bad header, a header with no row after it (at the end of the input), a line longer than
+    :data:`BATCH_MAX_LINE`, a NUL byte or text that is not UTF-8 raise TaskError naming the line."""
+    header: list[str] | None = None
+    header_line = 0
+    sep = ","
+    number = 0
+    line = 0
+    while True:
+        try:
+            text = stream.readline(BATCH_MAX_LINE + 1)
+        except UnicodeDecodeError:
+            raise TaskError(f"{source}:{line + 1}: not UTF-8 text (a binary file?); a batch is a CSV file") from None
+        if text == "":
+            break
+        line += 1
+        if len(text) > BATCH_MAX_LINE and not text.endswith(("\n", "\r")):
+            raise TaskError(f"{source}:{line}: a line of more than {BATCH_MAX_LINE} characters; a batch row is one "
+                            "move (a binary file, or no line breaks?)")
+        if "\0" in text:
+            raise TaskError(f"{source}:{line}: a binary file (NUL bytes), not a CSV batch")
+        text = text.rstrip("\r\n")
+        if line == 1:
+            text = text.removeprefix("\ufeff")  # a BOM (the CLI opens files as utf-8-sig; stdin keeps it)
+        if not text.strip() or text.lstrip().startswith("#"):
+            continue
+        if header is None:
+            header_line = line
+            sep = sniff_delimiter(text)
+            header = _header(text, sep, source, line)
+            continue
+        number += 1
+        yield _row(number, line, text, header, sep, source)
+    if header is None:
         raise TaskError(f"{source}: no header row (need columns {', '.join(REQUIRED)})")
-    header_line, header_text = lines[0]
-    sep = sniff_delimiter(header_text)
-    header = [h.strip() for h in next(csv.reader([header_text], delimiter=sep))]
-    unknown = [h for h in header if h not in REQUIRED + OPTIONAL]
-    if unknown:
-        raise TaskError(
-            f"{source}:{header_line}: column {unknown[0]!r} is not known; columns are {', '.join(REQUIRED + OPTIONAL)}"
-        )
-    missing = [h for h in REQUIRED if h not in header]
-    if missing:
-        raise TaskError(f"{source}:{header_line}: column {missing[0]!r} is missing (required: {', '.join(REQUIRED)})")
-    dup = sorted({h for h in header if header.count(h) > 1})
-    if dup:
-        raise TaskError(f"{source}:{header_line}: column {dup[0]!r} appears twice")
-    if len(lines) == 1:
+    if number == 0:
         raise TaskError(
             f"{source}:{header_line}: no moves after the header (need one row per move with {', '.join(REQUIRED)})"
         )
+
+
+def _header(text: str, sep: str, source: str, line: int) -> list[str]:
+    header = [h.strip() for h in next(csv.reader([text], delimiter=sep))]
+    unknown = [h for h in header if h not in REQUIRED + OPTIONAL]
+    if unknown:
+        raise TaskError(
+            f"{source}:{line}: column {unknown[0]!r} is not known; columns are {', '.join(REQUIRED + OPTIONAL)}"
+        )
+    missing = [h for h in REQUIRED if h not in header]
+    if missing:
+        raise TaskError(f"{source}:{line}: column {missing[0]!r} is missing (required: {', '.join(REQUIRED)})")
+    dup = sorted({h for h in header if header.count(h) > 1})
+    if dup:
+        raise TaskError(f"{source}:{line}: column {dup[0]!r} appears twice")
+    return header
+
+
+def _row(number: int, line: int, text: str, header: list[str], sep: str, source: str) -> BatchRow | RowResult:
+    cells = [c.strip() for c in next(csv.reader([text], delimiter=sep))]
+    try:
+        if len(cells) != len(header):
+            raise TaskError(f"has {len(cells)} cells, the header has {len(header)}")
+        values: dict[str, Any] = {}
+        for name, cell in zip(header, cells):
+            if cell == "":
+                if name in REQUIRED:
+                    raise TaskError(f"{name} is empty: give a number in metres")
+                continue
+            if name == "time" and cell in ("auto", "fit", "optimal"):
+                values[name] = cell
+                continue
+            try:
+                x = float(cell)
+            except ValueError:
+                hint = " (the decimal mark is '.')" if "," in cell and sep != "," else ""
+                raise TaskError(f"{name} = {cell!r}: not a number{hint}") from None
+            if not math.isfinite(x):
+                raise TaskError(f"{name} = {cell!r}: must be finite")
+            values[name] = x
+        return BatchRow(number, line, values)
+    except TaskError as exc:
+        return RowResult(number, error=f"row {number} ({source}:{line}): {exc}", code=exc.exit_code)
+
+
+def read_batch(stream: IO[str], source: str = "batch") -> tuple[list[BatchRow], list[RowResult]]:
+    """Parse the whole batch CSV → (good rows, rows that failed to parse) (:func:`iter_batch`)."""
     rows: list[BatchRow] = []
     bad: list[RowResult] = []
-    for number, (line, text) in enumerate(lines[1:], start=1):
-        cells = [c.strip() for c in next(csv.reader([text], delimiter=sep))]
-        try:
-            if len(cells) != len(header):
-                raise TaskError(f"has {len(cells)} cells, the header has {len(header)}")
-            values: dict[str, Any] = {}
-            for name, cell in zip(header, cells):
-                if cell == "":
-                    if name in REQUIRED:
-                        raise TaskError(f"{name} is empty: give a number in metres")
-                    continue
-                if name == "time" and cell in ("auto", "fit", "optimal"):
-                    values[name] = cell
-                    continue
-                try:
-                    x = float(cell)
-                except ValueError:
-                    hint = " (the decimal mark is '.')" if "," in cell and sep != "," else ""
-                    raise TaskError(f"{name} = {cell!r}: not a number{hint}") from None
-                if not math.isfinite(x):
-                    raise TaskError(f"{name} = {cell!r}: must be finite")
-                values[name] = x
-            rows.append(BatchRow(number, line, values))
-        except TaskError as exc:
-            bad.append(RowResult(number, error=f"row {number} ({source}:{line}): {exc}", code=exc.exit_code))
+    for item in iter_batch(stream, source):
+        (rows if isinstance(item, BatchRow) else bad).append(item)
     return rows, bad
 
 
@@ -258,3 +301,118 @@ def run_chunks_in_order(fn, args: list, workers: int, fail_fast: bool) -> Iterat
 def read_batch_text(text: str, source: str = "batch") -> tuple[list[BatchRow], list[RowResult]]:
     """:func:`read_batch` on a string."""
     return read_batch(io.StringIO(text), source)
+
+
+# ------------------------------------------------------------------------------------ streaming (a pipe)
+
+
+#: most rows read ahead of the planner (parsed values only: bounded memory however fast the input comes)
+STREAM_READ_AHEAD = 1000
+#: most rows answered together: the rows already read when the planner is free (a pipe that delivers one row
+#: at a time gets one-row batches, the lowest latency; a file piped in at full speed gets the batch
+#: engine's throughput)
+STREAM_BATCH = 250
+
+
+def plan_stream(
+    items: Iterator[BatchRow | RowResult], profile, options, height: float | None = None, eta: float | None = None,
+    fail_fast: bool = False, source: str = "batch", workers: int = 1, csv_dialect: str | None = None,
+    format_failed: bool = False, verdicts: bool = False,
+) -> Iterator[RowResult]:
+    """Answer the rows of :func:`iter_batch` as they are read, in row order. A reader thread reads ahead (at
+    most ``STREAM_READ_AHEAD`` rows); whenever the planner is free it takes every row read so far (at most
+    ``STREAM_BATCH``) and answers them — planned one by one (``workers`` = 1: one trajectory in memory at a
+    time), decided by the verdict engine together (``verdicts``), or spread over ``workers`` processes in
+    chunks — yielding each result as soon as it and every earlier row are done. A row that arrives alone is
+    answered before the next line is read. Input errors (:func:`iter_batch`) are raised in row order, after
+    every row before them. ``csv_dialect``: the workers also format the CSV rows (``RowResult.text``)."""
+    import queue
+    import threading
+
+    inbox: queue.Queue = queue.Queue(maxsize=STREAM_READ_AHEAD)
+    end = object()
+
+    def reader() -> None:
+        try:
+            for item in items:
+                inbox.put(item)
+        except BaseException as exc:  # noqa: BLE001 - an input error: raised by the consumer, in order
+            inbox.put(exc)
+        inbox.put(end)
+
+    threading.Thread(target=reader, daemon=True, name="batch-reader").start()
+    pool = None
+    if workers > 1:
+        from concurrent.futures import ProcessPoolExecutor
+
+        pool = ProcessPoolExecutor(max_workers=workers)
+    try:
+        finished = False
+        while not finished:
+            batch = [inbox.get()]
+            while len(batch) < STREAM_BATCH:
+                try:
+                    batch.append(inbox.get_nowait())
+                except queue.Empty:
+                    break
+            error = None
+            if batch[-1] is end:
+                batch.pop()
+                finished = True
+            if batch and isinstance(batch[-1], BaseException):
+                error = batch.pop()
+            for res in _answer(batch, profile, options, height, eta, source, pool, workers, csv_dialect,
+                               format_failed, verdicts):
+                yield res
+                if fail_fast and res.code:
+                    return
+            if error is not None:
+                raise error
+    finally:
+        if pool is not None:
+            pool.shutdown(wait=False, cancel_futures=True)
+
+
+def _answer(batch: list, profile, options, height, eta, source, pool, workers, csv_dialect, format_failed,
+            verdicts) -> Iterator[RowResult]:
+    """The results of ``batch`` (BatchRows and parse failures) in row order (:func:`plan_stream`)."""
+    rows = [b for b in batch if isinstance(b, BatchRow)]
+    failed = {b.row: b for b in batch if isinstance(b, RowResult)}
+    if pool is not None and len(rows) > 1:
+        size = -(-len(rows) // workers)
+        chunks = [rows[i : i + size] for i in range(0, len(rows), size)]
+        if verdicts:
+            from .verdicts import _verdict_chunk
+
+            futures = [pool.submit(_verdict_chunk, (c, profile, options, height, eta, source)) for c in chunks]
+        else:
+            futures = [pool.submit(_plan_chunk, (c, profile, options, height, eta, source, csv_dialect, format_failed))
+                       for c in chunks]
+        answers = (res for fut in futures for res in fut.result())
+    elif verdicts and len(rows) > 1:  # one row alone: plan() is quicker than the engine's batch set-up
+        from .verdicts import verdict_rows
+
+        answers = verdict_rows(rows, profile, options, height, eta, False, source)
+    else:
+        answers = plan_rows(rows, profile, options, height, eta, False, source)
+    for res in answers:
+        while failed and min(failed) < res.row:
+            yield failed.pop(min(failed))
+        yield res
+    for n in sorted(failed):
+        yield failed[n]
+
+
+@dataclass(frozen=True)
+class ReportRecord:
+    """What ``--report`` keeps of a streamed row: its summary and limit report (not its samples)."""
+
+    report: Any
+    summary_doc: dict
+
+    def summary(self) -> dict:
+        return dict(self.summary_doc)
+
+    @classmethod
+    def of(cls, plan) -> "ReportRecord":
+        return cls(plan.report, plan.summary())

@@ -628,7 +628,24 @@ def _plan_batch(source, prof, options, height, eta, fail_fast, writer, output, r
     from .errors import TaskError
 
     name = "stdin" if source == "-" else source
-    if source == "-":
+    if source == "-" or _is_fifo(source):  # a pipe: answer each row as it is read
+        if source == "-":
+            try:  # undecodable bytes are an error, not surrogates (a C/POSIX locale's stdin escapes them)
+                sys.stdin.reconfigure(errors="strict")
+            except (AttributeError, ValueError, OSError):  # pragma: no cover - a test runner's stand-in
+                pass
+            _stream_batch(sys.stdin, name, prof, options, height, eta, fail_fast, writer, output, report,
+                          report_only, json_summary, quiet, workers)
+            return
+        try:
+            fh = open(source, encoding="utf-8-sig", newline="")
+        except OSError as exc:
+            raise TaskError(f"batch = {source}: cannot read it: {exc.strerror}") from None
+        with fh:
+            _stream_batch(fh, name, prof, options, height, eta, fail_fast, writer, output, report, report_only,
+                          json_summary, quiet, workers)
+        return
+    if source == "-":  # pragma: no cover - streamed above
         rows, bad = read_batch(sys.stdin, name)
     else:
         try:
@@ -727,6 +744,98 @@ def _plan_batch(source, prof, options, height, eta, fail_fast, writer, output, r
                               restart_time=not writer.one_timeline, gap=prof.planning.dwell)
         writer(samples, output)
     elif output is not None and not planned:
+        sys.stderr.write("pickplace: no row could be written\n")
+    if worst and not (report_only and all(c == 3 for c in codes if c)):
+        raise typer.Exit(worst)
+
+
+def _is_fifo(path: str) -> bool:
+    import os
+    import stat
+
+    try:
+        return stat.S_ISFIFO(os.stat(path).st_mode)
+    except OSError:
+        return False
+
+
+def _stream_batch(stream, name, prof, options, height, eta, fail_fast, writer, output, report, report_only,
+                  json_summary, quiet, workers: int) -> None:
+    """--batch - (or a named pipe): each row answered as soon as its line is read — a JSON line (``--json``)
+    or its CSV rows, flushed — with the same row numbers, messages and exit codes as a file batch. Memory:
+    one row's trajectory (MCAP and JSON trajectories need the whole timeline: those rows are kept until the
+    input ends; ``--report`` keeps each row's limit report, not its samples)."""
+    from contextlib import ExitStack
+
+    from .batch import ReportRecord, iter_batch, plan_stream
+
+    verdicts_only = json_summary and output is None and report is None
+    engine = False
+    if verdicts_only:
+        from .verdicts import engine_applies
+
+        engine = engine_applies(prof, options)
+    csv_out = output is not None and writer.csv_dialect is not None
+    kept: list = []  # MCAP / JSON trajectories: the rows to write when the input ends
+    reports: list = []
+    codes: list[int] = []
+    first_failed = None
+    n_written = 0
+    with ExitStack() as stack:
+        out = None
+        if csv_out:
+            from .export import atomic_output
+            from .export.csv import csv_header, csv_rows
+
+            out = stack.enter_context(atomic_output(output))
+        results = plan_stream(iter_batch(stream, name), prof, options, height, eta, fail_fast, name,
+                              workers=max(workers, 1), csv_dialect=writer.csv_dialect if csv_out else None,
+                              format_failed=report_only, verdicts=engine)
+        for res in results:
+            codes.append(res.code)
+            if res.code and first_failed is None:
+                first_failed = res.row
+            if res.error is not None:
+                sys.stderr.write("".join(f"pickplace: {ln}\n" for ln in res.error.splitlines()))
+                sys.stderr.flush()
+            if json_summary:
+                doc: dict = {"row": res.row, "exit_code": res.code, "error": res.error}
+                if res.plan is not None:
+                    doc.update(res.plan.summary())
+                    doc["violations"] = [v.as_dict() for v in res.plan.report.violations]
+                _emit_json(doc)
+            if res.plan is not None and report is not None:
+                reports.append((res.row, ReportRecord.of(res.plan)))
+            if res.plan is not None and output is not None and (res.code == 0 or report_only):
+                n_written += 1
+                if out is not None:
+                    if n_written == 1:
+                        out.write(csv_header(res.plan, writer.csv_dialect, move=True))
+                    out.write(res.text if res.text is not None else csv_rows(res.plan, writer.csv_dialect, move=res.row))
+                    out.flush()
+                else:
+                    from .batch import PlanRecord
+
+                    kept.append((res.row, res.plan if isinstance(res.plan, PlanRecord) else PlanRecord.of(res.plan)))
+            if fail_fast and res.code:
+                break
+    if kept:
+        from .timeline import concatenate
+
+        samples = concatenate([p for _, p in kept], [r for r, _ in kept], restart_time=not writer.one_timeline,
+                              gap=prof.planning.dwell)
+        writer(samples, output)
+    if report is not None:
+        _write_report([r for _, r in reports], report, rows=[n for n, _ in reports])
+    worst = max(codes, default=0)
+    if not quiet:
+        n_ok = sum(1 for c in codes if c == 0)
+        sys.stderr.write(
+            f"batch: {len(codes)} rows, {n_ok} ok, {len(codes) - n_ok} failed"
+            + (f" (first failing row {first_failed})" if worst else "")
+            + (f"; {n_written} written" if output is not None else "") + "\n"
+        )
+    if output is not None and n_written == 0:
         sys.stderr.write("pickplace: no row could be written\n")
     if worst and not (report_only and all(c == 3 for c in codes if c)):
         raise typer.Exit(worst)

@@ -1,0 +1,127 @@
+"""``plan --batch -`` as a pipeline stage (issue 16, part 2): latency per row and throughput.
+
+    python bench/bench_stream.py                      # ~2 min on 2 cores
+    python bench/bench_stream.py --old /tmp/oldclone  # also the throughput of another checkout (before streaming)
+
+Latency: one `pickplace plan --batch -` process; rows of the Adept cycle on the default Delta are written one
+at a time with a pause between them (a vision system's pace); the latency of a row is from the moment its
+last byte is written (after flush) to the moment the last byte of its answer is read: the JSON line (verdicts
+only, ``--json``) or all its CSV rows at 1 kHz (``--rate 1000``). Reports p50 and p99 (targets with samples:
+2 ms and 5 ms).
+Throughput: a file of rows piped in at full speed (``--json`` verdicts and CSV samples, ``-j 1`` and ``-j 2``),
+rows per second including start-up; with ``--old`` the same commands on another checkout side by side.
+Results go to ``bench/results/stream.json``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import select
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+HEADER = "from_x,from_y,from_z,to_x,to_y,to_z\n"
+ROW = "-0.1525,0,-0.8,0.1525,0,-0.8\n"
+
+
+def _cmd(root: Path, *args: str) -> tuple[list[str], dict]:
+    env = dict(os.environ, PYTHONPATH=str(root))
+    return [sys.executable, "-m", "pickplace_cli", "plan", "--batch", "-", *args], env
+
+
+def _read_lines(stream, n: int, timeout: float = 30.0) -> None:
+    """Read exactly n lines from a binary stream (raw fd reads, no Python buffering surprises)."""
+    fd = stream.fileno()
+    got = 0
+    buf = b""
+    while got < n:
+        ready, _, _ = select.select([fd], [], [], timeout)
+        if not ready:
+            raise TimeoutError(f"only {got} of {n} lines within {timeout} s")
+        chunk = os.read(fd, 1 << 20)
+        if not chunk:
+            raise EOFError(f"output ended after {got} of {n} lines")
+        buf += chunk
+        got = buf.count(b"\n")
+    if got > n:
+        raise RuntimeError(f"read {got} lines, expected {n}: the answer is not where this benchmark thinks")
+
+
+def latency(args: list[str], lines_per_row: int, first_extra: int, rows: int, pause: float) -> list[float]:
+    cmd, env = _cmd(ROOT, *args)
+    proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
+                            env=env, bufsize=0)
+    out = []
+    try:
+        os.write(proc.stdin.fileno(), HEADER.encode())
+        for i in range(rows):
+            os.write(proc.stdin.fileno(), ROW.encode())
+            t0 = time.perf_counter()
+            _read_lines(proc.stdout, lines_per_row + (first_extra if i == 0 else 0))
+            out.append(time.perf_counter() - t0)
+            time.sleep(pause)
+        proc.stdin.close()
+        proc.wait(30)
+    finally:
+        proc.kill()
+    return out[1:]  # the first row pays the imports and the warm-up of the process: reported apart
+
+
+def throughput(root: Path, args: list[str], rows: int) -> float:
+    cmd, env = _cmd(root, *args)
+    text = HEADER + ROW * rows
+    t0 = time.perf_counter()
+    r = subprocess.run(cmd, input=text.encode(), stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
+    dt = time.perf_counter() - t0
+    if r.returncode != 0:
+        raise RuntimeError(f"{cmd} exited {r.returncode}")
+    return rows / dt
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--rows", type=int, default=300, help="rows for the latency runs")
+    ap.add_argument("--pause", type=float, default=0.01, help="s between two rows in the latency runs")
+    ap.add_argument("--old", type=Path, help="another checkout to compare the throughput with")
+    ap.add_argument("-o", "--output", default=str(Path(__file__).parent / "results" / "stream.json"))
+    args = ap.parse_args()
+    sys.path.insert(0, str(ROOT))
+    from pickplace_cli.planner import PlanOptions, plan
+    from pickplace_cli.profile import load_profile
+    from pickplace_cli.task import Task
+
+    samples = len(plan(Task([-0.1525, 0, -0.8], [0.1525, 0, -0.8], 0.025, 0.5), load_profile("delta-su2018"),
+                       PlanOptions(rate=1000.0)).t)
+    result: dict = {"rows": args.rows, "pause_s": args.pause, "samples_per_row": samples}
+    for name, cli, lines, extra in (("verdicts (--json)", ["--json", "-q"], 1, 0),
+                                    ("samples (CSV, 1 kHz)", ["--rate", "1000", "-q"], samples, 1)):
+        lat = sorted(latency(cli, lines, extra, args.rows, args.pause))
+        p50 = statistics.median(lat) * 1e3
+        p99 = lat[min(len(lat) - 1, int(round(0.99 * (len(lat) - 1))))] * 1e3
+        result[name] = {"p50_ms": p50, "p99_ms": p99, "max_ms": lat[-1] * 1e3}
+        print(f"latency, {name}: p50 {p50:.2f} ms, p99 {p99:.2f} ms, max {lat[-1] * 1e3:.2f} ms "
+              f"({len(lat)} rows, {args.pause * 1e3:.0f} ms apart)", flush=True)
+    runs = (("verdicts -j 1", ["--json", "-q", "-j", "1"], 3000), ("verdicts -j 2", ["--json", "-q", "-j", "2"], 3000),
+            ("CSV -j 1", ["-q", "-j", "1"], 600), ("CSV -j 2", ["-q", "-j", "2"], 600))
+    for name, cli, rows in runs:
+        new = statistics.median(throughput(ROOT, cli, rows) for _ in range(3))
+        line = f"throughput, {name}, {rows} rows piped in: {new:.0f} rows/s"
+        entry = {"rows": rows, "rows_per_s": new}
+        if args.old:
+            old = statistics.median(throughput(args.old, cli, rows) for _ in range(3))
+            entry["old_rows_per_s"] = old
+            line += f" (other checkout {old:.0f} rows/s: {new / old:.2f} ×)"
+        result[f"throughput {name}"] = entry
+        print(line, flush=True)
+    Path(args.output).parent.mkdir(parents=True, exist_ok=True)
+    Path(args.output).write_text(json.dumps(result, indent=1))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,139 @@
+"""``plan --batch -`` as a pipeline stage (issue 16, part 2): each row answered as soon as it is read, in row
+order, with bounded input; a real subprocess and a real pipe (not CliRunner, which hands the input over whole)."""
+
+from __future__ import annotations
+
+import json
+import os
+import select
+import subprocess
+import sys
+import time
+
+import pytest
+
+from pickplace_cli.batch import BATCH_MAX_LINE
+
+HEADER = "from_x,from_y,from_z,to_x,to_y,to_z\n"
+ROW = "-0.1525,0,-0.8,0.1525,0,-0.8\n"
+ROW2 = "0.1,0.05,-0.85,-0.1,0,-0.8\n"
+TIMEOUT = 60.0  # s: generous for a cold start on a slow 2-core CI machine
+
+
+def _start(*args: str) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, "-m", "pickplace_cli", "plan", "--batch", "-", *args],
+                            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, bufsize=1)
+
+
+def _readline(stream, timeout: float = TIMEOUT) -> str:
+    """One line of ``stream`` within ``timeout`` s (fails the test instead of hanging)."""
+    ready, _, _ = select.select([stream], [], [], timeout)
+    assert ready, f"no output within {timeout} s"
+    return stream.readline()
+
+
+def test_first_answer_arrives_before_the_second_row_is_written():
+    """The issue's test: a row written, a pause, the next row. The first answer (a JSON line) must come while
+    the input is still open and the second row not yet written."""
+    proc = _start("--json")
+    try:
+        proc.stdin.write(HEADER + ROW)
+        proc.stdin.flush()
+        first = json.loads(_readline(proc.stdout))
+        assert first["row"] == 1 and first["exit_code"] == 0 and first["limits_ok"]
+        assert proc.poll() is None  # still running, waiting for more input
+        proc.stdin.write(ROW2)
+        proc.stdin.flush()
+        second = json.loads(_readline(proc.stdout))
+        assert second["row"] == 2
+        proc.stdin.close()
+        assert proc.wait(TIMEOUT) == 0
+        assert proc.stdout.read() == ""
+    finally:
+        proc.kill()
+
+
+def test_csv_rows_are_flushed_per_row():
+    proc = _start("-q")
+    try:
+        proc.stdin.write(HEADER + ROW)
+        proc.stdin.flush()
+        header = _readline(proc.stdout)
+        assert header.startswith("move[-],t[s],")
+        line = _readline(proc.stdout)
+        assert line.startswith("1,0,")
+        proc.stdin.write(ROW2)
+        proc.stdin.close()
+        rest = proc.stdout.read()
+        assert proc.wait(TIMEOUT) == 0
+        moves = [ln.split(",", 1)[0] for ln in [line, *rest.splitlines()]]
+        assert set(moves) == {"1", "2"} and moves == sorted(moves)
+    finally:
+        proc.kill()
+
+
+def test_stream_keeps_row_order_with_workers_and_matches_a_file_batch(tmp_path):
+    """-j 2 on a stream: answers in row order, the same documents as the file batch (same numbers), a parse
+    error in the middle reported at its row."""
+    rows = [ROW, ROW2, "1,2,3\n", ROW2, ROW, ROW2, ROW]
+    text = HEADER + "".join(rows)
+    f = tmp_path / "moves.csv"
+    f.write_text(text)
+    streamed = subprocess.run([sys.executable, "-m", "pickplace_cli", "plan", "--batch", "-", "--json", "-j", "2",
+                               "-q"], input=text, capture_output=True, text=True, timeout=TIMEOUT)
+    filed = subprocess.run([sys.executable, "-m", "pickplace_cli", "plan", "--batch", str(f), "--json", "-q"],
+                           capture_output=True, text=True, timeout=TIMEOUT)
+    assert streamed.returncode == filed.returncode == 1
+    docs = [json.loads(x) for x in streamed.stdout.splitlines()]
+    assert [d["row"] for d in docs] == list(range(1, 8))
+    assert docs[2]["exit_code"] == 1 and "has 3 cells" in docs[2]["error"]
+    want = [json.loads(x) for x in filed.stdout.splitlines()]
+    strip = ("error",)
+    assert [{k: v for k, v in d.items() if k not in strip} for d in docs] == [
+        {k: v for k, v in d.items() if k not in strip} for d in want]
+
+
+def test_stream_writes_a_file_atomically_and_fail_fast_stops(tmp_path):
+    out = tmp_path / "out.csv"
+    text = HEADER + ROW + "0,0,0,5,0,-0.8\n" + ROW2
+    r = subprocess.run([sys.executable, "-m", "pickplace_cli", "plan", "--batch", "-", "-o", str(out), "--fail-fast",
+                        "-q"], input=text, capture_output=True, text=True, timeout=TIMEOUT)
+    assert r.returncode == 4, r.stderr
+    assert "row 2" in r.stderr and "row 3" not in r.stderr
+    moves = {ln.split(",", 1)[0] for ln in out.read_text().splitlines()[1:]}
+    assert moves == {"1"}
+    assert [p.name for p in tmp_path.iterdir()] == ["out.csv"]  # no temp file left behind
+
+
+@pytest.mark.parametrize("payload, words", [
+    (HEADER.encode() + b"\x00\x01\x02\n", "binary file (NUL bytes)"),
+    (HEADER.encode() + b"\xff\xfe\xfd\n", "not UTF-8 text"),
+    (HEADER.encode() + b"1" * (BATCH_MAX_LINE + 10), f"more than {BATCH_MAX_LINE} characters"),
+])
+def test_bad_input_is_one_line_exit_1(payload, words):
+    r = subprocess.run([sys.executable, "-m", "pickplace_cli", "plan", "--batch", "-", "--json"], input=payload,
+                       capture_output=True, timeout=TIMEOUT)
+    err = r.stderr.decode()
+    assert r.returncode == 1, err
+    assert words in err and "Traceback" not in err
+    assert len([ln for ln in err.splitlines() if ln.startswith("pickplace: error:")]) == 1
+
+
+def test_a_named_pipe_streams_too(tmp_path):
+    fifo = tmp_path / "moves.fifo"
+    os.mkfifo(fifo)
+    proc = subprocess.Popen([sys.executable, "-m", "pickplace_cli", "plan", "--batch", str(fifo), "--json"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        with open(fifo, "w") as w:
+            w.write(HEADER + ROW)
+            w.flush()
+            first = json.loads(_readline(proc.stdout))
+            assert first["row"] == 1 and proc.poll() is None
+            time.sleep(0.05)
+            w.write(ROW2)
+        assert proc.wait(TIMEOUT) == 0
+        assert json.loads(proc.stdout.read())["row"] == 2
+    finally:
+        proc.kill()
