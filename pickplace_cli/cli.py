@@ -257,7 +257,8 @@ def plan(
     ),
     rate: Optional[float] = typer.Option(None, "--rate", help="Samples per second in Hz. [default: profile]"),
     batch: Optional[str] = typer.Option(
-        None, "--batch", help="Plan many moves from a CSV ('-' = stdin): columns from_x,from_y,from_z,to_x,to_y,to_z "
+        None, "--batch", help="Plan many moves from a CSV ('-' = stdin or a named pipe: streamed, each row answered "
+        "and flushed as soon as it is read): columns from_x,from_y,from_z,to_x,to_y,to_z "
         "[m], optional height [m], eta, v_from_x.. v_to_z [m/s], time [s|auto|fit|optimal]. Output gets a move column."
     ),
     fail_fast: bool = typer.Option(False, "--fail-fast", help="With --batch: stop at the first row that fails."),
