@@ -16,7 +16,7 @@ from ..bspline import (
     make_spline,
     solve_control_points,
 )
-from ..errors import TaskError
+from ..errors import TableError, TaskError
 from ..peaks import batch_norm_peaks
 from ..task import Task
 from ..trajectory import CartesianPath
@@ -69,8 +69,16 @@ def plan_bspline(
                 "give --k1 and --k2 for a purely vertical move"
             )
         tab = load_table(table)
-        k1, k2 = tab.lookup(task.lam, eta=task.eta)
-        source = f"table {tab.source}"
+        try:
+            k1, k2 = tab.lookup(task.lam, eta=task.eta)
+            source = f"table {tab.source}"
+        except TableError as exc:  # a (λ, η) the table does not cover: the same optimiser, for this move
+            from ..table import solve_on_demand
+
+            k1, k2, _ = solve_on_demand(round(task.lam, 12), round(task.eta, 12))
+            why = "η" if str(exc).startswith("eta") else "λ"
+            source = (f"solved on demand: {why} outside table {tab.source}; build-table's optimiser, cached in "
+                      "this process")
     for name, k in (("k1", k1), ("k2", k2)):
         check_k(name, k)
     # numpy only (no scipy import on the online path), and the very arithmetic of the batch verdict

@@ -80,8 +80,9 @@ def test_stdout_and_file_identical(tmp_path):
 
 
 def test_height_eta_change_the_path():
+    # the shipped table is for η = 0.5: another η is solved on demand (issue 16) and says so
     r = run("plan", *ADEPT, "--height", "0.05", "--eta", "0.4", "--format", "json", "-q")
-    assert r.exit_code == 1 and "built for eta = 0.5" in r.stderr  # the shipped table is for η = 0.5
+    assert r.exit_code == 0 and "solved on demand: η outside table" in json.loads(r.stdout)["summary"]["parameters"]["k_source"]
     r = run("plan", *ADEPT, "--height", "0.05", "--eta", "0.4", "--k1", "0.4", "--k2", "0.15", "--format", "json", "-q")
     doc = json.loads(r.stdout)
     assert max(doc["samples"]["z[m]"]) == pytest.approx(-0.75, abs=1e-6)
@@ -101,7 +102,7 @@ BAD = [
     ([*ADEPT, "--k1", "0.3"], "give both"),
     ([*ADEPT, "--k1", "1.3", "--k2", "0.1"], "k1 = 1.3"),
     (["--from", "1,2", "--to", "0.1,0,-0.8"], "three coordinates"),
-    (["--from", "-0.6,0,-0.8", "--to", "0.6,0,-0.8"], "outside the table's range"),
+    ([*ADEPT, "--height", "1e-6"], "lambda = b/h = 3.05e+05: outside [0.001, 100000]"),
     ([*ADEPT, "--rate", "1e9"], "rate = 1000000000.0 Hz: the output rate must lie in (0, 1e6] Hz"),
     ([*ADEPT, "--k1", "1e-300", "--k2", "0.1"], "k1 = 1e-300: time-ratio factors must lie in [0.0001, 0.9999]"),
     # inside the k range, but the knot spans are so short that the duration (~2e5 s) needs 1.8e8 samples
@@ -164,13 +165,17 @@ def test_unreachable_exit_4():
     assert "outside the travel of axis z" in r.stderr and "at t = " in r.stderr
 
 
-def test_unreachable_end_point_is_named_before_the_table_range():
-    """A move the table does not cover because an end point is out of reach: exit 4 naming that point
-    (not the table's λ range, which would send the user to change --height)."""
+def test_unreachable_end_point_is_exit_4_not_a_table_range():
+    """A move the table does not cover because an end point is out of reach: its (k1, k2) are solved on
+    demand (issue 16), and the first unreachable sample is named (exit 4, one line) — never the table's λ
+    range, which would send the user to change --height. A λ no optimum covers still names the end first."""
     r = run("plan", "--from", "-0.1525,0,-0.8", "--to", "2,0,-0.8")
     assert r.exit_code == 4
-    assert r.stderr.strip().startswith("pickplace: error: to = 2,0,-0.8 m: outside the workspace of profile delta-su2018")
+    assert r.stderr.strip().startswith("pickplace: error: Delta: sample") and "is unreachable" in r.stderr
     assert len(r.stderr.strip().splitlines()) == 1
+    r = run("plan", "--from", "-0.1525,0,-0.8", "--to", "2,0,-0.8", "--height", "1e-6")
+    assert r.exit_code == 4
+    assert r.stderr.strip().startswith("pickplace: error: to = 2,0,-0.8 m: outside the workspace of profile delta-su2018")
 
 
 def test_build_table_small(tmp_path):

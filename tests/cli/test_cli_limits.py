@@ -195,7 +195,7 @@ def test_json_summary_on_error_is_still_one_json_document(tmp_path):
     assert out["error"] in r.stderr
     r = run("plan", "--from", "0,0,-0.8", "--to", "2,0,-0.8", "--json")
     out = json.loads(r.stdout)
-    assert r.exit_code == 4 and out == {"exit_code": 4, "error": out["error"]} and "outside the workspace" in out["error"]
+    assert r.exit_code == 4 and out == {"exit_code": 4, "error": out["error"]} and "is unreachable" in out["error"]
     r = run("plan", "--from", "0,0,-0.8", "--to", "2,0,-0.8")  # without --json stdout stays empty
     assert r.exit_code == 4 and r.stdout == ""
 

@@ -24,7 +24,7 @@ BATCH = """from_x,from_y,from_z,to_x,to_y,to_z,height,time
 -0.1525,0,-0.8,0.1525,0,-0.8,,
 0.1,0.1,-0.8,-0.1,-0.1,-0.8,0.03,0.2
 # a comment line, skipped
-0,0,-0.8,0.3,0,-0.8,0.002,
+0,0,-0.8,0.3,0,-0.8,0.000001,
 0,0,-0.8,0.1,0,-0.8,,0.01
 1,2,x,4,5,6,,
 -0.1525,0,-0.8,0.1525,0,-0.8,,fit
@@ -45,10 +45,10 @@ def test_batch_reports_rows_plans_the_rest_and_exits_with_the_worst(tmp_path):
     src.write_text(BATCH)
     out = tmp_path / "out.csv"
     r = run("plan", "--batch", str(src), "-o", str(out))
-    # row 3: λ = 0.3/0.002 = 150, out of the table (1), row 4: 10 ms is far too fast (3), row 5: not a number (1)
+    # row 3: λ = 0.3/1e-6 = 3e5, beyond any (k1, k2) optimum (1), row 4: 10 ms is far too fast (3), row 5: not a number (1)
     assert r.exit_code == 3
     err = r.stderr
-    assert f"row 3 ({src}:5)" in err and "outside the table's range" in err
+    assert f"row 3 ({src}:5)" in err and "where the optimal (k1, k2) can be solved" in err
     assert f"row 4 ({src}:6): limit exceeded" in err
     assert f"row 5 ({src}:7): from_z = 'x': not a number" in err
     assert "batch: 6 rows, 3 ok, 3 failed (first failing row 3); 3 written" in err

@@ -18,7 +18,7 @@ MIXED = """from_x,from_y,from_z,to_x,to_y,to_z,height,time
 -0.1525,0,-0.8,0.1525,0,-0.8,,
 0.1,0.1,-0.8,-0.1,-0.1,-0.8,0.03,0.2
 # a comment line, skipped
-0,0,-0.8,0.3,0,-0.8,0.002,
+0,0,-0.8,0.3,0,-0.8,0.000001,
 0,0,-0.8,0.1,0,-0.8,,0.01
 1,2,x,4,5,6,,
 0,0,-0.8,0.1,0,-0.3,,
@@ -66,12 +66,12 @@ def test_mixed_batch_identical_with_and_without_the_engine(monkeypatch, extra):
     seen = spy(monkeypatch)
     on, off = both(["plan", "--batch", "-", "--json", "-j", "1", *extra], MIXED, monkeypatch)
     assert seen  # the engine ran
-    if extra != ["--eta", "0.4"]:  # (the shipped table is for η = 0.5: every row goes to plan(), which says so)
+    if extra != ["--eta", "0.4"]:  # (the shipped table is for η = 0.5: every row goes to plan(), which solves it)
         assert seen[0] >= 2  # it decided rows 1, 2 (and 7) itself
     assert on.stdout == off.stdout
     assert on.stderr == off.stderr
-    # --eta 0.4: every row is refused by the η = 0.5 table (1) except row 6, whose unreachable end is named
-    # first (4); --fail-fast: row 3 (λ = 150, outside the table) stops the batch
+    # --eta 0.4: the rows are solved on demand (not in the η = 0.5 table); row 6 is unreachable (4);
+    # --fail-fast: row 3 (λ = 3e5, beyond any optimum: 1) stops the batch
     assert on.exit_code == off.exit_code == {"--fail-fast": 1}.get(extra[0] if extra else "", 4)
     if not extra:
         docs = [json.loads(x) for x in on.stdout.splitlines()]

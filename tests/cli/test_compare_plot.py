@@ -99,12 +99,12 @@ def test_compare_every_method_unreachable_exits_4(tmp_path):
 
 
 def test_compare_some_methods_fail_others_run():
-    """λ = 60 is beyond the B-spline table: that row fails, the others plan (exit 0)."""
+    """λ = 3e5 is beyond any B-spline (k1, k2) optimum: that row fails, the others plan (exit 0)."""
     others = [m.value for m in Method if m.value != "bspline"]
     if not others:
         pytest.skip("only the B-spline is registered")
-    r = run("compare", "--from", "-0.15,0,-0.8", "--to", "0.15,0,-0.8", "--height", "0.005", "-m", f"bspline,{others[0]}")
-    assert r.exit_code == 0 and "pickplace: method bspline: lambda = b/h = 60" in r.stderr
+    r = run("compare", "--from", "-0.15,0,-0.8", "--to", "0.15,0,-0.8", "--height", "1e-6", "-m", f"bspline,{others[0]}")
+    assert r.exit_code == 0 and "pickplace: method bspline: lambda = b/h = 3e+05" in r.stderr
 
 
 def test_plot_png_and_svg(tmp_path):

@@ -79,7 +79,8 @@ def test_engine_lines_equal_plan_lines_on_240_random_rows(agreement):
     assert [r.row for r in got] == [r.row for r in ref] == [r.row for r in rows]
     # the mix the test needs: decided rows, limit violations, unreachable and invalid rows
     codes = [r.code for r in ref]
-    assert codes.count(3) >= 10 and codes.count(4) >= 10 and codes.count(1) >= 3
+    # (rows outside the λ table were invalid, exit 1; they are solved on demand since issue 16)
+    assert codes.count(3) >= 10 and codes.count(4) >= 10 and codes.count(1) >= 2
     decided = [g for g in got if isinstance(g.plan, Verdict)]
     assert len(decided) >= 100
     # identical lines: every key and value (floats bitwise: json.dumps writes the shortest round-trip repr)

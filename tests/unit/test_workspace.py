@@ -172,11 +172,11 @@ def test_every_method_can_be_fitted(delta, method):
 
 
 def test_a_move_that_cannot_be_planned_keeps_its_own_error(delta):
-    """λ = 60 is outside the B-spline table: TableError (exit 1), not a workspace verdict."""
+    """λ = 3e5 is beyond any (k1, k2) optimum: TableError (exit 1), not a workspace verdict."""
     from pickplace_cli.errors import TableError
 
-    with pytest.raises(TableError, match="lambda = b/h = 60"):
-        fit_workspace(Task([-0.15, 0, -0.8], [0.15, 0, -0.8], 0.005), delta)
+    with pytest.raises(TableError, match="lambda = b/h = 3e"):
+        fit_workspace(Task([-0.15, 0, -0.8], [0.15, 0, -0.8], 1e-6), delta)
 
 
 # ------------------------------------------------------------------ radial extent (profile show's sentence)
