@@ -713,20 +713,11 @@ def _plan_batch(source, prof, options, height, eta, fail_fast, writer, output, r
     planned = [r for r in ordered if r.plan is not None and (r.code == 0 or report_only)]
     if json_summary:
         for r in ordered:
-            doc: dict = {"row": r.row, "exit_code": r.code, "error": r.error}
-            if r.plan is not None:
-                doc.update(r.plan.summary())
-                doc["violations"] = [v.as_dict() for v in r.plan.report.violations]
-            _emit_json(doc)
+            _emit_row_json(r)
     if report is not None:
         _write_report([r.plan for r in ordered if r.plan is not None], report, rows=[r.row for r in ordered if r.plan is not None])
     if not quiet:
-        n_ok = sum(1 for c in codes if c == 0)
-        sys.stderr.write(
-            f"batch: {len(ordered)} rows, {n_ok} ok, {len(ordered) - n_ok} failed"
-            + (f" (first failing row {next(r.row for r in ordered if r.code)})" if worst else "")
-            + (f"; {len(planned)} written" if output is not None else "") + "\n"
-        )
+        _batch_line(codes, next((r.row for r in ordered if r.code), None), len(planned) if output is not None else None)
     if output is not None and planned and writer.csv_dialect is not None:
         # CSV: header, then each plan's rows (formatted by the workers when there are several)
         from .export import atomic_output
@@ -748,6 +739,25 @@ def _plan_batch(source, prof, options, height, eta, fail_fast, writer, output, r
         sys.stderr.write("pickplace: no row could be written\n")
     if worst and not (report_only and all(c == 3 for c in codes if c)):
         raise typer.Exit(worst)
+
+
+def _emit_row_json(res) -> None:
+    """A batch row's JSON line: row, exit code, error, and the plan's summary and violations when it has one."""
+    doc: dict = {"row": res.row, "exit_code": res.code, "error": res.error}
+    if res.plan is not None:
+        doc.update(res.plan.summary())
+        doc["violations"] = [v.as_dict() for v in res.plan.report.violations]
+    _emit_json(doc)
+
+
+def _batch_line(codes: list, first_failed, written) -> None:
+    """The batch's closing line on stderr (``written``: rows written to -o, None without -o)."""
+    n_ok = sum(1 for c in codes if c == 0)
+    sys.stderr.write(
+        f"batch: {len(codes)} rows, {n_ok} ok, {len(codes) - n_ok} failed"
+        + (f" (first failing row {first_failed})" if first_failed is not None else "")
+        + (f"; {written} written" if written is not None else "") + "\n"
+    )
 
 
 def _is_fifo(path: str) -> bool:
@@ -800,11 +810,7 @@ def _stream_batch(stream, name, prof, options, height, eta, fail_fast, writer, o
                 sys.stderr.write("".join(f"pickplace: {ln}\n" for ln in res.error.splitlines()))
                 sys.stderr.flush()
             if json_summary:
-                doc: dict = {"row": res.row, "exit_code": res.code, "error": res.error}
-                if res.plan is not None:
-                    doc.update(res.plan.summary())
-                    doc["violations"] = [v.as_dict() for v in res.plan.report.violations]
-                _emit_json(doc)
+                _emit_row_json(res)
             if res.plan is not None and report is not None:
                 reports.append((res.row, ReportRecord.of(res.plan)))
             if res.plan is not None and output is not None and (res.code == 0 or report_only):
@@ -830,12 +836,7 @@ def _stream_batch(stream, name, prof, options, height, eta, fail_fast, writer, o
         _write_report([r for _, r in reports], report, rows=[n for n, _ in reports])
     worst = max(codes, default=0)
     if not quiet:
-        n_ok = sum(1 for c in codes if c == 0)
-        sys.stderr.write(
-            f"batch: {len(codes)} rows, {n_ok} ok, {len(codes) - n_ok} failed"
-            + (f" (first failing row {first_failed})" if worst else "")
-            + (f"; {n_written} written" if output is not None else "") + "\n"
-        )
+        _batch_line(codes, first_failed, n_written if output is not None else None)
     if output is not None and n_written == 0:
         sys.stderr.write("pickplace: no row could be written\n")
     if worst and not (report_only and all(c == 3 for c in codes if c)):
