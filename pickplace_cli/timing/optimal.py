@@ -215,7 +215,7 @@ def _problem(model, tau: np.ndarray, knots: np.ndarray, t_fit: float, dwell: flo
             dms = (2 * dI * den - (2 * I + hold) * 2 * dT) / den**2
             vals.append(1.0 - ms / r**2)
             jacs.append(-dms / r**2)
-        return np.array(vals), np.array(jacs).reshape(len(vals), -1)
+        return np.array(vals), np.array(jacs).reshape(len(vals), B0.shape[1])  # (0, n) with no rated joint
 
     def constraints(x, keep=None):
         """(values ≥ 0 when feasible, Jacobian) over the grid rows ``keep`` (all: None) and the RMS rows."""

@@ -167,3 +167,19 @@ def test_hold_capacity_refusals():
     prof = load_profile("delta-su2018")
     with pytest.raises(UsageError, match="bspline-vel"):
         plan(ADEPT, prof, PlanOptions(method="bspline-vel", time="fit", hold_capacity=True))
+
+
+def test_optimal_without_rated_torque_has_no_rms_rows():
+    """A profile whose drives have no rated torque (no RMS check) plans --time optimal (regression: the empty
+    RMS block of the constraint Jacobian could not be shaped), faster than with the RMS limit."""
+    import yaml
+
+    from pickplace_cli.profile import Profile, resolve_profile_path
+
+    d = yaml.safe_load(resolve_profile_path("delta-su2018").read_text())
+    del d["robot"]["joints"]["drive"]["rated_torque"]
+    prof = Profile.model_validate(d)
+    opt = plan(ADEPT, prof, PlanOptions(time="optimal"))
+    fit = plan(ADEPT, prof, PlanOptions(time="fit"))
+    assert opt.report.ok and opt.duration.seconds <= fit.duration.seconds
+    assert not any("RMS" in r.quantity for r in opt.report.rows)
