@@ -33,10 +33,8 @@ from typing import Any, Iterable, Mapping
 import numpy as np
 
 from .errors import NoFeasibleDuration, PickplaceError, TaskError
+from .peaks import DENSE, _dense_grid, true_peaks  # noqa: F401 - true_peaks: compare's measured peaks
 
-#: uniform samples of τ ∈ [0, 1] for the numerical peaks, extremes and the continuity scan (plus the
-#: breakpoints and both sides of each); every local maximum is then refined by golden-section search
-DENSE = 2001
 #: a derivative "jumps" where its two one-sided limits differ by more than this fraction of its peak.
 #: The one-sided limits are linear extrapolations from τ ± ε, τ ± 2ε with ε ≤ 1e-7: their error is
 #: ~ε²·|f″| ≈ 1e-14·|f″|, i.e. ≤ 1e-8 of the peak for |f″|/|f| up to 1e6 — far below this threshold, while
@@ -243,29 +241,6 @@ def continuity(path, rest_ends: bool = True, samples: dict[int, np.ndarray] | No
 
 
 # ------------------------------------------------------------------------------ peaks and geometry
-
-
-def _dense_grid(path) -> np.ndarray:
-    bp = np.clip(np.asarray(path.breakpoints, float), 0.0, 1.0)
-    g = np.unique(np.concatenate([np.linspace(0.0, 1.0, DENSE), bp, np.clip(bp - 1e-11, 0, 1), np.clip(bp + 1e-11, 0, 1)]))
-    return g
-
-
-def true_peaks(path, grid: np.ndarray | None = None, samples: dict[int, np.ndarray] | None = None) -> tuple[float, float, float]:
-    """max ‖d^k p/dτ^k‖ for k = 1, 2, 3 over τ ∈ [0, 1] (m/1^k, T = 1), measured on the path: dense
-    samples (plus every breakpoint and τ ± 1e-11 on both sides, so a one-sided limit at a jump is seen),
-    each local maximum refined by golden-section search (:func:`pickplace_cli.peaks.refine_max`)."""
-    from .peaks import refine_max
-
-    if grid is None:
-        grid = _dense_grid(path)
-
-    def norms(t: np.ndarray) -> np.ndarray:
-        return np.column_stack([np.linalg.norm(path(t, k), axis=1) for k in (1, 2, 3)])
-
-    y = None if samples is None else np.column_stack([np.linalg.norm(samples[k], axis=1) for k in (1, 2, 3)])
-    peak, _ = refine_max(norms, grid, y)
-    return float(peak[0]), float(peak[1]), float(peak[2])
 
 
 @dataclass(frozen=True)

@@ -235,3 +235,29 @@ def refine_max(
                 best[c] = fm[sel][k]
                 best_x[c] = xm[sel][k]
     return (best[0], best_x[0]) if squeeze else (best, best_x)
+
+
+#: uniform samples of τ ∈ [0, 1] for the numerical peaks, extremes and the continuity scan (plus the
+#: breakpoints and both sides of each); every local maximum is then refined by golden-section search
+DENSE = 2001
+
+
+def _dense_grid(path) -> np.ndarray:
+    bp = np.clip(np.asarray(path.breakpoints, float), 0.0, 1.0)
+    g = np.unique(np.concatenate([np.linspace(0.0, 1.0, DENSE), bp, np.clip(bp - 1e-11, 0, 1), np.clip(bp + 1e-11, 0, 1)]))
+    return g
+
+
+def true_peaks(path, grid: np.ndarray | None = None, samples: dict[int, np.ndarray] | None = None) -> tuple[float, float, float]:
+    """max ‖d^k p/dτ^k‖ for k = 1, 2, 3 over τ ∈ [0, 1] (m/1^k, T = 1), measured on the path: dense
+    samples (plus every breakpoint and τ ± 1e-11 on both sides, so a one-sided limit at a jump is seen),
+    each local maximum refined by golden-section search (:func:`pickplace_cli.peaks.refine_max`)."""
+    if grid is None:
+        grid = _dense_grid(path)
+
+    def norms(t: np.ndarray) -> np.ndarray:
+        return np.column_stack([np.linalg.norm(path(t, k), axis=1) for k in (1, 2, 3)])
+
+    y = None if samples is None else np.column_stack([np.linalg.norm(samples[k], axis=1) for k in (1, 2, 3)])
+    peak, _ = refine_max(norms, grid, y)
+    return float(peak[0]), float(peak[1]), float(peak[2])

@@ -351,7 +351,7 @@ def compose(path, b) -> object:
     dense = np.linspace(0.0, 1.0, 4001)
     bp = np.unique(np.clip(fwd(np.asarray(path.breakpoints, float)), 0.0, 1.0))
     jumps = fwd(path.jump_points) if len(path.jump_points) else np.zeros(0)
-    from ..compare import true_peaks
+    from ..peaks import true_peaks
 
     shell = CartesianPath(evaluate, path.method, {}, (0.0, 0.0, 0.0), np.unique(np.concatenate([[0.0, 1.0], bp])),
                           jumps=tuple(jumps.tolist()), evaluate_all=orders)
