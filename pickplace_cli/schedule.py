@@ -155,12 +155,14 @@ class ScheduleSummary:
     failed: list = None  # type: ignore[assignment]
     t_first: float = math.inf
     t_last: float = -math.inf
+    worst: int = 0  # the highest exit code of the rows
 
     def __post_init__(self) -> None:
         self.failed = [] if self.failed is None else self.failed
 
     def add(self, res: ScheduleRow) -> None:
         self.rows += 1
+        self.worst = max(self.worst, res.code)
         if res.code:
             self.failed.append(res.row)
             return
