@@ -328,7 +328,8 @@ def allowed_interval(part: Part, profile, dwell: float) -> tuple[float, float, s
         where = "the belt window and " if window is not None else ""
         raise UnreachableError(
             f"{part.label()}: it is never inside {where}the workspace of profile {profile.name} for the pick and "
-            f"{dwell:g} s of tracking within {HORIZON:g} s of the move's start"
+            f"{dwell:g} s of tracking within {HORIZON:g} s of the move's start (at the start, latency "
+            f"{part.latency:g} s, it is at {','.join(f'{c:.4g}' for c in part.at(0.0))} m)"
         )
     k = int(first[0])
     end = k + int(np.argmin(ok[k:])) if not ok[k:].all() else n
