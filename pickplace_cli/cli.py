@@ -215,7 +215,8 @@ def plan(
     ),
     latency: Optional[float] = typer.Option(
         None, "--latency", help="With --to-belt: seconds (>= 0) from the part's detection to the start of the move "
-        "(vision + planning + bus); the trajectory's t = 0 is the start of the move. [default: 0]",
+        "(vision + planning + bus); the trajectory's t = 0 is the start of the move. With a belt schedule (--batch "
+        "with t_detect): the rows' earliest move start after their detection. [default: 0]",
     ),
     method: MethodName = typer.Option(MethodName.bspline, "--method", "-m", help="Planning method."),
     k1: Optional[float] = typer.Option(None, "--k1", help="B-spline time-ratio factor k1 = τ8/τ9 (overrides the table)."),
@@ -259,7 +260,11 @@ def plan(
     batch: Optional[str] = typer.Option(
         None, "--batch", help="Plan many moves from a CSV ('-' = stdin or a named pipe: streamed, each row answered "
         "and flushed as soon as it is read): columns from_x,from_y,from_z,to_x,to_y,to_z "
-        "[m], optional height [m], eta, v_from_x.. v_to_z [m/s], time [s|auto|fit|optimal]. Output gets a move column."
+        "[m], optional height [m], eta, v_from_x.. v_to_z [m/s], time [s|auto|fit|optimal]. Output gets a move column. "
+        "A t_detect column makes it a belt schedule (one detected part per row, in time order, the robot's state "
+        "carried over): t_detect [s], to_x,to_y,to_z [m, where the part was seen], to_belt_vx,to_belt_vy,to_belt_vz "
+        "[m/s], place_x,place_y,place_z [m], optional latency [s >= 0, default --latency], height, eta, time, "
+        "from_x,from_y,from_z [m, row 1 only: the robot's start]."
     ),
     fail_fast: bool = typer.Option(False, "--fail-fast", help="With --batch: stop at the first row that fails."),
     workers: int = typer.Option(
