@@ -9,6 +9,7 @@ Heavy modules (numpy, scipy, pydantic, rich) are imported inside the commands so
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import sys
 from enum import Enum
@@ -636,31 +637,14 @@ def _plan_batch(source, prof, options, height, eta, fail_fast, writer, output, r
                 quiet, workers: int = 1, belt: Optional[dict] = None) -> None:
     """--batch: plan every row, report failures by row number, write the good ones, exit with the worst code.
     A batch with a t_detect column is a belt schedule (:func:`_plan_schedule`)."""
-    import itertools
     import os
-    from contextlib import ExitStack
 
-    from .batch import BatchRow, iter_batch, plan_rows_parallel
-    from .errors import TaskError
+    from .batch import BatchRow, plan_rows_parallel
 
     belt = belt or {}
     name = "stdin" if source == "-" else source
     streamed = source == "-" or _is_fifo(source)  # a pipe: answer each row as it is read
-    with ExitStack() as stack:
-        if source == "-":
-            try:  # undecodable bytes are an error, not surrogates (a C/POSIX locale's stdin escapes them)
-                sys.stdin.reconfigure(errors="strict")
-            except (AttributeError, ValueError, OSError):  # pragma: no cover - a test runner's stand-in
-                pass
-            fh = sys.stdin
-        else:
-            try:  # -sig: Excel's BOM
-                fh = stack.enter_context(open(source, encoding="utf-8-sig", newline=""))
-            except OSError as exc:
-                raise TaskError(f"batch = {source}: cannot read it: {exc.strerror}") from None
-        info: dict = {}
-        items = iter_batch(fh, name, info)
-        items = itertools.chain([next(items)], items)  # the header is read: a plain batch or a belt schedule
+    with _batch_input(source, name) as (items, info):
         if info.get("schedule"):
             _plan_schedule(items, name, streamed, prof, options, height, eta, fail_fast, writer, output, report,
                            report_only, json_summary, quiet, workers, belt)
@@ -739,7 +723,15 @@ def _plan_batch(source, prof, options, height, eta, fail_fast, writer, output, r
         _write_report([r.plan for r in ordered if r.plan is not None], report, rows=[r.row for r in ordered if r.plan is not None])
     if not quiet:
         _batch_line(codes, next((r.row for r in ordered if r.code), None), len(planned) if output is not None else None)
-    if output is not None and planned and writer.csv_dialect is not None:
+    if output is not None:
+        _write_batch_file(planned, writer, output, prof.planning.dwell)
+    if worst and not (report_only and all(c == 3 for c in codes if c)):
+        raise typer.Exit(worst)
+
+
+def _write_batch_file(planned, writer, output, dwell: float) -> None:
+    """A file batch's planned rows (RowResults) to ``output`` (atomically), or one line when there is none."""
+    if planned and writer.csv_dialect is not None:
         # CSV: header, then each plan's rows (formatted by the workers when there are several)
         from .export import atomic_output
         from .export.csv import csv_header, csv_rows
@@ -748,18 +740,42 @@ def _plan_batch(source, prof, options, height, eta, fail_fast, writer, output, r
             stream.write(csv_header(planned[0].plan, writer.csv_dialect, move=True))
             for r in planned:
                 stream.write(r.text if r.text is not None else csv_rows(r.plan, writer.csv_dialect, move=r.row))
-    elif output is not None and planned:
+    elif planned:
         from .timeline import concatenate
 
         # CSV/JSON: each move keeps its own time (the move column tells them apart); MCAP: one timeline,
         # moves one dwell apart
         samples = concatenate([r.plan for r in planned], [r.row for r in planned],
-                              restart_time=not writer.one_timeline, gap=prof.planning.dwell)
+                              restart_time=not writer.one_timeline, gap=dwell)
         writer(samples, output)
-    elif output is not None and not planned:
+    else:
         sys.stderr.write("pickplace: no row could be written\n")
-    if worst and not (report_only and all(c == 3 for c in codes if c)):
-        raise typer.Exit(worst)
+
+
+@contextlib.contextmanager
+def _batch_input(source: str, name: str):
+    """The batch's rows (:func:`~pickplace_cli.batch.iter_batch`, lazily) and its header ``info`` (plain batch or
+    belt schedule), the header already read; the file (or stdin) stays open inside the ``with``."""
+    import itertools
+
+    from .batch import iter_batch
+    from .errors import TaskError
+
+    with contextlib.ExitStack() as stack:
+        if source == "-":
+            try:  # undecodable bytes are an error, not surrogates (a C/POSIX locale's stdin escapes them)
+                sys.stdin.reconfigure(errors="strict")
+            except (AttributeError, ValueError, OSError):  # pragma: no cover - a test runner's stand-in
+                pass
+            fh = sys.stdin
+        else:
+            try:  # -sig: Excel's BOM
+                fh = stack.enter_context(open(source, encoding="utf-8-sig", newline=""))
+            except OSError as exc:
+                raise TaskError(f"batch = {source}: cannot read it: {exc.strerror}") from None
+        info: dict = {}
+        items = iter_batch(fh, name, info)
+        yield itertools.chain([next(items)], items), info  # next(): the header is read
 
 
 def _plan_schedule(items, name, streamed, prof, options, height, eta, fail_fast, writer, output, report,
