@@ -25,6 +25,13 @@ from .errors import PickplaceError, TaskError
 
 REQUIRED = ("from_x", "from_y", "from_z", "to_x", "to_y", "to_z")
 OPTIONAL = ("height", "eta", "v_from_x", "v_from_y", "v_from_z", "v_to_x", "v_to_y", "v_to_z", "time")
+#: a belt schedule (a ``t_detect`` column; :mod:`~pickplace_cli.schedule`): one detected part per row — where it
+#: was seen [m], the belt velocity [m/s], the detection time stamp [s] and where to place it [m]; optional
+#: ``latency`` [s, >= 0] (earliest move start after the detection), ``height`` [m], ``eta``, ``time``, and
+#: ``from_x … from_z`` [m] on row 1 only (where the robot starts; later moves start where the previous ended)
+SCHEDULE_REQUIRED = ("to_x", "to_y", "to_z", "to_belt_vx", "to_belt_vy", "to_belt_vz", "t_detect",
+                     "place_x", "place_y", "place_z")
+SCHEDULE_OPTIONAL = ("latency", "height", "eta", "time", "from_x", "from_y", "from_z")
 
 
 @dataclass(frozen=True)
@@ -80,12 +87,15 @@ def violation_text(r) -> str:
 BATCH_MAX_LINE = 1 << 16
 
 
-def iter_batch(stream: IO[str], source: str = "batch") -> Iterator[BatchRow | RowResult]:
+def iter_batch(stream: IO[str], source: str = "batch", info: dict | None = None) -> Iterator[BatchRow | RowResult]:
     """Parse the batch CSV lazily, one line at a time: a :class:`BatchRow` per good row, a :class:`RowResult`
     (with its error) per row that failed to parse, each as soon as its line is read (a pipe is answered row
     by row). A bad header, a header with no row after it (at the end of the input), a line longer than
-    :data:`BATCH_MAX_LINE`, a NUL byte or text that is not UTF-8 raise TaskError naming the line."""
+    :data:`BATCH_MAX_LINE`, a NUL byte or text that is not UTF-8 raise TaskError naming the line. ``info``
+    (a dict) receives ``columns`` and ``schedule`` (a ``t_detect`` column: a belt schedule) once the header
+    is read, i.e. before the first row is yielded."""
     header: list[str] | None = None
+    required: tuple = REQUIRED
     header_line = 0
     sep = ","
     number = 0
@@ -112,9 +122,12 @@ def iter_batch(stream: IO[str], source: str = "batch") -> Iterator[BatchRow | Ro
             header_line = line
             sep = sniff_delimiter(text)
             header = _header(text, sep, source, line)
+            required = SCHEDULE_REQUIRED if "t_detect" in header else REQUIRED
+            if info is not None:
+                info.update(columns=list(header), schedule="t_detect" in header)
             continue
         number += 1
-        yield _row(number, line, text, header, sep, source)
+        yield _row(number, line, text, header, sep, source, required)
     if header is None:
         raise TaskError(f"{source}: no header row (need columns {', '.join(REQUIRED)})")
     if number == 0:
@@ -125,21 +138,31 @@ def iter_batch(stream: IO[str], source: str = "batch") -> Iterator[BatchRow | Ro
 
 def _header(text: str, sep: str, source: str, line: int) -> list[str]:
     header = [h.strip() for h in next(csv.reader([text], delimiter=sep))]
-    unknown = [h for h in header if h not in REQUIRED + OPTIONAL]
-    if unknown:
+    schedule = "t_detect" in header
+    required, optional = (SCHEDULE_REQUIRED, SCHEDULE_OPTIONAL) if schedule else (REQUIRED, OPTIONAL)
+    unknown = [h for h in header if h not in required + optional]
+    if unknown and not schedule and unknown[0] in SCHEDULE_REQUIRED + SCHEDULE_OPTIONAL:
         raise TaskError(
-            f"{source}:{line}: column {unknown[0]!r} is not known; columns are {', '.join(REQUIRED + OPTIONAL)}"
+            f"{source}:{line}: column {unknown[0]!r} belongs to a belt schedule, which needs a t_detect column "
+            f"(detection time stamp, s) and the columns {', '.join(SCHEDULE_REQUIRED)}"
         )
-    missing = [h for h in REQUIRED if h not in header]
+    if unknown:
+        what = "a belt schedule's" if schedule else "the"
+        raise TaskError(
+            f"{source}:{line}: column {unknown[0]!r} is not known; {what} columns are {', '.join(required + optional)}"
+        )
+    missing = [h for h in required if h not in header]
     if missing:
-        raise TaskError(f"{source}:{line}: column {missing[0]!r} is missing (required: {', '.join(REQUIRED)})")
+        what = "a belt schedule (t_detect) requires" if schedule else "required:"
+        raise TaskError(f"{source}:{line}: column {missing[0]!r} is missing ({what} {', '.join(required)})")
     dup = sorted({h for h in header if header.count(h) > 1})
     if dup:
         raise TaskError(f"{source}:{line}: column {dup[0]!r} appears twice")
     return header
 
 
-def _row(number: int, line: int, text: str, header: list[str], sep: str, source: str) -> BatchRow | RowResult:
+def _row(number: int, line: int, text: str, header: list[str], sep: str, source: str,
+         required: tuple = REQUIRED) -> BatchRow | RowResult:
     cells = [c.strip() for c in next(csv.reader([text], delimiter=sep))]
     try:
         if len(cells) != len(header):
@@ -147,8 +170,9 @@ def _row(number: int, line: int, text: str, header: list[str], sep: str, source:
         values: dict[str, Any] = {}
         for name, cell in zip(header, cells):
             if cell == "":
-                if name in REQUIRED:
-                    raise TaskError(f"{name} is empty: give a number in metres")
+                if name in required:
+                    unit = {"t_detect": "seconds"}.get(name, "m/s" if name.startswith("to_belt") else "metres")
+                    raise TaskError(f"{name} is empty: give a number in {unit}")
                 continue
             if name == "time" and cell in ("auto", "fit", "optimal"):
                 values[name] = cell
@@ -160,6 +184,8 @@ def _row(number: int, line: int, text: str, header: list[str], sep: str, source:
                 raise TaskError(f"{name} = {cell!r}: not a number{hint}") from None
             if not math.isfinite(x):
                 raise TaskError(f"{name} = {cell!r}: must be finite")
+            if name == "latency" and x < 0:
+                raise TaskError(f"latency = {cell!r}: must be >= 0 s (the earliest move start after the detection)")
             values[name] = x
         return BatchRow(number, line, values)
     except TaskError as exc:

@@ -9,6 +9,7 @@ Heavy modules (numpy, scipy, pydantic, rich) are imported inside the commands so
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import sys
 from enum import Enum
@@ -215,7 +216,8 @@ def plan(
     ),
     latency: Optional[float] = typer.Option(
         None, "--latency", help="With --to-belt: seconds (>= 0) from the part's detection to the start of the move "
-        "(vision + planning + bus); the trajectory's t = 0 is the start of the move. [default: 0]",
+        "(vision + planning + bus); the trajectory's t = 0 is the start of the move. With a belt schedule (--batch "
+        "with t_detect): the rows' earliest move start after their detection. [default: 0]",
     ),
     method: MethodName = typer.Option(MethodName.bspline, "--method", "-m", help="Planning method."),
     k1: Optional[float] = typer.Option(None, "--k1", help="B-spline time-ratio factor k1 = τ8/τ9 (overrides the table)."),
@@ -259,7 +261,11 @@ def plan(
     batch: Optional[str] = typer.Option(
         None, "--batch", help="Plan many moves from a CSV ('-' = stdin or a named pipe: streamed, each row answered "
         "and flushed as soon as it is read): columns from_x,from_y,from_z,to_x,to_y,to_z "
-        "[m], optional height [m], eta, v_from_x.. v_to_z [m/s], time [s|auto|fit|optimal]. Output gets a move column."
+        "[m], optional height [m], eta, v_from_x.. v_to_z [m/s], time [s|auto|fit|optimal]. Output gets a move column. "
+        "A t_detect column makes it a belt schedule (one detected part per row, in time order, the robot's state "
+        "carried over): t_detect [s], to_x,to_y,to_z [m, where the part was seen], to_belt_vx,to_belt_vy,to_belt_vz "
+        "[m/s], place_x,place_y,place_z [m], optional latency [s >= 0, default --latency], height, eta, time, "
+        "from_x,from_y,from_z [m, row 1 only: the robot's start]."
     ),
     fail_fast: bool = typer.Option(False, "--fail-fast", help="With --batch: stop at the first row that fails."),
     workers: int = typer.Option(
@@ -358,7 +364,12 @@ def plan(
     if output is None and not json_summary:
         output = "-"
     _check_output_paths(output, report)
-    if to_belt is not None or latency is not None:
+    if batch is not None and to_belt is None and latency is not None:  # a belt schedule's default row latency
+        import math
+
+        if not (math.isfinite(latency) and latency >= 0):
+            raise TaskError(f"latency = {latency!r}: must be a finite number of seconds >= 0 (detection to move start)")
+    elif to_belt is not None or latency is not None:
         method = _belt_method(ctx, method, to_belt, latency, v_to, batch, round_trip, fit_ws, optimize)
     prof = load_profile(profile)
     params: dict = _parse_params(param or [])
@@ -388,8 +399,10 @@ def plan(
                               hold_capacity=hold_capacity)
         if workers < 0:
             raise TaskError(f"workers = {workers}: must be 0 (automatic) or a positive number of processes")
+        source = ctx.get_parameter_source("method")
+        belt = {"latency": latency, "method_given": source is not None and source.name != "DEFAULT"}
         _plan_batch(batch, prof, options, height, eta, fail_fast, writer, output, report, report_only, json_summary,
-                    quiet, workers)
+                    quiet, workers, belt)
         return
     from .task import Task
 
@@ -621,39 +634,31 @@ def _emit_json(doc: dict) -> None:
 
 
 def _plan_batch(source, prof, options, height, eta, fail_fast, writer, output, report, report_only, json_summary,
-                quiet, workers: int = 1) -> None:
-    """--batch: plan every row, report failures by row number, write the good ones, exit with the worst code."""
+                quiet, workers: int = 1, belt: Optional[dict] = None) -> None:
+    """--batch: plan every row, report failures by row number, write the good ones, exit with the worst code.
+    A batch with a t_detect column is a belt schedule (:func:`_plan_schedule`)."""
     import os
 
-    from .batch import plan_rows_parallel, read_batch
-    from .errors import TaskError
+    from .batch import BatchRow, plan_rows_parallel
 
+    belt = belt or {}
     name = "stdin" if source == "-" else source
-    if source == "-" or _is_fifo(source):  # a pipe: answer each row as it is read
-        if source == "-":
-            try:  # undecodable bytes are an error, not surrogates (a C/POSIX locale's stdin escapes them)
-                sys.stdin.reconfigure(errors="strict")
-            except (AttributeError, ValueError, OSError):  # pragma: no cover - a test runner's stand-in
-                pass
-            _stream_batch(sys.stdin, name, prof, options, height, eta, fail_fast, writer, output, report,
+    streamed = source == "-" or _is_fifo(source)  # a pipe: answer each row as it is read
+    with _batch_input(source, name) as (items, info):
+        if info.get("schedule"):
+            _plan_schedule(items, name, streamed, prof, options, height, eta, fail_fast, writer, output, report,
+                           report_only, json_summary, quiet, workers, belt)
+            return
+        if belt.get("latency") is not None:
+            _usage("--latency with --batch is the default latency of a belt schedule's rows (a batch with a "
+                   "t_detect column); this batch has none")
+        if streamed:
+            _stream_batch(items, name, prof, options, height, eta, fail_fast, writer, output, report,
                           report_only, json_summary, quiet, workers)
             return
-        try:
-            fh = open(source, encoding="utf-8-sig", newline="")
-        except OSError as exc:
-            raise TaskError(f"batch = {source}: cannot read it: {exc.strerror}") from None
-        with fh:
-            _stream_batch(fh, name, prof, options, height, eta, fail_fast, writer, output, report, report_only,
-                          json_summary, quiet, workers)
-        return
-    if source == "-":  # pragma: no cover - streamed above
-        rows, bad = read_batch(sys.stdin, name)
-    else:
-        try:
-            with open(source, encoding="utf-8-sig", newline="") as fh:  # -sig: Excel's BOM
-                rows, bad = read_batch(fh, name)
-        except OSError as exc:
-            raise TaskError(f"batch = {source}: cannot read it: {exc.strerror}") from None
+        rows, bad = [], []
+        for item in items:
+            (rows if isinstance(item, BatchRow) else bad).append(item)
     first_bad = min((b.row for b in bad), default=None)
     if fail_fast and first_bad is not None:
         rows = [r for r in rows if r.row < first_bad]
@@ -718,7 +723,15 @@ def _plan_batch(source, prof, options, height, eta, fail_fast, writer, output, r
         _write_report([r.plan for r in ordered if r.plan is not None], report, rows=[r.row for r in ordered if r.plan is not None])
     if not quiet:
         _batch_line(codes, next((r.row for r in ordered if r.code), None), len(planned) if output is not None else None)
-    if output is not None and planned and writer.csv_dialect is not None:
+    if output is not None:
+        _write_batch_file(planned, writer, output, prof.planning.dwell)
+    if worst and not (report_only and all(c == 3 for c in codes if c)):
+        raise typer.Exit(worst)
+
+
+def _write_batch_file(planned, writer, output, dwell: float) -> None:
+    """A file batch's planned rows (RowResults) to ``output`` (atomically), or one line when there is none."""
+    if planned and writer.csv_dialect is not None:
         # CSV: header, then each plan's rows (formatted by the workers when there are several)
         from .export import atomic_output
         from .export.csv import csv_header, csv_rows
@@ -727,18 +740,114 @@ def _plan_batch(source, prof, options, height, eta, fail_fast, writer, output, r
             stream.write(csv_header(planned[0].plan, writer.csv_dialect, move=True))
             for r in planned:
                 stream.write(r.text if r.text is not None else csv_rows(r.plan, writer.csv_dialect, move=r.row))
-    elif output is not None and planned:
+    elif planned:
         from .timeline import concatenate
 
         # CSV/JSON: each move keeps its own time (the move column tells them apart); MCAP: one timeline,
         # moves one dwell apart
         samples = concatenate([r.plan for r in planned], [r.row for r in planned],
-                              restart_time=not writer.one_timeline, gap=prof.planning.dwell)
+                              restart_time=not writer.one_timeline, gap=dwell)
         writer(samples, output)
-    elif output is not None and not planned:
+    else:
         sys.stderr.write("pickplace: no row could be written\n")
-    if worst and not (report_only and all(c == 3 for c in codes if c)):
-        raise typer.Exit(worst)
+
+
+@contextlib.contextmanager
+def _batch_input(source: str, name: str):
+    """The batch's rows (:func:`~pickplace_cli.batch.iter_batch`, lazily) and its header ``info`` (plain batch or
+    belt schedule), the header already read; the file (or stdin) stays open inside the ``with``."""
+    import itertools
+
+    from .batch import iter_batch
+    from .errors import TaskError
+
+    with contextlib.ExitStack() as stack:
+        if source == "-":
+            try:  # undecodable bytes are an error, not surrogates (a C/POSIX locale's stdin escapes them)
+                sys.stdin.reconfigure(errors="strict")
+            except (AttributeError, ValueError, OSError):  # pragma: no cover - a test runner's stand-in
+                pass
+            fh = sys.stdin
+        else:
+            try:  # -sig: Excel's BOM
+                fh = stack.enter_context(open(source, encoding="utf-8-sig", newline=""))
+            except OSError as exc:
+                raise TaskError(f"batch = {source}: cannot read it: {exc.strerror}") from None
+        info: dict = {}
+        items = iter_batch(fh, name, info)
+        yield itertools.chain([next(items)], items), info  # next(): the header is read
+
+
+def _plan_schedule(items, name, streamed, prof, options, height, eta, fail_fast, writer, output, report,
+                   report_only, json_summary, quiet, workers, belt) -> None:
+    """--batch with a t_detect column: a belt schedule (pickplace_cli/schedule.py), the robot's state carried
+    from row to row. A file is checked whole (order, cells) before anything is planned or written; a stream
+    row by row. Each row: a JSON line (--json) or a line on stderr; the picked cycles' samples (detection clock,
+    move = row) to -o / stdout; the closing line; exit with the worst row's code."""
+    from contextlib import ExitStack
+
+    from .errors import TaskError
+    from .schedule import ScheduleSummary, check_order, plan_schedule
+
+    if report is not None or report_only:
+        _usage(f"{'--report' if report is not None else '--report-only'} is not available with a belt schedule "
+               "(a batch with t_detect): use --json for each row's limits")
+    if belt.get("method_given") and options.method != "bspline-vel":
+        raise TaskError(f"method = {options.method}: a belt schedule meets each part with its velocity; it "
+                        "needs --method bspline-vel (the default for a schedule)")
+    if workers > 1 and not quiet:
+        sys.stderr.write(f"pickplace: -j {workers}: a belt schedule is planned row by row (the robot's state carries "
+                         "over from each row to the next); one process\n")
+    if not streamed:  # every row read and checked first: an input error writes nothing
+        items = list(check_order(items, name))
+    params = {k: v for k, v in options.method_params.items() if k in ("solver", "table") and v is not None}
+    results = plan_schedule(items, prof, options.time, height, eta, options.rate, belt.get("latency") or 0.0,
+                            params, name, fail_fast)
+    summary = ScheduleSummary()
+    kept: list = []
+    csv_out = output is not None and writer.csv_dialect is not None
+    with ExitStack() as stack:
+        out = None
+        if csv_out:
+            from .export import atomic_output
+            from .export.csv import csv_header, csv_rows
+
+            out = stack.enter_context(atomic_output(output))
+        for res in results:
+            summary.add(res)
+            if res.error is not None:
+                sys.stderr.write("".join(f"pickplace: {ln}\n" for ln in res.error.splitlines()))
+            elif not quiet:
+                c = res.cycle
+                xyz = ", ".join(f"{x:.4f}" for x in c.rendezvous.meeting_point)
+                sys.stderr.write(f"row {res.row}: starts t = {c.t_start:.4f} s (latency {c.latency:.4f} s), meets the part "
+                                 f"at ({xyz}) m at t = {c.t_meet:.4f} s, placed t = {c.t_place:.4f} s, free "
+                                 f"t = {c.t_end:.4f} s\n")
+            sys.stderr.flush()
+            if json_summary:
+                _emit_json(res.as_dict())
+            if res.code == 0 and output is not None:
+                timeline = res.cycle.timeline()
+                if out is not None:
+                    if summary.picks == 1:
+                        out.write(csv_header(timeline, writer.csv_dialect, move=True))
+                    out.write(csv_rows(timeline, writer.csv_dialect))
+                    out.flush()
+                else:
+                    kept.append(timeline)
+    if kept:
+        from .timeline import _join, _pieces_of
+
+        writer(_join([_pieces_of(tl, 0.0) for tl in kept], [int(tl.move[0]) for tl in kept], kept[0].joint,
+                     [sg for tl in kept for sg in tl.segments], [sm for tl in kept for sm in tl.summaries]), output)
+    if json_summary:
+        _emit_json({"schedule": summary.as_dict()})
+    if not quiet:
+        sys.stderr.write(summary.line() + "\n")
+    if output is not None and summary.picks == 0:
+        sys.stderr.write("pickplace: no part was picked: nothing written\n")
+    if summary.worst:
+        raise typer.Exit(summary.worst)
 
 
 def _emit_row_json(res) -> None:
@@ -770,15 +879,16 @@ def _is_fifo(path: str) -> bool:
         return False
 
 
-def _stream_batch(stream, name, prof, options, height, eta, fail_fast, writer, output, report, report_only,
+def _stream_batch(items, name, prof, options, height, eta, fail_fast, writer, output, report, report_only,
                   json_summary, quiet, workers: int) -> None:
-    """--batch - (or a named pipe): each row answered as soon as its line is read — a JSON line (``--json``)
+    """--batch - (or a named pipe): the rows of :func:`~pickplace_cli.batch.iter_batch` (``items``), each
+    answered as soon as its line is read — a JSON line (``--json``)
     or its CSV rows, flushed — with the same row numbers, messages and exit codes as a file batch. Memory:
     one row's trajectory (MCAP and JSON trajectories need the whole timeline: those rows are kept until the
     input ends; ``--report`` keeps each row's limit report, not its samples)."""
     from contextlib import ExitStack
 
-    from .batch import ReportRecord, iter_batch, plan_stream
+    from .batch import ReportRecord, plan_stream
 
     verdicts_only = json_summary and output is None and report is None
     engine = False
@@ -799,7 +909,7 @@ def _stream_batch(stream, name, prof, options, height, eta, fail_fast, writer, o
             from .export.csv import csv_header, csv_rows
 
             out = stack.enter_context(atomic_output(output))
-        results = plan_stream(iter_batch(stream, name), prof, options, height, eta, fail_fast, name,
+        results = plan_stream(items, prof, options, height, eta, fail_fast, name,
                               workers=max(workers, 1), csv_dialect=writer.csv_dialect if csv_out else None,
                               format_failed=report_only, verdicts=engine)
         for res in results:

@@ -328,7 +328,8 @@ def allowed_interval(part: Part, profile, dwell: float) -> tuple[float, float, s
         where = "the belt window and " if window is not None else ""
         raise UnreachableError(
             f"{part.label()}: it is never inside {where}the workspace of profile {profile.name} for the pick and "
-            f"{dwell:g} s of tracking within {HORIZON:g} s of the move's start"
+            f"{dwell:g} s of tracking within {HORIZON:g} s of the move's start (at the start, latency "
+            f"{part.latency:g} s, it is at {','.join(f'{c:.4g}' for c in part.at(0.0))} m)"
         )
     k = int(first[0])
     end = k + int(np.argmin(ok[k:])) if not ok[k:].all() else n
@@ -515,7 +516,8 @@ def tracking_path(point, velocity, duration: float):
 def plan_tracking(move, part: Part, profile, duration: float | None = None, rate: float | None = None):
     """Plan of the tracking segment after the rendezvous ``move`` (a Plan ending at the part): the tool follows
     the part for ``duration`` [s] (default: the profile's dwell), joint motion by the robot's IK and dynamics,
-    checked against every limit like a move (its RMS row covers the segment alone). Its ``t`` runs from 0."""
+    checked against every limit like a move (its RMS row covers the segment alone). Its ``t`` runs from 0; its
+    report's ``t_peak`` is trajectory time (T … T + duration), like the joined samples of :func:`with_tracking`."""
     from .limits import check_grid_order, check_limits
     from .planner import Plan, motion_model
     from .timing import Duration
@@ -535,6 +537,10 @@ def plan_tracking(move, part: Part, profile, duration: float | None = None, rate
         raise UnreachableError(f"{part.label()}: the tracking segment (t = {T:.4f} … {T + D:.4f} s) leaves the "
                                f"workspace: {exc}") from None
     report = check_limits(model, D, parts=parts, dwell=0.0)
+    # t_peak in the trajectory's time (the segment runs from T to T + D), as the written samples and the
+    # segment's heading say; the segment's own clock would read 0 … D
+    shifted = tuple(replace(r, t_peak=None if r.t_peak is None else r.t_peak + T) for r in report.rows)
+    report = replace(report, rows=shifted)
     n = len(t)
     out = {k: getattr(parts, k)[:n] for k in ("p", "v1", "a1", "j1", "q", "qd1", "qdd1", "qddd1", "A", "G", "Am", "Gm")}
     robot = model.robot

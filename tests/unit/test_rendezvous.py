@@ -163,6 +163,9 @@ def test_tracking_segment_follows_the_part(name):
     robot = motion_model_static(prof)[0]
     assert np.abs(robot.forward_kinematics(track.joint.q) - track.p).max() <= 1e-9
     assert track.report.rows and track.report.duration == D
+    # the limit table's t_peak is trajectory time (T … T + dwell), not the segment's own clock (1e-12: round-off)
+    peaks = [r.t_peak for r in track.report.rows if r.t_peak is not None]
+    assert peaks and all(T - 1e-12 <= t <= T + D + 1e-12 for t in peaks)
     tl = with_tracking(move, track)
     assert np.all(np.diff(tl.t) > 0) and tl.t[-1] == pytest.approx(T + D, abs=1e-12)
     assert len(tl.t) == len(move.t) + len(track.t) - 1
