@@ -44,8 +44,8 @@ except ImportError:  # pragma: no cover - the bench extra
     sys.exit("bench_bound.py needs toppra: pip install -e '.[bench]'")
 
 from pickplace_cli.planner import PlanOptions, motion_model, plan  # noqa: E402
-from pickplace_cli.profile import load_profile  # noqa: E402
-from pickplace_cli.task import Task  # noqa: E402
+from pickplace_cli.model.profile import load_profile  # noqa: E402
+from pickplace_cli.model.task import Task  # noqa: E402
 from tests.property.test_limit_truth import _profile  # noqa: E402
 
 logging.getLogger("toppra").setLevel(logging.WARNING)
@@ -150,7 +150,7 @@ def _variant(drop: tuple[str, ...]):
     """The default Delta with the named drive limits removed (``rated_torque`` removes the RMS check)."""
     import yaml
 
-    from pickplace_cli.profile import Profile, resolve_profile_path
+    from pickplace_cli.model.profile import Profile, resolve_profile_path
 
     d = yaml.safe_load(resolve_profile_path("delta-su2018").read_text())
     for key in drop:

@@ -48,8 +48,8 @@ def main() -> int:
     sys.path.insert(0, str(Path(__file__).resolve().parent))
     from bench_conveyor import random_moves, write_results
 
-    from pickplace_cli.methods import bspline_vel as bv
-    from pickplace_cli.table_vel import _order_knots, load_vel_table
+    from pickplace_cli.paths import bspline_vel as bv
+    from pickplace_cli.lookup.vel_table import _order_knots, load_vel_table
 
     tab = load_vel_table(args.table)
     margin = tab.grid.margin

@@ -68,7 +68,7 @@ class Compression(str, Enum):
 
 
 class MethodName(str, Enum):
-    """Mirror of pickplace_cli.methods.Method (kept here so --help needs no numpy)."""
+    """Mirror of pickplace_cli.paths.Method (kept here so --help needs no numpy)."""
 
     bspline = "bspline"
     ph = "ph"
@@ -92,7 +92,7 @@ def _handle_errors(fn: Callable) -> Callable:
 
     @functools.wraps(fn)
     def wrapper(*args, **kwargs):
-        from .errors import PickplaceError
+        from .model.errors import PickplaceError
 
         _JSON_ERRORS[0] = False
         try:
@@ -143,7 +143,7 @@ def _usage(message: str) -> None:
 
 
 def _parse_point(name: str, text: str, unit: str = "m"):
-    from .errors import TaskError
+    from .model.errors import TaskError
 
     words = "metres" if unit == "m" else unit
     what = "coordinates" if unit == "m" else "components"
@@ -165,7 +165,7 @@ def _parse_point(name: str, text: str, unit: str = "m"):
 def _finite(name: str, value: Optional[float], rule: str = "> 0") -> Optional[float]:
     import math
 
-    from .errors import TaskError
+    from .model.errors import TaskError
 
     if value is None:
         return None
@@ -177,7 +177,7 @@ def _finite(name: str, value: Optional[float], rule: str = "> 0") -> Optional[fl
 def _complete_profile(incomplete: str) -> list[str]:
     """Shell completion for --profile: the shipped profile names (files complete by the shell)."""
     try:
-        from .resources import data_dir
+        from .model.resources import data_dir
 
         names = sorted(p.stem for p in data_dir("profiles").glob("*.yaml"))
     except Exception:  # completion must never fail loudly
@@ -318,9 +318,9 @@ def plan(
     trip adds a leading move column. Exit 3 when a limit is exceeded, 4 when a point is unreachable or
     outside the workcell, 1 for invalid input; a batch exits with the highest code of its rows.
     """
-    from .errors import TaskError
+    from .model.errors import TaskError
     from .planner import PlanOptions
-    from .profile import load_profile
+    from .model.profile import load_profile
 
     _JSON_ERRORS[0] = json_summary and batch is None  # a batch prints its own line per row
     _finite("height", height)
@@ -328,7 +328,7 @@ def plan(
     if rate is not None and not (0 < rate <= 1e6):
         raise TaskError(f"rate = {rate!r} Hz: the output rate must lie in (0, 1e6] Hz (as the profile's planning.rate)")
     if k1 is not None or k2 is not None:
-        from .methods.bspline import check_k
+        from .paths.bspline import check_k
 
         for name, k in (("k1", k1), ("k2", k2)):
             if k is not None:
@@ -404,7 +404,7 @@ def plan(
         _plan_batch(batch, prof, options, height, eta, fail_fast, writer, output, report, report_only, json_summary,
                     quiet, workers, belt)
         return
-    from .task import Task
+    from .model.task import Task
 
     p_from = _parse_point("from", from_)
     p_to = _parse_point("to", to)
@@ -428,7 +428,7 @@ def plan(
     task = Task(p_from, p_to, h, e, v_from=vel_from, v_to=vel_to)
     workspace_fit = None
     if fit_ws:
-        from .workspace import fit_workspace
+        from .studies.workspace import fit_workspace
 
         _finite("max-shift", max_shift)
         workspace_fit = fit_workspace(task, prof, method.value, params, adjust_points=adjust_points, max_shift=max_shift)
@@ -471,12 +471,12 @@ def plan(
     # the trajectory before the JSON summary: a failed write is then the one JSON document on stdout
     if output is not None and (code == 0 or report_only):
         if round_trip:
-            from .timeline import round_trip as make_round_trip
+            from .pipelines.timeline import round_trip as make_round_trip
 
             rate_hz = rate if rate is not None else prof.planning.rate
             samples = make_round_trip(legs[0], legs[1], dwell, rate_hz)
         elif track is not None:
-            from .rendezvous import with_tracking
+            from .pipelines.rendezvous import with_tracking
 
             samples = with_tracking(legs[0], track)
         else:
@@ -505,7 +505,7 @@ def _parse_params(items: list[str]) -> dict:
     """--param NAME=VALUE items → {name: float}; one-line TaskError for a malformed item."""
     import math
 
-    from .errors import TaskError
+    from .model.errors import TaskError
 
     out: dict = {}
     for item in items:
@@ -540,7 +540,7 @@ def _belt_method(ctx, method, to_belt, latency, v_to, batch, round_trip, fit_ws,
     source = ctx.get_parameter_source("method")
     if source is None or source.name == "DEFAULT":
         return MethodName.bspline_vel
-    from .errors import TaskError
+    from .model.errors import TaskError
 
     raise TaskError(f"to-belt: method {method.value} plans moves from rest to rest; a moving end needs "
                     "--method bspline-vel (the default with --to-belt)")
@@ -548,10 +548,10 @@ def _belt_method(ctx, method, to_belt, latency, v_to, batch, round_trip, fit_ws,
 
 def _plan_to_belt(p_from, p_to, to_belt, latency, prof, time, height, eta, v_from, params, rate):
     """The rendezvous move and its tracking segment (the profile's dwell; None when 0): ([plan], Rendezvous, track)."""
-    from .rendezvous import Part, plan_rendezvous
+    from .pipelines.rendezvous import Part, plan_rendezvous
 
     part = Part(p_to, _parse_point("to-belt", to_belt, "m/s"), 0.0 if latency is None else latency)
-    from .rendezvous import plan_tracking
+    from .pipelines.rendezvous import plan_tracking
 
     plan, rv = plan_rendezvous(p_from, part, prof, time, height, eta, v_from, params, rate)
     track = plan_tracking(plan, part, prof, rate=rate) if prof.planning.dwell > 0 else None
@@ -576,7 +576,7 @@ def _run_plan(task, prof, options):
 
 def _writer(fmt, dialect, flavor, compression) -> Callable:
     """A function (samples, output path) that writes atomically in the chosen format."""
-    from .errors import ExportError
+    from .model.errors import ExportError
 
     if fmt != OutputFormat.mcap and compression != Compression.none:
         raise ExportError(f"compression = {compression.value}: only MCAP output is compressed (--format mcap)")
@@ -639,7 +639,7 @@ def _plan_batch(source, prof, options, height, eta, fail_fast, writer, output, r
     A batch with a t_detect column is a belt schedule (:func:`_plan_schedule`)."""
     import os
 
-    from .batch import BatchRow, plan_rows_parallel
+    from .pipelines.batch import BatchRow, plan_rows_parallel
 
     belt = belt or {}
     name = "stdin" if source == "-" else source
@@ -687,7 +687,7 @@ def _plan_batch(source, prof, options, height, eta, fail_fast, writer, output, r
         csv_dialect = writer.csv_dialect if output is not None else None
         verdicts_only = json_summary and output is None and report is None
         if verdicts_only:  # the batched verdict engine decides the rows clearly inside every limit (verdicts.py)
-            from .verdicts import engine_applies, verdict_rows_parallel
+            from .pipelines.verdicts import engine_applies, verdict_rows_parallel
         if verdicts_only and engine_applies(prof, options):
             outcomes = verdict_rows_parallel(rows, prof, options, height, eta, fail_fast, name, workers=n_workers)
         else:
@@ -741,7 +741,7 @@ def _write_batch_file(planned, writer, output, dwell: float) -> None:
             for r in planned:
                 stream.write(r.text if r.text is not None else csv_rows(r.plan, writer.csv_dialect, move=r.row))
     elif planned:
-        from .timeline import concatenate
+        from .pipelines.timeline import concatenate
 
         # CSV/JSON: each move keeps its own time (the move column tells them apart); MCAP: one timeline,
         # moves one dwell apart
@@ -754,12 +754,12 @@ def _write_batch_file(planned, writer, output, dwell: float) -> None:
 
 @contextlib.contextmanager
 def _batch_input(source: str, name: str):
-    """The batch's rows (:func:`~pickplace_cli.batch.iter_batch`, lazily) and its header ``info`` (plain batch or
+    """The batch's rows (:func:`~pickplace_cli.pipelines.batch.iter_batch`, lazily) and its header ``info`` (plain batch or
     belt schedule), the header already read; the file (or stdin) stays open inside the ``with``."""
     import itertools
 
-    from .batch import iter_batch
-    from .errors import TaskError
+    from .pipelines.batch import iter_batch
+    from .model.errors import TaskError
 
     with contextlib.ExitStack() as stack:
         if source == "-":
@@ -786,8 +786,8 @@ def _plan_schedule(items, name, streamed, prof, options, height, eta, fail_fast,
     move = row) to -o / stdout; the closing line; exit with the worst row's code."""
     from contextlib import ExitStack
 
-    from .errors import TaskError
-    from .schedule import ScheduleSummary, check_order, plan_schedule
+    from .model.errors import TaskError
+    from .pipelines.schedule import ScheduleSummary, check_order, plan_schedule
 
     if report is not None or report_only:
         _usage(f"{'--report' if report is not None else '--report-only'} is not available with a belt schedule "
@@ -836,7 +836,7 @@ def _plan_schedule(items, name, streamed, prof, options, height, eta, fail_fast,
                 else:
                     kept.append(timeline)
     if kept:
-        from .timeline import _join, _pieces_of
+        from .pipelines.timeline import _join, _pieces_of
 
         writer(_join([_pieces_of(tl, 0.0) for tl in kept], [int(tl.move[0]) for tl in kept], kept[0].joint,
                      [sg for tl in kept for sg in tl.segments], [sm for tl in kept for sm in tl.summaries]), output)
@@ -881,19 +881,19 @@ def _is_fifo(path: str) -> bool:
 
 def _stream_batch(items, name, prof, options, height, eta, fail_fast, writer, output, report, report_only,
                   json_summary, quiet, workers: int) -> None:
-    """--batch - (or a named pipe): the rows of :func:`~pickplace_cli.batch.iter_batch` (``items``), each
+    """--batch - (or a named pipe): the rows of :func:`~pickplace_cli.pipelines.batch.iter_batch` (``items``), each
     answered as soon as its line is read — a JSON line (``--json``)
     or its CSV rows, flushed — with the same row numbers, messages and exit codes as a file batch. Memory:
     one row's trajectory (MCAP and JSON trajectories need the whole timeline: those rows are kept until the
     input ends; ``--report`` keeps each row's limit report, not its samples)."""
     from contextlib import ExitStack
 
-    from .batch import ReportRecord, plan_stream
+    from .pipelines.batch import ReportRecord, plan_stream
 
     verdicts_only = json_summary and output is None and report is None
     engine = False
     if verdicts_only:
-        from .verdicts import engine_applies
+        from .pipelines.verdicts import engine_applies
 
         engine = engine_applies(prof, options)
     csv_out = output is not None and writer.csv_dialect is not None
@@ -931,13 +931,13 @@ def _stream_batch(items, name, prof, options, height, eta, fail_fast, writer, ou
                     out.write(res.text if res.text is not None else csv_rows(res.plan, writer.csv_dialect, move=res.row))
                     out.flush()
                 else:
-                    from .batch import PlanRecord
+                    from .pipelines.batch import PlanRecord
 
                     kept.append((res.row, res.plan if isinstance(res.plan, PlanRecord) else PlanRecord.of(res.plan)))
             if fail_fast and res.code:
                 break
     if kept:
-        from .timeline import concatenate
+        from .pipelines.timeline import concatenate
 
         samples = concatenate([p for _, p in kept], [r for r, _ in kept], restart_time=not writer.one_timeline,
                               gap=prof.planning.dwell)
@@ -957,7 +957,7 @@ def _check_output_paths(output: str, report: Optional[str]) -> None:
     """Refuse colliding or impossible outputs before anything is computed or written."""
     import os
 
-    from .errors import ExportError
+    from .model.errors import ExportError
     from .export import check_writable
 
     check_writable(output)
@@ -995,7 +995,7 @@ def _print_limit_table(report) -> None:
     from rich.markup import escape
     from rich.table import Table
 
-    from .limits import percent
+    from .limits.check import percent
 
     table = Table(title=None, box=None, pad_edge=False, show_header=True, header_style="bold")
     for col, just in (("joint", "left"), ("quantity", "left"), ("peak", "right"), ("limit", "right"),
@@ -1027,7 +1027,7 @@ def _print_verdict(report, quiet: bool, with_cycle: bool = True) -> None:
         if not quiet:
             sys.stderr.write(f"verdict: all limits hold; {cycle}\n")
         return
-    from .batch import violation_text  # the same words as a batch row's limit lines
+    from .pipelines.batch import violation_text  # the same words as a batch row's limit lines
 
     for r in report.violations:
         sys.stderr.write(f"pickplace: {violation_text(r)}\n")
@@ -1098,10 +1098,10 @@ def check(
     """
     import json
 
-    from .check import check_file
-    from .errors import TaskError
+    from .pipelines.check import check_file
+    from .model.errors import TaskError
     from .export import atomic_output
-    from .profile import load_profile
+    from .model.profile import load_profile
 
     if not (smoothing >= 0 and smoothing < float("inf")):
         raise TaskError(f"smoothing = {smoothing!r}: must be a finite number >= 0")
@@ -1147,7 +1147,7 @@ def profile_validate(
     profile: str = typer.Argument(..., help="Profile YAML file or shipped name."),
 ) -> None:
     """Validate a profile: exit 0 and one line when it is valid, exit 1 with the first problem otherwise."""
-    from .profile import load_profile, resolve_profile_path
+    from .model.profile import load_profile, resolve_profile_path
     from .robots import build_robot
 
     prof = load_profile(profile)
@@ -1165,7 +1165,7 @@ def profile_show(
     from rich.console import Console
     from rich.markup import escape
 
-    from .profile import load_profile
+    from .model.profile import load_profile
     from .robots import build_robot
 
     _finite("z", z, "in m (no NaN or inf)")
@@ -1198,7 +1198,7 @@ def profile_show(
     if kind == "gantry":
         out.print("workspace: the travel box " + ", ".join(f"{n} [{a.travel[0]:g}, {a.travel[1]:g}] m" for n, a in zip("xyz", prof.robot.axes)))
     else:
-        from .workspace import radial_extent
+        from .studies.workspace import radial_extent
 
         out.print(escape(f"workspace at z = {z:g} m: {radial_extent(prof, z).describe()}"))
     def g(x, unit: str = "") -> str:
@@ -1220,7 +1220,7 @@ def profile_show(
 
 
 def _parse_weights(text: str) -> tuple[float, float]:
-    from .errors import TableError
+    from .model.errors import TableError
 
     try:
         wa, wj = (float(x) for x in text.split(","))
@@ -1274,8 +1274,8 @@ def build_table_cmd(
     import contextlib
     import os
 
-    from .errors import TableError
-    from .table import TableSettings, checkpoint_path, format_table, lambda_grid, run_build
+    from .model.errors import TableError
+    from .lookup.bspline_table import TableSettings, checkpoint_path, format_table, lambda_grid, run_build
 
     if table_method == TableMethod.bspline_vel:
         if scheduler or resume or table_format != TableFormat.csv:
@@ -1302,7 +1302,7 @@ def build_table_cmd(
     with contextlib.ExitStack() as stack:
         executor = None
         if scheduler:
-            from .parallel import dask_executor
+            from .lookup.executors import dask_executor
 
             executor, n_workers = stack.enter_context(dask_executor(scheduler))
         tick = None
@@ -1372,9 +1372,9 @@ class CompareFormat(str, Enum):
 
 def _task_from_options(from_: str, to: str, profile: Optional[str], height: Optional[float], eta: Optional[float]):
     """(profile, task) from the shared move options of compare and plot (one-line errors)."""
-    from .errors import TaskError
-    from .profile import load_profile
-    from .task import Task
+    from .model.errors import TaskError
+    from .model.profile import load_profile
+    from .model.task import Task
 
     p_from = _parse_point("from", from_)
     p_to = _parse_point("to", to)
@@ -1475,8 +1475,8 @@ def compare(
     vibration. Exit 0 when at least one method planned (limits exceeded are shown, not fatal); otherwise
     the first method's error code.
     """
-    from .compare import compare_methods, write_compare_csv, write_compare_json
-    from .errors import ExportError
+    from .studies.compare import compare_methods, write_compare_csv, write_compare_json
+    from .model.errors import ExportError
     from .export import atomic_output, check_writable
 
     if fmt == CompareFormat.table and output != "-":
@@ -1518,8 +1518,8 @@ def plot(
     """Draw the path in the vertical plane (u along the move, z) and |v|, |a|, |j| against time for one or
     several methods, and with --motors how hard each motor works (PNG or SVG; needs the optional extra:
     pip install 'pickplace-cli[plot]')."""
-    from .compare import parse_methods
-    from .errors import PickplaceError
+    from .studies.compare import parse_methods
+    from .model.errors import PickplaceError
     from .export import atomic_output, check_writable
     from .export.plot import PlotMove, plot_format, require_matplotlib, write_plot
     from .planner import PlanOptions
@@ -1559,7 +1559,7 @@ def _motor_use(res, prof) -> tuple:
     import numpy as np
 
     from .export.plot import PLOT_SAMPLES
-    from .limits import jump_sides, limit_use
+    from .limits.check import jump_sides, limit_use
     from .planner import motion_model
 
     path, T = res.cartesian.path, res.duration.seconds
@@ -1572,8 +1572,8 @@ def _motor_use(res, prof) -> tuple:
 
 def _checkpointed_rows(ckpt, settings) -> int:
     """Rows saved in a build-table checkpoint (0 when there is none or it cannot be read)."""
-    from .errors import PickplaceError
-    from .table import read_checkpoint
+    from .model.errors import PickplaceError
+    from .lookup.bspline_table import read_checkpoint
 
     try:
         return len(read_checkpoint(ckpt, settings)) if ckpt is not None else 0
@@ -1585,9 +1585,9 @@ def _build_vel_table(eta: float, workers: int, output: str, quiet: bool) -> None
     """build-table --method bspline-vel: Yang 2022 optima on the default dimensionless grid."""
     import os
 
-    from .errors import TableError
+    from .model.errors import TableError
     from .export import atomic_output, check_writable
-    from .table_vel import VelGrid, build_vel_table, format_vel_table
+    from .lookup.vel_table import VelGrid, build_vel_table, format_vel_table
 
     if workers < 0:
         raise TableError(f"workers = {workers}: must be 0 (all cores) or a positive number")

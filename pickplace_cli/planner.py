@@ -11,14 +11,14 @@ from typing import Any
 
 import numpy as np
 
-from .errors import TableError, UnreachableError
-from .limits import LimitReport, MotionModel, check_grid_order, check_limits, reach_error
-from .methods import Method, depends_on_duration, path_factory, plan_path
-from .profile import Profile
+from .model.errors import TableError, UnreachableError
+from .limits.check import LimitReport, MotionModel, check_grid_order, check_limits, reach_error
+from .paths import Method, depends_on_duration, path_factory, plan_path
+from .model.profile import Profile
 from .robots import build_robot
-from .task import Task
+from .model.task import Task
 from .timing import Duration, choose_duration, choose_duration_for
-from .trajectory import CartesianTrajectory, JointTrajectory
+from .model.trajectory import CartesianTrajectory, JointTrajectory
 
 
 @dataclass(frozen=True)
@@ -131,7 +131,7 @@ def _optimised_shape(task: Task, profile: Profile, options: PlanOptions) -> tupl
     (``shape``: the chosen shape, its screened duration, the table's shape and its exact fit duration)."""
     from dataclasses import replace
 
-    from .errors import PickplaceError, UsageError
+    from .model.errors import PickplaceError, UsageError
     from .timing.shape import optimise_shape
 
     if Method(options.method) is not Method.bspline:
@@ -171,7 +171,7 @@ def _optimised_shape(task: Task, profile: Profile, options: PlanOptions) -> tupl
 def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions()) -> Plan:
     """Plan ``task`` on ``profile``: path, duration, samples, joint motion, limit report."""
     if (task.v_from.any() or task.v_to.any()) and not depends_on_duration(options.method):
-        from .errors import TaskError
+        from .model.errors import TaskError
 
         raise TaskError(
             f"v_from/v_to = ({', '.join(f'{x:g}' for x in task.v_from)}), ({', '.join(f'{x:g}' for x in task.v_to)}) m/s: "
@@ -187,12 +187,12 @@ def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions()) -> 
     try:
         if depends_on_duration(options.method):  # the path is planned for a duration (e.g. conveyor tracking)
             if options.hold_capacity:
-                from .errors import UsageError
+                from .model.errors import UsageError
 
                 raise UsageError(f"--hold-capacity: not available for method {Method(options.method).value} (its "
                                  "fit re-plans the path for every trial duration); use --time auto for the capacity")
             if options.time == "optimal":
-                from .errors import UsageError
+                from .model.errors import UsageError
 
                 raise UsageError(
                     f"--time optimal: method {Method(options.method).value} plans its path for a duration (the end "

@@ -1,7 +1,7 @@
 """MCAP export: the sampled trajectory for ROS 2 tools (``ros2`` flavour) or Foxglove (``foxglove`` flavour).
 
 Input is duck-typed (a :class:`~pickplace_cli.planner.Plan` or a batch/round-trip timeline): ``t`` (N,) s;
-``p, v, a, j`` (N, 3) in m, m/s, m/s², m/s³; ``joint`` a :class:`~pickplace_cli.trajectory.JointTrajectory`;
+``p, v, a, j`` (N, 3) in m, m/s, m/s², m/s³; ``joint`` a :class:`~pickplace_cli.model.trajectory.JointTrajectory`;
 optional ``move`` (N,) int = the move number of each sample (absent or None: one move); each run of
 equal numbers is one move. ``t`` must not decrease.
 
@@ -49,7 +49,7 @@ from typing import IO, Any, Callable
 
 import numpy as np
 
-from ..errors import ExportError
+from ..model.errors import ExportError
 
 #: fixed epoch offset added to every message time: 2024-01-01T00:00:00Z in ns since the Unix epoch
 EPOCH_NS = 1_704_067_200 * 1_000_000_000

@@ -20,7 +20,7 @@ spline's coefficients: SLSQP with exact Jacobians, warm-started at the uniform l
 Position, singularity and workcell limits belong to the path and do not change with the law.
 
 The optimiser's grid is not the judge: the law found is composed with the path into a new
-:class:`~pickplace_cli.trajectory.CartesianPath` (u = t/T: τ = σ(u) from the exact integral of 1/√b), and
+:class:`~pickplace_cli.model.trajectory.CartesianPath` (u = t/T: τ = σ(u) from the exact integral of 1/√b), and
 ``--time fit`` runs on that path with the continuous check (all limits, exact RMS). A law that is not
 faster than uniform scaling is not used (the plan says so).
 """
@@ -78,7 +78,7 @@ def _basis(knots: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np
 def _law_grid(path, points: int = 0, spans: bool = True) -> np.ndarray:
     """The optimiser's τ grid: ``points`` (default ``LAW_GRID``) uniform points, the path's knots, both sides
     of every jump and (``spans``) the check's Gauss-Kronrod nodes of every span."""
-    from ..limits import interior_jumps, jump_sides, span_nodes
+    from ..limits.check import interior_jumps, jump_sides, span_nodes
 
     parts = [np.linspace(0.0, 1.0, points or LAW_GRID), np.asarray(path.breakpoints, float),
              jump_sides(path.breakpoints, path.jumps)]
@@ -317,7 +317,7 @@ def compose(path, b) -> object:
     (its derivatives are those at T = 1 s; ``T`` of the law itself is ∫dτ/√b)."""
     from scipy.interpolate import CubicHermiteSpline
 
-    from ..trajectory import CartesianPath
+    from ..model.trajectory import CartesianPath
 
     b1, b2 = b.derivative(1), b.derivative(2)
     # t(τ) = ∫ dτ/√b: 4-point Gauss on every interval of a fine table (b is a cubic spline: ~1e-13)
@@ -351,7 +351,7 @@ def compose(path, b) -> object:
     dense = np.linspace(0.0, 1.0, 4001)
     bp = np.unique(np.clip(fwd(np.asarray(path.breakpoints, float)), 0.0, 1.0))
     jumps = fwd(path.jump_points) if len(path.jump_points) else np.zeros(0)
-    from ..peaks import true_peaks
+    from ..curves.peaks import true_peaks
 
     shell = CartesianPath(evaluate, path.method, {}, (0.0, 0.0, 0.0), np.unique(np.concatenate([[0.0, 1.0], bp])),
                           jumps=tuple(jumps.tolist()), evaluate_all=orders)

@@ -11,11 +11,11 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from pickplace_cli.batch import read_batch_text
+from pickplace_cli.pipelines.batch import read_batch_text
 from pickplace_cli.cli import app
 from pickplace_cli.planner import PlanOptions, plan
-from pickplace_cli.profile import load_profile
-from pickplace_cli.task import Task
+from pickplace_cli.model.profile import load_profile
+from pickplace_cli.model.task import Task
 
 runner = CliRunner()
 ADEPT = ["--from", "-0.1525,0,-0.8", "--to", "0.1525,0,-0.8"]

@@ -8,10 +8,10 @@ import math
 import numpy as np
 import pytest
 
-from pickplace_cli import table as T
-from pickplace_cli.bspline import piece_coefficients, _left_derivatives
-from pickplace_cli.methods.bspline import plan_bspline
-from pickplace_cli.task import Task
+from pickplace_cli.lookup import bspline_table as T
+from pickplace_cli.curves.bspline import piece_coefficients, _left_derivatives
+from pickplace_cli.paths.bspline import plan_bspline
+from pickplace_cli.model.task import Task
 
 LAM, ETA = 28.0, 0.5
 
@@ -115,7 +115,7 @@ def test_eq26_cycle_time_section4():
 
     With the exact a_max = 9.0153 (k = 0.31, 0.12) Eq. 26 gives 0.1986 s; the paper's 0.198 follows from
     its rounded a_max = 9.0 (0.1984 s). Tolerance 1 ms."""
-    from pickplace_cli.profile import Capacity
+    from pickplace_cli.model.profile import Capacity
     from pickplace_cli.timing import choose_duration
 
     task = Task([0.0, 0.0, -0.8], [0.7, 0.0, -0.8], 0.7 / LAM, ETA)

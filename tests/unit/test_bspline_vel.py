@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pickplace_cli.errors import TaskError
-from pickplace_cli.methods import bspline_vel as bv
-from pickplace_cli.task import Task
-from pickplace_cli.trajectory import CartesianTrajectory
+from pickplace_cli.model.errors import TaskError
+from pickplace_cli.paths import bspline_vel as bv
+from pickplace_cli.model.task import Task
+from pickplace_cli.model.trajectory import CartesianTrajectory
 
 # Yang 2022 Sec. 2.3.1 example: (0,0,0) → (280, −200, 0) mm, 40 mm high, T = 0.25 s, 200 mm/s along +y
 EXAMPLE = Task([0, 0, 0], [0.28, -0.2, 0], 0.04, 0.5, [0, 0.2, 0], [0, 0.2, 0])
@@ -313,7 +313,7 @@ def test_invariance_under_the_dimensionless_groups():
 def test_mirror_and_reversal_symmetries():
     """Mirroring in the move's vertical plane leaves the optimum; reversing the move (v0 ↔ v1) maps
     τ6 ↔ 1 − τ10, τ7 ↔ 1 − τ9, λ1 ↔ λ3 (what the table builder relies on). Tolerance 1e-6 (optimiser)."""
-    from pickplace_cli.table_vel import reverse_params
+    from pickplace_cli.lookup.vel_table import reverse_params
 
     g = dict(h_over_b=0.2, eta=0.5, v0_along=0.3, v0_across=-0.2, v1_along=-0.1, v1_across=0.4)
     mirrored = dict(g, v0_across=0.2, v1_across=-0.4)
@@ -328,7 +328,7 @@ def test_mirror_and_reversal_symmetries():
 def test_rest_to_rest_reduces_to_the_li_path():
     """v0 = v1 = 0: with Li's knots (τ6 = k1k2/2, τ7 = k1/2, τ9 = 1 − k1/2, τ10 = 1 − k1k2/2) the path is
     the bspline method's path to round-off; every λ is degenerate."""
-    from pickplace_cli.methods.bspline import plan_bspline
+    from pickplace_cli.paths.bspline import plan_bspline
 
     task = Task([-0.1525, 0, -0.8], [0.1525, 0, -0.8], 0.025, 0.5)
     k1, k2 = 0.31, 0.12
@@ -390,7 +390,7 @@ ADEPT_BELT = Task([-0.1525, 0, -0.8], [0.1525, 0, -0.8], 0.025, 0.5, [0.3, 0, 0]
 
 @pytest.fixture(scope="module")
 def delta():
-    from pickplace_cli.profile import load_profile
+    from pickplace_cli.model.profile import load_profile
 
     return load_profile("delta-su2018")
 
@@ -425,7 +425,7 @@ def test_auto_duration_is_the_smallest_meeting_the_capacity(delta):
 def test_fit_solves_eq38_every_motor_limit_at_the_optimal_shape(delta):
     """Eq. 38: the smallest T at which every limit (motor torque and its rate, speed, RMS …) holds with the
     shape optimal at T. All hold at T_fit; with 0.1 % less time (and the shape optimal there) one fails."""
-    from pickplace_cli.limits import check_limits
+    from pickplace_cli.limits.check import check_limits
     from pickplace_cli.planner import PlanOptions, motion_model, plan
 
     r = plan(ADEPT_BELT, delta, PlanOptions(method="bspline-vel", time="fit"))

@@ -7,10 +7,10 @@ import io
 import numpy as np
 import pytest
 
-from pickplace_cli.batch import read_batch
-from pickplace_cli.errors import TaskError
-from pickplace_cli.profile import load_profile
-from pickplace_cli.schedule import ScheduleSummary, check_order, plan_schedule
+from pickplace_cli.pipelines.batch import read_batch
+from pickplace_cli.model.errors import TaskError
+from pickplace_cli.model.profile import load_profile
+from pickplace_cli.pipelines.schedule import ScheduleSummary, check_order, plan_schedule
 
 HEAD = "t_detect,to_x,to_y,to_z,to_belt_vx,to_belt_vy,to_belt_vz,place_x,place_y,place_z,from_x,from_y,from_z\n"
 PLACE = "-0.1525,0,-0.8"

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pickplace_cli import table as T
-from pickplace_cli.errors import TableError
+from pickplace_cli.lookup import bspline_table as T
+from pickplace_cli.model.errors import TableError
 
 
 @pytest.mark.slow

@@ -13,8 +13,8 @@ from pathlib import Path
 
 import pytest
 
-from pickplace_cli import table as T
-from pickplace_cli.errors import TableError
+from pickplace_cli.lookup import bspline_table as T
+from pickplace_cli.model.errors import TableError
 
 LAMS = [1.0, 1.5, 7.0, 28.0, 40.0]  # both F maxima at λ = 1, the a_min-on-the-floor case, large λ
 
@@ -50,7 +50,7 @@ def test_dask_local_cluster_equals_local(sequential):
     """The same build through Dask's concurrent.futures executor on a LocalCluster (threads, so the
     test stays fast; a real cluster runs the same tasks in worker processes)."""
     distributed = pytest.importorskip("distributed")
-    from pickplace_cli.parallel import dask_executor
+    from pickplace_cli.lookup.executors import dask_executor
 
     with distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=False, dashboard_address=None) as cluster:
         with dask_executor(cluster.scheduler_address) as (executor, threads):
@@ -62,7 +62,7 @@ def test_dask_local_cluster_equals_local(sequential):
 
 def test_dask_unreachable_scheduler_is_one_line():
     pytest.importorskip("distributed")
-    from pickplace_cli.parallel import dask_executor
+    from pickplace_cli.lookup.executors import dask_executor
 
     with pytest.raises(TableError, match=r"^scheduler = tcp://127.0.0.1:9: cannot reach the Dask scheduler within 0.5 s") as exc:
         with dask_executor("tcp://127.0.0.1:9", timeout=0.5):
@@ -71,7 +71,7 @@ def test_dask_unreachable_scheduler_is_one_line():
 
 
 def test_dask_not_installed(monkeypatch):
-    from pickplace_cli.parallel import dask_executor
+    from pickplace_cli.lookup.executors import dask_executor
 
     monkeypatch.setitem(sys.modules, "distributed", None)  # import distributed → ImportError
     with pytest.raises(TableError, match=r"Dask is not installed; install the extra: pip install 'pickplace-cli\[dask\]'"):

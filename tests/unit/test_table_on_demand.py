@@ -8,11 +8,11 @@ import time
 import numpy as np
 import pytest
 
-import pickplace_cli.table as T
-from pickplace_cli.errors import TableError
+import pickplace_cli.lookup.bspline_table as T
+from pickplace_cli.model.errors import TableError
 from pickplace_cli.planner import PlanOptions, plan
-from pickplace_cli.profile import load_profile
-from pickplace_cli.task import Task
+from pickplace_cli.model.profile import load_profile
+from pickplace_cli.model.task import Task
 
 
 def test_on_demand_matches_the_shipped_table_where_it_has_rows():
