@@ -26,7 +26,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from pickplace_cli.model.errors import PickplaceError  # noqa: E402
-from pickplace_cli.limits.check import _extra_points  # noqa: E402
+from pickplace_cli.limits.grid import _extra_points  # noqa: E402
 from pickplace_cli.paths import plan_path  # noqa: E402
 from pickplace_cli.planner import PlanOptions, motion_model, plan  # noqa: E402
 from pickplace_cli.model.task import Task  # noqa: E402

@@ -888,7 +888,8 @@ def _stream_batch(items, name, prof, options, height, eta, fail_fast, writer, ou
     input ends; ``--report`` keeps each row's limit report, not its samples)."""
     from contextlib import ExitStack
 
-    from .pipelines.batch import ReportRecord, plan_stream
+    from .pipelines.batch import ReportRecord
+    from .pipelines.stream import plan_stream
 
     verdicts_only = json_summary and output is None and report is None
     engine = False
@@ -995,7 +996,7 @@ def _print_limit_table(report) -> None:
     from rich.markup import escape
     from rich.table import Table
 
-    from .limits.check import percent
+    from .limits.report import percent
 
     table = Table(title=None, box=None, pad_edge=False, show_header=True, header_style="bold")
     for col, just in (("joint", "left"), ("quantity", "left"), ("peak", "right"), ("limit", "right"),
@@ -1559,7 +1560,8 @@ def _motor_use(res, prof) -> tuple:
     import numpy as np
 
     from .export.plot import PLOT_SAMPLES
-    from .limits.check import jump_sides, limit_use
+    from .limits.grid import jump_sides
+    from .limits.motion import limit_use
     from .planner import motion_model
 
     path, T = res.cartesian.path, res.duration.seconds

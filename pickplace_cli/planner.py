@@ -12,7 +12,10 @@ from typing import Any
 import numpy as np
 
 from .model.errors import TableError, UnreachableError
-from .limits.check import LimitReport, MotionModel, check_grid_order, check_limits, reach_error
+from .limits.check import check_limits, reach_error
+from .limits.grid import check_grid_order
+from .limits.motion import MotionModel
+from .limits.report import LimitReport
 from .paths import Method, depends_on_duration, path_factory, plan_path
 from .model.profile import Profile
 from .robots import build_robot

@@ -164,7 +164,7 @@ def refine_max(
     bracket of two 1e-3 sample steps; the value error of a smooth maximum is quadratic in that, ~1e-14
     relative for a peak of width ~0.1). Returns
     (peak (n_cols,), x_peak (n_cols,)). Never lower than the sampled maximum. ``segments`` (N,): a label
-    per sample of the piece it lies on (:func:`pickplace_cli.limits.check.segment_ids`); a bracket never reaches
+    per sample of the piece it lies on (:func:`pickplace_cli.limits.grid.segment_ids`); a bracket never reaches
     into a neighbour of another label, so a search never straddles a jump of ``fun``.
     """
     x = np.asarray(x, dtype=float)

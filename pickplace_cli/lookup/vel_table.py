@@ -1,5 +1,5 @@
 """Look-up table of the conveyor-tracking B-spline's optimal shape [Yang2022, Eq. (37)], over the
-dimensionless groups the optimum depends on (``methods.bspline_vel.groups``).
+dimensionless groups the optimum depends on (``curves.vel_problem.groups``).
 
 Yang et al. train two neural networks because their interior-point solve takes minutes; here the exact
 solve takes tens of milliseconds, and this table gives answers in well under a millisecond. The optimum
@@ -33,7 +33,7 @@ median 9.4 %, against 2/20, 3.1 % multilinear; scratch script), a local SLSQP po
 iteration 2.9 ms; converged, 20 ms, still 5/60 beyond 1 %); the rest by bench/bench_conveyor_table.py. The
 exact answer stays fast: the table also stores each node's minimisers of a_max and j_max, and
 ``VelTable.seeds`` gives the interpolated and the 32 corner values of all three as starts for
-``methods.bspline_vel.solve_seeded``.
+``lookup.vel_solver.solve_seeded``.
 
 Symmetries cut the build by four: mirroring the move in its vertical plane (across components negated)
 leaves the optimum unchanged; running the move backwards (v0 ↔ v1 with along and across kept, since both
@@ -154,7 +154,7 @@ class VelTable:
     # -------------------------------------------------------------------------------------- lookup
     def query_groups(self, task, duration: float) -> np.ndarray:
         """The five table groups of ``task`` at ``duration`` (TableError when the table does not apply)."""
-        from ..paths.bspline_vel import groups
+        from ..curves.vel_problem import groups
 
         g = groups(task, duration)
         if abs(g["eta"] - self.grid.eta) > 1e-9:
@@ -247,7 +247,7 @@ class VelTable:
         interpolation (:meth:`via_interpolate`) and the multilinear one, with F = a_min/a_max + j_min/j_max
         estimated in one batch of the solver's evaluator (‖a‖, ‖j‖ at 8 points per knot span; a_min, j_min
         interpolated from the cell's corners)."""
-        from ..paths.bspline_vel import _Evaluator, _grid, make_problem
+        from ..curves.vel_problem import _Evaluator, _grid, make_problem
 
         x = self.query_groups(task, duration)
         at, w = self._cell(x)
@@ -281,7 +281,8 @@ def _order_knots(t: np.ndarray, margin: float) -> np.ndarray:
 def solve_node(args: tuple) -> tuple[tuple[int, ...], tuple[float, ...], float, float, float]:
     """Exact optimum at one grid node (runs in a worker process): (node, params, F, a_min, j_min), the
     normalisers for b = 1 m, T = 1 s."""
-    from ..paths.bspline_vel import VelSettings, make_problem, solve, task_from_groups
+    from ..curves.vel_problem import VelSettings, make_problem, task_from_groups
+    from .vel_solver import solve
 
     idx, groups, eta, settings = args
     g = dict(zip(GROUP_AXES, groups), eta=eta)
@@ -310,7 +311,7 @@ def build_vel_table(
     """
     from dataclasses import replace
 
-    from ..paths.bspline_vel import VelSettings
+    from ..curves.vel_problem import VelSettings
 
     settings = replace(settings or VelSettings(), margin=grid.margin)
     axes = grid.axes()

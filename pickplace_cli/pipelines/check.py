@@ -29,7 +29,10 @@ from pathlib import Path
 import numpy as np
 
 from ..model.errors import TaskError
-from ..limits.check import LimitReport, MotionModel, _range_row, check_grid, check_limits
+from ..limits.check import _range_row, check_limits
+from ..limits.grid import check_grid
+from ..limits.motion import MotionModel
+from ..limits.report import LimitReport
 from ..model.profile import Profile
 from ..robots import build_robot
 from ..model.trajectory import CartesianPath

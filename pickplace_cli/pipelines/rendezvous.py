@@ -518,7 +518,8 @@ def plan_tracking(move, part: Part, profile, duration: float | None = None, rate
     the part for ``duration`` [s] (default: the profile's dwell), joint motion by the robot's IK and dynamics,
     checked against every limit like a move (its RMS row covers the segment alone). Its ``t`` runs from 0; its
     report's ``t_peak`` is trajectory time (T … T + duration), like the joined samples of :func:`with_tracking`."""
-    from ..limits.check import check_grid_order, check_limits
+    from ..limits.check import check_limits
+    from ..limits.grid import check_grid_order
     from ..planner import Plan, motion_model
     from ..timing import Duration
     from ..model.trajectory import CartesianTrajectory, JointTrajectory

@@ -47,7 +47,7 @@ from .batch import BatchRow, RowResult, plan_rows, row_task, run_chunks_in_order
 from ..curves.bspline import DEGREE
 from ..paths.bspline import batch_paths
 from ..model.errors import PickplaceError, UnreachableError
-from ..limits.check import LimitReport
+from ..limits.report import LimitReport
 
 #: uniform τ samples of the screening grid per move (plus its interior knots and PIECE_SAMPLES points inside
 #: every piece: 144 in all); the parabolic-vertex estimate is within 0.3 % of plan()'s peaks (tests)
@@ -83,7 +83,7 @@ class Screen:
     """Screening of a block of moves: ``decided`` (P,), estimated peaks (P, n_cols) in plan()'s sign
     convention (the value the limit row would show), the utilisation of every column and of every joint's
     RMS motor torque (P, n_cols + n_joints; inf for a move not screened) and the RMS motor torque
-    (P, n_joints) [N·m]; ``meta`` as :meth:`~pickplace_cli.limits.check.MotionModel.columns` gives it."""
+    (P, n_joints) [N·m]; ``meta`` as :meth:`~pickplace_cli.limits.motion.MotionModel.columns` gives it."""
 
     decided: np.ndarray
     peak: np.ndarray

@@ -445,7 +445,8 @@ def paper_duration(method, task, profile) -> tuple[float, str] | None:
 
 def compare_row(task, profile, method, params: Mapping[str, Any] | None = None, time: str | float = "auto") -> CompareRow:
     """One method on ``task``/``profile`` → :class:`CompareRow` (errors of that method become the row's error)."""
-    from ..limits.check import check_grid, percent
+    from ..limits.grid import check_grid
+    from ..limits.report import percent
     from ..planner import PlanOptions, motion_model, plan
     from .vibration import residual_vibration
 

@@ -451,7 +451,9 @@ def fit_workspace(
     error of the method itself when the requested move cannot be planned at all (e.g. TableError).
     ``method_params`` go to the planner (a method whose path depends on the duration needs it there).
     """
-    from ..limits.check import MotionModel, check_grid, check_limits
+    from ..limits.check import check_limits
+    from ..limits.grid import check_grid
+    from ..limits.motion import MotionModel
     from ..paths import plan_path
     from ..planner import motion_model
 

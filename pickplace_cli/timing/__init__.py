@@ -82,7 +82,7 @@ def choose_duration(
     hold_capacity: bool = False,
 ) -> Duration:
     """Duration of the move: explicit seconds, ``auto`` (Eq. 26), or ``fit`` (needs ``model``, a
-    :class:`~pickplace_cli.limits.check.MotionModel`): the smallest T at which every limit holds.
+    :class:`~pickplace_cli.limits.motion.MotionModel`): the smallest T at which every limit holds.
     ``hold_capacity``: ``fit`` also holds the Cartesian capacity (T ≥ auto; the peaks scale exactly)."""
     spec = parse_time(spec)
     tv, ta, tj, binding = auto_duration(path, capacity)
@@ -112,7 +112,8 @@ def _worst_utilisation(model, dwell: float = 0.0, tau=None):
     None when no limit depends on T."""
     import numpy as np
 
-    from ..limits.check import _parabolic_peak, fit_grid, interior_jumps, segment_ids
+    from ..limits.check import _parabolic_peak
+    from ..limits.grid import fit_grid, interior_jumps, segment_ids
 
     # 1,001 uniform points and the check's own extra points (knots, points per span, both sides of every
     # jump); the parabolic estimate never spans a jump, as in the check; the RMS is the model's exact integral

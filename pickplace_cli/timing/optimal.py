@@ -78,7 +78,7 @@ def _basis(knots: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np
 def _law_grid(path, points: int = 0, spans: bool = True) -> np.ndarray:
     """The optimiser's τ grid: ``points`` (default ``LAW_GRID``) uniform points, the path's knots, both sides
     of every jump and (``spans``) the check's Gauss-Kronrod nodes of every span."""
-    from ..limits.check import interior_jumps, jump_sides, span_nodes
+    from ..limits.grid import interior_jumps, jump_sides, span_nodes
 
     parts = [np.linspace(0.0, 1.0, points or LAW_GRID), np.asarray(path.breakpoints, float),
              jump_sides(path.breakpoints, path.jumps)]

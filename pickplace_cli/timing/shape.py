@@ -115,7 +115,7 @@ def optimise_shape(task, profile, model_of, eta_fixed: float | None = None,
     from scipy.optimize import minimize
 
     from ..model.errors import PickplaceError
-    from ..limits.check import _extra_points
+    from ..limits.grid import _extra_points
     from ..paths import plan_path
     from ..model.task import Task
     from . import _worst_utilisation, auto_duration, screened_root

@@ -177,7 +177,7 @@ def test_limit_use_agrees_with_the_limit_report():
     RMS bars are the report's RMS rows."""
     import numpy as np
 
-    from pickplace_cli.limits.check import limit_use
+    from pickplace_cli.limits.motion import limit_use
     from pickplace_cli.planner import PlanOptions, motion_model, plan
     from pickplace_cli.model.profile import load_profile
     from pickplace_cli.model.task import Task

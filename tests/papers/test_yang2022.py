@@ -16,6 +16,10 @@ import numpy as np
 import pytest
 
 from pickplace_cli.paths import bspline_vel as bv
+
+from pickplace_cli.lookup import vel_slsqp as vq
+
+from pickplace_cli.curves import vel_problem as vp
 from pickplace_cli.model.task import Task
 from pickplace_cli.model.trajectory import CartesianTrajectory
 
@@ -137,9 +141,9 @@ def _de_solve(prob, margin=0.01, seed=1):
     peaks, 32 samples per knot span; then exact peaks at its result)."""
     from scipy.optimize import differential_evolution
 
-    space = bv._Space(prob.lambda_free, margin)
-    ev = bv._Evaluator(prob)
-    grid = bv._grid(32)
+    space = vq._Space(prob.lambda_free, margin)
+    ev = vp._Evaluator(prob)
+    grid = vp._grid(32)
 
     def peaks(u):
         ga, gj = ev.sampled(space.full(space.from_unit(np.atleast_2d(u.T))), *grid)

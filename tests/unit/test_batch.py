@@ -100,7 +100,7 @@ def test_a_limit_row_lists_every_violation_in_the_single_plan_format():
 def test_violation_text_wording():
     """The one line per exceeded limit (README "How to read the limit table"): quantity, peak, time or
     duty cycle, limit, excess and utilisation, numbers to 4 significant digits."""
-    from pickplace_cli.limits.check import LimitRow
+    from pickplace_cli.limits.report import LimitRow
 
     r = LimitRow("q1", "motor torque", "N·m", 2.5841, 2.0, 1.29205, 0.04791, False)
     assert violation_text(r) == (

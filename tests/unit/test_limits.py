@@ -243,7 +243,9 @@ def test_check_grid_estimates_every_peak_well_inside_the_exact_band(name, task, 
     (EXACT_BAND), so no violation can hide between the grid's points. An estimate may be *above* the true
     peak (the parabola through a jump of the torque rate, where a 3-4-5 law's jerk steps): that only sends
     the quantity to the exact refinement. Measured worst underestimate: 3.7e-3 (ph, torque rate)."""
-    from pickplace_cli.limits.check import EXACT_BAND, _parabolic_peak, check_grid
+    from pickplace_cli.limits.check import _parabolic_peak
+    from pickplace_cli.limits.grid import check_grid
+    from pickplace_cli.limits.motion import EXACT_BAND
     from pickplace_cli.paths import plan_path
     from pickplace_cli.curves.peaks import refine_max
 
@@ -310,7 +312,7 @@ def test_no_parabola_or_bracket_spans_a_jump():
     """At a breakpoint where the jerk steps the torque rate steps too: the check grid holds both one-sided
     points, and the reported peak is the larger one-sided limit, the same at every output rate (issue 19:
     a parabola across the step made it 29.6 / 85.6 / 30.3 N·m/s at 1 / 2 / 200 kHz; the truth is 27.16)."""
-    from pickplace_cli.limits.check import check_grid, jump_sides, segment_ids
+    from pickplace_cli.limits.grid import check_grid, jump_sides, segment_ids
     from pickplace_cli.planner import PlanOptions, plan
 
     prof = profile_from(raw("scara-600"))
@@ -338,7 +340,7 @@ def test_unreachable_mid_move_names_the_earliest_time():
     import re
 
     from pickplace_cli.model.errors import UnreachableError
-    from pickplace_cli.limits.check import check_grid
+    from pickplace_cli.limits.grid import check_grid
     from pickplace_cli.paths import plan_path
     from pickplace_cli.planner import PlanOptions, motion_model_static, plan
     from pickplace_cli.model.profile import load_profile

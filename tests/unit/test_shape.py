@@ -11,7 +11,7 @@ from typer.testing import CliRunner
 
 from pickplace_cli.cli import app
 from pickplace_cli.model.errors import UsageError
-from pickplace_cli.limits.check import _extra_points
+from pickplace_cli.limits.grid import _extra_points
 from pickplace_cli.paths import plan_path
 from pickplace_cli.planner import PlanOptions, motion_model, plan
 from pickplace_cli.model.profile import load_profile

@@ -7,7 +7,8 @@ import pytest
 from scipy.optimize import brentq
 
 from pickplace_cli.model.errors import TaskError, UnreachableError
-from pickplace_cli.limits.check import check_grid, check_limits
+from pickplace_cli.limits.check import check_limits
+from pickplace_cli.limits.grid import check_grid
 from pickplace_cli.paths import Method, plan_path
 from pickplace_cli.planner import motion_model
 from pickplace_cli.model.profile import load_profile
