@@ -163,6 +163,57 @@ def solve(prob: VelProblem, settings: VelSettings = VelSettings(), warm: VelResu
     )
 
 
+class _Group:
+    """One stage of :func:`solve_seeded`: SLSQP from ``first`` (the lead) and from each other start 1e-3 away from it whose
+    objective is below ``bound`` (screens, ``screen_ftol``); a finished screen that beats the lead's
+    result is polished (full tolerance); ``best`` (x, objective) once the lead is done."""
+
+    def __init__(self, lock: _Lockstep, settings: VelSettings, stage: _Stage, first: np.ndarray, others: list[np.ndarray],
+                 norms: tuple, bound: float):
+        self.stage, self.norms, self.lock, self.settings = stage, norms, lock, settings
+        self.max_rounds = settings.max_rounds
+        others = [x0 for x0 in others if np.max(np.abs(x0 - first)) > 1e-3]
+        if math.isfinite(bound):  # check_ratio: the starts' objectives (in one batch)
+            _eval_stages([(stage, x0) for x0 in others])
+            others = [x0 for x0 in others if stage.objective(x0, *norms) < bound]
+        # (the runs' first evaluations come with the next round's batch)
+        self.lead = lock.add(stage.run(first, *norms, max_rounds=self.max_rounds))
+        self.screens = [
+            lock.add(stage.run(x0, *norms, ftol=self.settings.screen_ftol, maxiter=self.settings.screen_maxiter,
+                               max_rounds=self.max_rounds))
+            for x0 in others
+        ]
+        self.polishes: list[_LockstepSLSQP] = []
+        self.best: tuple[np.ndarray, float] | None = None
+        self.handled: set[int] = set()
+
+    def runs(self) -> list[_LockstepSLSQP]:
+        return [self.lead, *self.screens, *self.polishes]
+
+    def pending(self) -> list[tuple[_Stage, np.ndarray]]:
+        """The results :meth:`update` will judge (to evaluate in one batch with other groups')."""
+        return [(self.stage, st.result()) for st in self.runs() if st.done and id(st) not in self.handled]
+
+    def update(self) -> None:
+        """Take the results of runs finished since the last call (their objectives in one batch)."""
+        fresh = [st for st in self.runs() if st.done and id(st) not in self.handled]
+        if self.best is None and self.lead not in fresh:
+            return  # the screens are judged against the lead's result
+        self.handled.update(id(st) for st in fresh)
+        xs = [st.result() for st in fresh]
+        _eval_stages([(self.stage, x) for x in xs])
+        for st, x in zip(fresh, xs):
+            f = self.stage.objective(x, *self.norms)
+            if st is self.lead:
+                self.best = (x, f) if self.best is None or f < self.best[1] else self.best
+        for st, x in zip(fresh, xs):
+            f = self.stage.objective(x, *self.norms)
+            if st in self.screens and np.max(np.abs(x - self.best[0])) > 1e-3 and f < self.best[1]:
+                self.polishes.append(self.lock.add(self.stage.run(x, *self.norms, max_rounds=self.max_rounds)))
+            elif st in self.polishes and f < self.best[1]:
+                self.best = (x, f)
+
+
 def solve_seeded(prob: VelProblem, seeds: dict[str, np.ndarray], settings: VelSettings = VelSettings(),
                  check: bool = True) -> VelResult:
     """The two-stage optimum of [Yang2022, Eq. (37)] started from ``seeds``: for each stage ("a", "j",
@@ -201,54 +252,6 @@ def solve_seeded(prob: VelProblem, seeds: dict[str, np.ndarray], settings: VelSe
 
     lock = _Lockstep()
 
-    class Group:
-        """One stage: SLSQP from ``first`` (the lead) and from each other start 1e-3 away from it whose
-        objective is below ``bound`` (screens, ``screen_ftol``); a finished screen that beats the lead's
-        result is polished (full tolerance); ``best`` (x, objective) once the lead is done."""
-
-        def __init__(self, stage: _Stage, first: np.ndarray, others: list[np.ndarray], norms: tuple, bound: float):
-            self.stage, self.norms = stage, norms
-            others = [x0 for x0 in others if np.max(np.abs(x0 - first)) > 1e-3]
-            if math.isfinite(bound):  # check_ratio: the starts' objectives (in one batch)
-                _eval_stages([(stage, x0) for x0 in others])
-                others = [x0 for x0 in others if stage.objective(x0, *norms) < bound]
-            # (the runs' first evaluations come with the next round's batch)
-            self.lead = lock.add(stage.run(first, *norms, max_rounds=settings.max_rounds))
-            self.screens = [
-                lock.add(stage.run(x0, *norms, ftol=settings.screen_ftol, maxiter=settings.screen_maxiter,
-                                   max_rounds=settings.max_rounds))
-                for x0 in others
-            ]
-            self.polishes: list[_LockstepSLSQP] = []
-            self.best: tuple[np.ndarray, float] | None = None
-            self.handled: set[int] = set()
-
-        def runs(self) -> list[_LockstepSLSQP]:
-            return [self.lead, *self.screens, *self.polishes]
-
-        def pending(self) -> list[tuple[_Stage, np.ndarray]]:
-            """The results :meth:`update` will judge (to evaluate in one batch with other groups')."""
-            return [(self.stage, st.result()) for st in self.runs() if st.done and id(st) not in self.handled]
-
-        def update(self) -> None:
-            """Take the results of runs finished since the last call (their objectives in one batch)."""
-            fresh = [st for st in self.runs() if st.done and id(st) not in self.handled]
-            if self.best is None and self.lead not in fresh:
-                return  # the screens are judged against the lead's result
-            self.handled.update(id(st) for st in fresh)
-            xs = [st.result() for st in fresh]
-            _eval_stages([(self.stage, x) for x in xs])
-            for st, x in zip(fresh, xs):
-                f = self.stage.objective(x, *self.norms)
-                if st is self.lead:
-                    self.best = (x, f) if self.best is None or f < self.best[1] else self.best
-            for st, x in zip(fresh, xs):
-                f = self.stage.objective(x, *self.norms)
-                if st in self.screens and np.max(np.abs(x - self.best[0])) > 1e-3 and f < self.best[1]:
-                    self.polishes.append(lock.add(self.stage.run(x, *self.norms, max_rounds=settings.max_rounds)))
-                elif st in self.polishes and f < self.best[1]:
-                    self.best = (x, f)
-
     sample, s_amax, s_jmax = pool[in_sample], amax[in_sample], jmax[in_sample]
     inner = (sample[:, 0] >= 3 * settings.margin) & (sample[:, 3] <= 1 - 3 * settings.margin)
     stage1 = []
@@ -267,10 +270,10 @@ def solve_seeded(prob: VelProblem, seeds: dict[str, np.ndarray], settings: VelSe
         i0 = int(np.argmin(vals[seg]))
         # check_ratio: screen only starts whose sampled peak is within c of the seed's sampled peak
         bound = float(vals[seg][i0] ** 2 / stage.norm[0 if kind == "a" else 1]) * c * c if math.isfinite(c) else np.inf
-        stage1.append(Group(stage, pool[seg][i0], others, (), bound))
+        stage1.append(_Group(lock, settings, stage, pool[seg][i0], others, (), bound))
     ga1, gj1 = stage1
 
-    def stage_F(xa: np.ndarray, fa: float, xj: np.ndarray, fj: float) -> tuple[Group, float, float]:
+    def stage_F(xa: np.ndarray, fa: float, xj: np.ndarray, fj: float) -> tuple[_Group, float, float]:
         # the exact peaks (a stage's objective is its largest exact segment maximum of ‖a‖², ‖j‖² / scale)
         a_min, j_min = math.sqrt(fa * ga1.stage.norm[0]), math.sqrt(fj * gj1.stage.norm[1])
         stage = _Stage(ev, space, "F", a_norm, j_norm, settings)
@@ -284,7 +287,7 @@ def solve_seeded(prob: VelProblem, seeds: dict[str, np.ndarray], settings: VelSe
             f_extra = a_min / np.sqrt(ga2) + j_min / np.sqrt(gj2)
             allx, allf = np.vstack([pool, extra]), np.concatenate([f_pool, f_extra])
             others = [allx[int(np.argmax(allf))], extra[2]]
-        return Group(stage, pool[seg][int(np.argmax(f_pool[seg]))], others, (a_min, j_min), np.inf), a_min, j_min
+        return _Group(lock, settings, stage, pool[seg][int(np.argmax(f_pool[seg]))], others, (a_min, j_min), np.inf), a_min, j_min
 
     # The F stage starts as soon as both stage-1 leads are done, from their minima, while the stage-1
     # screens run on; a screen that finds a lower minimum (rare) restarts it with the new normalisers.

@@ -274,6 +274,29 @@ def _no_evaluation(tau, order):  # the engine's stand-in path is never evaluated
     raise RuntimeError("the verdict engine's path stand-in has no evaluator")
 
 
+def _k_source(options) -> tuple[Any, tuple[float, float] | None, str] | None:
+    """(table, given (k1, k2), source text) of the engine's k1, k2, or None when the options are out of its
+    scope (other parameters, one of k1/k2 only, a k outside (0, 1), a table that does not load)."""
+    params = _given(options.method_params)
+    if not set(params) <= _PARAMS or ("k1" in params) != ("k2" in params):
+        return None
+    if "k1" in params:
+        try:
+            k_given = (float(params["k1"]), float(params["k2"]))
+        except (TypeError, ValueError):
+            return None
+        if not all(np.isfinite(k) and 0 < k < 1 for k in k_given):
+            return None
+        return None, k_given, "given"
+    from ..lookup.bspline_table import load_table
+
+    try:
+        tab = load_table(params.get("table"))
+    except PickplaceError:
+        return None
+    return tab, None, f"table {tab.source}"
+
+
 def decide(rows: list[BatchRow], profile, options, height: float | None = None, eta: float | None = None,
            block: int = BLOCK_MOVES) -> dict[int, Verdict]:
     """The rows the engine decides: {row number: Verdict}. Every row not in the answer must be planned by
@@ -284,26 +307,10 @@ def decide(rows: list[BatchRow], profile, options, height: float | None = None, 
     from ..timing import choose_duration
     from ..model.trajectory import CartesianPath, CartesianTrajectory
 
-    params = _given(options.method_params)
-    if not set(params) <= _PARAMS or ("k1" in params) != ("k2" in params):
+    ks = _k_source(options)
+    if ks is None:
         return {}
-    tab = None
-    if "k1" in params:
-        try:
-            k_given = (float(params["k1"]), float(params["k2"]))
-        except (TypeError, ValueError):
-            return {}
-        if not all(np.isfinite(k) and 0 < k < 1 for k in k_given):
-            return {}
-        source = "given"
-    else:
-        from ..lookup.bspline_table import load_table
-
-        try:
-            tab = load_table(params.get("table"))
-        except PickplaceError:
-            return {}
-        source = f"table {tab.source}"
+    tab, k_given, source = ks
     rate = options.rate if options.rate is not None else profile.planning.rate
     dwell = profile.planning.dwell
 
