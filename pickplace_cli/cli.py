@@ -318,130 +318,192 @@ def plan(
     trip adds a leading move column. Exit 3 when a limit is exceeded, 4 when a point is unreachable or
     outside the workcell, 1 for invalid input; a batch exits with the highest code of its rows.
     """
-    from .model.errors import TaskError
-    from .planner import PlanOptions
+    from types import SimpleNamespace
+
     from .model.profile import load_profile
+    from .planner import PlanOptions
 
+    a = SimpleNamespace(**{k: v for k, v in locals().items() if k not in ("SimpleNamespace", "load_profile",
+                                                                         "PlanOptions")})
     _JSON_ERRORS[0] = json_summary and batch is None  # a batch prints its own line per row
-    _finite("height", height)
-    _finite("rate", rate)
-    if rate is not None and not (0 < rate <= 1e6):
-        raise TaskError(f"rate = {rate!r} Hz: the output rate must lie in (0, 1e6] Hz (as the profile's planning.rate)")
-    if k1 is not None or k2 is not None:
-        from .paths.bspline import check_k
-
-        for name, k in (("k1", k1), ("k2", k2)):
-            if k is not None:
-                check_k(name, k)
-    if eta is not None and not (0 < eta < 1):
-        raise TaskError(f"eta = {eta!r}: the lift-off/set-down ratio η must lie strictly between 0 and 1")
-    if batch is not None and (from_ is not None or to is not None):
-        _usage("--batch takes the moves from the file; do not also give --from/--to")
-    if batch is None and (from_ is None or to is None):
-        _usage(f"missing --{'to' if from_ is not None else 'from'}: give both --from X,Y,Z and --to X,Y,Z in m (or --batch FILE)")
-    if batch is not None and round_trip:
-        _usage("--round-trip is not available with --batch (give each leg as a row)")
-    # an option set to anything but its default where it has no effect is a mistake: refused, not ignored
-    if batch is None and (fail_fast or workers != 0):
-        _usage(f"{'--fail-fast' if fail_fast else '-j/--workers'} only applies to --batch")
-    if batch is not None and (v_from is not None or v_to is not None):
-        _usage("--v-from/--v-to: with --batch give the velocities of each row as columns v_from_x … v_to_z")
-    if fmt != OutputFormat.mcap and (mcap_flavor != McapFlavor.ros2 or compression != Compression.none):
-        what = f"--mcap-flavor {mcap_flavor.value}" if mcap_flavor != McapFlavor.ros2 else f"--compression {compression.value}"
-        _usage(f"{what} only applies to --format mcap (the format is {fmt.value})")
-    if fmt != OutputFormat.csv and csv_dialect != CsvDialectName.default:
-        _usage(f"--csv-dialect {csv_dialect.value} only applies to --format csv (the format is {fmt.value})")
-    if json_summary and output is None and (fmt != OutputFormat.csv or csv_dialect != CsvDialectName.default):
-        _usage("--format/--csv-dialect: with --json and no -o FILE no trajectory is written (stdout carries the summary)")
-    if adjust_points and not fit_ws:
-        _usage("--adjust-points only applies with --fit-workspace")
-    if max_shift != MAX_SHIFT and not adjust_points:
-        _usage("--max-shift only applies with --adjust-points")
-    if json_summary and report == "-":
-        _usage("--report -: with --json stdout carries the summary; give --report a file")
-    if json_summary and output == "-":
-        _usage("-o -: with --json stdout carries the summary; give -o a file for the trajectory")
-    if output is None and not json_summary:
-        output = "-"
-    _check_output_paths(output, report)
+    _check_plan_values(a)
+    _check_plan_usage(a)
+    if a.output is None and not json_summary:
+        a.output = "-"
+    _check_output_paths(a.output, report)
     if batch is not None and to_belt is None and latency is not None:  # a belt schedule's default row latency
-        import math
-
-        if not (math.isfinite(latency) and latency >= 0):
-            raise TaskError(f"latency = {latency!r}: must be a finite number of seconds >= 0 (detection to move start)")
+        _finite_latency(latency)
     elif to_belt is not None or latency is not None:
-        method = _belt_method(ctx, method, to_belt, latency, v_to, batch, round_trip, fit_ws, optimize)
+        a.method = _belt_method(ctx, method, to_belt, latency, v_to, batch, round_trip, fit_ws, optimize)
     prof = load_profile(profile)
-    params: dict = _parse_params(param or [])
-    if method == MethodName.bspline:
-        params.update({"k1": k1, "k2": k2, "table": table})
-    elif method == MethodName.bspline_vel and table is not None and k1 is None and k2 is None:
-        params.update({"solver": "seeded", "table": table})  # that table seeds the exact polish
-    elif k1 is not None or k2 is not None or table is not None:
-        _usage(f"--k1/--k2/--table belong to --method bspline (--table also to bspline-vel), not {method.value}")
+    params = _method_params(a)
     writer = _writer(fmt, csv_dialect, mcap_flavor, compression)
-    if batch is not None and fit_ws:
-        _usage("--fit-workspace is not available with --batch")
-    shape = optimize == OptimizeWhat.shape
-    if shape and method != MethodName.bspline:
-        _usage(f"--optimize shape chooses k1, k2, η of --method bspline; method {method.value} has no such shape")
-    if shape and time not in ("fit", "optimal"):
-        _usage(f"--optimize shape minimises the fitted duration on the robot's limits: use it with --time fit or "
-               f"--time optimal (not --time {time})")
-    if hold_capacity and time not in ("fit", "optimal"):
-        _usage(f"--hold-capacity applies to --time fit or optimal (--time {time} "
-               f"{'holds the capacity already' if time == 'auto' else 'is given'})")
-    if shape and (k1 is not None or k2 is not None):
-        _usage("--optimize shape chooses k1 and k2 itself: drop --k1/--k2 (or drop --optimize)")
+    _check_shape_usage(a)
+    options = PlanOptions(method=a.method.value, method_params=params, time=time, rate=rate,
+                          fit=time == "fit" or show_fit, shape=a.optimize == OptimizeWhat.shape,
+                          hold_eta=eta is not None, hold_capacity=hold_capacity)
     if batch is not None:
-        options = PlanOptions(method=method.value, method_params=params, time=time, rate=rate,
-                              fit=time == "fit" or show_fit, shape=shape, hold_eta=eta is not None,
-                              hold_capacity=hold_capacity)
         if workers < 0:
+            from .model.errors import TaskError
+
             raise TaskError(f"workers = {workers}: must be 0 (automatic) or a positive number of processes")
         source = ctx.get_parameter_source("method")
         belt = {"latency": latency, "method_given": source is not None and source.name != "DEFAULT"}
-        _plan_batch(batch, prof, options, height, eta, fail_fast, writer, output, report, report_only, json_summary,
+        _plan_batch(batch, prof, options, height, eta, fail_fast, writer, a.output, report, report_only, json_summary,
                     quiet, workers, belt)
         return
-    from .model.task import Task
-
-    p_from = _parse_point("from", from_)
-    p_to = _parse_point("to", to)
-    h = height if height is not None else prof.planning.height
-    e = eta if eta is not None else prof.planning.eta
-    options = PlanOptions(method=method.value, method_params=params, time=time, rate=rate, fit=time == "fit" or show_fit,
-                          shape=shape, hold_eta=eta is not None, hold_capacity=hold_capacity)
-    wc = prof.workcell
-    vel_from = _parse_point("v-from", v_from, "m/s") if v_from is not None else (getattr(wc, "conveyor_pick_velocity", None) or (0.0, 0.0, 0.0))
-    vel_to = _parse_point("v-to", v_to, "m/s") if v_to is not None else (getattr(wc, "conveyor_place_velocity", None) or (0.0, 0.0, 0.0))
-    moving_ends = any(vel_from) or any(vel_to)
-    if method != MethodName.bspline_vel and (v_from is not None or v_to is not None) and moving_ends:
-        raise TaskError(
-            f"v-from/v-to: method {method.value} plans moves from rest to rest; use --method bspline-vel "
-            "for moving ends (conveyor tracking, Yang 2022)"
-        )
-    if method != MethodName.bspline_vel:
-        vel_from = vel_to = (0.0, 0.0, 0.0)  # the profile's conveyors concern bspline-vel only
-    if round_trip and moving_ends and method == MethodName.bspline_vel:
-        _usage("--round-trip dwells at rest between the legs: not possible with moving ends (--v-from/--v-to)")
-    task = Task(p_from, p_to, h, e, v_from=vel_from, v_to=vel_to)
-    workspace_fit = None
-    if fit_ws:
-        from .studies.workspace import fit_workspace
-
-        _finite("max-shift", max_shift)
-        workspace_fit = fit_workspace(task, prof, method.value, params, adjust_points=adjust_points, max_shift=max_shift)
-        for line in workspace_fit.changes():
-            sys.stderr.write(f"pickplace: {line}\n")
-        task = workspace_fit.task
+    task, workspace_fit, vel_from = _single_task(a, prof, params)
     rendezvous = track = None
     if to_belt is not None:
-        legs, rendezvous, track = _plan_to_belt(p_from, p_to, to_belt, latency, prof, time, h, e, vel_from, params, rate)
+        legs, rendezvous, track = _plan_to_belt(task.p_from, task.p_to, to_belt, latency, prof, time, task.height,
+                                                task.eta, vel_from, params, rate)
     else:
         legs = [_run_plan(task, prof, options)]
     if round_trip:
+        from .model.task import Task
+
         legs.append(_run_plan(Task(task.p_to, task.p_from, task.height, task.eta), prof, options))
+    code, cycle = _render_legs(a, prof, legs, rendezvous, track)
+    _write_plan_outputs(a, prof, writer, legs, track, code)
+    if json_summary:
+        _emit_json(_plan_json(legs, cycle, code, report_only, workspace_fit, rendezvous, track))
+    if code and not report_only:
+        if a.output is not None:
+            sys.stderr.write(
+                "pickplace: trajectory not written (a limit is exceeded); --report-only writes it anyway\n"
+            )
+        raise typer.Exit(code)
+
+
+def _check_plan_values(a) -> None:
+    """Values (exit 1): height, rate, k1/k2, η."""
+    from .model.errors import TaskError
+
+    _finite("height", a.height)
+    _finite("rate", a.rate)
+    if a.rate is not None and not (0 < a.rate <= 1e6):
+        raise TaskError(f"rate = {a.rate!r} Hz: the output rate must lie in (0, 1e6] Hz (as the profile's planning.rate)")
+    if a.k1 is not None or a.k2 is not None:
+        from .paths.bspline import check_k
+
+        for name, k in (("k1", a.k1), ("k2", a.k2)):
+            if k is not None:
+                check_k(name, k)
+    if a.eta is not None and not (0 < a.eta < 1):
+        raise TaskError(f"eta = {a.eta!r}: the lift-off/set-down ratio η must lie strictly between 0 and 1")
+
+
+def _check_plan_usage(a) -> None:
+    """Usage (exit 2): options that contradict each other, or are set where they have no effect (refused, not
+    ignored)."""
+    batch, fmt = a.batch, a.fmt
+    if batch is not None and (a.from_ is not None or a.to is not None):
+        _usage("--batch takes the moves from the file; do not also give --from/--to")
+    if batch is None and (a.from_ is None or a.to is None):
+        _usage(f"missing --{'to' if a.from_ is not None else 'from'}: give both --from X,Y,Z and --to X,Y,Z in m (or --batch FILE)")
+    if batch is not None and a.round_trip:
+        _usage("--round-trip is not available with --batch (give each leg as a row)")
+    if batch is None and (a.fail_fast or a.workers != 0):
+        _usage(f"{'--fail-fast' if a.fail_fast else '-j/--workers'} only applies to --batch")
+    if batch is not None and (a.v_from is not None or a.v_to is not None):
+        _usage("--v-from/--v-to: with --batch give the velocities of each row as columns v_from_x … v_to_z")
+    if fmt != OutputFormat.mcap and (a.mcap_flavor != McapFlavor.ros2 or a.compression != Compression.none):
+        what = f"--mcap-flavor {a.mcap_flavor.value}" if a.mcap_flavor != McapFlavor.ros2 else f"--compression {a.compression.value}"
+        _usage(f"{what} only applies to --format mcap (the format is {fmt.value})")
+    if fmt != OutputFormat.csv and a.csv_dialect != CsvDialectName.default:
+        _usage(f"--csv-dialect {a.csv_dialect.value} only applies to --format csv (the format is {fmt.value})")
+    if a.json_summary and a.output is None and (fmt != OutputFormat.csv or a.csv_dialect != CsvDialectName.default):
+        _usage("--format/--csv-dialect: with --json and no -o FILE no trajectory is written (stdout carries the summary)")
+    if a.adjust_points and not a.fit_ws:
+        _usage("--adjust-points only applies with --fit-workspace")
+    if a.max_shift != MAX_SHIFT and not a.adjust_points:
+        _usage("--max-shift only applies with --adjust-points")
+    if a.json_summary and a.report == "-":
+        _usage("--report -: with --json stdout carries the summary; give --report a file")
+    if a.json_summary and a.output == "-":
+        _usage("-o -: with --json stdout carries the summary; give -o a file for the trajectory")
+
+
+def _finite_latency(latency: float) -> None:
+    import math
+
+    from .model.errors import TaskError
+
+    if not (math.isfinite(latency) and latency >= 0):
+        raise TaskError(f"latency = {latency!r}: must be a finite number of seconds >= 0 (detection to move start)")
+
+
+def _method_params(a) -> dict:
+    """The method's parameters: --param NAME=VALUE, and --k1/--k2/--table where the method takes them."""
+    params: dict = _parse_params(a.param or [])
+    k_given = a.k1 is not None or a.k2 is not None
+    if a.method == MethodName.bspline:
+        params.update({"k1": a.k1, "k2": a.k2, "table": a.table})
+    elif a.method == MethodName.bspline_vel and a.table is not None and not k_given:
+        params.update({"solver": "seeded", "table": a.table})  # that table seeds the exact polish
+    elif k_given or a.table is not None:
+        _usage(f"--k1/--k2/--table belong to --method bspline (--table also to bspline-vel), not {a.method.value}")
+    return params
+
+
+def _check_shape_usage(a) -> None:
+    """Usage (exit 2) of --fit-workspace with --batch, --optimize shape and --hold-capacity."""
+    if a.batch is not None and a.fit_ws:
+        _usage("--fit-workspace is not available with --batch")
+    shape = a.optimize == OptimizeWhat.shape
+    if shape and a.method != MethodName.bspline:
+        _usage(f"--optimize shape chooses k1, k2, η of --method bspline; method {a.method.value} has no such shape")
+    if shape and a.time not in ("fit", "optimal"):
+        _usage(f"--optimize shape minimises the fitted duration on the robot's limits: use it with --time fit or "
+               f"--time optimal (not --time {a.time})")
+    if a.hold_capacity and a.time not in ("fit", "optimal"):
+        _usage(f"--hold-capacity applies to --time fit or optimal (--time {a.time} "
+               f"{'holds the capacity already' if a.time == 'auto' else 'is given'})")
+    if shape and (a.k1 is not None or a.k2 is not None):
+        _usage("--optimize shape chooses k1 and k2 itself: drop --k1/--k2 (or drop --optimize)")
+
+
+def _single_task(a, prof, params: dict):
+    """(task, workspace fit or None, velocity leaving the pick point) of a one-move plan: the points, height,
+    η and end velocities from the options and the profile; --fit-workspace applied."""
+    from .model.errors import TaskError
+    from .model.task import Task
+
+    p_from = _parse_point("from", a.from_)
+    p_to = _parse_point("to", a.to)
+    h = a.height if a.height is not None else prof.planning.height
+    e = a.eta if a.eta is not None else prof.planning.eta
+    wc = prof.workcell
+    vel_from = _parse_point("v-from", a.v_from, "m/s") if a.v_from is not None else (getattr(wc, "conveyor_pick_velocity", None) or (0.0, 0.0, 0.0))
+    vel_to = _parse_point("v-to", a.v_to, "m/s") if a.v_to is not None else (getattr(wc, "conveyor_place_velocity", None) or (0.0, 0.0, 0.0))
+    moving_ends = any(vel_from) or any(vel_to)
+    if a.method != MethodName.bspline_vel and (a.v_from is not None or a.v_to is not None) and moving_ends:
+        raise TaskError(
+            f"v-from/v-to: method {a.method.value} plans moves from rest to rest; use --method bspline-vel "
+            "for moving ends (conveyor tracking, Yang 2022)"
+        )
+    if a.method != MethodName.bspline_vel:
+        vel_from = vel_to = (0.0, 0.0, 0.0)  # the profile's conveyors concern bspline-vel only
+    if a.round_trip and moving_ends and a.method == MethodName.bspline_vel:
+        _usage("--round-trip dwells at rest between the legs: not possible with moving ends (--v-from/--v-to)")
+    task = Task(p_from, p_to, h, e, v_from=vel_from, v_to=vel_to)
+    workspace_fit = None
+    if a.fit_ws:
+        from .studies.workspace import fit_workspace
+
+        _finite("max-shift", a.max_shift)
+        workspace_fit = fit_workspace(task, prof, a.method.value, params, adjust_points=a.adjust_points,
+                                      max_shift=a.max_shift)
+        for line in workspace_fit.changes():
+            sys.stderr.write(f"pickplace: {line}\n")
+        task = workspace_fit.task
+    return task, workspace_fit, vel_from
+
+
+def _render_legs(a, prof, legs: list, rendezvous, track) -> tuple[int, float]:
+    """Summary, limit table and verdict of every leg (and of the tracking segment) on stderr; (exit code,
+    cycle time [s])."""
+    quiet, round_trip = a.quiet, a.round_trip
     for i, leg in enumerate(legs):
         if not quiet:
             if round_trip:
@@ -466,39 +528,43 @@ def plan(
             f"round trip: {legs[0].report.duration:.4f} s + {legs[1].report.duration:.4f} s + 2 × {dwell:g} s dwell "
             f"= {cycle:.4f} s, {60.0 / cycle:.1f} picks/min; {'all limits hold' if code == 0 else 'LIMITS EXCEEDED'}\n"
         )
-    if report is not None:
-        _write_report(legs + ([track] if track is not None else []), report)
-    # the trajectory before the JSON summary: a failed write is then the one JSON document on stdout
-    if output is not None and (code == 0 or report_only):
-        if round_trip:
-            from .pipelines.timeline import round_trip as make_round_trip
+    return code, cycle
 
-            rate_hz = rate if rate is not None else prof.planning.rate
-            samples = make_round_trip(legs[0], legs[1], dwell, rate_hz)
-        elif track is not None:
-            from .pipelines.rendezvous import with_tracking
 
-            samples = with_tracking(legs[0], track)
-        else:
-            samples = legs[0]
-        writer(samples, output)
-    if json_summary:
-        doc = _json_summary(legs, cycle, code, exit_code=0 if report_only else code)
-        if workspace_fit is not None:
-            doc["workspace_fit"] = workspace_fit.as_dict()
-        if rendezvous is not None:
-            doc["rendezvous"] = rendezvous.as_dict()
-            if track is not None:
-                doc["tracking"] = {"t_start_s": rendezvous.seconds, "duration_s": track.duration.seconds,
-                                   "limits_ok": track.report.ok,
-                                   "violations": [r.as_dict() for r in track.report.violations]}
-        _emit_json(doc)
-    if code and not report_only:
-        if output is not None:
-            sys.stderr.write(
-                "pickplace: trajectory not written (a limit is exceeded); --report-only writes it anyway\n"
-            )
-        raise typer.Exit(code)
+def _write_plan_outputs(a, prof, writer, legs: list, track, code: int) -> None:
+    """--report, then the trajectory (before the JSON summary: a failed write is then the one JSON document on
+    stdout): the move, the round trip, or the move with its tracking segment; not written when a limit is
+    exceeded unless --report-only."""
+    if a.report is not None:
+        _write_report(legs + ([track] if track is not None else []), a.report)
+    if a.output is None or not (code == 0 or a.report_only):
+        return
+    if a.round_trip:
+        from .pipelines.timeline import round_trip as make_round_trip
+
+        rate_hz = a.rate if a.rate is not None else prof.planning.rate
+        samples = make_round_trip(legs[0], legs[1], prof.planning.dwell, rate_hz)
+    elif track is not None:
+        from .pipelines.rendezvous import with_tracking
+
+        samples = with_tracking(legs[0], track)
+    else:
+        samples = legs[0]
+    writer(samples, a.output)
+
+
+def _plan_json(legs: list, cycle: float, code: int, report_only: bool, workspace_fit, rendezvous, track) -> dict:
+    """The --json summary of a one-move plan (a round trip, a rendezvous with its tracking segment)."""
+    doc = _json_summary(legs, cycle, code, exit_code=0 if report_only else code)
+    if workspace_fit is not None:
+        doc["workspace_fit"] = workspace_fit.as_dict()
+    if rendezvous is not None:
+        doc["rendezvous"] = rendezvous.as_dict()
+        if track is not None:
+            doc["tracking"] = {"t_start_s": rendezvous.seconds, "duration_s": track.duration.seconds,
+                               "limits_ok": track.report.ok,
+                               "violations": [r.as_dict() for r in track.report.violations]}
+    return doc
 
 
 def _parse_params(items: list[str]) -> dict:
