@@ -222,7 +222,7 @@ def test_shell_completion_script_and_profile_names(monkeypatch):
     monkeypatch.setenv("_TYPER_COMPLETE_TEST_DISABLE_SHELL_DETECTION", "1")
     r = run("--show-completion", "bash")
     assert r.exit_code == 0 and "complete" in r.stdout and "pickplace" in r.stdout.lower()
-    from pickplace_cli.cli import _complete_profile
+    from pickplace_cli.cli.app import _complete_profile
 
     assert set(_complete_profile("")) >= {"delta-su2018", "scara-600", "gantry"}
     assert _complete_profile("sc") == ["scara-600"]
