@@ -94,7 +94,8 @@ def bench_cli(args: list[str], repeat: int, stdout_file: bool = False) -> dict:
 
 
 def bench_table(workers: int) -> dict:
-    from pickplace_cli.lookup.bspline_table import TableSettings, build_table, lambda_grid
+    from pickplace_cli.lookup.bspline_build import build_table, lambda_grid
+    from pickplace_cli.lookup.bspline_optimum import TableSettings
 
     t0 = time.perf_counter()
     build_table(lambda_grid(1, 40, 0.5), TableSettings(), workers=workers)

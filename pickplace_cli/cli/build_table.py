@@ -68,7 +68,9 @@ def build_table_cmd(
     import os
 
     from ..model.errors import TableError
-    from ..lookup.bspline_table import TableSettings, checkpoint_path, format_table, lambda_grid, run_build
+    from ..lookup.bspline_build import checkpoint_path, lambda_grid, run_build
+    from ..lookup.bspline_optimum import TableSettings
+    from ..lookup.bspline_table import format_table
 
     if table_method == TableMethod.bspline_vel:
         if scheduler or resume or table_format != TableFormat.csv:
@@ -160,7 +162,7 @@ def build_table_cmd(
 def _checkpointed_rows(ckpt, settings) -> int:
     """Rows saved in a build-table checkpoint (0 when there is none or it cannot be read)."""
     from ..model.errors import PickplaceError
-    from ..lookup.bspline_table import read_checkpoint
+    from ..lookup.bspline_build import read_checkpoint
 
     try:
         return len(read_checkpoint(ckpt, settings)) if ckpt is not None else 0

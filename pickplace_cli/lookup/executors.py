@@ -1,11 +1,11 @@
 """Execution engines for ``build-table``: anything with the ``concurrent.futures.Executor`` interface.
 
-:func:`pickplace_cli.lookup.bspline_table.run_build` takes an executor, so the engine is pluggable:
+:func:`pickplace_cli.lookup.bspline_build.run_build` takes an executor, so the engine is pluggable:
 
 * local: a ``ProcessPoolExecutor`` (``run_build`` makes one itself for ``workers`` > 1);
 * a Dask distributed cluster: :func:`dask_executor` yields ``distributed.Client(address).get_executor()``,
   Dask's standard ``concurrent.futures`` adapter. The workers need ``pickplace-cli`` installed (they import
-  ``pickplace_cli.lookup.bspline_table`` to run a chunk of rows). Install with the extra ``pickplace-cli[dask]``.
+  ``pickplace_cli.lookup.bspline_build`` and ``bspline_optimum`` to run a chunk of rows). Install with the extra ``pickplace-cli[dask]``.
 """
 
 from __future__ import annotations

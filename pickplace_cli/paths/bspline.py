@@ -73,7 +73,7 @@ def plan_bspline(
             k1, k2 = tab.lookup(task.lam, eta=task.eta)
             source = f"table {tab.source}"
         except TableError as exc:  # a (λ, η) the table does not cover: the same optimiser, for this move
-            from ..lookup.bspline_table import solve_on_demand
+            from ..lookup.bspline_optimum import solve_on_demand
 
             k1, k2, _ = solve_on_demand(round(task.lam, 12), round(task.eta, 12))
             why = "η" if str(exc).startswith("eta") else "λ"
@@ -168,7 +168,7 @@ def batch_paths(k1: np.ndarray, k2: np.ndarray, via: np.ndarray, symmetric: np.n
     points minus P1.
 
     Moves between end points at the same height (the common case; the path is then symmetric about
-    τ = 1/2) use the closed form of the table build (:func:`pickplace_cli.lookup.bspline_table.unit_pieces`, ~20 numpy
+    τ = 1/2) use the closed form of the table build (:func:`pickplace_cli.lookup.bspline_optimum.unit_pieces`, ~20 numpy
     calls instead of the ~300 of the Cox–de Boor recursion); the others, and k1 outside ``UNIT_K1``, the
     batched de Boor path. Either way every row is computed by operations on that row alone, so one move
     planned alone and the same move in a batch of thousands get bitwise the same path (tested).
@@ -223,7 +223,7 @@ def _unit_paths(k1: np.ndarray, k2: np.ndarray, via: np.ndarray):
     """:func:`batch_paths` of symmetric moves from the closed-form unit path (s_u, s_v) of [Li2018,
     Eq. (16)] on [0, 1/2] and its mirror image s_u(1 − τ) = 1 − s_u(τ), s_v(1 − τ) = s_v(τ):
     p − P1 = s_u(τ)·(P5 − P1) + s_v(τ)·h e_z with h the clearance, and ‖p⁽ʳ⁾‖ = b ‖(s_u⁽ʳ⁾, s_v⁽ʳ⁾/λ)‖."""
-    from ..lookup.bspline_table import _EXP, _SHIFT, unit_peaks, unit_pieces
+    from ..lookup.bspline_optimum import _EXP, _SHIFT, unit_peaks, unit_pieces
 
     d = via[:, 4]
     top = via[:, 2, 2]
