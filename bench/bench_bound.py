@@ -174,19 +174,32 @@ def decompose(task: Task) -> list[tuple[str, float]]:
 
 
 def row(name: str, method: str, task: Task, t_opt: float | None = None, shape: bool = False) -> dict:
+    from pickplace_cli.timing.bound import torque_bound as ours
+
     prof = _profile(name)
     fit = plan(task, prof, PlanOptions(method=method, time="fit"))
     if t_opt is None:
         t_opt = plan(task, prof, PlanOptions(method=method, time="optimal")).duration.seconds
     out = {"profile": name, "method": method, "from": task.p_from.tolist(), "to": task.p_to.tolist(),
            "height": task.height, "t_fit": fit.duration.seconds, "t_optimal": t_opt}
-    t0 = time.perf_counter()
-    out["t_torque"] = torque_bound(fit.cartesian.path, prof)
-    out["bound_seconds"] = time.perf_counter() - t0
-    out["t_torque_speed"] = torque_bound(fit.cartesian.path, prof, speed=True)
-    out["opt_over_torque"] = t_opt / out["t_torque"]
-    out["opt_over_torque_speed"] = t_opt / out["t_torque_speed"]
-    out["fit_over_torque"] = out["t_fit"] / out["t_torque"]
+    model = motion_model(fit.cartesian.path, prof)
+    out["t_ours"] = ours(model, speed=False)  # pickplace's own bound (τ-parameter TOPP-RA passes)
+    out["t_ours_speed"] = ours(model, speed=True)
+    try:
+        t0 = time.perf_counter()
+        out["t_torque"] = torque_bound(fit.cartesian.path, prof)
+        out["bound_seconds"] = time.perf_counter() - t0
+        out["t_torque_speed"] = torque_bound(fit.cartesian.path, prof, speed=True)
+    except RuntimeError as exc:  # TOPP-RA found no parameterisation: ours stands alone
+        out["toppra_error"] = str(exc)
+        out["t_torque"] = out["t_torque_speed"] = None
+    ref, ref_s = out["t_torque"] or out["t_ours"], out["t_torque_speed"] or out["t_ours_speed"]
+    out["opt_over_torque"] = t_opt / ref
+    out["opt_over_torque_speed"] = t_opt / ref_s
+    out["fit_over_torque"] = out["t_fit"] / ref
+    if out["t_torque"]:
+        out["ours_over_toppra"] = out["t_ours"] / out["t_torque"]
+        out["ours_over_toppra_speed"] = out["t_ours_speed"] / out["t_torque_speed"]
     return out
 
 
@@ -205,6 +218,15 @@ def main() -> None:
     b_fine = torque_bound(fit.cartesian.path, prof, stations=800, grid=2000)
     bs = torque_bound(fit.cartesian.path, prof, speed=True)
     b_shape = torque_bound(shape_opt.cartesian.path, prof)
+    from pickplace_cli.timing.bound import torque_bound as ours
+
+    model = motion_model(fit.cartesian.path, prof)
+    b_ours = ours(model)
+    ours_times = []
+    for _ in range(5):
+        t0 = time.perf_counter()
+        ours(model)
+        ours_times.append(time.perf_counter() - t0)
     times = []
     for _ in range(5):
         t0 = time.perf_counter()
@@ -214,8 +236,10 @@ def main() -> None:
         "t_fit": fit.duration.seconds, "t_optimal": opt.duration.seconds, "t_torque": b, "t_torque_fine": b_fine,
         "t_torque_speed": bs, "t_shape_fit": shape_fit.duration.seconds, "t_shape_optimal": shape_opt.duration.seconds,
         "t_torque_shape_path": b_shape, "bound_ms_median": statistics.median(times) * 1e3,
-        "binding_optimal": opt.duration.binding,
+        "binding_optimal": opt.duration.binding, "t_ours": b_ours, "ours_ms_median": statistics.median(ours_times) * 1e3,
     }
+    print(f"  pickplace's own bound (timing/bound.py, in --time optimal's summary): {b_ours:.4f} s = "
+          f"{b_ours / b:.4f} × TOPP-RA's, {statistics.median(ours_times) * 1e3:.0f} ms median")
     print(f"Adept cycle, delta-su2018, bspline (table k1, k2, η 0.5):")
     print(f"  T_fit {fit.duration.seconds:.4f} s  T_optimal {opt.duration.seconds:.4f} s  "
           f"TOPP-RA torque bound {b:.4f} s (grid 2000: {b_fine:.4f} s, {abs(b_fine / b - 1) * 100:.2f} % apart), "
@@ -241,8 +265,11 @@ def main() -> None:
             print(f"{r['profile']:13s} {r['method']:15s} failed: {exc}", flush=True)
             continue
         rows.append(res)
+        tr = (f"TOPP-RA {res['t_torque']:.4f} (+speed {res['t_torque_speed']:.4f}), ours/TOPP-RA "
+              f"{res['ours_over_toppra']:.4f} ({res['ours_over_toppra_speed']:.4f})" if res["t_torque"]
+              else f"TOPP-RA failed ({res['toppra_error']})")
         print(f"{res['profile']:13s} {res['method']:15s} fit {res['t_fit']:.4f} optimal {res['t_optimal']:.4f} "
-              f"torque bound {res['t_torque']:.4f} (+speed {res['t_torque_speed']:.4f})  "
+              f"ours {res['t_ours']:.4f} (+speed {res['t_ours_speed']:.4f})  {tr}  "
               f"opt/bound {res['opt_over_torque']:.3f}  fit/bound {res['fit_over_torque']:.3f}", flush=True)
     ratios = [r["opt_over_torque"] for r in rows]
     ratios_s = [r["opt_over_torque_speed"] for r in rows]
@@ -255,6 +282,13 @@ def main() -> None:
     print(f"{len(rows)} moves: T_optimal / T_torque min {min(ratios):.3f} median {statistics.median(ratios):.3f} "
           f"max {max(ratios):.3f}; / T_torque+speed median {statistics.median(ratios_s):.3f}; T_fit / T_torque "
           f"median {summary['fit_over_torque_median']:.3f}; below the bound: {sum(x < 1 for x in ratios)}")
+    both = [r for r in rows if r["t_torque"]]
+    dev = [abs(r["ours_over_toppra"] - 1) for r in both] + [abs(r["ours_over_toppra_speed"] - 1) for r in both]
+    summary["ours_vs_toppra"] = {"compared": len(both), "worst_relative": max(dev), "median_relative": statistics.median(dev),
+                                 "toppra_failed": len(rows) - len(both)}
+    print(f"pickplace's own bound against TOPP-RA on {len(both)} moves (torque, torque + speed): median "
+          f"{statistics.median(dev) * 100:.3f} %, worst {max(dev) * 100:.3f} % apart; TOPP-RA failed on "
+          f"{len(rows) - len(both)} where ours gives a bound")
     Path(args.output).write_text(json.dumps(summary, indent=1))
 
 

@@ -204,6 +204,9 @@ def _print_summary(result) -> None:
         fit += (f"; optimal {d.t_optimal:.4f} s = {d.t_optimal / d.t_fit:.3f} × fit, {d.t_optimal / d.t_auto:.3f} × auto"
                 f" ({60 / (2 * d.t_optimal + 2 * result.report.dwell):.1f} against "
                 f"{60 / (2 * d.t_fit + 2 * result.report.dwell):.1f} picks/min with fit)")
+        if d.t_bound:
+            fit += (f"; lower bound {d.t_bound:.4f} s (peak motor torque and speed alone: T = {d.seconds / d.t_bound:.3f} "
+                    "× bound; the rest is torque rate, RMS and smoothness)")
     sys.stderr.write(
         f"{s['profile']} / {s['method']}: b = {s['b_m']:.4g} m, h = {s['height_m']:.4g} m, λ = {s['lambda']:.4g}, η = {s['eta']:g}; {ks}\n"
         f"duration T = {d.seconds:.4f} s ({d.mode}, binding: {d.binding}); auto {d.t_auto:.4f} s (Eq. 26: {bounds}){fit}; "

@@ -13,7 +13,7 @@ import numpy as np
 
 from ..model.errors import UnreachableError
 from .grid import interior_jumps, segment_ids
-from .motion import EXACT_BAND, MotionModel, Parts
+from .motion import MotionModel, Parts
 from .report import LimitReport, LimitRow
 
 

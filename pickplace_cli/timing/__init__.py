@@ -29,6 +29,9 @@ class Duration:
     #: --time optimal: the duration of the non-uniform law (None otherwise) and what the optimiser said
     t_optimal: float | None = None
     law: str | None = None
+    #: --time optimal: the lower bound of the path, its time-optimal traversal under peak motor torque and speed
+    #: alone (:mod:`pickplace_cli.timing.bound`; None otherwise)
+    t_bound: float | None = None
 
     @property
     def t_auto(self) -> float:
@@ -44,6 +47,7 @@ class Duration:
             "binding": self.binding,
             "optimal_s": self.t_optimal,
             "time_law": self.law or "uniform",
+            "torque_bound_s": self.t_bound,
         }
 
 
@@ -335,9 +339,14 @@ def choose_optimal(path: CartesianPath, profile, model, dwell: float, model_of,
     composed path. Returns (Duration, the path to sample — the composed one, or ``path`` itself when the law
     is not faster than uniform scaling —, a note for the user)."""
     from ..model.errors import PickplaceError
+    from .bound import torque_bound
     from .optimal import optimal_law
 
     fit = choose_duration(path, profile.capacity, "fit", model=model, dwell=dwell, hold_capacity=hold_capacity)
+    try:
+        fit = replace(fit, t_bound=torque_bound(model))
+    except ValueError:  # no motor torque or speed limit, or one exceeded at rest: no bound to show
+        pass
     law = optimal_law(model, dwell, fit.seconds, capacity=profile.capacity if hold_capacity else None)
     composed = law.path
     try:
