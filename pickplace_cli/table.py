@@ -496,8 +496,8 @@ class Table:
     def __post_init__(self) -> None:
         object.__setattr__(self, "_columns", {})  # column arrays, built once (a table is immutable)
         lam = self.lam
-        if len(lam) < 2:
-            raise TableError(f"{self.source}: a table needs at least two rows, got {len(lam)}")
+        if len(lam) < 1:
+            raise TableError(f"{self.source}: a table needs at least one row")
         if np.any(np.diff(lam) <= 0):
             raise TableError(f"{self.source}: lambda must increase strictly from row to row")
 
@@ -568,8 +568,8 @@ def lambda_grid(lam_min: float, lam_max: float, step: float) -> np.ndarray:
     for name, v in (("lambda-min", lam_min), ("lambda-max", lam_max), ("lambda-step", step)):
         if not (np.isfinite(v) and v > 0):
             raise TableError(f"{name} = {v!r}: must be a finite number > 0")
-    if lam_max <= lam_min:
-        raise TableError(f"lambda-max = {lam_max:g}: must be greater than lambda-min = {lam_min:g}")
+    if lam_max < lam_min:
+        raise TableError(f"lambda-max = {lam_max:g}: must not be less than lambda-min = {lam_min:g}")
     n = int(math.floor((lam_max - lam_min) / step + 1e-9))
     grid = lam_min + step * np.arange(n + 1)
     if lam_max - grid[-1] > 1e-9 * step:
