@@ -37,10 +37,10 @@ def main() -> None:
 
     import numpy as np
 
-    from pickplace_cli.compare import compare_methods, compare_row
-    from pickplace_cli.methods import Method
-    from pickplace_cli.profile import load_profile
-    from pickplace_cli.task import Task
+    from pickplace_cli.studies.compare import compare_methods, compare_row
+    from pickplace_cli.paths import Method
+    from pickplace_cli.model.profile import load_profile
+    from pickplace_cli.model.task import Task
 
     prof = load_profile(args.profile)
     if prof.vibration is None:

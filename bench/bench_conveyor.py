@@ -43,7 +43,7 @@ def random_moves(n: int, seed: int = 2022):
     """Held-out moves: h/b log-uniform in [0.025, 1], each v·T/b group uniform in [−0.5, 0.5], b, T random."""
     import numpy as np
 
-    from pickplace_cli.methods.bspline_vel import task_from_groups
+    from pickplace_cli.paths.bspline_vel import task_from_groups
 
     rng = np.random.default_rng(seed)
     out = []
@@ -69,11 +69,11 @@ def main() -> int:
 
     import numpy as np
 
-    from pickplace_cli.methods import bspline_vel as bv
+    from pickplace_cli.paths import bspline_vel as bv
     from pickplace_cli.planner import PlanOptions, plan
-    from pickplace_cli.profile import load_profile
-    from pickplace_cli.table_vel import load_vel_table
-    from pickplace_cli.task import Task
+    from pickplace_cli.model.profile import load_profile
+    from pickplace_cli.lookup.vel_table import load_vel_table
+    from pickplace_cli.model.task import Task
 
     results: dict = {"machine": {"platform": platform.platform(), "python": sys.version.split()[0],
                                  "cpus": os.cpu_count(), "load_avg_start": os.getloadavg()},
@@ -161,7 +161,7 @@ def main() -> int:
         show(f"plan Delta Adept + belts, --time {spec} (T = {r.duration.seconds:.4f} s)", s)
 
     if args.build:
-        from pickplace_cli.table_vel import VelGrid, build_vel_table
+        from pickplace_cli.lookup.vel_table import VelGrid, build_vel_table
 
         t0 = time.perf_counter()
         built = build_vel_table(VelGrid(), workers=os.cpu_count() or 1)

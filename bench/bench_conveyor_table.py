@@ -48,8 +48,12 @@ def main() -> int:
     sys.path.insert(0, str(Path(__file__).resolve().parent))
     from bench_conveyor import random_moves, write_results
 
-    from pickplace_cli.methods import bspline_vel as bv
-    from pickplace_cli.table_vel import _order_knots, load_vel_table
+    from pickplace_cli.paths import bspline_vel as bv
+
+    from pickplace_cli.lookup import vel_slsqp as vq
+
+    from pickplace_cli.curves import vel_problem as vp
+    from pickplace_cli.lookup.vel_table import _order_knots, load_vel_table
 
     tab = load_vel_table(args.table)
     margin = tab.grid.margin
@@ -95,10 +99,10 @@ def main() -> int:
         loss["nearest corner"].append(corner_loss[int(np.argmax(w))])
         loss["best corner (exact F, a bound)"].append(min(corner_loss))
         if i < args.polish:
-            space = bv._Space(prob.lambda_free, margin)
+            space = vq._Space(prob.lambda_free, margin)
             a_min, j_min = float(w @ tab.a_min[tuple(at)]), float(w @ tab.j_min[tuple(at)])
             for iters in (1, 3, 100):
-                stage = bv._Stage(bv._Evaluator(prob), space, "F", a_min**2, j_min**2, bv.VelSettings(margin=margin))
+                stage = vq._Stage(vp._Evaluator(prob), space, "F", a_min**2, j_min**2, bv.VelSettings(margin=margin))
                 s = time.perf_counter()
                 xs = stage.solve(space.clip(feasible(lin)[space.free]), a_min, j_min, maxiter=iters)
                 dt = time.perf_counter() - s

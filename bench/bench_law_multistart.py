@@ -27,9 +27,9 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from pickplace_cli.errors import PickplaceError  # noqa: E402
+from pickplace_cli.model.errors import PickplaceError  # noqa: E402
 from pickplace_cli.planner import PlanOptions, motion_model, plan  # noqa: E402
-from pickplace_cli.task import Task  # noqa: E402
+from pickplace_cli.model.task import Task  # noqa: E402
 from pickplace_cli.timing import fit_duration  # noqa: E402
 from pickplace_cli.timing import optimal as O  # noqa: E402
 from tests.property.test_limit_truth import REGIONS, _profile  # noqa: E402

@@ -26,9 +26,9 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from pickplace_cli.errors import PickplaceError  # noqa: E402
+from pickplace_cli.model.errors import PickplaceError  # noqa: E402
 from pickplace_cli.planner import PlanOptions, motion_model, plan  # noqa: E402
-from pickplace_cli.task import Task  # noqa: E402
+from pickplace_cli.model.task import Task  # noqa: E402
 from pickplace_cli.timing import fit_duration  # noqa: E402
 from pickplace_cli.timing import optimal as O  # noqa: E402
 from tests.property.test_limit_truth import REGIONS, _profile  # noqa: E402
@@ -76,7 +76,7 @@ def main() -> None:
     ap.add_argument("--moves", type=int, default=3, help="random moves per method and robot")
     ap.add_argument("-o", "--output", default=str(Path(__file__).parent / "results" / "optimal.json"))
     args = ap.parse_args()
-    from pickplace_cli.profile import load_profile
+    from pickplace_cli.model.profile import load_profile
 
     prof = load_profile("delta-su2018")
     adept = Task([-0.1525, 0, -0.8], [0.1525, 0, -0.8], 0.025, 0.5)

@@ -33,8 +33,8 @@ def bench_inprocess(repeat: int) -> dict:
     import numpy as np
 
     from pickplace_cli.planner import PlanOptions, plan
-    from pickplace_cli.profile import load_profile
-    from pickplace_cli.task import Task
+    from pickplace_cli.model.profile import load_profile
+    from pickplace_cli.model.task import Task
 
     prof = load_profile("gantry")
     task = Task(np.array([-0.1525, 0, -0.8]), np.array([0.1525, 0, -0.8]), 0.025, 0.5)
@@ -51,11 +51,11 @@ def bench_limits(repeat: int) -> tuple[dict, dict, dict]:
     """Delta: joint mapping + dynamics + limit check of 1,000 samples; --time fit; whole in-process plan."""
     import numpy as np
 
-    from pickplace_cli.limits import check_limits
-    from pickplace_cli.methods import plan_path
+    from pickplace_cli.limits.check import check_limits
+    from pickplace_cli.paths import plan_path
     from pickplace_cli.planner import PlanOptions, motion_model, plan
-    from pickplace_cli.profile import load_profile
-    from pickplace_cli.task import Task
+    from pickplace_cli.model.profile import load_profile
+    from pickplace_cli.model.task import Task
     from pickplace_cli.timing import fit_duration
 
     prof = load_profile("delta-su2018")
@@ -94,7 +94,8 @@ def bench_cli(args: list[str], repeat: int, stdout_file: bool = False) -> dict:
 
 
 def bench_table(workers: int) -> dict:
-    from pickplace_cli.table import TableSettings, build_table, lambda_grid
+    from pickplace_cli.lookup.bspline_build import build_table, lambda_grid
+    from pickplace_cli.lookup.bspline_optimum import TableSettings
 
     t0 = time.perf_counter()
     build_table(lambda_grid(1, 40, 0.5), TableSettings(), workers=workers)

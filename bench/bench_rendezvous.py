@@ -26,9 +26,9 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from pickplace_cli.methods.bspline_vel import plan_bspline_vel  # noqa: E402
-from pickplace_cli.profile import load_profile  # noqa: E402
-from pickplace_cli.rendezvous import Part, find_rendezvous  # noqa: E402
+from pickplace_cli.paths.bspline_vel import plan_bspline_vel  # noqa: E402
+from pickplace_cli.model.profile import load_profile  # noqa: E402
+from pickplace_cli.pipelines.rendezvous import Part, find_rendezvous  # noqa: E402
 
 
 def cases(n: int, seed: int = 17):

@@ -25,11 +25,11 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from pickplace_cli.errors import PickplaceError  # noqa: E402
-from pickplace_cli.limits import _extra_points  # noqa: E402
-from pickplace_cli.methods import plan_path  # noqa: E402
+from pickplace_cli.model.errors import PickplaceError  # noqa: E402
+from pickplace_cli.limits.grid import _extra_points  # noqa: E402
+from pickplace_cli.paths import plan_path  # noqa: E402
 from pickplace_cli.planner import PlanOptions, motion_model, plan  # noqa: E402
-from pickplace_cli.task import Task  # noqa: E402
+from pickplace_cli.model.task import Task  # noqa: E402
 from pickplace_cli.timing import _worst_utilisation, fit_duration, screened_root  # noqa: E402
 from pickplace_cli.timing import shape as S  # noqa: E402
 from tests.property.test_limit_truth import REGIONS, _profile  # noqa: E402

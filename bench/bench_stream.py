@@ -93,8 +93,8 @@ def main() -> None:
     args = ap.parse_args()
     sys.path.insert(0, str(ROOT))
     from pickplace_cli.planner import PlanOptions, plan
-    from pickplace_cli.profile import load_profile
-    from pickplace_cli.task import Task
+    from pickplace_cli.model.profile import load_profile
+    from pickplace_cli.model.task import Task
 
     samples = len(plan(Task([-0.1525, 0, -0.8], [0.1525, 0, -0.8], 0.025, 0.5), load_profile("delta-su2018"),
                        PlanOptions(rate=1000.0)).t)

@@ -29,7 +29,7 @@ sys.path.insert(0, str(ROOT))
 
 
 def _reference(point: tuple[float, float]) -> tuple[float, float, float, float, float]:
-    from pickplace_cli.table import TableSettings, _coarse_for, optimise_lambda
+    from pickplace_cli.lookup.bspline_optimum import TableSettings, _coarse_for, optimise_lambda
 
     lam, eta = point
     s = TableSettings(eta=eta)
@@ -49,8 +49,8 @@ def main() -> int:
     ap.add_argument("--out", default=str(ROOT / "bench" / "results" / "table2d.json"))
     args = ap.parse_args()
 
-    from pickplace_cli.table import TableSettings, fast_peaks, solve_on_demand
-    from pickplace_cli.table2d import (
+    from pickplace_cli.lookup.bspline_optimum import TableSettings, fast_peaks, solve_on_demand
+    from pickplace_cli.lookup.table2d import (
         TableJumpError, eta_grid, format_table_2d, load_table_2d, log_lambda_grid, run_build_2d)
 
     result: dict = {"cpu_count": os.cpu_count()}

@@ -6,11 +6,11 @@
 What it measures (all on the Adept cycle (−0.1525, 0, −0.8) → (0.1525, 0, −0.8) m, h = 25 mm, on the
 default Delta profile ``delta-su2018``, output at 1 kHz):
 
-* in-process ``plan`` for every method in ``pickplace_cli.methods.Method`` (path, ``--time auto``, joint
+* in-process ``plan`` for every method in ``pickplace_cli.paths.Method`` (path, ``--time auto``, joint
   mapping, dynamics, limit check), and the B-spline plan with ``--time fit``;
-* batch throughput in moves/s through ``pickplace_cli.batch.plan_rows`` (full plans; and verdicts only,
+* batch throughput in moves/s through ``pickplace_cli.pipelines.batch.plan_rows`` (full plans; and verdicts only,
   i.e. output rate 1 Hz — duration and verdict are the same, since the check grid does not depend on it);
-  the batched verdict engine (``pickplace_cli.verdicts``) in-process and through the CLI
+  the batched verdict engine (``pickplace_cli.pipelines.verdicts``) in-process and through the CLI
   (``plan --batch F --json -q``, fresh process, -j 1 and -j 2) for 1,000 and 10,000 moves;
 * CLI cold start, wall time of a fresh process: ``--help``, ``--version``, one ``plan`` to a CSV file;
 * ``build-table`` wall time for the default grid (79 λ), sequential (``-j 1``) and on all cores;
@@ -156,15 +156,15 @@ def wall(cmd: list[str], repeat: int, cwd: str | None = None) -> dict:
 
 
 def adept_task(**kw):
-    from pickplace_cli.task import Task
+    from pickplace_cli.model.task import Task
 
     return Task(list(ADEPT_FROM), list(ADEPT_TO), 0.025, 0.5, **kw)
 
 
 def bench_methods(repeat: int) -> dict:
-    from pickplace_cli.methods import Method
+    from pickplace_cli.paths import Method
     from pickplace_cli.planner import PlanOptions, plan
-    from pickplace_cli.profile import load_profile
+    from pickplace_cli.model.profile import load_profile
 
     section(f"in-process plan, Adept cycle, {PROFILE}, 1 kHz, kinematics + dynamics + limit check")
     prof = load_profile(PROFILE)
@@ -212,12 +212,12 @@ def _batch_rows(n: int) -> str:
 def bench_batch(n: int, repeat: int, engine_sizes: tuple[int, ...] = (1000, 10000)) -> dict:
     section(f"batch throughput ({n} moves, {PROFILE}, bspline)")
     try:
-        from pickplace_cli.batch import plan_rows, read_batch_text
+        from pickplace_cli.pipelines.batch import plan_rows, read_batch_text
     except ImportError:
-        note("batch", "not available (pickplace_cli.batch is missing); skipped")
-        return {"error": "pickplace_cli.batch not available"}
+        note("batch", "not available (pickplace_cli.pipelines.batch is missing); skipped")
+        return {"error": "pickplace_cli.pipelines.batch not available"}
     from pickplace_cli.planner import PlanOptions
-    from pickplace_cli.profile import load_profile
+    from pickplace_cli.model.profile import load_profile
 
     prof = load_profile(PROFILE)
     rows, bad = read_batch_text(_batch_rows(n), "bench")
@@ -243,13 +243,13 @@ def bench_batch(n: int, repeat: int, engine_sizes: tuple[int, ...] = (1000, 1000
 
 def _bench_verdict_engine(prof, sizes: tuple[int, ...], repeat: int) -> dict:
     """The batched verdict engine (``plan --batch F --json`` without -o): in-process moves/s through
-    ``pickplace_cli.verdicts.verdict_rows``, and the CLI's wall time (fresh process) with -j 1 and -j 2."""
+    ``pickplace_cli.pipelines.verdicts.verdict_rows``, and the CLI's wall time (fresh process) with -j 1 and -j 2."""
     try:
-        from pickplace_cli.verdicts import Verdict, verdict_rows
+        from pickplace_cli.pipelines.verdicts import Verdict, verdict_rows
     except ImportError:
-        note("verdict engine", "not available (pickplace_cli.verdicts is missing); skipped")
-        return {"error": "pickplace_cli.verdicts not available"}
-    from pickplace_cli.batch import read_batch_text
+        note("verdict engine", "not available (pickplace_cli.pipelines.verdicts is missing); skipped")
+        return {"error": "pickplace_cli.pipelines.verdicts not available"}
+    from pickplace_cli.pipelines.batch import read_batch_text
     from pickplace_cli.planner import PlanOptions
 
     res: dict = {}
@@ -309,7 +309,7 @@ def bench_build_table(repeat: int) -> dict:
 def bench_conveyor(repeat: int) -> dict:
     section("conveyor tracking (bspline-vel), Adept cycle with conveyor velocities, T = 0.2 s")
     try:
-        from pickplace_cli.methods.bspline_vel import plan_bspline_vel
+        from pickplace_cli.paths.bspline_vel import plan_bspline_vel
     except ImportError:
         note("bspline-vel", "not available")
         return {"error": "not available"}
@@ -330,8 +330,8 @@ def bench_conveyor(repeat: int) -> dict:
 
 
 def _our_bspline():
-    from pickplace_cli.methods import plan_path
-    from pickplace_cli.profile import load_profile
+    from pickplace_cli.paths import plan_path
+    from pickplace_cli.model.profile import load_profile
     from pickplace_cli.timing import choose_duration
 
     prof = load_profile(PROFILE)

@@ -11,14 +11,17 @@ from typing import Any
 
 import numpy as np
 
-from .errors import TableError, UnreachableError
-from .limits import LimitReport, MotionModel, check_grid_order, check_limits, reach_error
-from .methods import Method, depends_on_duration, path_factory, plan_path
-from .profile import Profile
+from .model.errors import TableError, UnreachableError
+from .limits.check import check_limits, reach_error
+from .limits.grid import check_grid_order
+from .limits.motion import MotionModel
+from .limits.report import LimitReport
+from .paths import Method, depends_on_duration, path_factory, plan_path
+from .model.profile import Profile
 from .robots import build_robot
-from .task import Task
+from .model.task import Task
 from .timing import Duration, choose_duration, choose_duration_for
-from .trajectory import CartesianTrajectory, JointTrajectory
+from .model.trajectory import CartesianTrajectory, JointTrajectory
 
 
 @dataclass(frozen=True)
@@ -131,7 +134,7 @@ def _optimised_shape(task: Task, profile: Profile, options: PlanOptions) -> tupl
     (``shape``: the chosen shape, its screened duration, the table's shape and its exact fit duration)."""
     from dataclasses import replace
 
-    from .errors import PickplaceError, UsageError
+    from .model.errors import PickplaceError, UsageError
     from .timing.shape import optimise_shape
 
     if Method(options.method) is not Method.bspline:
@@ -169,96 +172,133 @@ def _optimised_shape(task: Task, profile: Profile, options: PlanOptions) -> tupl
 
 
 def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions()) -> Plan:
-    """Plan ``task`` on ``profile``: path, duration, samples, joint motion, limit report."""
+    """Plan ``task`` on ``profile``: path, duration, samples, joint motion, limit report.
+
+    The pipeline, each stage once, in order: the task (and, with ``--optimize shape``, its shape) → the path
+    (:func:`_path_stage`) → the motion model (:func:`motion_model`) → the duration or time law
+    (:func:`_duration_stage`; the fit/optimal searches test feasibility through ``model_of``, passed in) →
+    the samples (:func:`_sample`) → the limit check (:func:`check_limits`) → the Plan (:func:`_assemble`).
+    """
+    _refuse_moving_ends(task, options)
+    rate = options.rate if options.rate is not None else profile.planning.rate
+    shape = None
+    if options.shape:
+        task, options, shape = _optimised_shape(task, profile, options)
+    path, factory, first = _path_stage(task, profile, options, shape)
+    model = motion_model(path, profile)
+    # reachability first, on the output samples of the auto (or given) duration, so an error names a time
+    samples = _sample(model, path, first.seconds, rate)
+    duration, path, model, notes = _duration_stage(task, profile, options, path, factory, model, first)
+    if duration.seconds != first.seconds or model.path is not samples.path:
+        samples = _sample(model, path, duration.seconds, rate)
+    report = check_limits(model, duration.seconds, parts=samples.parts, dwell=profile.planning.dwell, notes=notes)
+    return _assemble(task, profile, path, duration, model, samples, report)
+
+
+def _refuse_moving_ends(task: Task, options: PlanOptions) -> None:
+    """TaskError: end velocities with a method that plans from rest to rest."""
     if (task.v_from.any() or task.v_to.any()) and not depends_on_duration(options.method):
-        from .errors import TaskError
+        from .model.errors import TaskError
 
         raise TaskError(
             f"v_from/v_to = ({', '.join(f'{x:g}' for x in task.v_from)}), ({', '.join(f'{x:g}' for x in task.v_to)}) m/s: "
             f"method {Method(options.method).value} plans moves from rest to rest; use bspline-vel for moving ends"
         )
-    dwell = profile.planning.dwell
-    rate = options.rate if options.rate is not None else profile.planning.rate
-    shape = None
-    if options.shape:
-        task, options, shape = _optimised_shape(task, profile, options)
+
+
+def _path_stage(task: Task, profile: Profile, options: PlanOptions, shape: dict | None):
+    """The path, its factory T → path when the path is planned for a duration (else None), and the first
+    duration (auto or given; ``fit``/``optimal`` start from auto). A move the table does not cover is often one
+    the robot cannot make at all: that is said first (exit 4)."""
     first_spec = "auto" if options.time in ("fit", "optimal") else options.time
-    factory = None
     try:
         if depends_on_duration(options.method):  # the path is planned for a duration (e.g. conveyor tracking)
-            if options.hold_capacity:
-                from .errors import UsageError
-
-                raise UsageError(f"--hold-capacity: not available for method {Method(options.method).value} (its "
-                                 "fit re-plans the path for every trial duration); use --time auto for the capacity")
-            if options.time == "optimal":
-                from .errors import UsageError
-
-                raise UsageError(
-                    f"--time optimal: method {Method(options.method).value} plans its path for a duration (the end "
-                    "velocities enter as v·T), so a time law would change the path; use --time fit"
-                )
+            _refuse_retiming(options)
             factory = path_factory(task, options.method, **options.method_params)
             first, path = choose_duration_for(factory, profile.capacity, first_spec)
-        else:
-            path = plan_path(task, options.method, **options.method_params)
-            if shape is not None:
-                from dataclasses import replace
-
-                path = replace(path, parameters={**path.parameters, "k_source": "--optimize shape", "shape": shape})
+            return path, factory, first
+        path = plan_path(task, options.method, **options.method_params)
     except TableError:
-        # a move the table does not cover is often one the robot cannot make at all: say that first (exit 4)
         check_ends_reachable(task, profile)
         raise
-    model = motion_model(path, profile)
-    notes: tuple[str, ...] = ()
-    retimed = False
-    # reachability first, on the output samples of the auto (or given) duration, so an error names a time
-    if factory is None:
-        first = choose_duration(path, profile.capacity, first_spec)
-    # one evaluation of the model on the check grid (output samples ∪ a dense uniform grid ∪ knots)
-    t = CartesianTrajectory(path, first.seconds).sample_times(rate)
-    tau = t / first.seconds
-    # the output samples first, then the check's extra points: the outputs are the first len(t) rows
-    grid, order = check_grid_order(tau, path.breakpoints, path.jumps)
-    try:
-        grid_parts = model.parts(grid, order=order)
-    except UnreachableError as exc:
-        raise _first_unreachable(exc, model, grid, order, first.seconds) from None
-    if factory is not None and options.time == "fit":
-        duration, path = choose_duration_for(
-            factory, profile.capacity, "fit", model_of=lambda p: motion_model(p, profile), dwell=dwell,
-            start=first.seconds,
+    if shape is not None:
+        from dataclasses import replace
+
+        path = replace(path, parameters={**path.parameters, "k_source": "--optimize shape", "shape": shape})
+    return path, None, choose_duration(path, profile.capacity, first_spec)
+
+
+def _refuse_retiming(options: PlanOptions) -> None:
+    """UsageError: options that retime a path which is planned for its duration."""
+    from .model.errors import UsageError
+
+    name = Method(options.method).value
+    if options.hold_capacity:
+        raise UsageError(f"--hold-capacity: not available for method {name} (its "
+                         "fit re-plans the path for every trial duration); use --time auto for the capacity")
+    if options.time == "optimal":
+        raise UsageError(
+            f"--time optimal: method {name} plans its path for a duration (the end "
+            "velocities enter as v·T), so a time law would change the path; use --time fit"
         )
-        model = motion_model(path, profile)
-    elif options.time == "optimal":
+
+
+def _duration_stage(task: Task, profile: Profile, options: PlanOptions, path, factory, model: MotionModel,
+                    first: Duration) -> tuple[Duration, Any, MotionModel, tuple[str, ...]]:
+    """(duration, path, model, notes) for ``options.time``: the first duration as it is, the fit (the smallest
+    T at which every limit holds), or the time-optimal law (which composes a new path). The searches reach the
+    limit stage only through ``model_of`` (path → MotionModel), passed in."""
+    dwell = profile.planning.dwell
+
+    def model_of(p):
+        return motion_model(p, profile)
+
+    if factory is not None and options.time == "fit":
+        duration, path = choose_duration_for(factory, profile.capacity, "fit", model_of=model_of, dwell=dwell,
+                                             start=first.seconds)
+        return duration, path, model_of(path), ()
+    if options.time == "optimal":
         from .timing import choose_optimal
 
-        duration, path, law_note = choose_optimal(path, profile, model, dwell, lambda p: motion_model(p, profile),
-                                                  hold_capacity=options.hold_capacity)
-        notes = (law_note,)
-        if path is not model.path:  # the composed path: evaluated below
-            model = motion_model(path, profile)
-            retimed = True
-    elif factory is None and (options.fit or options.time == "fit"):
-        duration = choose_duration(path, profile.capacity, options.time, model=model, dwell=dwell,
-                                   hold_capacity=options.hold_capacity)
-    else:
-        duration = first
+        duration, law_path, law_note = choose_optimal(path, profile, model, dwell, model_of,
+                                                      hold_capacity=options.hold_capacity)
+        if law_path is not model.path:  # the composed path: evaluated anew
+            model = model_of(law_path)
+        return duration, law_path, model, (law_note,)
+    if factory is None and (options.fit or options.time == "fit"):
+        return choose_duration(path, profile.capacity, options.time, model=model, dwell=dwell,
+                               hold_capacity=options.hold_capacity), path, model, ()
+    return first, path, model, ()
+
+
+@dataclass(frozen=True)
+class _Samples:
+    """The output sample times ``t`` [s] and the model on the check grid (outputs first, then the check's
+    extra points: the outputs are the first len(t) rows of ``parts``), for ``path`` at one duration."""
+
+    path: Any
+    t: np.ndarray
+    parts: Any
+
+
+def _sample(model: MotionModel, path, T: float, rate: float) -> _Samples:
+    """One evaluation of the model on the check grid (output samples ∪ a dense uniform grid ∪ knots) at
+    duration T [s]; an unreachable point names its earliest time."""
+    t = CartesianTrajectory(path, T).sample_times(rate)
+    grid, order = check_grid_order(t / T, path.breakpoints, path.jumps)
+    try:
+        return _Samples(path, t, model.parts(grid, order=order))
+    except UnreachableError as exc:  # a path planned for another duration can take another route
+        raise _first_unreachable(exc, model, grid, order, T) from None
+
+
+def _assemble(task: Task, profile: Profile, path, duration: Duration, model: MotionModel, samples: _Samples,
+              report: LimitReport) -> Plan:
+    """The Plan: the output samples of the quantities written out (the first len(t) rows of the grid)."""
     T = duration.seconds
-    traj = CartesianTrajectory(path, T)
-    if T != first.seconds or retimed:
-        t = traj.sample_times(rate)
-        tau = t / T
-        grid, order = check_grid_order(tau, path.breakpoints, path.jumps)
-        try:
-            grid_parts = model.parts(grid, order=order)
-        except UnreachableError as exc:  # a path planned for another duration can take another route
-            raise _first_unreachable(exc, model, grid, order, T) from None
-    report = check_limits(model, T, parts=grid_parts, dwell=dwell, notes=notes)
-    # the output samples of the quantities written out: the first len(t) rows of the grid (views)
+    t = samples.t
     n = len(t)
-    out = {name: getattr(grid_parts, name)[:n] for name in _OUTPUT_PARTS}
+    out = {name: getattr(samples.parts, name)[:n] for name in _OUTPUT_PARTS}
     robot = model.robot
     joint = JointTrajectory(
         t,
@@ -273,4 +313,5 @@ def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions()) -> 
         motor_torque=out["Am"] / T**2 + out["Gm"] if model.has_drives else None,
     )
     p, v, a, j = out["p"], out["v1"] / T, out["a1"] / T**2, out["j1"] / T**3
+    traj = CartesianTrajectory(path, T)
     return Plan(task, path.method, dict(path.parameters), duration, traj, t, p, v, a, j, joint, report, profile.name)

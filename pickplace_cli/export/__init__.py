@@ -19,7 +19,7 @@ from typing import IO, Iterator
 
 import numpy as np
 
-from ..errors import ExportError
+from ..model.errors import ExportError
 
 #: format of every float in text exports: fixed, deterministic, round-trips ~1e-12 relative
 FLOAT_FORMAT = "%.12g"

@@ -23,7 +23,7 @@ from typing import IO
 
 import numpy as np
 
-from ..errors import ExportError
+from ..model.errors import ExportError
 from . import FLOAT_FORMAT, plan_columns
 
 #: header name of the move index column of a batch (dimensionless index)

@@ -1,7 +1,7 @@
 """MCAP export: the sampled trajectory for ROS 2 tools (``ros2`` flavour) or Foxglove (``foxglove`` flavour).
 
 Input is duck-typed (a :class:`~pickplace_cli.planner.Plan` or a batch/round-trip timeline): ``t`` (N,) s;
-``p, v, a, j`` (N, 3) in m, m/s, m/s², m/s³; ``joint`` a :class:`~pickplace_cli.trajectory.JointTrajectory`;
+``p, v, a, j`` (N, 3) in m, m/s, m/s², m/s³; ``joint`` a :class:`~pickplace_cli.model.trajectory.JointTrajectory`;
 optional ``move`` (N,) int = the move number of each sample (absent or None: one move); each run of
 equal numbers is one move. ``t`` must not decrease.
 
@@ -49,7 +49,7 @@ from typing import IO, Any, Callable
 
 import numpy as np
 
-from ..errors import ExportError
+from ..model.errors import ExportError
 
 #: fixed epoch offset added to every message time: 2024-01-01T00:00:00Z in ns since the Unix epoch
 EPOCH_NS = 1_704_067_200 * 1_000_000_000
@@ -447,39 +447,18 @@ def _fixed_layout_cdr(
     return blobs
 
 
-def _write_ros2(writer, samples, epoch_ns: int, frame_id: str, fast: bool = True) -> None:
-    from mcap_ros2._dynamic import serialize_dynamic
-
+def _per_sample_channels(samples, names: list, motor_names: list, frame_id: str, drives: bool,
+                         has_torque: bool) -> list[tuple[str, Callable[[int, int, list[float]], dict], np.ndarray]]:
+    """The channels written once per sample: (topic, build(sec, nanosec, floats) → message dict, values (N, M))."""
     jt = samples.joint
-    nj = len(jt.names)
-    drives = jt.motor_speed is not None and jt.motor_torque is not None
-    topics = [
-        ("/joint_trajectory", "trajectory_msgs/msg/JointTrajectory"),
-        ("/joint_states", "sensor_msgs/msg/JointState"),
-        *([("/motor_states", "sensor_msgs/msg/JointState")] if drives else []),
-        ("/tool_pose", "geometry_msgs/msg/PoseStamped"),
-        ("/tool_twist", "geometry_msgs/msg/TwistStamped"),
-        ("/tool_accel", "geometry_msgs/msg/AccelStamped"),
-        ("/tool_jerk", "geometry_msgs/msg/Vector3Stamped"),
-    ]
-    channels = _Channels(writer)
-    encoders: dict[str, Callable[[Any], bytes]] = {}
-    for topic, datatype in topics:
-        text = ros2_msgdef(datatype)
-        channels.add(topic, datatype, "ros2msg", text.encode(), "cdr")
-        encoders[topic] = serialize_dynamic(datatype, text)[datatype]
+    nj = len(names)
 
-    ns_arr = log_times_ns(samples.t, epoch_ns)
-    ns = ns_arr.tolist()
-    names = list(jt.names)
-    motor_names = [f"motor{i + 1}" for i in range(nj)]
-    has_torque = jt.torque is not None
-    f64 = lambda x: np.asarray(x, dtype=float)  # noqa: E731
+    def f64(x):
+        return np.asarray(x, dtype=float)
 
     def hdr(s: int, c: int, frame: str) -> dict:
         return {"stamp": {"sec": s, "nanosec": c}, "frame_id": frame}
 
-    # per sample channels: (topic, build(sec, nanosec, floats), values (N, M))
     per_sample: list[tuple[str, Callable[[int, int, list[float]], dict], np.ndarray]] = [
         (
             "/joint_states",
@@ -525,6 +504,37 @@ def _write_ros2(writer, samples, epoch_ns: int, frame_id: str, fast: bool = True
         ),
         ("/tool_jerk", lambda s, c, x: {"header": hdr(s, c, frame_id), "vector": _vec(x)}, f64(samples.j)),
     ]
+    return per_sample
+
+
+def _write_ros2(writer, samples, epoch_ns: int, frame_id: str, fast: bool = True) -> None:
+    from mcap_ros2._dynamic import serialize_dynamic
+
+    jt = samples.joint
+    nj = len(jt.names)
+    drives = jt.motor_speed is not None and jt.motor_torque is not None
+    topics = [
+        ("/joint_trajectory", "trajectory_msgs/msg/JointTrajectory"),
+        ("/joint_states", "sensor_msgs/msg/JointState"),
+        *([("/motor_states", "sensor_msgs/msg/JointState")] if drives else []),
+        ("/tool_pose", "geometry_msgs/msg/PoseStamped"),
+        ("/tool_twist", "geometry_msgs/msg/TwistStamped"),
+        ("/tool_accel", "geometry_msgs/msg/AccelStamped"),
+        ("/tool_jerk", "geometry_msgs/msg/Vector3Stamped"),
+    ]
+    channels = _Channels(writer)
+    encoders: dict[str, Callable[[Any], bytes]] = {}
+    for topic, datatype in topics:
+        text = ros2_msgdef(datatype)
+        channels.add(topic, datatype, "ros2msg", text.encode(), "cdr")
+        encoders[topic] = serialize_dynamic(datatype, text)[datatype]
+
+    ns_arr = log_times_ns(samples.t, epoch_ns)
+    ns = ns_arr.tolist()
+    names = list(jt.names)
+    motor_names = [f"motor{i + 1}" for i in range(nj)]
+    has_torque = jt.torque is not None
+    per_sample = _per_sample_channels(samples, names, motor_names, frame_id, drives, has_torque)
     blobs: list[tuple[str, list[bytes]]] = []
     for topic, build, values in per_sample:
         enc = encoders[topic]

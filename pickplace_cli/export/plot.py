@@ -13,7 +13,7 @@ from typing import IO, Sequence
 
 import numpy as np
 
-from ..errors import ExportError
+from ..model.errors import ExportError
 
 #: formats ``write_plot`` accepts (matplotlib's names)
 FORMATS = ("png", "svg")

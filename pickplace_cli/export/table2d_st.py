@@ -4,9 +4,9 @@
   (``ARRAY[1..NE] OF LREAL``) and ``<PREFIX>_LAMBDA`` (``ARRAY[1..NL]``), both strictly increasing; the optima
   ``<PREFIX>_K1``, ``<PREFIX>_K2`` : ``ARRAY[1..NE, 1..NL] OF LREAL`` (η index first; initialiser row by row);
   ``<PREFIX>_JUMP`` : ``ARRAY[1..NE, 1..NL] OF BOOL``, TRUE for the grid cell whose lower corner is (i, j)
-  when the optimum jumps between basins inside it (:func:`pickplace_cli.table2d.find_jumps`).
+  when the optimum jumps between basins inside it (:func:`pickplace_cli.lookup.table2d.find_jumps`).
 * ``FUNCTION <NAME> : BOOL`` (VAR_INPUT fLambda, fEta; VAR_OUTPUT fK1, fK2): bilinear interpolation in the
-  cell around (λ, η) (bisection on each axis), the rule of :meth:`pickplace_cli.table2d.Table2D.lookup`;
+  cell around (λ, η) (bisection on each axis), the rule of :meth:`pickplace_cli.lookup.table2d.Table2D.lookup`;
   TRUE then. Outside the grid, or in a jump cell, it returns FALSE with the values of the nearest grid node
   (clamped), which the caller may use knowing they are not the optimum there (pickplace plan solves such a
   move on demand instead).
@@ -16,8 +16,8 @@ Constants are the shortest decimals that read back as the same doubles; the text
 
 from __future__ import annotations
 
-from ..errors import ExportError
-from ..table2d import Table2D, _jump_cells, find_jumps
+from ..model.errors import ExportError
+from ..lookup.table2d import Table2D, _jump_cells, find_jumps
 from .table_st import _IDENT, VALUES_PER_LINE, _comment, st_real
 
 DERIVED_META = frozenset({"pickplace 2-D look-up table", "units", "basin_jumps"})

@@ -20,8 +20,8 @@ import json
 import math
 from typing import IO
 
-from ..errors import ExportError
-from ..table import COLUMNS, Table
+from ..model.errors import ExportError
+from ..lookup.bspline_table import COLUMNS, Table
 from .table_st import provenance
 
 #: units of the table's columns (peaks of the normalised path, b = 1 m, T = 1 s)

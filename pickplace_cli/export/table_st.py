@@ -8,7 +8,7 @@ computes λ = b/h of the move and interpolates k1, k2. This writes that table an
   (λ strictly increasing);
 * ``FUNCTION <NAME> : BOOL`` with ``VAR_INPUT fLambda : LREAL`` and ``VAR_OUTPUT fK1, fK2 : LREAL``: linear
   interpolation between the two rows around λ (found by bisection, ⌈log2 N⌉ steps), exactly the rule of
-  :meth:`pickplace_cli.table.Table.lookup`. Outside the table's range the end row is returned (clamped)
+  :meth:`pickplace_cli.lookup.bspline_table.Table.lookup`. Outside the table's range the end row is returned (clamped)
   and the function returns FALSE (also for NaN, with the first row); TRUE when λ lies in the range.
 
 Constants are written with the shortest decimal that reads back as the same double, so the PLC's LREAL
@@ -22,8 +22,8 @@ import re
 from pathlib import Path
 from typing import IO
 
-from ..errors import ExportError
-from ..table import Table
+from ..model.errors import ExportError
+from ..lookup.bspline_table import Table
 
 #: meta keys of a parsed table that ``format_table`` derives again (not provenance of the build)
 DERIVED_META = frozenset({"pickplace look-up table", "units", "a_min, j_min", "fit_k1", "fit_k2", "fit"})

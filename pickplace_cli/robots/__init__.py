@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from typing import Any, Callable
 
-from ..errors import ProfileError
+from ..model.errors import ProfileError
 
 
 def _gantry(model: Any):
@@ -62,7 +62,7 @@ def radial_reach(robot, specs, z: float, margin: float | None = None, directions
     Scanned on a 1 mm grid along each ray."""
     import numpy as np
 
-    from ..errors import UnreachableError
+    from ..model.errors import UnreachableError
 
     rho = np.linspace(0, 2.0, 2001)
     inner, outer, count = 0.0, np.inf, 0
@@ -92,7 +92,7 @@ def radial_reach(robot, specs, z: float, margin: float | None = None, directions
 
 
 def _one_inside(robot, specs, margin, p) -> bool:
-    from ..errors import UnreachableError
+    from ..model.errors import UnreachableError
 
     try:
         q = robot.inverse_kinematics(p[None, :])

@@ -38,7 +38,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from ..errors import UnreachableError
+from ..model.errors import UnreachableError
 
 #: arm angles φ_i [rad]: arm 1 on +x, then 120° and 240°
 PHI = np.deg2rad([0.0, 120.0, 240.0])

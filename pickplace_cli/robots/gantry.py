@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import UnreachableError
+from ..model.errors import UnreachableError
 
 G = 9.80665
 

@@ -28,7 +28,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from ..errors import UnreachableError
+from ..model.errors import UnreachableError
 from .delta import _check_non_negative, _check_positive, _samples
 
 

@@ -5,9 +5,9 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 
-from ..errors import TaskError
-from ..profile import Capacity
-from ..trajectory import CartesianPath
+from ..model.errors import TaskError
+from ..model.profile import Capacity
+from ..model.trajectory import CartesianPath
 
 
 @dataclass(frozen=True)
@@ -29,6 +29,9 @@ class Duration:
     #: --time optimal: the duration of the non-uniform law (None otherwise) and what the optimiser said
     t_optimal: float | None = None
     law: str | None = None
+    #: --time optimal: the lower bound of the path, its time-optimal traversal under peak motor torque and speed
+    #: alone (:mod:`pickplace_cli.timing.bound`; None otherwise)
+    t_bound: float | None = None
 
     @property
     def t_auto(self) -> float:
@@ -44,6 +47,7 @@ class Duration:
             "binding": self.binding,
             "optimal_s": self.t_optimal,
             "time_law": self.law or "uniform",
+            "torque_bound_s": self.t_bound,
         }
 
 
@@ -82,7 +86,7 @@ def choose_duration(
     hold_capacity: bool = False,
 ) -> Duration:
     """Duration of the move: explicit seconds, ``auto`` (Eq. 26), or ``fit`` (needs ``model``, a
-    :class:`~pickplace_cli.limits.MotionModel`): the smallest T at which every limit holds.
+    :class:`~pickplace_cli.limits.motion.MotionModel`): the smallest T at which every limit holds.
     ``hold_capacity``: ``fit`` also holds the Cartesian capacity (T ≥ auto; the peaks scale exactly)."""
     spec = parse_time(spec)
     tv, ta, tj, binding = auto_duration(path, capacity)
@@ -112,7 +116,8 @@ def _worst_utilisation(model, dwell: float = 0.0, tau=None):
     None when no limit depends on T."""
     import numpy as np
 
-    from ..limits import _parabolic_peak, fit_grid, interior_jumps, segment_ids
+    from ..limits.check import _parabolic_peak
+    from ..limits.grid import fit_grid, interior_jumps, segment_ids
 
     # 1,001 uniform points and the check's own extra points (knots, points per span, both sides of every
     # jump); the parabolic estimate never spans a jump, as in the check; the RMS is the model's exact integral
@@ -152,7 +157,7 @@ def screened_root(worst, start: float = 0.1, rtol: float = 1e-10) -> float:
     scanned down in steps of 0.85 while feasible, then the crossing root-found (brentq, relative ``rtol``)."""
     from scipy.optimize import brentq
 
-    from ..errors import NoFeasibleDuration
+    from ..model.errors import NoFeasibleDuration
 
     hi = max(start, 1e-3)
     while worst(hi)[0] > 0:
@@ -184,7 +189,7 @@ def fit_duration(model, dwell: float = 0.0, start: float = 0.1) -> tuple[float |
     report shows them). The result is nudged up until the exact (refined) check passes.
     Returns (T, the binding quantity "joint quantity"), or (None, None) when no limit depends on T.
     """
-    from ..limits import check_limits
+    from ..limits.check import check_limits
 
     found = _worst_utilisation(model, dwell)
     if found is None:
@@ -218,7 +223,7 @@ def _smallest_feasible(g, start: float, factor: float, rtol: float, what: str) -
     steps of ``factor`` and root-finding the crossing (brentq): every scanned T above it is feasible."""
     from scipy.optimize import brentq
 
-    from ..errors import NoFeasibleDuration
+    from ..model.errors import NoFeasibleDuration
 
     T = float(start)
     if g(T) > 0:
@@ -305,7 +310,7 @@ def fit_duration_for(factory, model_of, dwell: float = 0.0, start: float = 0.1, 
     """(T, binding, path): the smallest T [s] at which every T-dependent limit holds on the path planned
     for T [Yang2022, Eq. (38)] (see :func:`choose_duration_for`); (None, None, path) when no limit depends
     on T. Each trial T plans its own path and evaluates the model once on it."""
-    from ..limits import check_limits
+    from ..limits.check import check_limits
 
     def worst(T: float):
         found = _worst_utilisation(model_of(factory(T)), dwell)
@@ -333,10 +338,15 @@ def choose_optimal(path: CartesianPath, profile, model, dwell: float, model_of,
     (:mod:`pickplace_cli.timing.optimal`), whose duration is fitted again by the continuous check on the
     composed path. Returns (Duration, the path to sample — the composed one, or ``path`` itself when the law
     is not faster than uniform scaling —, a note for the user)."""
-    from ..errors import PickplaceError
+    from ..model.errors import PickplaceError
+    from .bound import torque_bound
     from .optimal import optimal_law
 
     fit = choose_duration(path, profile.capacity, "fit", model=model, dwell=dwell, hold_capacity=hold_capacity)
+    try:
+        fit = replace(fit, t_bound=torque_bound(model))
+    except ValueError:  # no motor torque or speed limit, or one exceeded at rest: no bound to show
+        pass
     law = optimal_law(model, dwell, fit.seconds, capacity=profile.capacity if hold_capacity else None)
     composed = law.path
     try:

@@ -20,7 +20,7 @@ spline's coefficients: SLSQP with exact Jacobians, warm-started at the uniform l
 Position, singularity and workcell limits belong to the path and do not change with the law.
 
 The optimiser's grid is not the judge: the law found is composed with the path into a new
-:class:`~pickplace_cli.trajectory.CartesianPath` (u = t/T: τ = σ(u) from the exact integral of 1/√b), and
+:class:`~pickplace_cli.model.trajectory.CartesianPath` (u = t/T: τ = σ(u) from the exact integral of 1/√b), and
 ``--time fit`` runs on that path with the continuous check (all limits, exact RMS). A law that is not
 faster than uniform scaling is not used (the plan says so).
 """
@@ -78,7 +78,7 @@ def _basis(knots: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np
 def _law_grid(path, points: int = 0, spans: bool = True) -> np.ndarray:
     """The optimiser's τ grid: ``points`` (default ``LAW_GRID``) uniform points, the path's knots, both sides
     of every jump and (``spans``) the check's Gauss-Kronrod nodes of every span."""
-    from ..limits import interior_jumps, jump_sides, span_nodes
+    from ..limits.grid import interior_jumps, jump_sides, span_nodes
 
     parts = [np.linspace(0.0, 1.0, points or LAW_GRID), np.asarray(path.breakpoints, float),
              jump_sides(path.breakpoints, path.jumps)]
@@ -104,24 +104,11 @@ class _Problem:
         self.__dict__.update(_problem(model, tau, knots, t_fit, dwell, capacity))
 
 
-def _problem(model, tau: np.ndarray, knots: np.ndarray, t_fit: float, dwell: float, capacity) -> dict:
-    path = model.path
-    pr = model.parts(tau)
-    p, p1, p2, p3 = path.all_orders(tau)
-    m = _inertia_along(model, tau, p, p1)
-    h = 1e-5
-    lo, hi = np.clip(tau - h, 0.0, 1.0), np.clip(tau + h, 0.0, 1.0)
-    plo, phi = path.all_orders(lo), path.all_orders(hi)
-    dm = (_inertia_along(model, hi, phi[0], phi[1]) - _inertia_along(model, lo, plo[0], plo[1])) / (hi - lo)[:, None]
-
-    B0, B1, B2 = _basis(knots, tau)
-    w = np.zeros(len(tau))  # trapezoid weights on the grid
-    dt = np.diff(tau)
-    w[:-1] += dt / 2
-    w[1:] += dt / 2
-    scale = 1.0 / t_fit**2  # b = scale · (B0 @ x): x ≡ 1 is the uniform law at t_fit
-
-    # the limited quantities, each as (kind, coefficient arrays, limit) over grid × joints
+def _limit_rows(model, pr, m: np.ndarray, dm: np.ndarray, tool: tuple, capacity) -> list[tuple]:
+    """The limited quantities, each as (kind, coefficient arrays, limit) over grid × joints: joint speed,
+    acceleration, jerk, motor speed, torque and torque rate per joint spec, and the tool's capacity (``tool``:
+    the path's first three τ-derivatives on the grid)."""
+    p1, p2, p3 = tool
     rows: list[tuple] = []
     for i, spec in enumerate(model.specs):
         lim, drv = spec.limits, spec.drive
@@ -145,6 +132,65 @@ def _problem(model, tau: np.ndarray, knots: np.ndarray, t_fit: float, dwell: flo
         rows.append(("vaffine", (p2, p1 / 2), capacity.acceleration))
         if capacity.jerk:
             rows.append(("vrate", (p3, 1.5 * p2, p1 / 2), capacity.jerk))
+    return rows
+
+
+def _pointwise(rows: list[tuple], b: np.ndarray, b1: np.ndarray, b2: np.ndarray) -> tuple:
+    """Every grid row: (values ≥ 0 when feasible, and the coefficients a0, a1, a2 of its gradient in
+    (b, b′, b″)), each (R,); the row's Jacobian in x is (a0·B0 + a1·B1 + a2·B2)·scale at its grid point."""
+    zero = np.zeros(len(b))
+    vals, a0, a1, a2 = [], [], [], []
+    for kind, c, limit in rows:
+        L2 = limit**2
+        if kind == "speed":  # c²·b ≤ L²
+            vals.append(1.0 - c**2 * b / L2)
+            a0.append(-(c**2) / L2), a1.append(zero), a2.append(zero)
+        elif kind == "affine":  # |c0 b + c1 b′ + c2| ≤ L
+            val = (c[0] * b + c[1] * b1 + c[2]) / limit
+            vals += [1.0 - val, 1.0 + val]
+            a0 += [-c[0] / limit, c[0] / limit]
+            a1 += [-c[1] / limit, c[1] / limit]
+            a2 += [zero, zero]
+        elif kind == "rate":  # b·(c0 b + c1 b′ + c2 b″ + c3)² ≤ L²
+            y = c[0] * b + c[1] * b1 + c[2] * b2 + c[3]
+            vals.append(1.0 - b * y**2 / L2)
+            a0.append(-(y**2 + 2 * b * y * c[0]) / L2)
+            a1.append(-2 * b * y * c[1] / L2)
+            a2.append(-2 * b * y * c[2] / L2)
+        elif kind == "vaffine":  # ‖c0 b + c1 b′‖² ≤ L²
+            v = c[0] * b[:, None] + c[1] * b1[:, None]
+            vals.append(1.0 - np.sum(v * v, axis=1) / L2)
+            a0.append(-2 * np.sum(v * c[0], axis=1) / L2)
+            a1.append(-2 * np.sum(v * c[1], axis=1) / L2)
+            a2.append(zero)
+        elif kind == "vrate":  # b‖c0 b + c1 b′ + c2 b″‖² ≤ L²
+            v = c[0] * b[:, None] + c[1] * b1[:, None] + c[2] * b2[:, None]
+            n2 = np.sum(v * v, axis=1)
+            vals.append(1.0 - b * n2 / L2)
+            a0.append(-(n2 + 2 * b * np.sum(v * c[0], axis=1)) / L2)
+            a1.append(-2 * b * np.sum(v * c[1], axis=1) / L2)
+            a2.append(-2 * b * np.sum(v * c[2], axis=1) / L2)
+    return np.concatenate(vals), np.concatenate(a0), np.concatenate(a1), np.concatenate(a2)
+
+
+def _problem(model, tau: np.ndarray, knots: np.ndarray, t_fit: float, dwell: float, capacity) -> dict:
+    path = model.path
+    pr = model.parts(tau)
+    p, p1, p2, p3 = path.all_orders(tau)
+    m = _inertia_along(model, tau, p, p1)
+    h = 1e-5
+    lo, hi = np.clip(tau - h, 0.0, 1.0), np.clip(tau + h, 0.0, 1.0)
+    plo, phi = path.all_orders(lo), path.all_orders(hi)
+    dm = (_inertia_along(model, hi, phi[0], phi[1]) - _inertia_along(model, lo, plo[0], plo[1])) / (hi - lo)[:, None]
+
+    B0, B1, B2 = _basis(knots, tau)
+    w = np.zeros(len(tau))  # trapezoid weights on the grid
+    dt = np.diff(tau)
+    w[:-1] += dt / 2
+    w[1:] += dt / 2
+    scale = 1.0 / t_fit**2  # b = scale · (B0 @ x): x ≡ 1 is the uniform law at t_fit
+
+    rows = _limit_rows(model, pr, m, dm, (p1, p2, p3), capacity)
     rated = [(i, s.drive.rated_torque) for i, s in enumerate(model.specs) if s.drive and s.drive.rated_torque]
 
     def state(x):
@@ -157,43 +203,8 @@ def _problem(model, tau: np.ndarray, knots: np.ndarray, t_fit: float, dwell: flo
         g = (w * -0.5 * b**-1.5 * scale) @ B0
         return f, g
 
-    zero = np.zeros(len(tau))
-
     def pointwise(b, b1, b2):
-        """Every grid row: (values ≥ 0 when feasible, and the coefficients a0, a1, a2 of its gradient in
-        (b, b′, b″)), each (R,); the row's Jacobian in x is (a0·B0 + a1·B1 + a2·B2)·scale at its grid point."""
-        vals, a0, a1, a2 = [], [], [], []
-        for kind, c, limit in rows:
-            L2 = limit**2
-            if kind == "speed":  # c²·b ≤ L²
-                vals.append(1.0 - c**2 * b / L2)
-                a0.append(-(c**2) / L2), a1.append(zero), a2.append(zero)
-            elif kind == "affine":  # |c0 b + c1 b′ + c2| ≤ L
-                val = (c[0] * b + c[1] * b1 + c[2]) / limit
-                vals += [1.0 - val, 1.0 + val]
-                a0 += [-c[0] / limit, c[0] / limit]
-                a1 += [-c[1] / limit, c[1] / limit]
-                a2 += [zero, zero]
-            elif kind == "rate":  # b·(c0 b + c1 b′ + c2 b″ + c3)² ≤ L²
-                y = c[0] * b + c[1] * b1 + c[2] * b2 + c[3]
-                vals.append(1.0 - b * y**2 / L2)
-                a0.append(-(y**2 + 2 * b * y * c[0]) / L2)
-                a1.append(-2 * b * y * c[1] / L2)
-                a2.append(-2 * b * y * c[2] / L2)
-            elif kind == "vaffine":  # ‖c0 b + c1 b′‖² ≤ L²
-                v = c[0] * b[:, None] + c[1] * b1[:, None]
-                vals.append(1.0 - np.sum(v * v, axis=1) / L2)
-                a0.append(-2 * np.sum(v * c[0], axis=1) / L2)
-                a1.append(-2 * np.sum(v * c[1], axis=1) / L2)
-                a2.append(zero)
-            elif kind == "vrate":  # b‖c0 b + c1 b′ + c2 b″‖² ≤ L²
-                v = c[0] * b[:, None] + c[1] * b1[:, None] + c[2] * b2[:, None]
-                n2 = np.sum(v * v, axis=1)
-                vals.append(1.0 - b * n2 / L2)
-                a0.append(-(n2 + 2 * b * np.sum(v * c[0], axis=1)) / L2)
-                a1.append(-2 * b * np.sum(v * c[1], axis=1) / L2)
-                a2.append(-2 * b * np.sum(v * c[2], axis=1) / L2)
-        return np.concatenate(vals), np.concatenate(a0), np.concatenate(a1), np.concatenate(a2)
+        return _pointwise(rows, b, b1, b2)
 
     n_rows = len(pointwise(*state(np.ones(B0.shape[1])))[0])
     at = np.tile(np.arange(len(tau)), n_rows // len(tau))  # the grid point of every row
@@ -215,7 +226,7 @@ def _problem(model, tau: np.ndarray, knots: np.ndarray, t_fit: float, dwell: flo
             dms = (2 * dI * den - (2 * I + hold) * 2 * dT) / den**2
             vals.append(1.0 - ms / r**2)
             jacs.append(-dms / r**2)
-        return np.array(vals), np.array(jacs).reshape(len(vals), -1)
+        return np.array(vals), np.array(jacs).reshape(len(vals), B0.shape[1])  # (0, n) with no rated joint
 
     def constraints(x, keep=None):
         """(values ≥ 0 when feasible, Jacobian) over the grid rows ``keep`` (all: None) and the RMS rows."""
@@ -317,7 +328,7 @@ def compose(path, b) -> object:
     (its derivatives are those at T = 1 s; ``T`` of the law itself is ∫dτ/√b)."""
     from scipy.interpolate import CubicHermiteSpline
 
-    from ..trajectory import CartesianPath
+    from ..model.trajectory import CartesianPath
 
     b1, b2 = b.derivative(1), b.derivative(2)
     # t(τ) = ∫ dτ/√b: 4-point Gauss on every interval of a fine table (b is a cubic spline: ~1e-13)
@@ -351,7 +362,7 @@ def compose(path, b) -> object:
     dense = np.linspace(0.0, 1.0, 4001)
     bp = np.unique(np.clip(fwd(np.asarray(path.breakpoints, float)), 0.0, 1.0))
     jumps = fwd(path.jump_points) if len(path.jump_points) else np.zeros(0)
-    from ..compare import true_peaks
+    from ..curves.peaks import true_peaks
 
     shell = CartesianPath(evaluate, path.method, {}, (0.0, 0.0, 0.0), np.unique(np.concatenate([[0.0, 1.0], bp])),
                           jumps=tuple(jumps.tolist()), evaluate_all=orders)

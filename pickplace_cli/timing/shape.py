@@ -114,10 +114,10 @@ def optimise_shape(task, profile, model_of, eta_fixed: float | None = None,
     and used as one more start. ``capacity``: also hold the Cartesian capacity (T ≥ Eq. 26's auto)."""
     from scipy.optimize import minimize
 
-    from ..errors import PickplaceError
-    from ..limits import _extra_points
-    from ..methods import plan_path
-    from ..task import Task
+    from ..model.errors import PickplaceError
+    from ..limits.grid import _extra_points
+    from ..paths import plan_path
+    from ..model.task import Task
     from . import _worst_utilisation, auto_duration, screened_root
 
     dwell = profile.planning.dwell
@@ -175,7 +175,7 @@ def optimise_shape(task, profile, model_of, eta_fixed: float | None = None,
         if np.isfinite(t_table):
             starts.append(table_shape if eta_fixed is None else (table_shape[0], table_shape[1], eta_fixed))
     if not starts:
-        from ..errors import NoFeasibleDuration
+        from ..model.errors import NoFeasibleDuration
 
         raise NoFeasibleDuration(
             f"--optimize shape: no (k1, k2, η) on the search grid gives a feasible move on profile {profile.name}")

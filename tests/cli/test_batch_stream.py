@@ -12,7 +12,7 @@ import time
 
 import pytest
 
-from pickplace_cli.batch import BATCH_MAX_LINE
+from pickplace_cli.pipelines.batch import BATCH_MAX_LINE
 
 HEADER = "from_x,from_y,from_z,to_x,to_y,to_z\n"
 ROW = "-0.1525,0,-0.8,0.1525,0,-0.8\n"

@@ -134,7 +134,7 @@ def test_failed_run_keeps_existing_output(tmp_path):
 
 
 def test_unknown_profile_key(tmp_path):
-    from pickplace_cli.profile import resolve_profile_path
+    from pickplace_cli.model.profile import resolve_profile_path
 
     text = resolve_profile_path("gantry").read_text().replace("  eta: 0.5", "  eta: 0.5\n  speed: 3", 1)
     prof = tmp_path / "p.yaml"
@@ -186,7 +186,7 @@ def test_build_table_small(tmp_path):
     out = tmp_path / "t.csv"
     r = run("build-table", "--lambda-min", "27", "--lambda-max", "28", "--lambda-step", "0.5", "-o", str(out), "-j", "1", "-q")
     assert r.exit_code == 0, r.stderr
-    from pickplace_cli.table import load_table
+    from pickplace_cli.lookup.bspline_table import load_table
 
     tab = load_table(out)
     assert tab.lam.tolist() == [27.0, 27.5, 28.0]

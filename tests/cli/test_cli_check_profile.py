@@ -9,7 +9,7 @@ import pytest
 from typer.testing import CliRunner
 
 from pickplace_cli.cli import app
-from pickplace_cli.profile import resolve_profile_path
+from pickplace_cli.model.profile import resolve_profile_path
 
 runner = CliRunner()
 ADEPT = ["--from", "-0.1525,0,-0.8", "--to", "0.1525,0,-0.8"]

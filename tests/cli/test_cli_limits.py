@@ -10,7 +10,7 @@ import yaml
 from typer.testing import CliRunner
 
 from pickplace_cli.cli import app
-from pickplace_cli.profile import resolve_profile_path
+from pickplace_cli.model.profile import resolve_profile_path
 
 runner = CliRunner()
 ADEPT = ["--from", "-0.1525,0,-0.8", "--to", "0.1525,0,-0.8"]
@@ -176,7 +176,7 @@ def test_wildly_infeasible_move_prints_readable_percentages_and_whole_rows():
 
 
 def test_percent_format():
-    from pickplace_cli.limits import percent
+    from pickplace_cli.limits.report import percent
 
     assert percent(0.5) == "50.0" and percent(99.9994) == "9999.9" and percent(99.9999) == "1e+04" and percent(100.0) == "1e+04"
     assert percent(291787.793) == "2.92e+07" and percent(-0.25) == "-25.0" and percent(float("inf")) == "inf"

@@ -11,11 +11,11 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from pickplace_cli.batch import read_batch_text
+from pickplace_cli.pipelines.batch import read_batch_text
 from pickplace_cli.cli import app
 from pickplace_cli.planner import PlanOptions, plan
-from pickplace_cli.profile import load_profile
-from pickplace_cli.task import Task
+from pickplace_cli.model.profile import load_profile
+from pickplace_cli.model.task import Task
 
 runner = CliRunner()
 ADEPT = ["--from", "-0.1525,0,-0.8", "--to", "0.1525,0,-0.8"]
@@ -222,7 +222,7 @@ def test_shell_completion_script_and_profile_names(monkeypatch):
     monkeypatch.setenv("_TYPER_COMPLETE_TEST_DISABLE_SHELL_DETECTION", "1")
     r = run("--show-completion", "bash")
     assert r.exit_code == 0 and "complete" in r.stdout and "pickplace" in r.stdout.lower()
-    from pickplace_cli.cli import _complete_profile
+    from pickplace_cli.cli.app import _complete_profile
 
     assert set(_complete_profile("")) >= {"delta-su2018", "scara-600", "gantry"}
     assert _complete_profile("sc") == ["scara-600"]

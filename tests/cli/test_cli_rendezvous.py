@@ -113,7 +113,7 @@ def test_csv_includes_the_tracking_segment(tmp_path):
 
 
 def test_window_miss_is_exit_4_nothing_written(tmp_path):
-    from pickplace_cli.resources import data_dir
+    from pickplace_cli.model.resources import data_dir
 
     text = (data_dir("profiles") / "delta-su2018.yaml").read_text()
     anchor = "  box: {min: [-0.6, -0.6, -1.1], max: [0.6, 0.6, -0.55]}"

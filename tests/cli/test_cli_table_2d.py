@@ -15,7 +15,7 @@ def test_build_table_2d_csv_and_st(tmp_path):
             "--eta-min", "0.3", "--eta-max", "0.5", "--eta-step", "0.2", "-j", "1", "-o", str(out))
     assert r.exit_code == 0, r.stderr
     assert "4 rows (2 η × 2 λ)" in r.stderr and "basin jump" in r.stderr
-    from pickplace_cli.table2d import load_table_2d
+    from pickplace_cli.lookup.table2d import load_table_2d
 
     tab = load_table_2d(out)
     assert tab.etas == (0.3, 0.5) and tab.lams == (2.0, 4.0)
@@ -33,7 +33,7 @@ def test_one_row_grid_builds_and_plans(tmp_path):
     out = tmp_path / "t.csv"
     r = run("build-table", "--lambda-min", "28", "--lambda-max", "28", "-j", "1", "-q", "-o", str(out))
     assert r.exit_code == 0, r.stderr
-    from pickplace_cli.table import load_table
+    from pickplace_cli.lookup.bspline_table import load_table
 
     tab = load_table(out)
     assert tab.lam.tolist() == [28.0]

@@ -1,4 +1,4 @@
-"""`plan --batch FILE --json` without -o: the batched verdict engine (pickplace_cli.verdicts) must not change
+"""`plan --batch FILE --json` without -o: the batched verdict engine (pickplace_cli.pipelines.verdicts) must not change
 a byte of the output, the messages or the exit code (PICKPLACE_NO_VERDICT_ENGINE=1 switches it off)."""
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from pickplace_cli import verdicts
+from pickplace_cli.pipelines import verdicts
 from pickplace_cli.cli import app
 
 runner = CliRunner()

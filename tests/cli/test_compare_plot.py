@@ -12,7 +12,7 @@ import pytest
 from typer.testing import CliRunner
 
 from pickplace_cli.cli import app
-from pickplace_cli.methods import Method
+from pickplace_cli.paths import Method
 
 runner = CliRunner()
 ADEPT = ["--from", "-0.1525,0,-0.8", "--to", "0.1525,0,-0.8"]
@@ -177,10 +177,10 @@ def test_limit_use_agrees_with_the_limit_report():
     RMS bars are the report's RMS rows."""
     import numpy as np
 
-    from pickplace_cli.limits import limit_use
+    from pickplace_cli.limits.motion import limit_use
     from pickplace_cli.planner import PlanOptions, motion_model, plan
-    from pickplace_cli.profile import load_profile
-    from pickplace_cli.task import Task
+    from pickplace_cli.model.profile import load_profile
+    from pickplace_cli.model.task import Task
 
     prof = load_profile("delta-su2018")
     res = plan(Task([-0.1525, 0, -0.8], [0.1525, 0, -0.8], 0.025, 0.5), prof, PlanOptions(time="fit"))

@@ -17,9 +17,9 @@ from typing import Any
 import numpy as np
 
 from pickplace_cli.planner import PlanOptions, plan
-from pickplace_cli.profile import load_profile
-from pickplace_cli.task import Task
-from pickplace_cli.trajectory import JointTrajectory
+from pickplace_cli.model.profile import load_profile
+from pickplace_cli.model.task import Task
+from pickplace_cli.model.trajectory import JointTrajectory
 
 ADEPT = Task([-0.1525, 0.0, -0.8], [0.1525, 0.0, -0.8], 0.025, 0.5)
 ADEPT_BACK = Task([0.1525, 0.0, -0.8], [-0.1525, 0.0, -0.8], 0.025, 0.5)
@@ -135,7 +135,8 @@ def synthetic_batch() -> Synthetic:
 
 def synthetic_table():
     """A 12-row table of closed-form values (non-uniform λ grid, small k2 with an exponent literal)."""
-    from pickplace_cli.table import Table, TableRow
+    from pickplace_cli.lookup.bspline_optimum import TableRow
+    from pickplace_cli.lookup.bspline_table import Table
 
     lams = [1.0, 1.5, 2.0, 3.0, 5.0, 7.5, 10.0, 12.5, 15.0, 20.0, 30.0, 40.0]
     rows = []

@@ -8,10 +8,11 @@ import math
 import numpy as np
 import pytest
 
-from pickplace_cli import table as T
-from pickplace_cli.bspline import piece_coefficients, _left_derivatives
-from pickplace_cli.methods.bspline import plan_bspline
-from pickplace_cli.task import Task
+from pickplace_cli.lookup import bspline_table as T
+from pickplace_cli.lookup import bspline_optimum as T_optimum
+from pickplace_cli.curves.bspline import piece_coefficients, _left_derivatives
+from pickplace_cli.paths.bspline import plan_bspline
+from pickplace_cli.model.task import Task
 
 LAM, ETA = 28.0, 0.5
 
@@ -22,7 +23,7 @@ def test_table1_bspline_peaks():
     We get 9.0153 and 84.079. Tolerance ±0.1: the paper prints one decimal, and 84.08 rounds to 84.1, one
     unit in the last printed place from 84.0 (their sampling of the curve probably missed the true peak).
     """
-    v, a, j = T.normalised_peaks(0.31, 0.12, LAM, ETA)
+    v, a, j = T_optimum.normalised_peaks(0.31, 0.12, LAM, ETA)
     assert a == pytest.approx(9.0, abs=0.1)
     assert j == pytest.approx(84.0, abs=0.1)
 
@@ -39,7 +40,7 @@ def test_optimum_of_F_at_lambda_28():
     grid = np.round(np.arange(0.25, 0.40, 0.01), 2)
     k2s = np.round(np.arange(0.05, 0.20, 0.01), 2)
     best = max(
-        ((0.5 * a_min / p[0] + 0.5 * j_min / p[1], k1, k2) for k1 in grid for k2 in k2s for p in [T.normalised_peaks(k1, k2, LAM, ETA, (2, 3))]),
+        ((0.5 * a_min / p[0] + 0.5 * j_min / p[1], k1, k2) for k1 in grid for k2 in k2s for p in [T_optimum.normalised_peaks(k1, k2, LAM, ETA, (2, 3))]),
     )
     assert (best[1], best[2]) == (0.31, 0.12)
     assert round(r28.k1, 2) == 0.31
@@ -53,7 +54,7 @@ def test_section31_minima_locations():
     from scipy.optimize import minimize_scalar
 
     def a_valley(k2):
-        r = minimize_scalar(lambda x: T.normalised_peaks(x, k2, LAM, ETA, (2,))[0], bounds=(0.1, 0.4), method="bounded", options={"xatol": 1e-7})
+        r = minimize_scalar(lambda x: T_optimum.normalised_peaks(x, k2, LAM, ETA, (2,))[0], bounds=(0.1, 0.4), method="bounded", options={"xatol": 1e-7})
         return r.x, r.fun
 
     k1_0, a0 = a_valley(1e-4)
@@ -62,13 +63,13 @@ def test_section31_minima_locations():
     assert all(np.diff(vals) > 0)  # monotonic increase along the valley
     k1s = np.round(np.arange(0.30, 0.40, 0.01), 2)
     k2s = np.round(np.arange(0.01, 0.15, 0.01), 2)
-    jmin = min((T.normalised_peaks(a, b, LAM, ETA, (3,))[0], a, b) for a in k1s for b in k2s)
+    jmin = min((T_optimum.normalised_peaks(a, b, LAM, ETA, (3,))[0], a, b) for a in k1s for b in k2s)
     assert (jmin[1], jmin[2]) == (0.34, 0.07)
 
 
 def _rms(k1, k2, order):
     """Exact ∫‖d^r s/dτ^r‖² dτ over [0, 1] from the piece polynomials, square-rooted (Eq. 18-19)."""
-    s = T._unit_spline(k1, k2, ETA)
+    s = T_optimum._unit_spline(k1, k2, ETA)
     br = np.unique(s.t)
     d = [x * np.array([1.0, 1.0 / LAM]) for x in _left_derivatives(s, br)]
     b, c = piece_coefficients(s, order, d)
@@ -115,7 +116,7 @@ def test_eq26_cycle_time_section4():
 
     With the exact a_max = 9.0153 (k = 0.31, 0.12) Eq. 26 gives 0.1986 s; the paper's 0.198 follows from
     its rounded a_max = 9.0 (0.1984 s). Tolerance 1 ms."""
-    from pickplace_cli.profile import Capacity
+    from pickplace_cli.model.profile import Capacity
     from pickplace_cli.timing import choose_duration
 
     task = Task([0.0, 0.0, -0.8], [0.7, 0.0, -0.8], 0.7 / LAM, ETA)
@@ -138,7 +139,7 @@ def test_table_optimum_is_global(lam):
     r = next(x for x in tab.rows if x.lam == lam)
 
     def neg_f(x):
-        a, j = T.normalised_peaks(float(x[0]), float(x[1]), lam, ETA, (2, 3))
+        a, j = T_optimum.normalised_peaks(float(x[0]), float(x[1]), lam, ETA, (2, 3))
         return -(0.5 * r.a_min / a + 0.5 * r.j_min / j)
 
     res = differential_evolution(neg_f, [(0.01, 0.99), (1e-4, 0.99)], seed=1, tol=1e-10, maxiter=300, popsize=20, polish=True)

@@ -8,13 +8,13 @@ import math
 
 import pytest
 
-from pickplace_cli.methods.bspline import plan_bspline
-from pickplace_cli.methods.lame import paper_duration as lame_time
-from pickplace_cli.methods.lame import plan_lame
-from pickplace_cli.methods.piecewise_poly import paper_duration as piecewise_time
-from pickplace_cli.methods.piecewise_poly import plan_piecewise_poly
-from pickplace_cli.profile import Capacity
-from pickplace_cli.task import Task
+from pickplace_cli.paths.bspline import plan_bspline
+from pickplace_cli.paths.lame import paper_duration as lame_time
+from pickplace_cli.paths.lame import plan_lame
+from pickplace_cli.paths.piecewise_poly import paper_duration as piecewise_time
+from pickplace_cli.paths.piecewise_poly import plan_piecewise_poly
+from pickplace_cli.model.profile import Capacity
+from pickplace_cli.model.task import Task
 
 LAM = 28.0
 #: the normalisation of Table 1: b = 1, T = 1 (Eq. 17–19), so the τ-peaks of a 1 m move are a_max, j_max
@@ -83,7 +83,7 @@ def test_section4_cycle_times(name, plan, paper_time, paper_T, printed_a):
 
 def test_section4_bspline_cycle_time():
     """Sec. 4, 'B-spline': 0.198 s; exact peaks give 0.1986 s, the rounded a_max = 9.0 gives 0.1984 s → 0.198."""
-    from pickplace_cli.methods._motion import li_eq26
+    from pickplace_cli.paths._motion import li_eq26
 
     T = li_eq26(plan_bspline(SEC4, k1=0.31, k2=0.12), CAP)
     assert T == pytest.approx(0.198, abs=1e-3)

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from pickplace_cli.methods.ph import (
+from pickplace_cli.paths.ph import (
     PHCorner,
     cycle_time_eq22,
     paper_duration,
@@ -24,11 +24,11 @@ from pickplace_cli.methods.ph import (
     ph_sigma,
     plan_ph,
 )
-from pickplace_cli.methods.superposition import cycle_time, plan_superposition
-from pickplace_cli.methods.superposition import paper_duration as sup_paper_duration
-from pickplace_cli.profile import Capacity
-from pickplace_cli.studies import fig11_study, paper_times, true_times
-from pickplace_cli.task import Task
+from pickplace_cli.paths.superposition import cycle_time, plan_superposition
+from pickplace_cli.paths.superposition import paper_duration as sup_paper_duration
+from pickplace_cli.model.profile import Capacity
+from pickplace_cli.studies.parameters import fig11_study, paper_times, true_times
+from pickplace_cli.model.task import Task
 
 #: (m, r) in m: the Adept corner, a square one, a tall narrow one, a flat wide one
 CORNERS = [(0.025, 0.1525), (0.1, 0.1), (0.3, 0.01), (0.005, 0.5)]

@@ -15,9 +15,13 @@ import math
 import numpy as np
 import pytest
 
-from pickplace_cli.methods import bspline_vel as bv
-from pickplace_cli.task import Task
-from pickplace_cli.trajectory import CartesianTrajectory
+from pickplace_cli.paths import bspline_vel as bv
+
+from pickplace_cli.lookup import vel_slsqp as vq
+
+from pickplace_cli.curves import vel_problem as vp
+from pickplace_cli.model.task import Task
+from pickplace_cli.model.trajectory import CartesianTrajectory
 
 MM = 1e-3
 # Sec. 2.3.1: (0,0,0) → (280, −200, 0) mm, 40 mm high, T = 0.250 s, 200 mm/s at both ends along +y, η = 0.5
@@ -117,7 +121,7 @@ def test_rest_to_rest_degenerates_to_li2018():
     bspline method: with a margin of 1e-3, k1 = 2τ7 and k2 = τ6/τ7 equal the shipped Li table's (k1, k2) to
     1e-3, and j_min equals the table's j_min to 1e-8 relative (a_min differs only through the margin: the
     Li table reaches k2 = 1e-4)."""
-    from pickplace_cli.table import load_table
+    from pickplace_cli.lookup.bspline_table import load_table
 
     tab = load_table()
     for lam in (5.0, 28.0):
@@ -137,9 +141,9 @@ def _de_solve(prob, margin=0.01, seed=1):
     peaks, 32 samples per knot span; then exact peaks at its result)."""
     from scipy.optimize import differential_evolution
 
-    space = bv._Space(prob.lambda_free, margin)
-    ev = bv._Evaluator(prob)
-    grid = bv._grid(32)
+    space = vq._Space(prob.lambda_free, margin)
+    ev = vp._Evaluator(prob)
+    grid = vp._grid(32)
 
     def peaks(u):
         ga, gj = ev.sampled(space.full(space.from_unit(np.atleast_2d(u.T))), *grid)

@@ -6,10 +6,10 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from pickplace_cli.bspline import li_knots
-from pickplace_cli.methods.bspline import plan_bspline
-from pickplace_cli.task import Task
-from pickplace_cli.trajectory import CartesianTrajectory
+from pickplace_cli.curves.bspline import li_knots
+from pickplace_cli.paths.bspline import plan_bspline
+from pickplace_cli.model.task import Task
+from pickplace_cli.model.trajectory import CartesianTrajectory
 
 coord = st.floats(-0.5, 0.5, allow_nan=False)
 k = st.floats(0.05, 0.95)

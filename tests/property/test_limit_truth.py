@@ -20,12 +20,12 @@ import numpy as np
 import pytest
 import yaml
 
-from pickplace_cli.errors import PickplaceError
+from pickplace_cli.model.errors import PickplaceError
 from pickplace_cli.export.csv import csv_header, csv_rows
-from pickplace_cli.methods import Method
+from pickplace_cli.paths import Method
 from pickplace_cli.planner import PlanOptions, plan
-from pickplace_cli.profile import Profile, load_profile, resolve_profile_path
-from pickplace_cli.task import Task
+from pickplace_cli.model.profile import Profile, load_profile, resolve_profile_path
+from pickplace_cli.model.task import Task
 
 FINE = 50_000.0  # Hz: the reference rate
 RATES = (500.0, 4000.0)  # Hz: the output rates whose reports are checked

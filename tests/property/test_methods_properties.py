@@ -9,8 +9,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from pickplace_cli.methods import Method, plan_path
-from pickplace_cli.task import Task
+from pickplace_cli.paths import Method, plan_path
+from pickplace_cli.model.task import Task
 
 METHODS = [Method.ph, Method.superposition, Method.lame, Method.piecewise_poly]
 coord = st.floats(-0.5, 0.5, allow_nan=False)

@@ -9,7 +9,7 @@ import numpy as np
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from pickplace_cli.errors import UnreachableError
+from pickplace_cli.model.errors import UnreachableError
 from pickplace_cli.robots.delta import DeltaRobot
 from pickplace_cli.robots.scara import ScaraRobot
 

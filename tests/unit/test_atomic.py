@@ -20,7 +20,7 @@ from pathlib import Path
 
 import pytest
 
-from pickplace_cli.errors import ExportError
+from pickplace_cli.model.errors import ExportError
 from pickplace_cli.export import atomic_output
 
 ROOT = Path(__file__).resolve().parents[2]

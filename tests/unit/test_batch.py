@@ -1,15 +1,15 @@
-"""pickplace_cli.batch: reading the batch CSV (BOM, delimiters, header-only files) and the per-row limit
+"""pickplace_cli.pipelines.batch: reading the batch CSV (BOM, delimiters, header-only files) and the per-row limit
 messages. The CLI side (exit codes, files written) is in tests/cli/test_batch_cli.py."""
 
 from __future__ import annotations
 
 import pytest
 
-from pickplace_cli.batch import plan_rows, read_batch_text, sniff_delimiter, violation_text
-from pickplace_cli.errors import TaskError
+from pickplace_cli.pipelines.batch import plan_rows, read_batch_text, sniff_delimiter, violation_text
+from pickplace_cli.model.errors import TaskError
 from pickplace_cli.planner import PlanOptions, plan
-from pickplace_cli.profile import load_profile
-from pickplace_cli.task import Task
+from pickplace_cli.model.profile import load_profile
+from pickplace_cli.model.task import Task
 
 DELTA = load_profile("delta-su2018")
 OPTS = PlanOptions(fit=False)
@@ -100,7 +100,7 @@ def test_a_limit_row_lists_every_violation_in_the_single_plan_format():
 def test_violation_text_wording():
     """The one line per exceeded limit (README "How to read the limit table"): quantity, peak, time or
     duty cycle, limit, excess and utilisation, numbers to 4 significant digits."""
-    from pickplace_cli.limits import LimitRow
+    from pickplace_cli.limits.report import LimitRow
 
     r = LimitRow("q1", "motor torque", "N·m", 2.5841, 2.0, 1.29205, 0.04791, False)
     assert violation_text(r) == (

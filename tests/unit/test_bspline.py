@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pickplace_cli.bspline import (
+from pickplace_cli.curves.bspline import (
     DEGREE,
     basis_matrix,
     li_knots,
@@ -128,7 +128,7 @@ def test_exact_peaks_bound_dense_samples(k1, k2):
 
 def _random_knots(rng, count):
     """Clamped 17-knot vectors with four random free knots around τ8 = 1/2 (Yang 2022 Eq. 23)."""
-    from pickplace_cli.bspline import yang_knots
+    from pickplace_cli.curves.bspline import yang_knots
 
     out = []
     for _ in range(count):
@@ -139,7 +139,7 @@ def _random_knots(rng, count):
 
 
 def test_yang_knots_eq23():
-    from pickplace_cli.bspline import yang_knots
+    from pickplace_cli.curves.bspline import yang_knots
 
     t = yang_knots(0.01, 0.21, 0.79, 0.99)
     assert t.shape == (17,) and t[8] == 0.5 and np.all(t[:6] == 0) and np.all(t[11:] == 1)
@@ -154,7 +154,7 @@ def test_batch_basis_matches_scipy_every_degree():
     of a degree-5 recursion on O(1) values), on knot spans, their ends and τ = 1."""
     from scipy.interpolate import BSpline
 
-    from pickplace_cli.bspline import batch_basis
+    from pickplace_cli.curves.bspline import batch_basis
 
     rng = np.random.default_rng(3)
     knots = _random_knots(rng, 5)
@@ -179,7 +179,7 @@ def test_end_and_derivative_control_points_match_the_general_solve():
     """Eq. 12-15 inverted step by step (batch_end_control_points) gives the same control points as the
     general solve with boundary rows (solve_control_points), for arbitrary v, a, j at both ends; the
     derivative control points (Eq. 12-14) reproduce scipy's derivatives."""
-    from pickplace_cli.bspline import (
+    from pickplace_cli.curves.bspline import (
         batch_end_control_points,
         derivative_control_points,
         make_spline,
@@ -216,7 +216,7 @@ def test_batched_pieces_match_scipy():
     batched path gives exactly), and the control points equal the general solver's to 1e-12."""
     from scipy.interpolate import BSpline
 
-    from pickplace_cli.bspline import batch_control_points, batch_li_knots, batch_pieces
+    from pickplace_cli.curves.bspline import batch_control_points, batch_li_knots, batch_pieces
 
     rng = np.random.default_rng(7)
     k = np.array([[0.31, 0.12], [0.05, 0.9], [0.9, 0.01], [0.3966, 0.1328]])
@@ -243,8 +243,8 @@ def test_symmetric_closed_form_path_equals_de_boor():
     k1 = 0.1 with k2 = 1e-4, ~3e-12 inside; the closed form loses digits towards k1 → 0, hence UNIT_K1)
     and exact peaks to 1e-10 relative (measured 1.3e-11). Moves at two heights, and k1 outside UNIT_K1,
     take the de Boor path, and a batch mixing both gives each row what it gets alone."""
-    from pickplace_cli.methods.bspline import UNIT_K1, _deboor_paths, _symmetric, _unit_paths, batch_paths
-    from pickplace_cli.task import Task
+    from pickplace_cli.paths.bspline import UNIT_K1, _deboor_paths, _symmetric, _unit_paths, batch_paths
+    from pickplace_cli.model.task import Task
 
     rng = np.random.default_rng(5)
     tasks = []
@@ -282,8 +282,8 @@ def test_online_bspline_path_loads_no_scipy():
 
     code = (
         "import sys, numpy as np\n"
-        "from pickplace_cli.methods import plan_path\n"
-        "from pickplace_cli.task import Task\n"
+        "from pickplace_cli.paths import plan_path\n"
+        "from pickplace_cli.model.task import Task\n"
         "p = plan_path(Task(np.array([-0.15, 0, -0.8]), np.array([0.15, 0, -0.8]), 0.025, 0.5), 'bspline')\n"
         "p(np.linspace(0, 1, 11), 3)\n"
         "print(sorted(m for m in sys.modules if m.startswith('scipy')))\n"
@@ -295,8 +295,8 @@ def test_online_bspline_path_loads_no_scipy():
 def test_symmetric_one_is_the_batched_decision():
     """plan_bspline decides on floats (_symmetric_one) what the batch engine decides on arrays (_symmetric):
     both must agree on every move, or one move planned alone and in a batch would take different paths."""
-    from pickplace_cli.methods.bspline import UNIT_K1, _symmetric, _symmetric_one
-    from pickplace_cli.task import Task
+    from pickplace_cli.paths.bspline import UNIT_K1, _symmetric, _symmetric_one
+    from pickplace_cli.model.task import Task
 
     rng = np.random.default_rng(7)
     vias, k1s = [], []

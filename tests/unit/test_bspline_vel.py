@@ -5,10 +5,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pickplace_cli.errors import TaskError
-from pickplace_cli.methods import bspline_vel as bv
-from pickplace_cli.task import Task
-from pickplace_cli.trajectory import CartesianTrajectory
+from pickplace_cli.model.errors import TaskError
+from pickplace_cli.paths import bspline_vel as bv
+from pickplace_cli.lookup import vel_solver as vs
+from pickplace_cli.lookup import vel_slsqp as vq
+from pickplace_cli.curves import vel_problem as vp
+from pickplace_cli.model.task import Task
+from pickplace_cli.model.trajectory import CartesianTrajectory
 
 # Yang 2022 Sec. 2.3.1 example: (0,0,0) → (280, −200, 0) mm, 40 mm high, T = 0.25 s, 200 mm/s along +y
 EXAMPLE = Task([0, 0, 0], [0.28, -0.2, 0], 0.04, 0.5, [0, 0.2, 0], [0, 0.2, 0])
@@ -107,10 +110,10 @@ def test_batched_evaluator_matches_scipy():
     spline's acceleration and jerk, to 1e-12 relative, for several parameter vectors at once."""
     prob = bv.make_problem(GENERAL, 0.3)
     rng = np.random.default_rng(0)
-    space = bv._Space((True, True, True), 0.01)
+    space = vq._Space((True, True, True), 0.01)
     params = space.full(space.from_unit(rng.uniform(size=(4, 7))))
-    ev = bv._Evaluator(prob)
-    piece, u = bv._grid(7)
+    ev = vp._Evaluator(prob)
+    piece, u = vp._grid(7)
     ga, gj = ev.sampled(params, piece, u)
     for p, a2, j2 in zip(params, ga, gj):
         s = bv.spline_of(prob, p)
@@ -127,10 +130,10 @@ def test_taylor_form_evaluator_matches_the_bspline_route():
     1e-9 of their scale, on 300 quasi-random feasible vectors including knots on the margin (round-off
     of the shooting across spans 0.01 … 0.48 wide; measured worst 2e-11)."""
     prob = bv.make_problem(GENERAL, 0.3)
-    space = bv._Space((True, True, True), 0.01)
-    params = space.full(space.from_unit(bv._quasi_random(300, 7)))
+    space = vq._Space((True, True, True), 0.01)
+    params = space.full(space.from_unit(vs._quasi_random(300, 7)))
     params[:3, 0], params[:3, 3] = 0.01, 0.99
-    ev = bv._Evaluator(prob)
+    ev = vp._Evaluator(prob)
     w1, d1 = ev.prepare(params)
     w0, d0 = ev.prepare_bspline(params)
     np.testing.assert_array_equal(w0, w1)
@@ -142,11 +145,11 @@ def test_exact_segment_maxima_are_the_maxima():
     """Each segment's maximum (roots of d‖·‖²/dτ) is ≥ a dense sampling of that segment and within 1e-9."""
     prob = bv.make_problem(GENERAL, 0.3)
     p = np.array([[0.03, 0.2, 0.75, 0.95, 0.3, 0.6, 0.4]])
-    ev = bv._Evaluator(prob)
+    ev = vp._Evaluator(prob)
     prep = ev.prepare(p)
     sub = 3
     for q in (0, 1):
-        u = bv._exact_segment_maxima(prep, q, sub)
+        u = vq._exact_segment_maxima(prep, q, sub)
         piece = np.repeat(np.arange(6), sub)
         at = ev.values(prep, piece, u)[q][0]
         for k in range(6 * sub):
@@ -156,14 +159,14 @@ def test_exact_segment_maxima_are_the_maxima():
             assert at[k] >= dense.max() * (1 - 1e-12)
             assert at[k] == pytest.approx(dense.max(), rel=1e-6)
     # both quantities in one call (the F stage's batch): the same maxima, a's then j's
-    both = bv._exact_segment_maxima(prep, (0, 1), sub)
-    np.testing.assert_allclose(both, np.concatenate([bv._exact_segment_maxima(prep, q, sub) for q in (0, 1)]), atol=1e-12)
+    both = vq._exact_segment_maxima(prep, (0, 1), sub)
+    np.testing.assert_allclose(both, np.concatenate([vq._exact_segment_maxima(prep, q, sub) for q in (0, 1)]), atol=1e-12)
 
 
 def _stages(prob, norms=(1.0, 1.0)):
-    ev = bv._Evaluator(prob)
-    space = bv._Space(prob.lambda_free, 0.01)
-    return space, {k: bv._Stage(ev, space, k, *norms, bv.VelSettings()) for k in "ajF"}
+    ev = vp._Evaluator(prob)
+    space = vq._Space(prob.lambda_free, 0.01)
+    return space, {k: vq._Stage(ev, space, k, *norms, bv.VelSettings()) for k in "ajF"}
 
 
 def test_lockstep_runs_are_scipys_slsqp():
@@ -172,17 +175,17 @@ def test_lockstep_runs_are_scipys_slsqp():
     routine and set-up (bitwise here; 1e-9 allows for batched round-off)."""
     prob = bv.make_problem(GENERAL, 0.3)
     space, _ = _stages(prob)
-    x0 = space.from_unit(bv._quasi_random(4, space.n))
-    ga, gj = bv._Evaluator(prob).grid_maxima(space.full(x0), 8)
+    x0 = space.from_unit(vs._quasi_random(4, space.n))
+    ga, gj = vp._Evaluator(prob).grid_maxima(space.full(x0), 8)
     norms = (ga.min(), gj.min())  # F's normalisers: the smallest sampled peaks (squared) of the starts
     _, st = _stages(prob, norms)
     a_min, j_min = np.sqrt(norms)
     runs = [st["a"].run(x0[0]), st["j"].run(x0[1]), st["a"].run(x0[2], ftol=1e-5), st["F"].run(x0[3], a_min, j_min)]
-    together = bv._run_slsqp(runs)
+    together = vq._run_slsqp(runs)
     for r, x in zip(runs, together):
         _, alone = _stages(prob, norms)
         ra = alone[r.stage.kind].run(r.x0, r.a_min, r.j_min, r.ftol)
-        ref = bv._run_one(ra, ra.y0(ra.stage._eval(ra.x0)[0]))
+        ref = vq._run_one(ra, ra.y0(ra.stage._eval(ra.x0)[0]))
         np.testing.assert_allclose(x, ref, atol=1e-9)
         assert r.stage.objective(x, r.a_min, r.j_min) < r.stage.objective(r.x0, r.a_min, r.j_min)
 
@@ -194,16 +197,16 @@ def test_lockstep_uses_the_private_routine_only_on_checked_scipy_versions(monkey
     import scipy
 
     version = tuple(int(x) for x in scipy.__version__.split(".")[:2])
-    in_range = bv._SLSQP_VERSIONS[0] <= version < bv._SLSQP_VERSIONS[1]
-    assert (bv._slsqp_routine() is not None) == in_range
+    in_range = vq._SLSQP_VERSIONS[0] <= version < vq._SLSQP_VERSIONS[1]
+    assert (vq._slsqp_routine() is not None) == in_range
     prob = bv.make_problem(GENERAL, 0.3)
     space, st = _stages(prob)
-    x0 = space.from_unit(bv._quasi_random(2, space.n))
-    fast = bv._run_slsqp([st["a"].run(x0[0]), st["j"].run(x0[1])])
+    x0 = space.from_unit(vs._quasi_random(2, space.n))
+    fast = vq._run_slsqp([st["a"].run(x0[0]), st["j"].run(x0[1])])
     monkeypatch.setattr(scipy, "__version__", "9.0.0")  # an unchecked scipy
-    assert bv._slsqp_routine() is None
+    assert vq._slsqp_routine() is None
     _, st2 = _stages(prob)
-    slow = bv._run_slsqp([st2["a"].run(x0[0]), st2["j"].run(x0[1])])
+    slow = vq._run_slsqp([st2["a"].run(x0[0]), st2["j"].run(x0[1])])
     for a, b in zip(fast, slow):
         np.testing.assert_allclose(a, b, atol=1e-9)
 
@@ -213,8 +216,8 @@ def test_cut_off_run_returns_its_best_feasible_point():
     feasible (Eq. 36 with the margin) and no worse than its start."""
     prob = bv.make_problem(GENERAL, 0.3)
     space, st = _stages(prob)
-    x0 = space.from_unit(bv._quasi_random(3, space.n))[2]
-    (x,) = bv._run_slsqp([st["j"].run(x0, max_rounds=3)])
+    x0 = space.from_unit(vs._quasi_random(3, space.n))[2]
+    (x,) = vq._run_slsqp([st["j"].run(x0, max_rounds=3)])
     assert np.all(x >= space.lo - 1e-12) and np.all(x <= space.hi + 1e-12) and np.all(space.order_gaps(x) >= -1e-12)
     assert st["j"].objective(x) <= st["j"].objective(x0)
     with pytest.raises(TaskError, match="max_rounds"):
@@ -230,7 +233,7 @@ def test_segment_maxima_jacobian_exact_in_lambda_central_in_knots(free):
     prob = bv.make_problem(task, 0.3)
     assert prob.lambda_free == free
     space, st = _stages(prob)
-    x = space.from_unit(bv._quasi_random(3, space.n))[2]
+    x = space.from_unit(vs._quasi_random(3, space.n))[2]
     for kind in "ajF":
         _, jacs = st[kind]._eval(x)
         for q, jac in enumerate(jacs):
@@ -247,16 +250,16 @@ def test_batched_pieces_match_the_one_at_a_time_ones():
     subset of vectors per quantity = the full computation's rows; the λ-derivatives of ``prepare`` =
     central differences (1e-9 relative: round-off only, as D is affine in λ)."""
     prob = bv.make_problem(GENERAL, 0.3)
-    ev = bv._Evaluator(prob)
-    space = bv._Space((True, True, True), 0.01)
-    p = space.full(space.from_unit(bv._quasi_random(300, 7)))
-    ga, gj = ev.sampled(p, *bv._grid(8))
+    ev = vp._Evaluator(prob)
+    space = vq._Space((True, True, True), 0.01)
+    p = space.full(space.from_unit(vs._quasi_random(300, 7)))
+    ga, gj = ev.sampled(p, *vp._grid(8))
     a2, j2 = ev.grid_maxima(p, 8)
     np.testing.assert_array_equal(ga.max(axis=1), a2)
     np.testing.assert_array_equal(gj.max(axis=1), j2)
     w, d, dl = ev.prepare(p[:6], np.array([1, 4]))
-    full = bv._segment_maxima(w, d, (0, 1), 3)
-    ua, uj = bv._segment_maxima(w, d, (0, 1), 3, (np.array([0, 2, 5]), np.array([1, 4])))
+    full = vq._segment_maxima(w, d, (0, 1), 3)
+    ua, uj = vq._segment_maxima(w, d, (0, 1), 3, (np.array([0, 2, 5]), np.array([1, 4])))
     np.testing.assert_array_equal(ua, full[[0, 2, 5], :18])
     np.testing.assert_array_equal(uj, full[[1, 4], 18:])
     for i in range(3):  # D is affine in λ: a wide central difference (0.05) has no truncation error
@@ -313,7 +316,7 @@ def test_invariance_under_the_dimensionless_groups():
 def test_mirror_and_reversal_symmetries():
     """Mirroring in the move's vertical plane leaves the optimum; reversing the move (v0 ↔ v1) maps
     τ6 ↔ 1 − τ10, τ7 ↔ 1 − τ9, λ1 ↔ λ3 (what the table builder relies on). Tolerance 1e-6 (optimiser)."""
-    from pickplace_cli.table_vel import reverse_params
+    from pickplace_cli.lookup.vel_table import reverse_params
 
     g = dict(h_over_b=0.2, eta=0.5, v0_along=0.3, v0_across=-0.2, v1_along=-0.1, v1_across=0.4)
     mirrored = dict(g, v0_across=0.2, v1_across=-0.4)
@@ -328,7 +331,7 @@ def test_mirror_and_reversal_symmetries():
 def test_rest_to_rest_reduces_to_the_li_path():
     """v0 = v1 = 0: with Li's knots (τ6 = k1k2/2, τ7 = k1/2, τ9 = 1 − k1/2, τ10 = 1 − k1k2/2) the path is
     the bspline method's path to round-off; every λ is degenerate."""
-    from pickplace_cli.methods.bspline import plan_bspline
+    from pickplace_cli.paths.bspline import plan_bspline
 
     task = Task([-0.1525, 0, -0.8], [0.1525, 0, -0.8], 0.025, 0.5)
     k1, k2 = 0.31, 0.12
@@ -390,7 +393,7 @@ ADEPT_BELT = Task([-0.1525, 0, -0.8], [0.1525, 0, -0.8], 0.025, 0.5, [0.3, 0, 0]
 
 @pytest.fixture(scope="module")
 def delta():
-    from pickplace_cli.profile import load_profile
+    from pickplace_cli.model.profile import load_profile
 
     return load_profile("delta-su2018")
 
@@ -425,7 +428,7 @@ def test_auto_duration_is_the_smallest_meeting_the_capacity(delta):
 def test_fit_solves_eq38_every_motor_limit_at_the_optimal_shape(delta):
     """Eq. 38: the smallest T at which every limit (motor torque and its rate, speed, RMS …) holds with the
     shape optimal at T. All hold at T_fit; with 0.1 % less time (and the shape optimal there) one fails."""
-    from pickplace_cli.limits import check_limits
+    from pickplace_cli.limits.check import check_limits
     from pickplace_cli.planner import PlanOptions, motion_model, plan
 
     r = plan(ADEPT_BELT, delta, PlanOptions(method="bspline-vel", time="fit"))

@@ -8,13 +8,13 @@ import io
 import numpy as np
 import pytest
 
-from pickplace_cli.check import check_file, check_trajectory, read_moves, read_trajectory
-from pickplace_cli.errors import TaskError
+from pickplace_cli.pipelines.check import check_file, check_trajectory, read_moves, read_trajectory
+from pickplace_cli.model.errors import TaskError
 from pickplace_cli.export.csv import write_csv
 from pickplace_cli.planner import PlanOptions, plan
-from pickplace_cli.profile import load_profile, parse_profile, resolve_profile_path
-from pickplace_cli.task import Task
-from pickplace_cli.timeline import concatenate, round_trip
+from pickplace_cli.model.profile import load_profile, parse_profile, resolve_profile_path
+from pickplace_cli.model.task import Task
+from pickplace_cli.pipelines.timeline import concatenate, round_trip
 
 Q = ("q1", "q2", "q3")
 

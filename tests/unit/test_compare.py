@@ -1,4 +1,4 @@
-"""compare (pickplace_cli.compare): continuity class, true peaks, geometry, rows, writers."""
+"""compare (pickplace_cli.studies.compare): continuity class, true peaks, geometry, rows, writers."""
 
 from __future__ import annotations
 
@@ -9,14 +9,14 @@ import json
 import numpy as np
 import pytest
 
-from pickplace_cli import compare as cmp
-from pickplace_cli.errors import TaskError
-from pickplace_cli.laws import POLY345, MotionLaw
-from pickplace_cli.methods import Method, plan_path
+from pickplace_cli.studies import compare as cmp
+from pickplace_cli.model.errors import TaskError
+from pickplace_cli.curves.laws import POLY345, MotionLaw
+from pickplace_cli.paths import Method, plan_path
 from pickplace_cli.planner import PlanOptions, plan
-from pickplace_cli.profile import load_profile
-from pickplace_cli.task import Task
-from pickplace_cli.trajectory import CartesianPath
+from pickplace_cli.model.profile import load_profile
+from pickplace_cli.model.task import Task
+from pickplace_cli.model.trajectory import CartesianPath
 from tests.conftest import ADEPT_FROM, ADEPT_TO
 
 ADEPT = Task(ADEPT_FROM, ADEPT_TO, 0.025)

@@ -12,7 +12,7 @@ import io
 import numpy as np
 import pytest
 
-from pickplace_cli.errors import ExportError
+from pickplace_cli.model.errors import ExportError
 from pickplace_cli.export import atomic_output, plan_columns
 from pickplace_cli.export.csv import MOVE_COLUMN, CsvDialect, write_csv
 from tests.golden.samples import delta_batch, delta_plan, gantry_plan, parse_csv

@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pickplace_cli.errors import ExportError
+from pickplace_cli.model.errors import ExportError
 from pickplace_cli.export import atomic_output
 from pickplace_cli.export import mcap as M
 from pickplace_cli.export.mcap import EPOCH_NS, mcap_bytes, ros2_msgdef, write_mcap

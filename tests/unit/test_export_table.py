@@ -19,10 +19,11 @@ import math
 import numpy as np
 import pytest
 
-from pickplace_cli.errors import ExportError
+from pickplace_cli.model.errors import ExportError
 from pickplace_cli.export.table_json import format_table_json, write_table_json
 from pickplace_cli.export.table_st import format_table_st, st_real, write_table_st
-from pickplace_cli.table import Table, TableRow, load_table
+from pickplace_cli.lookup.bspline_optimum import TableRow
+from pickplace_cli.lookup.bspline_table import Table, load_table
 
 TOL = 1e-12
 

@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from pickplace_cli.errors import TaskError
-from pickplace_cli.laws import LAWS, POLY345, POLY4567, Law, MotionLaw, get_law, poly345, poly4567
+from pickplace_cli.model.errors import TaskError
+from pickplace_cli.curves.laws import LAWS, POLY345, POLY4567, Law, MotionLaw, get_law, poly345, poly4567
 
 U = np.linspace(0.0, 1.0, 20001)
 

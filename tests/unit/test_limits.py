@@ -10,8 +10,8 @@ import pytest
 import yaml
 
 from pickplace_cli.planner import PlanOptions, motion_model, plan
-from pickplace_cli.profile import Profile, resolve_profile_path
-from pickplace_cli.task import Task
+from pickplace_cli.model.profile import Profile, resolve_profile_path
+from pickplace_cli.model.task import Task
 
 ADEPT = Task([-0.1525, 0, -0.8], [0.1525, 0, -0.8], 0.025, 0.5)
 SCARA_MOVE = Task([0.35, -0.15, -0.15], [0.35, 0.15, -0.15], 0.025, 0.5)
@@ -219,7 +219,7 @@ def test_analytic_torque_rate_matches_differences_of_the_model(name, task):
     Reference: Richardson-extrapolated central differences of the model itself (steps 1e-4 and 5e-5 in τ,
     truncation O(h⁴) ~ 1e-12, round-off ~ eps/h ~ 1e-11 relative) — so a 1e-7 relative tolerance can only
     fail on a wrong formula, not on the reference."""
-    from pickplace_cli.methods import plan_path
+    from pickplace_cli.paths import plan_path
 
     model = motion_model(plan_path(task, "bspline"), profile_from(raw(name)))
     tau = np.linspace(0.002, 0.998, 301)
@@ -243,9 +243,11 @@ def test_check_grid_estimates_every_peak_well_inside_the_exact_band(name, task, 
     (EXACT_BAND), so no violation can hide between the grid's points. An estimate may be *above* the true
     peak (the parabola through a jump of the torque rate, where a 3-4-5 law's jerk steps): that only sends
     the quantity to the exact refinement. Measured worst underestimate: 3.7e-3 (ph, torque rate)."""
-    from pickplace_cli.limits import EXACT_BAND, _parabolic_peak, check_grid
-    from pickplace_cli.methods import plan_path
-    from pickplace_cli.peaks import refine_max
+    from pickplace_cli.limits.check import _parabolic_peak
+    from pickplace_cli.limits.grid import check_grid
+    from pickplace_cli.limits.motion import EXACT_BAND
+    from pickplace_cli.paths import plan_path
+    from pickplace_cli.curves.peaks import refine_max
 
     prof = profile_from(raw(name))
     if name == "gantry":
@@ -270,7 +272,7 @@ def test_rms_integrals_match_scipy_quad_vec():
     on a superposition path whose jerk steps at five breakpoints."""
     from scipy.integrate import quad_vec
 
-    from pickplace_cli.methods import plan_path
+    from pickplace_cli.paths import plan_path
 
     prof = profile_from(raw("delta-su2018"))
     task = Task([0.1976, -0.0072, -0.8372], [-0.0019, -0.2504, -0.7253], 0.0188, 0.5)
@@ -291,7 +293,7 @@ def test_rms_integrals_match_scipy_quad_vec():
 
 def test_rms_is_exact_for_every_duration():
     """RMS(T) from the three integrals equals a direct dense integral of (A_m/T² + G_m)² at any T."""
-    from pickplace_cli.methods import plan_path
+    from pickplace_cli.paths import plan_path
 
     prof = profile_from(raw("delta-su2018"))
     model = motion_model(plan_path(ADEPT, "ph"), prof)
@@ -310,7 +312,7 @@ def test_no_parabola_or_bracket_spans_a_jump():
     """At a breakpoint where the jerk steps the torque rate steps too: the check grid holds both one-sided
     points, and the reported peak is the larger one-sided limit, the same at every output rate (issue 19:
     a parabola across the step made it 29.6 / 85.6 / 30.3 N·m/s at 1 / 2 / 200 kHz; the truth is 27.16)."""
-    from pickplace_cli.limits import check_grid, jump_sides, segment_ids
+    from pickplace_cli.limits.grid import check_grid, jump_sides, segment_ids
     from pickplace_cli.planner import PlanOptions, plan
 
     prof = profile_from(raw("scara-600"))
@@ -337,14 +339,14 @@ def test_unreachable_mid_move_names_the_earliest_time():
     still name the earliest unreachable point in time, as on the sorted grid."""
     import re
 
-    from pickplace_cli.errors import UnreachableError
-    from pickplace_cli.limits import check_grid
-    from pickplace_cli.methods import plan_path
+    from pickplace_cli.model.errors import UnreachableError
+    from pickplace_cli.limits.grid import check_grid
+    from pickplace_cli.paths import plan_path
     from pickplace_cli.planner import PlanOptions, motion_model_static, plan
-    from pickplace_cli.profile import load_profile
-    from pickplace_cli.task import Task
+    from pickplace_cli.model.profile import load_profile
+    from pickplace_cli.model.task import Task
     from pickplace_cli.timing import choose_duration
-    from pickplace_cli.trajectory import CartesianTrajectory
+    from pickplace_cli.model.trajectory import CartesianTrajectory
 
     prof = load_profile("delta-su2018")
     task = Task([-0.1, 0, -0.8], [0.1, 0, -0.8], 0.45, 0.5)  # the lift leaves the workspace mid-move

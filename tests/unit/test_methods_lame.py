@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from pickplace_cli.errors import TaskError
-from pickplace_cli.methods.lame import lame_path, plan_lame
-from pickplace_cli.task import Task
+from pickplace_cli.model.errors import TaskError
+from pickplace_cli.paths.lame import lame_path, plan_lame
+from pickplace_cli.model.task import Task
 
 TASK = Task([0.1, -0.2, -0.8], [0.4, 0.2, -0.8], 0.05)  # b = 0.5, λ = 10, γ ≠ 0
 

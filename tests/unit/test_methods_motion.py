@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pickplace_cli.laws import POLY345, POLY4567
-from pickplace_cli.methods._motion import (
+from pickplace_cli.curves.laws import POLY345, POLY4567
+from pickplace_cli.paths._motion import (
     ArcLengthPath,
     AxisLaws,
     ParametricPiece,

@@ -7,11 +7,11 @@ import math
 import numpy as np
 import pytest
 
-from pickplace_cli.errors import TaskError
-from pickplace_cli.methods import Method, plan_path
-from pickplace_cli.methods.ph import PHCorner, cycle_time_eq22, paper_duration, path_length, ph_path, plan_ph
-from pickplace_cli.profile import Capacity
-from pickplace_cli.task import Task
+from pickplace_cli.model.errors import TaskError
+from pickplace_cli.paths import Method, plan_path
+from pickplace_cli.paths.ph import PHCorner, cycle_time_eq22, paper_duration, path_length, ph_path, plan_ph
+from pickplace_cli.model.profile import Capacity
+from pickplace_cli.model.task import Task
 from tests.conftest import ADEPT_FROM, ADEPT_TO
 
 ADEPT = Task(ADEPT_FROM, ADEPT_TO, 0.025)

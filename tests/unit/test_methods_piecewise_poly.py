@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pickplace_cli.errors import TaskError
-from pickplace_cli.methods.piecewise_poly import lift_time, plan_piecewise_poly
-from pickplace_cli.task import Task
+from pickplace_cli.model.errors import TaskError
+from pickplace_cli.paths.piecewise_poly import lift_time, plan_piecewise_poly
+from pickplace_cli.model.task import Task
 
 TASK = Task([-0.1525, 0.0, -0.8], [0.1525, 0.0, -0.8], 0.025)
 

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from pickplace_cli.methods.superposition import (
+from pickplace_cli.paths.superposition import (
     axis_time,
     cycle_time,
     cycle_time_eq26,
@@ -16,8 +16,8 @@ from pickplace_cli.methods.superposition import (
     plan_superposition,
     schedule,
 )
-from pickplace_cli.profile import Capacity
-from pickplace_cli.task import Task
+from pickplace_cli.model.profile import Capacity
+from pickplace_cli.model.task import Task
 from tests.conftest import ADEPT_FROM, ADEPT_TO
 
 

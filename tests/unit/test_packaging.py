@@ -8,7 +8,7 @@ from importlib import metadata
 
 import pytest
 
-from pickplace_cli.resources import data_dir
+from pickplace_cli.model.resources import data_dir
 
 
 def test_data_dirs_hold_the_shipped_files():

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pickplace_cli.peaks import ppoly_norm_peak, refine_max
+from pickplace_cli.curves.peaks import ppoly_norm_peak, refine_max
 
 
 def test_ppoly_peak_of_known_polynomial():
@@ -35,8 +35,8 @@ def test_batched_peaks_equal_one_by_one():
     """batch_norm_peaks (P moves × several orders in one eigenvalue call; lower degrees padded with roots at
     the piece's left end; pieces whose Bernstein bound is below a reached value skipped) gives the same
     peaks as ppoly_norm_peak move by move and order by order, to 1e-13 relative."""
-    from pickplace_cli.bspline import _left_derivatives, li_knots, make_spline, piece_coefficients, solve_control_points
-    from pickplace_cli.peaks import batch_norm_peaks
+    from pickplace_cli.curves.bspline import _left_derivatives, li_knots, make_spline, piece_coefficients, solve_control_points
+    from pickplace_cli.curves.peaks import batch_norm_peaks
 
     rng = np.random.default_rng(3)
     breaks_all, coefs_all = [], []

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import pytest
 
-from pickplace_cli.errors import ProfileError
-from pickplace_cli.profile import load_profile, parse_profile, shipped_profiles
+from pickplace_cli.model.errors import ProfileError
+from pickplace_cli.model.profile import load_profile, parse_profile, shipped_profiles
 
 GANTRY = """\
 name: g
@@ -77,7 +77,7 @@ def test_profile_is_frozen():
 
 
 def _edit(name: str, old: str, new: str) -> str:
-    from pickplace_cli.profile import resolve_profile_path
+    from pickplace_cli.model.profile import resolve_profile_path
 
     text = resolve_profile_path(name).read_text()
     assert old in text, old

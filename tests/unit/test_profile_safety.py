@@ -12,8 +12,8 @@ from hypothesis import strategies as st
 from typer.testing import CliRunner
 
 from pickplace_cli.cli import app
-from pickplace_cli.errors import ProfileError
-from pickplace_cli.profile import load_profile, parse_profile, resolve_profile_path
+from pickplace_cli.model.errors import ProfileError
+from pickplace_cli.model.profile import load_profile, parse_profile, resolve_profile_path
 
 LAUGHS = "\n".join(
     [f'a: &a [{",".join(["lol"] * 9)}]']
@@ -104,7 +104,7 @@ def test_check_refuses_a_binary_trajectory(tmp_path):
 def test_check_refuses_a_file_over_the_bound_in_one_line_without_reading_it_all(tmp_path, monkeypatch):
     """A file over CHECK_MAX_BYTES is one line naming the file and the bound; the read stops at bound + 1
     bytes (a /dev/zero-like endless stream does not hang)."""
-    import pickplace_cli.check as C
+    import pickplace_cli.pipelines.check as C
     from typer.testing import CliRunner
 
     from pickplace_cli.cli import app

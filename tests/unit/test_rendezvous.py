@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from pickplace_cli.errors import TaskError, UnreachableError, UsageError
-from pickplace_cli.profile import load_profile
-from pickplace_cli.rendezvous import Part, find_rendezvous, plan_rendezvous
+from pickplace_cli.model.errors import TaskError, UnreachableError, UsageError
+from pickplace_cli.model.profile import load_profile
+from pickplace_cli.pipelines.rendezvous import Part, find_rendezvous, plan_rendezvous
 
 #: (profile, a working point the moves stay near [m], radius of the random starts [m])
 SITES = {
@@ -68,7 +68,7 @@ def test_auto_is_the_fixed_point():
     """T* = T_auto(P(T*)): re-planning the move to the meeting point with the plain --time auto (the lead's
     search, continuation from its own start) gives T* back (relative 1e-6: both are brentq roots refined to
     1e-8 or better and nudged to the feasible side), and the capacity bound holds at T* to round-off."""
-    from pickplace_cli.methods.bspline_vel import PathFactory
+    from pickplace_cli.paths.bspline_vel import PathFactory
     from pickplace_cli.timing import auto_duration, choose_duration_for
 
     prof = load_profile("delta-su2018")
@@ -83,7 +83,7 @@ def test_auto_is_the_fixed_point():
 def test_fit_is_the_fixed_point():
     """T* = T_fit(P(T*)) on the Delta (relative 1e-5: the lead's fit stops at rtol 1e-7 and both are nudged
     by the exact check), and every limit holds at T*."""
-    from pickplace_cli.methods.bspline_vel import PathFactory
+    from pickplace_cli.paths.bspline_vel import PathFactory
     from pickplace_cli.planner import motion_model
     from pickplace_cli.timing import choose_duration_for
 
@@ -150,7 +150,7 @@ def test_tracking_segment_follows_the_part(name):
     zero acceleration and jerk; the joint columns come from the robot's IK (FK of q gives p back, 1e-9 m) and
     the segment is limit-checked; the joined trajectory has strictly increasing t and no duplicate meeting."""
     from pickplace_cli.planner import motion_model_static
-    from pickplace_cli.rendezvous import plan_tracking, with_tracking
+    from pickplace_cli.pipelines.rendezvous import plan_tracking, with_tracking
 
     prof = load_profile(name)
     start, part = random_case(np.random.default_rng(5), name)
@@ -163,6 +163,9 @@ def test_tracking_segment_follows_the_part(name):
     robot = motion_model_static(prof)[0]
     assert np.abs(robot.forward_kinematics(track.joint.q) - track.p).max() <= 1e-9
     assert track.report.rows and track.report.duration == D
+    # the limit table's t_peak is trajectory time (T … T + dwell), not the segment's own clock (1e-12: round-off)
+    peaks = [r.t_peak for r in track.report.rows if r.t_peak is not None]
+    assert peaks and all(T - 1e-12 <= t <= T + D + 1e-12 for t in peaks)
     tl = with_tracking(move, track)
     assert np.all(np.diff(tl.t) > 0) and tl.t[-1] == pytest.approx(T + D, abs=1e-12)
     assert len(tl.t) == len(move.t) + len(track.t) - 1
@@ -178,7 +181,7 @@ START = np.array([-0.1525, 0.0, -0.8])
 
 def with_window(lo_y, hi_y, name="delta-su2018"):
     """The profile with a belt window x ∈ [0, 0.3], y ∈ [lo_y, hi_y], z ∈ [-0.9, -0.7] m (a belt along +y)."""
-    from pickplace_cli.profile import Box
+    from pickplace_cli.model.profile import Box
 
     prof = load_profile(name)
     wc = prof.workcell.model_copy(update={"belt_window": Box(min=(0.0, lo_y, -0.9), max=(0.3, hi_y, -0.7))})
@@ -237,7 +240,7 @@ def test_given_time_outside_the_window():
 def test_window_must_intersect_the_box():
     from pydantic import ValidationError
 
-    from pickplace_cli.profile import Box, Workcell
+    from pickplace_cli.model.profile import Box, Workcell
 
     box = load_profile("delta-su2018").workcell.box
     with pytest.raises(ValidationError, match="does not intersect the workcell box"):

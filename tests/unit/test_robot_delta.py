@@ -12,7 +12,7 @@ import math
 import numpy as np
 import pytest
 
-from pickplace_cli.errors import UnreachableError
+from pickplace_cli.model.errors import UnreachableError
 from pickplace_cli.robots.delta import DeltaRobot
 
 DELTA = DeltaRobot(

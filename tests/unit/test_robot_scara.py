@@ -11,7 +11,7 @@ import math
 import numpy as np
 import pytest
 
-from pickplace_cli.errors import UnreachableError
+from pickplace_cli.model.errors import UnreachableError
 from pickplace_cli.robots.scara import Elbow, ScaraRobot
 
 MASSES = dict(m1=2.0, lc1=0.16, I1=0.020, m2=1.5, lc2=0.14, I2=0.012, m3=0.8, payload=0.1)

@@ -10,12 +10,12 @@ import pytest
 from typer.testing import CliRunner
 
 from pickplace_cli.cli import app
-from pickplace_cli.errors import UsageError
-from pickplace_cli.limits import _extra_points
-from pickplace_cli.methods import plan_path
+from pickplace_cli.model.errors import UsageError
+from pickplace_cli.limits.grid import _extra_points
+from pickplace_cli.paths import plan_path
 from pickplace_cli.planner import PlanOptions, motion_model, plan
-from pickplace_cli.profile import load_profile
-from pickplace_cli.task import Task
+from pickplace_cli.model.profile import load_profile
+from pickplace_cli.model.task import Task
 from pickplace_cli.timing import _worst_utilisation, fit_duration, screened_root
 from pickplace_cli.timing import shape as S
 

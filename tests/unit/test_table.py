@@ -5,8 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pickplace_cli import table as T
-from pickplace_cli.errors import TableError
+from pickplace_cli.lookup import bspline_table as T
+from pickplace_cli.lookup import bspline_build as T_build
+from pickplace_cli.lookup import bspline_optimum as T_optimum
+from pickplace_cli.model.errors import TableError
 
 
 @pytest.mark.slow
@@ -15,7 +17,7 @@ def test_rebuild_sample_rows_matches_shipped_table():
     ridge of F), F within 1e-7 relative (F is flat there to second order)."""
     shipped = T.load_table()
     lams = [1.0, 7.5, 28.0, 40.0]
-    fresh = T.build_table(lams, T.TableSettings())
+    fresh = T_build.build_table(lams, T_optimum.TableSettings())
     for r in fresh.rows:
         ref = next(x for x in shipped.rows if x.lam == r.lam)
         assert r.k1 == pytest.approx(ref.k1, abs=2e-4) and r.k2 == pytest.approx(ref.k2, abs=2e-4)
@@ -31,7 +33,7 @@ def test_shipped_table_provenance_and_shape():
     assert "tool_version" in tab.meta and "fit_k1" in tab.meta
     # every row's peaks are the exact peaks at its (k1, k2) (1e-9: printed with 10 significant digits)
     for r in tab.rows[::10]:
-        v, a, j = T.normalised_peaks(r.k1, r.k2, r.lam, 0.5)
+        v, a, j = T_optimum.normalised_peaks(r.k1, r.k2, r.lam, 0.5)
         assert (v, a, j) == pytest.approx((r.v_max, r.a_max, r.j_max), rel=1e-8)
         assert r.F == pytest.approx(0.5 * r.a_min / a + 0.5 * r.j_min / j, rel=1e-8)
 
@@ -100,20 +102,20 @@ def test_format_parse_round_trip():
 
 
 def test_lambda_grid():
-    g = T.lambda_grid(1, 40, 0.5)
+    g = T_build.lambda_grid(1, 40, 0.5)
     assert len(g) == 79 and g[0] == 1 and g[-1] == 40
-    assert T.lambda_grid(1, 2, 0.3).tolist() == [1.0, 1.3, 1.6, 1.9, 2.0]
+    assert T_build.lambda_grid(1, 2, 0.3).tolist() == [1.0, 1.3, 1.6, 1.9, 2.0]
     with pytest.raises(TableError):
-        T.lambda_grid(2, 1, 0.5)
+        T_build.lambda_grid(2, 1, 0.5)
     with pytest.raises(TableError):
-        T.lambda_grid(1, 2, 0)
+        T_build.lambda_grid(1, 2, 0)
 
 
 def test_settings_validation():
     with pytest.raises(TableError, match="weights"):
-        T.TableSettings(weights=(0.5, 0.6))
+        T_optimum.TableSettings(weights=(0.5, 0.6))
     with pytest.raises(TableError, match="eta"):
-        T.TableSettings(eta=1.0)
+        T_optimum.TableSettings(eta=1.0)
 
 
 # ------------------------------------------------------------------ fast closed-form path vs scipy BSpline
@@ -131,12 +133,12 @@ def test_fast_peaks_match_scipy_reference_inside_the_box():
     k2 = np.where(rng.random(300) < 0.2, 1e-4, rng.uniform(1e-4, 0.95, 300))
     lam = rng.uniform(0.5, 60.0, 300)
     for a, b, l in zip(k1, k2, lam):
-        fast = T.fast_peaks(a, b, l, 0.5)[0]
-        ref = np.array(T.normalised_peaks(a, b, l, 0.5))
+        fast = T_optimum.fast_peaks(a, b, l, 0.5)[0]
+        ref = np.array(T_optimum.normalised_peaks(a, b, l, 0.5))
         np.testing.assert_allclose(fast, ref, rtol=2e-9, err_msg=f"k1={a}, k2={b}, lam={l}")
     # batched = one at a time, and η other than 0.5
-    batch = T.fast_peaks(k1[:20], k2[:20], 12.0, 0.3)
-    one = np.array([T.normalised_peaks(a, b, 12.0, 0.3) for a, b in zip(k1[:20], k2[:20])])
+    batch = T_optimum.fast_peaks(k1[:20], k2[:20], 12.0, 0.3)
+    one = np.array([T_optimum.normalised_peaks(a, b, 12.0, 0.3) for a, b in zip(k1[:20], k2[:20])])
     np.testing.assert_allclose(batch, one, rtol=2e-9)
 
 
@@ -148,7 +150,7 @@ def test_fast_peaks_near_the_corners_of_the_box():
     there, and the coarse grid only ranks those points (values ~1e5 where the optima have ~10)."""
     for a in (1e-3, 0.01, 0.999):
         for b in (1e-4, 1e-3, 0.5, 0.99):
-            np.testing.assert_allclose(T.fast_peaks(a, b, 5.0)[0], T.normalised_peaks(a, b, 5.0), rtol=5e-5)
+            np.testing.assert_allclose(T_optimum.fast_peaks(a, b, 5.0)[0], T_optimum.normalised_peaks(a, b, 5.0), rtol=5e-5)
 
 
 def test_unit_pieces_are_the_li2018_spline():
@@ -157,8 +159,8 @@ def test_unit_pieces_are_the_li2018_spline():
     derivative's scale: high derivatives are ~1e4 at k2 = 0.05 and carry that many ulps."""
     rng = np.random.default_rng(3)
     for a, b in ((0.31, 0.12), (0.55, 0.4), (0.2, 0.05), (0.45, 1e-4)):
-        h, coef = T.unit_pieces(a, b, 0.5)
-        spline = T._unit_spline(a, b, 0.5)
+        h, coef = T_optimum.unit_pieces(a, b, 0.5)
+        spline = T_optimum._unit_spline(a, b, 0.5)
         starts = np.concatenate(([0.0], np.cumsum(h[0])))
         for tau in rng.uniform(0, 1, 25):
             mirror = tau > 0.5
@@ -179,9 +181,9 @@ def test_unit_pieces_are_the_li2018_spline():
 def test_coarse_samples_under_estimate_exact_peaks_slightly():
     """The coarse stage's sampled peaks never exceed the exact peaks and stay within 1 % of them (16
     samples per piece: the reason ``basin_margin`` is 3 %)."""
-    coarse = T._coarse_for(T.TableSettings(grid_step=0.1))
+    coarse = T_optimum._coarse_for(T_optimum.TableSettings(grid_step=0.1))
     for lam in (1.0, 12.0, 40.0):
         a_s, j_s = coarse.peaks(lam)
-        exact = T.fast_peaks(coarse.k1, coarse.k2, lam, 0.5, (2, 3))
+        exact = T_optimum.fast_peaks(coarse.k1, coarse.k2, lam, 0.5, (2, 3))
         assert np.all(a_s <= exact[:, 0] * (1 + 1e-12)) and np.all(j_s <= exact[:, 1] * (1 + 1e-12))
         assert np.all(a_s >= 0.99 * exact[:, 0]) and np.all(j_s >= 0.99 * exact[:, 1])

@@ -1,4 +1,4 @@
-"""table2d.py: the (λ, η) → (k1, k2) table (issue 16): grids, jumps, lookup, file format, the shipped table,
+"""lookup/table2d.py: the (λ, η) → (k1, k2) table (issue 16): grids, jumps, lookup, file format, the shipped table,
 its interpolation error at seeded held-out points, the build (tiny grids only), the ST export (blark)."""
 
 from __future__ import annotations
@@ -8,15 +8,16 @@ import math
 import numpy as np
 import pytest
 
-from pickplace_cli import table as T
-from pickplace_cli import table2d as T2
-from pickplace_cli.errors import TableError
+from pickplace_cli.lookup import bspline_build as B
+from pickplace_cli.lookup import bspline_optimum as O
+from pickplace_cli.lookup import table2d as T2
+from pickplace_cli.model.errors import TableError
 from pickplace_cli.export.table2d_st import format_table_2d_st
 
 
 def _row(lam, k1, k2):
     nan = float("nan")
-    return T.TableRow(lam, k1, k2, nan, nan, nan, nan, nan, nan)
+    return O.TableRow(lam, k1, k2, nan, nan, nan, nan, nan, nan)
 
 
 def _synthetic(k1_of=lambda e, lam: 0.3 + 0.1 * e + 0.001 * lam, k2_of=lambda e, lam: 0.1 + 0.05 * e):
@@ -32,7 +33,7 @@ def test_grids():
     g = T2.log_lambda_grid(0.5, 200, 40)
     assert len(g) == 40 and g[0] == 0.5 and g[-1] == 200 and np.allclose(np.diff(np.log(g)), math.log(400) / 39, rtol=1e-8)
     assert T2.log_lambda_grid(28, 28, 1).tolist() == [28.0]
-    assert T.lambda_grid(28, 28, 0.5).tolist() == [28.0]  # the one-row grid is a grid (issue 16)
+    assert B.lambda_grid(28, 28, 0.5).tolist() == [28.0]  # the one-row grid is a grid (issue 16)
     for bad, match in (((0.9, 0.1, 0.05), "eta-max = 0.1: must not be less than eta-min = 0.9"),
                        ((0.0, 0.5, 0.05), r"eta-min = 0.0: must lie in \[0.01, 0.99\]"),
                        ((0.1, 0.5, 0.0), "eta-step = 0.0: must be a finite number > 0")):
@@ -102,8 +103,8 @@ def test_shipped_table_covers_the_issue_range(shipped):
     # the η = 0.5 row of the 2-D table is the optimiser's answer at those λ (same settings as the 1-D table)
     i = shipped.etas.index(0.5)
     lam = shipped.lams[20]
-    s = T.TableSettings(eta=0.5)
-    want = T.optimise_lambda(lam, T._coarse_for(s), s)
+    s = O.TableSettings(eta=0.5)
+    want = O.optimise_lambda(lam, O._coarse_for(s), s)
     assert shipped.grid("k1")[i, 20] == pytest.approx(want.k1, abs=1e-8)  # 10 significant digits in the file
 
 
@@ -118,9 +119,9 @@ def test_interpolated_F_within_half_a_percent_at_seeded_points(shipped):
             k1, k2 = shipped.lookup(float(lam), float(eta))
         except T2.TableJumpError:
             continue
-        s = T.TableSettings(eta=float(eta), grid_step=T.ON_DEMAND_GRID)
-        ref = T.optimise_lambda(float(lam), T._coarse_for(s), s)
-        _, a, j = T.fast_peaks(k1, k2, float(lam), float(eta))[0]
+        s = O.TableSettings(eta=float(eta), grid_step=O.ON_DEMAND_GRID)
+        ref = O.optimise_lambda(float(lam), O._coarse_for(s), s)
+        _, a, j = O.fast_peaks(k1, k2, float(lam), float(eta))[0]
         f = 0.5 * ref.a_min / a + 0.5 * ref.j_min / j
         assert f >= ref.F * (1 - 0.005), (lam, eta)
         checked += 1
@@ -132,14 +133,14 @@ def test_tiny_2d_build_parallel_equals_sequential_and_resumes(tmp_path):
     seq, rep = T2.run_build_2d(lams, etas)
     assert rep.rows == 4 and rep.computed == 4
     row = seq.rows[2]  # η = 0.5, λ = 2: the same as the 1-D build's row
-    assert row == T.build_table([2.0, 3.0]).rows[0]
+    assert row == B.build_table([2.0, 3.0]).rows[0]
     ckpt = tmp_path / "t.csv.partial.jsonl"
     par, _ = T2.run_build_2d(lams, etas, workers=2, checkpoint=ckpt)
     assert par.rows == seq.rows
     again, rep2 = T2.run_build_2d(lams, etas, checkpoint=ckpt, resume=True)
     assert rep2.resumed == 4 and rep2.computed == 0 and again.rows == seq.rows
     with pytest.raises(TableError, match="written for other settings"):
-        T2.run_build_2d(lams, etas, T.TableSettings(grid_step=0.02), checkpoint=ckpt, resume=True)
+        T2.run_build_2d(lams, etas, O.TableSettings(grid_step=0.02), checkpoint=ckpt, resume=True)
 
 
 # ------------------------------------------------------------------------------------ Structured Text

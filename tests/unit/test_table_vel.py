@@ -9,9 +9,9 @@ import time
 import numpy as np
 import pytest
 
-from pickplace_cli.errors import TableError
-from pickplace_cli.methods import bspline_vel as bv
-from pickplace_cli.table_vel import (
+from pickplace_cli.model.errors import TableError
+from pickplace_cli.paths import bspline_vel as bv
+from pickplace_cli.lookup.vel_table import (
     GROUP_AXES,
     VelGrid,
     build_vel_table,
@@ -21,7 +21,7 @@ from pickplace_cli.table_vel import (
     parse_vel_table,
     reverse_params,
 )
-from pickplace_cli.task import Task
+from pickplace_cli.model.task import Task
 
 SMALL = VelGrid(h_min=0.1, h_max=0.3, h_count=2, v_max=0.2, v_count=2)
 
@@ -77,7 +77,7 @@ def test_via_interpolation_blends_displacements_not_lambdas(small):
     """λ1 moves via point 1 by λ1·v0·T/b [Yang2022, Eq. (25)]. Between a node with v0 = 0 (λ1 = 0.21, no
     displacement) and one with v0·T/b = (0.2, 0) and λ1 = 0.5 (displacement (0.1, 0)), halfway the blended
     displacement is (0.05, 0), i.e. λ1 = 0.5 for v0·T/b = (0.1, 0); the multilinear λ1 is (0.21 + 0.5)/2."""
-    from pickplace_cli.table_vel import VelTable
+    from pickplace_cli.lookup.vel_table import VelTable
 
     grid = VelGrid(h_min=0.1, h_max=0.3, h_count=2, v_max=0.2, v_count=3)
     shape = (2, 3, 3, 3, 3)
@@ -129,7 +129,7 @@ def test_stage1_minimisers_stored_and_seeds(small):
 def test_tables_without_stage1_columns_still_read(small):
     """Tables written before the stage-1 minimisers were stored (15 columns) still load; their seeds are
     the optimum's values for every stage."""
-    from pickplace_cli.table_vel import COLUMNS_V1, VelTable
+    from pickplace_cli.lookup.vel_table import COLUMNS_V1, VelTable
 
     old = VelTable(small.grid, small.params, small.F, small.a_min, small.j_min, small.meta)
     text = format_vel_table(old, "test")

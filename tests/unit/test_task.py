@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from pickplace_cli.errors import TaskError
-from pickplace_cli.task import Task
+from pickplace_cli.model.errors import TaskError
+from pickplace_cli.model.task import Task
 
 
 def test_local_frame_eq1_eq2():

@@ -11,8 +11,8 @@ from typer.testing import CliRunner
 
 from pickplace_cli.cli import app
 from pickplace_cli.planner import PlanOptions, motion_model, plan
-from pickplace_cli.profile import load_profile
-from pickplace_cli.task import Task
+from pickplace_cli.model.profile import load_profile
+from pickplace_cli.model.task import Task
 from tests.property.test_limit_truth import _duty_rms, _rate_reference, _written
 
 ADEPT = Task([-0.1525, 0, -0.8], [0.1525, 0, -0.8], 0.025, 0.5)
@@ -121,7 +121,7 @@ def test_cli_time_optimal_and_refusals(tmp_path):
 def test_model_inertia_along_matches_the_model():
     """m(τ) (the motor torque of the pure acceleration p′ at rest) makes the torque affine in (b, b′):
     τ = A_m·b + m·b′/2 + G_m. Check against the model evaluated on an explicitly retimed motion."""
-    from pickplace_cli.methods import plan_path
+    from pickplace_cli.paths import plan_path
     from pickplace_cli.timing.optimal import _inertia_along
 
     prof = load_profile("delta-su2018")
@@ -162,8 +162,24 @@ def test_hold_capacity_refusals():
     runner = CliRunner()
     r = runner.invoke(app, ["plan", "--from", "-0.1525,0,-0.8", "--to", "0.1525,0,-0.8", "--hold-capacity"])
     assert r.exit_code == 2 and "--time fit or optimal" in r.output
-    from pickplace_cli.errors import UsageError
+    from pickplace_cli.model.errors import UsageError
 
     prof = load_profile("delta-su2018")
     with pytest.raises(UsageError, match="bspline-vel"):
         plan(ADEPT, prof, PlanOptions(method="bspline-vel", time="fit", hold_capacity=True))
+
+
+def test_optimal_without_rated_torque_has_no_rms_rows():
+    """A profile whose drives have no rated torque (no RMS check) plans --time optimal (regression: the empty
+    RMS block of the constraint Jacobian could not be shaped), faster than with the RMS limit."""
+    import yaml
+
+    from pickplace_cli.model.profile import Profile, resolve_profile_path
+
+    d = yaml.safe_load(resolve_profile_path("delta-su2018").read_text())
+    del d["robot"]["joints"]["drive"]["rated_torque"]
+    prof = Profile.model_validate(d)
+    opt = plan(ADEPT, prof, PlanOptions(time="optimal"))
+    fit = plan(ADEPT, prof, PlanOptions(time="fit"))
+    assert opt.report.ok and opt.duration.seconds <= fit.duration.seconds
+    assert not any("RMS" in r.quantity for r in opt.report.rows)

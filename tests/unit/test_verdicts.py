@@ -1,4 +1,4 @@
-"""The batched verdict engine (pickplace_cli.verdicts) against plan() row by row.
+"""The batched verdict engine (pickplace_cli.pipelines.verdicts) against plan() row by row.
 
 The contract [issue 7, "a limit check never lies"]: a row the engine decides gets exactly the JSON line
 plan() gives (same keys, same values: bitwise, since the engine does plan()'s arithmetic on stacked arrays),
@@ -15,13 +15,13 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from pickplace_cli.batch import plan_rows, read_batch_text
-from pickplace_cli.errors import PickplaceError
-from pickplace_cli.methods import plan_path
+from pickplace_cli.pipelines.batch import plan_rows, read_batch_text
+from pickplace_cli.model.errors import PickplaceError
+from pickplace_cli.paths import plan_path
 from pickplace_cli.planner import PlanOptions, motion_model, plan
-from pickplace_cli.profile import load_profile
-from pickplace_cli.task import Task
-from pickplace_cli.verdicts import (
+from pickplace_cli.model.profile import load_profile
+from pickplace_cli.model.task import Task
+from pickplace_cli.pipelines.verdicts import (
     OFF_SWITCH,
     SCREEN_MARGIN,
     Verdict,
@@ -153,7 +153,7 @@ def test_peaks_are_bitwise_plan_bspline_peaks():
     ref = np.array([plan_path(t, "bspline", k1=a, k2=b).peaks for t, a, b in zip(tasks, k1, k2)])
     assert np.array_equal(peaks, ref)  # bitwise: the JSON lines must not change with the engine
     # and the piece polynomials evaluate the path (1e-12 m: Horner round-off on ~0.1 m coordinates)
-    from pickplace_cli.verdicts import batch_motion
+    from pickplace_cli.pipelines.verdicts import batch_motion
 
     tau = np.tile(np.linspace(0, 1, 33), (len(tasks), 1))
     mot = batch_motion(breaks, coef, tau)

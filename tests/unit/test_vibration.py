@@ -1,4 +1,4 @@
-"""Residual vibration (pickplace_cli.vibration) against scipy.signal.lsim, and the profile section."""
+"""Residual vibration (pickplace_cli.studies.vibration) against scipy.signal.lsim, and the profile section."""
 
 from __future__ import annotations
 
@@ -6,12 +6,12 @@ import numpy as np
 import pytest
 from scipy.signal import lsim
 
-from pickplace_cli import vibration as vib
-from pickplace_cli.errors import ProfileError
-from pickplace_cli.methods import plan_path
-from pickplace_cli.profile import load_profile, parse_profile, resolve_profile_path
-from pickplace_cli.task import Task
-from pickplace_cli.trajectory import CartesianTrajectory
+from pickplace_cli.studies import vibration as vib
+from pickplace_cli.model.errors import ProfileError
+from pickplace_cli.paths import plan_path
+from pickplace_cli.model.profile import load_profile, parse_profile, resolve_profile_path
+from pickplace_cli.model.task import Task
+from pickplace_cli.model.trajectory import CartesianTrajectory
 from tests.conftest import ADEPT_FROM, ADEPT_TO
 
 F = np.array([18.0, 18.0, 25.0])  # Hz (Delta-like estimates)

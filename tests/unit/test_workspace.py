@@ -1,4 +1,4 @@
-"""Constrained workspace (pickplace_cli.workspace): membership, APF point [Su2018, Eq. (25)], lowering h."""
+"""Constrained workspace (pickplace_cli.studies.workspace): membership, APF point [Su2018, Eq. (25)], lowering h."""
 
 from __future__ import annotations
 
@@ -6,13 +6,14 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from pickplace_cli.errors import TaskError, UnreachableError
-from pickplace_cli.limits import check_grid, check_limits
-from pickplace_cli.methods import Method, plan_path
+from pickplace_cli.model.errors import TaskError, UnreachableError
+from pickplace_cli.limits.check import check_limits
+from pickplace_cli.limits.grid import check_grid
+from pickplace_cli.paths import Method, plan_path
 from pickplace_cli.planner import motion_model
-from pickplace_cli.profile import load_profile
-from pickplace_cli.task import Task
-from pickplace_cli.workspace import APF_MARGIN, Workspace, apf_point, fit_workspace
+from pickplace_cli.model.profile import load_profile
+from pickplace_cli.model.task import Task
+from pickplace_cli.studies.workspace import APF_MARGIN, Workspace, apf_point, fit_workspace
 
 
 @pytest.fixture(scope="module")
@@ -173,7 +174,7 @@ def test_every_method_can_be_fitted(delta, method):
 
 def test_a_move_that_cannot_be_planned_keeps_its_own_error(delta):
     """λ = 3e5 is beyond any (k1, k2) optimum: TableError (exit 1), not a workspace verdict."""
-    from pickplace_cli.errors import TableError
+    from pickplace_cli.model.errors import TableError
 
     with pytest.raises(TableError, match="lambda = b/h = 3e"):
         fit_workspace(Task([-0.15, 0, -0.8], [0.15, 0, -0.8], 1e-6), delta)
@@ -186,7 +187,7 @@ def test_radial_extent_scara_matches_the_closed_form():
     """SCARA at its default height: the band is r_min (q2 at its ±150° stop) … r_max (|sin q2| = the margin
     0.05), and a direction reaches the whole band iff q1 = θ + β(r) stays within ±132° for every r in it,
     β(r) = atan2(l2·sin|q2|, l1 + l2·cos q2) (elbow right, q2 < 0). Tolerance: the 1 mm scan grid."""
-    from pickplace_cli.workspace import radial_extent
+    from pickplace_cli.studies.workspace import radial_extent
 
     prof = load_profile("scara-600")
     l1, l2 = prof.robot.link1.length, prof.robot.link2.length
@@ -212,7 +213,7 @@ def test_radial_extent_scara_matches_the_closed_form():
 
 
 def test_radial_extent_delta_disc_and_errors(delta):
-    from pickplace_cli.workspace import radial_extent
+    from pickplace_cli.studies.workspace import radial_extent
 
     from pickplace_cli.robots import build_robot, radial_reach
 

@@ -1,0 +1,200 @@
+"""The Typer app, the option enums, and what every command shares: typed errors → one line and the exit code, point and number parsing."""
+
+from __future__ import annotations
+
+import functools
+import sys
+from enum import Enum
+from typing import Callable, Optional
+
+import typer
+
+from .. import __version__
+
+
+app = typer.Typer(
+    name="pickplace",
+    help=(
+        "Plan smooth, fast pick-and-place moves for high-speed robots and write the sampled joint "
+        "trajectories (SI units: m, s, rad). Exit codes: 0 ok, 1 invalid input, 2 usage error, "
+        "3 limit exceeded, 4 unreachable point."
+    ),
+    no_args_is_help=True,
+    add_completion=True,
+    pretty_exceptions_enable=False,
+    rich_markup_mode=None,
+    context_settings={"help_option_names": ["-h", "--help"]},
+)
+
+
+class OutputFormat(str, Enum):
+    csv = "csv"
+    json = "json"
+    mcap = "mcap"
+
+
+class CsvDialectName(str, Enum):
+    """Mirror of pickplace_cli.export.csv.CsvDialect."""
+
+    default = "default"
+    twincat = "twincat"
+    tsv = "tsv"
+
+
+class TableMethod(str, Enum):
+    bspline = "bspline"
+    bspline_vel = "bspline-vel"
+
+
+class McapFlavor(str, Enum):
+    ros2 = "ros2"
+    foxglove = "foxglove"
+
+
+#: --max-shift default [m]
+MAX_SHIFT = 0.01
+
+
+class Compression(str, Enum):
+    none = "none"
+    zstd = "zstd"
+
+
+class MethodName(str, Enum):
+    """Mirror of pickplace_cli.paths.Method (kept here so --help needs no numpy)."""
+
+    bspline = "bspline"
+    ph = "ph"
+    superposition = "superposition"
+    lame = "lame"
+    piecewise_poly = "piecewise-poly"
+    bspline_vel = "bspline-vel"
+
+
+class OptimizeWhat(str, Enum):
+    none = "none"
+    shape = "shape"
+
+
+def _err(message: str) -> None:
+    sys.stderr.write(f"pickplace: error: {message}\n")
+
+
+def _handle_errors(fn: Callable) -> Callable:
+    """Turn the library's typed errors into one line on stderr and the documented exit code."""
+
+    @functools.wraps(fn)
+    def wrapper(*args, **kwargs):
+        from ..model.errors import PickplaceError
+
+        _JSON_ERRORS[0] = False
+        try:
+            return fn(*args, **kwargs)
+        except PickplaceError as exc:
+            _err(str(exc))
+            if _JSON_ERRORS[0]:  # `plan --json`: stdout still carries one JSON document, like a batch row's
+                import json
+
+                sys.stdout.write(json.dumps({"exit_code": exc.exit_code, "error": str(exc)}) + "\n")
+            raise typer.Exit(exc.exit_code) from None
+        except KeyboardInterrupt:
+            _err("interrupted; no output file was changed")
+            raise typer.Exit(130) from None
+        except BrokenPipeError:
+            # the reader went away (e.g. `| head`): not an error of ours
+            try:
+                sys.stdout = None  # type: ignore[assignment]
+            finally:
+                raise typer.Exit(0) from None
+
+    return wrapper
+
+
+#: set by `plan --json` (one move or a round trip) once its options are read: an error after that also
+#: goes to stdout as {"exit_code", "error"}, so a script reading the summary always gets a JSON document
+_JSON_ERRORS = [False]
+
+
+def _version_callback(value: bool) -> None:
+    if value:
+        typer.echo(f"pickplace {__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _root(
+    version: bool = typer.Option(
+        False, "--version", callback=_version_callback, is_eager=True, help="Print the version and exit."
+    ),
+) -> None:
+    """pickplace: smooth pick-and-place trajectories (Li 2018 quintic B-splines) checked for a robot."""
+
+
+def _usage(message: str) -> None:
+    """A usage error (exit 2), reported like any other misuse of the options."""
+    raise typer.BadParameter(message)
+
+
+def _parse_point(name: str, text: str, unit: str = "m"):
+    from ..model.errors import TaskError
+
+    words = "metres" if unit == "m" else unit
+    what = "coordinates" if unit == "m" else "components"
+    parts = [p.strip() for p in text.split(",")]
+    if len(parts) != 3 or not all(parts):
+        example = "-0.1525,0,-0.8" if unit == "m" else "0,0.2,0"
+        raise TaskError(f"{name} = {text!r}: give three {what} X,Y,Z in {words}, e.g. {example}")
+    try:
+        values = [float(p) for p in parts]
+    except ValueError:
+        raise TaskError(f"{name} = {text!r}: every {what[:-1]} must be a number in {words}") from None
+    import math
+
+    if not all(math.isfinite(v) for v in values):
+        raise TaskError(f"{name} = {text!r}: every coordinate must be a finite number (no NaN or inf)")
+    return values
+
+
+def _finite(name: str, value: Optional[float], rule: str = "> 0") -> Optional[float]:
+    import math
+
+    from ..model.errors import TaskError
+
+    if value is None:
+        return None
+    if not math.isfinite(value) or (rule == "> 0" and value <= 0):
+        raise TaskError(f"{name} = {value!r}: must be a finite number {rule}")
+    return value
+
+
+def _complete_profile(incomplete: str) -> list[str]:
+    """Shell completion for --profile: the shipped profile names (files complete by the shell)."""
+    try:
+        from ..model.resources import data_dir
+
+        names = sorted(p.stem for p in data_dir("profiles").glob("*.yaml"))
+    except Exception:  # completion must never fail loudly
+        return []
+    return [n for n in names if n.startswith(incomplete)]
+
+
+def _task_from_options(from_: str, to: str, profile: Optional[str], height: Optional[float], eta: Optional[float]):
+    """(profile, task) from the shared move options of compare and plot (one-line errors)."""
+    from ..model.errors import TaskError
+    from ..model.profile import load_profile
+    from ..model.task import Task
+
+    p_from = _parse_point("from", from_)
+    p_to = _parse_point("to", to)
+    _finite("height", height)
+    if eta is not None and not (0 < eta < 1):
+        raise TaskError(f"eta = {eta!r}: the lift-off/set-down ratio η must lie strictly between 0 and 1")
+    prof = load_profile(profile)
+    task = Task(p_from, p_to, height if height is not None else prof.planning.height,
+                eta if eta is not None else prof.planning.eta)
+    return prof, task
+
+
+def main() -> None:
+    """Console-script entry point."""
+    app()

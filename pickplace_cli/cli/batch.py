@@ -1,0 +1,314 @@
+"""`plan --batch FILE|-`: many moves from a CSV (a file, or a pipe answered row by row), and belt schedules (a t_detect column)."""
+
+from __future__ import annotations
+
+import contextlib
+import sys
+from typing import Optional
+
+import typer
+
+from .app import _usage
+from .render import _batch_line, _emit_json, _emit_row_json, _write_report
+
+
+def _plan_batch(source, prof, options, height, eta, fail_fast, writer, output, report, report_only, json_summary,
+                quiet, workers: int = 1, belt: Optional[dict] = None) -> None:
+    """--batch: plan every row, report failures by row number, write the good ones, exit with the worst code.
+    A batch with a t_detect column is a belt schedule (:func:`_plan_schedule`)."""
+    import os
+
+    from ..pipelines.batch import BatchRow, plan_rows_parallel
+
+    belt = belt or {}
+    name = "stdin" if source == "-" else source
+    streamed = source == "-" or _is_fifo(source)  # a pipe: answer each row as it is read
+    with _batch_input(source, name) as (items, info):
+        if info.get("schedule"):
+            _plan_schedule(items, name, streamed, prof, options, height, eta, fail_fast, writer, output, report,
+                           report_only, json_summary, quiet, workers, belt)
+            return
+        if belt.get("latency") is not None:
+            _usage("--latency with --batch is the default latency of a belt schedule's rows (a batch with a "
+                   "t_detect column); this batch has none")
+        if streamed:
+            _stream_batch(items, name, prof, options, height, eta, fail_fast, writer, output, report,
+                          report_only, json_summary, quiet, workers)
+            return
+        rows, bad = [], []
+        for item in items:
+            (rows if isinstance(item, BatchRow) else bad).append(item)
+    first_bad = min((b.row for b in bad), default=None)
+    if fail_fast and first_bad is not None:
+        rows = [r for r in rows if r.row < first_bad]
+        bad = [b for b in bad if b.row == first_bad]
+    total = len(rows) + len(bad)
+    results: dict = {}
+    pending = sorted(bad, key=lambda b: b.row)  # parse errors, reported in row order as planning passes them
+
+    def flush(upto: float) -> None:
+        while pending and pending[0].row < upto:
+            b = pending.pop(0)
+            results[b.row] = b
+            sys.stderr.write("".join(f"pickplace: {ln}\n" for ln in b.error.splitlines()))
+
+    progress = None
+    if not quiet and total >= 50 and sys.stderr.isatty():
+        from rich.console import Console
+        from rich.progress import Progress
+
+        progress = Progress(console=Console(stderr=True), transient=True)
+        progress.start()
+        bar = progress.add_task(f"planning {total} moves", total=len(rows))
+    stopped = False
+    try:
+        n_workers = workers or ((os.cpu_count() or 1) if len(rows) >= 100 else 1)
+        csv_dialect = writer.csv_dialect if output is not None else None
+        verdicts_only = json_summary and output is None and report is None
+        if verdicts_only:  # the batched verdict engine decides the rows clearly inside every limit (verdicts.py)
+            from ..pipelines.verdicts import engine_applies, verdict_rows_parallel
+        if verdicts_only and engine_applies(prof, options):
+            outcomes = verdict_rows_parallel(rows, prof, options, height, eta, fail_fast, name, workers=n_workers)
+        else:
+            outcomes = plan_rows_parallel(rows, prof, options, height, eta, fail_fast, name, workers=n_workers,
+                                          csv_dialect=csv_dialect, format_failed=report_only)
+        for res in outcomes:
+            flush(res.row)
+            results[res.row] = res
+            if progress is not None:
+                progress.advance(bar)
+            if res.error is not None:  # one line per problem (a limit row: one per exceeded limit)
+                sys.stderr.write("".join(f"pickplace: {ln}\n" for ln in res.error.splitlines()))
+                if fail_fast:
+                    stopped = True
+                    break
+    finally:
+        if progress is not None:
+            progress.stop()
+    if not stopped:
+        flush(float("inf"))
+    ordered = [results[k] for k in sorted(results)]
+    if fail_fast:
+        stop = next((r.row for r in ordered if r.code), None)
+        if stop is not None:
+            ordered = [r for r in ordered if r.row <= stop]
+    codes = [r.code for r in ordered]
+    worst = max(codes, default=0)
+    planned = [r for r in ordered if r.plan is not None and (r.code == 0 or report_only)]
+    if json_summary:
+        for r in ordered:
+            _emit_row_json(r)
+    if report is not None:
+        _write_report([r.plan for r in ordered if r.plan is not None], report, rows=[r.row for r in ordered if r.plan is not None])
+    if not quiet:
+        _batch_line(codes, next((r.row for r in ordered if r.code), None), len(planned) if output is not None else None)
+    if output is not None:
+        _write_batch_file(planned, writer, output, prof.planning.dwell)
+    if worst and not (report_only and all(c == 3 for c in codes if c)):
+        raise typer.Exit(worst)
+
+
+def _write_batch_file(planned, writer, output, dwell: float) -> None:
+    """A file batch's planned rows (RowResults) to ``output`` (atomically), or one line when there is none."""
+    if planned and writer.csv_dialect is not None:
+        # CSV: header, then each plan's rows (formatted by the workers when there are several)
+        from ..export import atomic_output
+        from ..export.csv import csv_header, csv_rows
+
+        with atomic_output(output) as stream:
+            stream.write(csv_header(planned[0].plan, writer.csv_dialect, move=True))
+            for r in planned:
+                stream.write(r.text if r.text is not None else csv_rows(r.plan, writer.csv_dialect, move=r.row))
+    elif planned:
+        from ..pipelines.timeline import concatenate
+
+        # CSV/JSON: each move keeps its own time (the move column tells them apart); MCAP: one timeline,
+        # moves one dwell apart
+        samples = concatenate([r.plan for r in planned], [r.row for r in planned],
+                              restart_time=not writer.one_timeline, gap=dwell)
+        writer(samples, output)
+    else:
+        sys.stderr.write("pickplace: no row could be written\n")
+
+
+@contextlib.contextmanager
+def _batch_input(source: str, name: str):
+    """The batch's rows (:func:`~pickplace_cli.pipelines.batch.iter_batch`, lazily) and its header ``info`` (plain batch or
+    belt schedule), the header already read; the file (or stdin) stays open inside the ``with``."""
+    import itertools
+
+    from ..pipelines.batch import iter_batch
+    from ..model.errors import TaskError
+
+    with contextlib.ExitStack() as stack:
+        if source == "-":
+            try:  # undecodable bytes are an error, not surrogates (a C/POSIX locale's stdin escapes them)
+                sys.stdin.reconfigure(errors="strict")
+            except (AttributeError, ValueError, OSError):  # pragma: no cover - a test runner's stand-in
+                pass
+            fh = sys.stdin
+        else:
+            try:  # -sig: Excel's BOM
+                fh = stack.enter_context(open(source, encoding="utf-8-sig", newline=""))
+            except OSError as exc:
+                raise TaskError(f"batch = {source}: cannot read it: {exc.strerror}") from None
+        info: dict = {}
+        items = iter_batch(fh, name, info)
+        yield itertools.chain([next(items)], items), info  # next(): the header is read
+
+
+def _plan_schedule(items, name, streamed, prof, options, height, eta, fail_fast, writer, output, report,
+                   report_only, json_summary, quiet, workers, belt) -> None:
+    """--batch with a t_detect column: a belt schedule (pickplace_cli/schedule.py), the robot's state carried
+    from row to row. A file is checked whole (order, cells) before anything is planned or written; a stream
+    row by row. Each row: a JSON line (--json) or a line on stderr; the picked cycles' samples (detection clock,
+    move = row) to -o / stdout; the closing line; exit with the worst row's code."""
+    from contextlib import ExitStack
+
+    from ..model.errors import TaskError
+    from ..pipelines.schedule import ScheduleSummary, check_order, plan_schedule
+
+    if report is not None or report_only:
+        _usage(f"{'--report' if report is not None else '--report-only'} is not available with a belt schedule "
+               "(a batch with t_detect): use --json for each row's limits")
+    if belt.get("method_given") and options.method != "bspline-vel":
+        raise TaskError(f"method = {options.method}: a belt schedule meets each part with its velocity; it "
+                        "needs --method bspline-vel (the default for a schedule)")
+    if workers > 1 and not quiet:
+        sys.stderr.write(f"pickplace: -j {workers}: a belt schedule is planned row by row (the robot's state carries "
+                         "over from each row to the next); one process\n")
+    if not streamed:  # every row read and checked first: an input error writes nothing
+        items = list(check_order(items, name))
+    params = {k: v for k, v in options.method_params.items() if k in ("solver", "table") and v is not None}
+    results = plan_schedule(items, prof, options.time, height, eta, options.rate, belt.get("latency") or 0.0,
+                            params, name, fail_fast)
+    summary = ScheduleSummary()
+    kept: list = []
+    csv_out = output is not None and writer.csv_dialect is not None
+    with ExitStack() as stack:
+        out = None
+        if csv_out:
+            from ..export import atomic_output
+            from ..export.csv import csv_header, csv_rows
+
+            out = stack.enter_context(atomic_output(output))
+        for res in results:
+            summary.add(res)
+            if res.error is not None:
+                sys.stderr.write("".join(f"pickplace: {ln}\n" for ln in res.error.splitlines()))
+            elif not quiet:
+                c = res.cycle
+                xyz = ", ".join(f"{x:.4f}" for x in c.rendezvous.meeting_point)
+                sys.stderr.write(f"row {res.row}: starts t = {c.t_start:.4f} s (latency {c.latency:.4f} s), meets the part "
+                                 f"at ({xyz}) m at t = {c.t_meet:.4f} s, placed t = {c.t_place:.4f} s, free "
+                                 f"t = {c.t_end:.4f} s\n")
+            sys.stderr.flush()
+            if json_summary:
+                _emit_json(res.as_dict())
+            if res.code == 0 and output is not None:
+                timeline = res.cycle.timeline()
+                if out is not None:
+                    if summary.picks == 1:
+                        out.write(csv_header(timeline, writer.csv_dialect, move=True))
+                    out.write(csv_rows(timeline, writer.csv_dialect))
+                    out.flush()
+                else:
+                    kept.append(timeline)
+    if kept:
+        from ..pipelines.timeline import _join, _pieces_of
+
+        writer(_join([_pieces_of(tl, 0.0) for tl in kept], [int(tl.move[0]) for tl in kept], kept[0].joint,
+                     [sg for tl in kept for sg in tl.segments], [sm for tl in kept for sm in tl.summaries]), output)
+    if json_summary:
+        _emit_json({"schedule": summary.as_dict()})
+    if not quiet:
+        sys.stderr.write(summary.line() + "\n")
+    if output is not None and summary.picks == 0:
+        sys.stderr.write("pickplace: no part was picked: nothing written\n")
+    if summary.worst:
+        raise typer.Exit(summary.worst)
+
+
+def _is_fifo(path: str) -> bool:
+    import os
+    import stat
+
+    try:
+        return stat.S_ISFIFO(os.stat(path).st_mode)
+    except OSError:
+        return False
+
+
+def _stream_batch(items, name, prof, options, height, eta, fail_fast, writer, output, report, report_only,
+                  json_summary, quiet, workers: int) -> None:
+    """--batch - (or a named pipe): the rows of :func:`~pickplace_cli.pipelines.batch.iter_batch` (``items``), each
+    answered as soon as its line is read — a JSON line (``--json``)
+    or its CSV rows, flushed — with the same row numbers, messages and exit codes as a file batch. Memory:
+    one row's trajectory (MCAP and JSON trajectories need the whole timeline: those rows are kept until the
+    input ends; ``--report`` keeps each row's limit report, not its samples)."""
+    from contextlib import ExitStack
+
+    from ..pipelines.batch import ReportRecord
+    from ..pipelines.stream import plan_stream
+
+    verdicts_only = json_summary and output is None and report is None
+    engine = False
+    if verdicts_only:
+        from ..pipelines.verdicts import engine_applies
+
+        engine = engine_applies(prof, options)
+    csv_out = output is not None and writer.csv_dialect is not None
+    kept: list = []  # MCAP / JSON trajectories: the rows to write when the input ends
+    reports: list = []
+    codes: list[int] = []
+    first_failed = None
+    n_written = 0
+    with ExitStack() as stack:
+        out = None
+        if csv_out:
+            from ..export import atomic_output
+            from ..export.csv import csv_header, csv_rows
+
+            out = stack.enter_context(atomic_output(output))
+        results = plan_stream(items, prof, options, height, eta, fail_fast, name,
+                              workers=max(workers, 1), csv_dialect=writer.csv_dialect if csv_out else None,
+                              format_failed=report_only, verdicts=engine)
+        for res in results:
+            codes.append(res.code)
+            if res.code and first_failed is None:
+                first_failed = res.row
+            if res.error is not None:
+                sys.stderr.write("".join(f"pickplace: {ln}\n" for ln in res.error.splitlines()))
+                sys.stderr.flush()
+            if json_summary:
+                _emit_row_json(res)
+            if res.plan is not None and report is not None:
+                reports.append((res.row, ReportRecord.of(res.plan)))
+            if res.plan is not None and output is not None and (res.code == 0 or report_only):
+                n_written += 1
+                if out is not None:
+                    if n_written == 1:
+                        out.write(csv_header(res.plan, writer.csv_dialect, move=True))
+                    out.write(res.text if res.text is not None else csv_rows(res.plan, writer.csv_dialect, move=res.row))
+                    out.flush()
+                else:
+                    from ..pipelines.batch import PlanRecord
+
+                    kept.append((res.row, res.plan if isinstance(res.plan, PlanRecord) else PlanRecord.of(res.plan)))
+            if fail_fast and res.code:
+                break
+    if kept:
+        from ..pipelines.timeline import concatenate
+
+        samples = concatenate([p for _, p in kept], [r for r, _ in kept], restart_time=not writer.one_timeline,
+                              gap=prof.planning.dwell)
+        writer(samples, output)
+    if report is not None:
+        _write_report([r for _, r in reports], report, rows=[n for n, _ in reports])
+    worst = max(codes, default=0)
+    if not quiet:
+        _batch_line(codes, first_failed, n_written if output is not None else None)
+    if output is not None and n_written == 0:
+        sys.stderr.write("pickplace: no row could be written\n")
+    if worst and not (report_only and all(c == 3 for c in codes if c)):
+        raise typer.Exit(worst)

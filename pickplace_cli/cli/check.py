@@ -1,0 +1,78 @@
+"""`pickplace check`: check a trajectory file (this tool's CSV or another tool's) against a profile's limits."""
+
+from __future__ import annotations
+
+import sys
+from typing import Optional
+
+import typer
+
+from .app import _handle_errors, app
+from .render import _print_limit_table, _print_verdict
+
+
+@app.command()
+@_handle_errors
+def check(
+    trajectory: str = typer.Argument(
+        ..., metavar="TRAJECTORY",
+        help="CSV with a header holding t [s] and q1 … qn (this tool's CSV works, also --batch and --round-trip "
+        "output); '-' = stdin.",
+    ),
+    profile: Optional[str] = typer.Option(None, "--profile", "-p", help="Profile YAML file or shipped name. [default: delta-su2018]"),
+    smoothing: float = typer.Option(
+        0.0, "--smoothing", help="Smoothing factor per sample, in m² (0 = interpolate exactly; > 0 for noisy measured data)."
+    ),
+    report: Optional[str] = typer.Option(None, "--report", help="Also write the limit report as JSON to this file."),
+    report_only: bool = typer.Option(False, "--report-only", help="Exit 0 even when a limit is exceeded."),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="Only violations and errors on stderr."),
+) -> None:
+    """Check an existing joint trajectory against a profile's limits (exit 3 if a limit is exceeded).
+
+    Joint positions go through forward kinematics; a quintic spline of the tool positions gives the
+    derivatives (the report says so), then the same dynamics and limit check as `plan`. Joint positions
+    are checked as given (q1 = 5 rad is 5 rad, not wrapped).
+
+    A file with a `move` column (`plan --batch` or `--round-trip` output) is checked move by move: each
+    move gets its own limit table and verdict, and the exit code is the worst of them. Samples at the end
+    of a move that repeat its last position (a round trip's dwell) are the dwell, not part of the move.
+    """
+    import json
+
+    from ..pipelines.check import check_file
+    from ..model.errors import TaskError
+    from ..export import atomic_output
+    from ..model.profile import load_profile
+
+    if not (smoothing >= 0 and smoothing < float("inf")):
+        raise TaskError(f"smoothing = {smoothing!r}: must be a finite number >= 0")
+    prof = load_profile(profile)
+    checks = check_file(trajectory, prof, smoothing)
+    several = len(checks) > 1 or checks[0].move is not None
+    if report is not None:
+        with atomic_output(report) as stream:
+            if several:
+                doc = {"profile": prof.name, "moves": [
+                    {"move": c.move, "lines": [c.first_line, c.last_line], "limits": c.report.as_dict()} for c in checks
+                ]}
+            else:
+                doc = {"profile": prof.name, "limits": checks[0].report.as_dict()}
+            json.dump(doc, stream, indent=2, default=float)
+            stream.write("\n")
+    for c in checks:
+        rep = c.report
+        if several and (not quiet or not rep.ok):
+            sys.stderr.write(f"--- move {c.move} (lines {c.first_line}–{c.last_line}) ---\n")
+        if not quiet:
+            for note in rep.notes:
+                sys.stderr.write(f"{note}\n")
+            _print_limit_table(rep)
+        _print_verdict(rep, quiet, with_cycle=not several)
+    code = max(c.report.exit_code() for c in checks)
+    if several and not quiet:
+        bad = sum(not c.report.ok for c in checks)
+        sys.stderr.write(
+            f"checked {len(checks)} move(s): {len(checks) - bad} within every limit, {bad} exceed one\n"
+        )
+    if code and not report_only:
+        raise typer.Exit(code)

@@ -1,0 +1,60 @@
+"""`pickplace compare`: every method on one move, side by side."""
+
+from __future__ import annotations
+
+import sys
+from enum import Enum
+from typing import Optional
+
+import typer
+
+from .app import _err, _handle_errors, _task_from_options, app
+from .render import _print_comparison
+
+
+class CompareFormat(str, Enum):
+    table = "table"
+    csv = "csv"
+    json = "json"
+
+
+@app.command()
+@_handle_errors
+def compare(
+    from_: str = typer.Option(..., "--from", help="Pick point X,Y,Z in m (base frame)."),
+    to: str = typer.Option(..., "--to", help="Place point X,Y,Z in m (base frame)."),
+    methods: str = typer.Option("all", "--methods", "-m", help="'all' or method names separated by commas."),
+    profile: Optional[str] = typer.Option(None, "--profile", "-p", help="Profile YAML file or shipped name. [default: delta-su2018]"),
+    height: Optional[float] = typer.Option(None, "--height", help="Clearance h in m above the higher end point. [default: profile]"),
+    eta: Optional[float] = typer.Option(None, "--eta", help="Lift-off/set-down ratio η, 0 < η < 1. [default: profile]"),
+    time: str = typer.Option("auto", "--time", "-t", help="Duration for the peaks and torques: 'auto', 'fit', 'optimal' (non-uniform time law) or seconds."),
+    fmt: CompareFormat = typer.Option(CompareFormat.table, "--format", "-f", help="table (stderr only), csv or json (stdout or -o)."),
+    output: str = typer.Option("-", "--output", "-o", help="Output file for csv/json ('-' = stdout). Written atomically."),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="No table on stderr with csv/json (errors still print)."),
+) -> None:
+    """Compare every planning method on one move: durations (auto, fit, the paper's formula), normalised
+    and true peaks, joint torque and torque-rate use, height, overshoot, drift, continuity class, residual
+    vibration. Exit 0 when at least one method planned (limits exceeded are shown, not fatal); otherwise
+    the first method's error code.
+    """
+    from ..studies.compare import compare_methods, write_compare_csv, write_compare_json
+    from ..model.errors import ExportError
+    from ..export import atomic_output, check_writable
+
+    if fmt == CompareFormat.table and output != "-":
+        raise ExportError(f"output = {output}: --format table prints to stderr; use --format csv or json to write a file")
+    check_writable(output)
+    prof, task = _task_from_options(from_, to, profile, height, eta)
+    result = compare_methods(task, prof, methods, time=time)
+    for r in result.rows:
+        if not r.ok:
+            sys.stderr.write(f"pickplace: method {r.method}: {r.error}\n")
+    if not result.ok_rows:
+        _err("no method could plan this move")
+        raise typer.Exit(result.rows[0].exit_code or 1)
+    if fmt == CompareFormat.table or not quiet:
+        _print_comparison(result)
+    if fmt != CompareFormat.table:
+        writer = write_compare_csv if fmt == CompareFormat.csv else write_compare_json
+        with atomic_output(output) as stream:
+            writer(result, stream)

@@ -1,0 +1,482 @@
+"""`pickplace plan`: parse the options → plan one move, a round trip or a conveyor rendezvous (or hand a batch over) → render."""
+
+from __future__ import annotations
+
+import sys
+from typing import Optional
+
+import typer
+
+from .app import (
+    _complete_profile,
+    _finite,
+    _handle_errors,
+    _JSON_ERRORS,
+    _parse_point,
+    _usage,
+    app,
+    Compression,
+    CsvDialectName,
+    MAX_SHIFT,
+    McapFlavor,
+    MethodName,
+    OptimizeWhat,
+    OutputFormat,
+)
+from .batch import _plan_batch
+from .render import (
+    _check_output_paths,
+    _emit_json,
+    _json_summary,
+    _print_limit_table,
+    _print_rendezvous,
+    _print_summary,
+    _print_verdict,
+    _write_report,
+    _writer,
+)
+
+
+@app.command()
+@_handle_errors
+def plan(
+    ctx: typer.Context,
+    from_: Optional[str] = typer.Option(None, "--from", help="Pick point X,Y,Z in m (base frame), e.g. -0.1525,0,-0.8."),
+    to: Optional[str] = typer.Option(None, "--to", help="Place point X,Y,Z in m (base frame)."),
+    profile: Optional[str] = typer.Option(
+        None, "--profile", "-p", help="Profile YAML file, or the name of a shipped profile. [default: delta-su2018]",
+        autocompletion=_complete_profile,
+    ),
+    height: Optional[float] = typer.Option(
+        None, "--height", help="Clearance h in m of the path's midpoint above the higher end point. [default: profile]"
+    ),
+    eta: Optional[float] = typer.Option(
+        None, "--eta", help="Lift-off/set-down ratio η, 0 < η < 1 (dimensionless). [default: profile]"
+    ),
+    v_from: Optional[str] = typer.Option(
+        None, "--v-from", "--from-belt", help="Tool velocity VX,VY,VZ in m/s (base frame) leaving the pick point, e.g. the pick "
+        "conveyor's (--method bspline-vel). [default: profile workcell.conveyor_pick_velocity, else 0]"
+    ),
+    v_to: Optional[str] = typer.Option(
+        None, "--v-to", help="Tool velocity VX,VY,VZ in m/s arriving at the place point (--method bspline-vel). "
+        "[default: profile workcell.conveyor_place_velocity, else 0]"
+    ),
+    to_belt: Optional[str] = typer.Option(
+        None, "--to-belt", help="Conveyor rendezvous: the part at --to (m, when it was detected) moves at VX,VY,VZ m/s "
+        "(base frame); the move meets it where it is after --latency + T and arrives with this velocity, then tracks it "
+        "for the profile's dwell (s). Selects --method bspline-vel.",
+    ),
+    latency: Optional[float] = typer.Option(
+        None, "--latency", help="With --to-belt: seconds (>= 0) from the part's detection to the start of the move "
+        "(vision + planning + bus); the trajectory's t = 0 is the start of the move. With a belt schedule (--batch "
+        "with t_detect): the rows' earliest move start after their detection. [default: 0]",
+    ),
+    method: MethodName = typer.Option(MethodName.bspline, "--method", "-m", help="Planning method."),
+    k1: Optional[float] = typer.Option(None, "--k1", help="B-spline time-ratio factor k1 = τ8/τ9 (overrides the table)."),
+    k2: Optional[float] = typer.Option(None, "--k2", help="B-spline time-ratio factor k2 = τ7/τ8 (overrides the table)."),
+    table: Optional[str] = typer.Option(
+        None, "--table", help="bspline: λ → (k1, k2) table CSV; bspline-vel: conveyor table that seeds the exact "
+        "solve. [default: shipped table]"
+    ),
+    param: Optional[list[str]] = typer.Option(
+        None, "--param", help="A method parameter NAME=VALUE (repeatable): ph m=, r= (corner extents in m); "
+        "lame m= (exponent, >= 3); piecewise-poly ratio= (τv/τu); bspline-vel margin=, tau6= … lambda3=. "
+        "[default: the paper's values]",
+    ),
+    time: str = typer.Option(
+        "auto",
+        "--time",
+        "-t",
+        help="Duration of the move in s, or 'auto' (from the profile's Cartesian capacity, Li 2018 Eq. 26), "
+        "or 'fit' (the smallest duration at which every joint and motor limit holds, path scaled uniformly in time), "
+        "or 'optimal' (the same path with a non-uniform, jerk-bounded time law that minimises the duration under the "
+        "same joint and motor limits, RMS included; ~0.3 s more; not for bspline-vel).",
+    ),
+    optimize: OptimizeWhat = typer.Option(
+        OptimizeWhat.none, "--optimize", help="'shape' (--method bspline): also choose the path's k1, k2 and η "
+        "(η within [0.1, 0.9]; give --eta to hold it) for the smallest duration on this robot's limits, instead of "
+        "the table's values (Li 2018's Cartesian optimum); with --time fit or optimal (the fit and the law are then "
+        "those of the chosen shape). The summary compares it with the table's shape. ~0.5-1 s more.",
+    ),
+    hold_capacity: bool = typer.Option(
+        False, "--hold-capacity", help="With --time fit or optimal (and --optimize shape): also hold the profile's "
+        "Cartesian capacity |v| ≤ capacity.velocity [m/s], |a| ≤ capacity.acceleration [m/s²] (and |j| ≤ capacity.jerk "
+        "[m/s³] when set), e.g. for a payload or gripper that limits the tool. Default: off, fit and optimal hold "
+        "the joint and motor limits only (auto holds the capacity only).",
+    ),
+    show_fit: bool = typer.Option(
+        False, "--show-fit", help="With --time auto or seconds: also compute the fitted duration (the smallest at "
+        "which every joint and motor limit holds) and report it next to the chosen one (fit_s in --json). Costs "
+        "~0.5 s of start-up (scipy.optimize); --time fit always computes it.",
+    ),
+    rate: Optional[float] = typer.Option(None, "--rate", help="Samples per second in Hz. [default: profile]"),
+    batch: Optional[str] = typer.Option(
+        None, "--batch", help="Plan many moves from a CSV ('-' = stdin or a named pipe: streamed, each row answered "
+        "and flushed as soon as it is read): columns from_x,from_y,from_z,to_x,to_y,to_z "
+        "[m], optional height [m], eta, v_from_x.. v_to_z [m/s], time [s|auto|fit|optimal]. Output gets a move column. "
+        "A t_detect column makes it a belt schedule (one detected part per row, in time order, the robot's state "
+        "carried over): t_detect [s], to_x,to_y,to_z [m, where the part was seen], to_belt_vx,to_belt_vy,to_belt_vz "
+        "[m/s], place_x,place_y,place_z [m], optional latency [s >= 0, default --latency], height, eta, time, "
+        "from_x,from_y,from_z [m, row 1 only: the robot's start]."
+    ),
+    fail_fast: bool = typer.Option(False, "--fail-fast", help="With --batch: stop at the first row that fails."),
+    workers: int = typer.Option(
+        0, "--workers", "-j", help="With --batch: planner processes (0 = all cores for 100 rows or more, else 1). "
+        "Results are the same and in row order whatever the number."
+    ),
+    round_trip: bool = typer.Option(
+        False, "--round-trip", help="Write there, dwell, back, dwell (the profile's dwell in s) as one trajectory."
+    ),
+    fmt: OutputFormat = typer.Option(OutputFormat.csv, "--format", "-f", help="Output format."),
+    csv_dialect: CsvDialectName = typer.Option(
+        CsvDialectName.default, "--csv-dialect",
+        help="CSV flavour: default (',' LF, header), twincat (';' CRLF, header), tsv (tab, no header).",
+    ),
+    mcap_flavor: McapFlavor = typer.Option(
+        McapFlavor.ros2, "--mcap-flavor", help="MCAP: ros2 (CDR, ROS 2 messages) or foxglove (JSON, Foxglove schemas)."
+    ),
+    compression: Compression = typer.Option(Compression.none, "--compression", help="MCAP chunk compression."),
+    output: Optional[str] = typer.Option(
+        None, "--output", "-o", help="Output file ('-' = stdout, the default without --json). Written atomically."
+    ),
+    report: Optional[str] = typer.Option(None, "--report", help="Also write the limit report as JSON to this file."),
+    report_only: bool = typer.Option(
+        False,
+        "--report-only",
+        help="Write the trajectory and exit 0 even when a limit is exceeded (the report still says so). "
+        "Without it, a move that breaks a limit is not written.",
+    ),
+    json_summary: bool = typer.Option(
+        False, "--json", help="Print a JSON summary (durations in s, cycle time, picks/min, verdict) on stdout "
+        "instead of the trajectory (one line per row with --batch); the trajectory then goes only to -o FILE.",
+    ),
+    fit_ws: bool = typer.Option(
+        False, "--fit-workspace", help="If the path leaves the workcell box or the reachable set, lower the height "
+        "in 1 mm steps until it fits (Su 2018 Sec. II.E) and say what changed."
+    ),
+    adjust_points: bool = typer.Option(
+        False, "--adjust-points", help="With --fit-workspace: move a pick/place point that lies outside to the nearest "
+        "inside point by Su 2018's potential field (Eq. 25), and report the distance. Never done silently."
+    ),
+    max_shift: float = typer.Option(
+        MAX_SHIFT, "--max-shift", help="With --adjust-points: the largest allowed move of a point in m (farther: exit 4)."
+    ),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="Nothing on stderr but errors and exceeded limits."),
+) -> None:
+    """Plan one move (or a round trip, or a batch), check it against the robot's limits, write the samples.
+
+    CSV columns: t[s], x y z [m], vx… [m/s], ax… [m/s^2], jx… [m/s^3], then per joint q<i>, qd<i>, qdd<i>,
+    then torque<i> (joint side, N·m or N), motor_speed<i> [rad/s], motor_torque<i> [N·m]; a batch or round
+    trip adds a leading move column. Exit 3 when a limit is exceeded, 4 when a point is unreachable or
+    outside the workcell, 1 for invalid input; a batch exits with the highest code of its rows.
+    """
+    from types import SimpleNamespace
+
+    from ..model.profile import load_profile
+    from ..planner import PlanOptions
+
+    a = SimpleNamespace(**{k: v for k, v in locals().items() if k not in ("SimpleNamespace", "load_profile",
+                                                                         "PlanOptions")})
+    _JSON_ERRORS[0] = json_summary and batch is None  # a batch prints its own line per row
+    _check_plan_values(a)
+    _check_plan_usage(a)
+    if a.output is None and not json_summary:
+        a.output = "-"
+    _check_output_paths(a.output, report)
+    if batch is not None and to_belt is None and latency is not None:  # a belt schedule's default row latency
+        _finite_latency(latency)
+    elif to_belt is not None or latency is not None:
+        a.method = _belt_method(ctx, method, to_belt, latency, v_to, batch, round_trip, fit_ws, optimize)
+    prof = load_profile(profile)
+    params = _method_params(a)
+    writer = _writer(fmt, csv_dialect, mcap_flavor, compression)
+    _check_shape_usage(a)
+    options = PlanOptions(method=a.method.value, method_params=params, time=time, rate=rate,
+                          fit=time == "fit" or show_fit, shape=a.optimize == OptimizeWhat.shape,
+                          hold_eta=eta is not None, hold_capacity=hold_capacity)
+    if batch is not None:
+        if workers < 0:
+            from ..model.errors import TaskError
+
+            raise TaskError(f"workers = {workers}: must be 0 (automatic) or a positive number of processes")
+        source = ctx.get_parameter_source("method")
+        belt = {"latency": latency, "method_given": source is not None and source.name != "DEFAULT"}
+        _plan_batch(batch, prof, options, height, eta, fail_fast, writer, a.output, report, report_only, json_summary,
+                    quiet, workers, belt)
+        return
+    task, workspace_fit, vel_from = _single_task(a, prof, params)
+    rendezvous = track = None
+    if to_belt is not None:
+        legs, rendezvous, track = _plan_to_belt(task.p_from, task.p_to, to_belt, latency, prof, time, task.height,
+                                                task.eta, vel_from, params, rate)
+    else:
+        legs = [_run_plan(task, prof, options)]
+    if round_trip:
+        from ..model.task import Task
+
+        legs.append(_run_plan(Task(task.p_to, task.p_from, task.height, task.eta), prof, options))
+    code, cycle = _render_legs(a, prof, legs, rendezvous, track)
+    _write_plan_outputs(a, prof, writer, legs, track, code)
+    if json_summary:
+        _emit_json(_plan_json(legs, cycle, code, report_only, workspace_fit, rendezvous, track))
+    if code and not report_only:
+        if a.output is not None:
+            sys.stderr.write(
+                "pickplace: trajectory not written (a limit is exceeded); --report-only writes it anyway\n"
+            )
+        raise typer.Exit(code)
+
+
+def _check_plan_values(a) -> None:
+    """Values (exit 1): height, rate, k1/k2, η."""
+    from ..model.errors import TaskError
+
+    _finite("height", a.height)
+    _finite("rate", a.rate)
+    if a.rate is not None and not (0 < a.rate <= 1e6):
+        raise TaskError(f"rate = {a.rate!r} Hz: the output rate must lie in (0, 1e6] Hz (as the profile's planning.rate)")
+    if a.k1 is not None or a.k2 is not None:
+        from ..paths.bspline import check_k
+
+        for name, k in (("k1", a.k1), ("k2", a.k2)):
+            if k is not None:
+                check_k(name, k)
+    if a.eta is not None and not (0 < a.eta < 1):
+        raise TaskError(f"eta = {a.eta!r}: the lift-off/set-down ratio η must lie strictly between 0 and 1")
+
+
+def _check_plan_usage(a) -> None:
+    """Usage (exit 2): options that contradict each other, or are set where they have no effect (refused, not
+    ignored)."""
+    batch, fmt = a.batch, a.fmt
+    if batch is not None and (a.from_ is not None or a.to is not None):
+        _usage("--batch takes the moves from the file; do not also give --from/--to")
+    if batch is None and (a.from_ is None or a.to is None):
+        _usage(f"missing --{'to' if a.from_ is not None else 'from'}: give both --from X,Y,Z and --to X,Y,Z in m (or --batch FILE)")
+    if batch is not None and a.round_trip:
+        _usage("--round-trip is not available with --batch (give each leg as a row)")
+    if batch is None and (a.fail_fast or a.workers != 0):
+        _usage(f"{'--fail-fast' if a.fail_fast else '-j/--workers'} only applies to --batch")
+    if batch is not None and (a.v_from is not None or a.v_to is not None):
+        _usage("--v-from/--v-to: with --batch give the velocities of each row as columns v_from_x … v_to_z")
+    if fmt != OutputFormat.mcap and (a.mcap_flavor != McapFlavor.ros2 or a.compression != Compression.none):
+        what = f"--mcap-flavor {a.mcap_flavor.value}" if a.mcap_flavor != McapFlavor.ros2 else f"--compression {a.compression.value}"
+        _usage(f"{what} only applies to --format mcap (the format is {fmt.value})")
+    if fmt != OutputFormat.csv and a.csv_dialect != CsvDialectName.default:
+        _usage(f"--csv-dialect {a.csv_dialect.value} only applies to --format csv (the format is {fmt.value})")
+    if a.json_summary and a.output is None and (fmt != OutputFormat.csv or a.csv_dialect != CsvDialectName.default):
+        _usage("--format/--csv-dialect: with --json and no -o FILE no trajectory is written (stdout carries the summary)")
+    if a.adjust_points and not a.fit_ws:
+        _usage("--adjust-points only applies with --fit-workspace")
+    if a.max_shift != MAX_SHIFT and not a.adjust_points:
+        _usage("--max-shift only applies with --adjust-points")
+    if a.json_summary and a.report == "-":
+        _usage("--report -: with --json stdout carries the summary; give --report a file")
+    if a.json_summary and a.output == "-":
+        _usage("-o -: with --json stdout carries the summary; give -o a file for the trajectory")
+
+
+def _finite_latency(latency: float) -> None:
+    import math
+
+    from ..model.errors import TaskError
+
+    if not (math.isfinite(latency) and latency >= 0):
+        raise TaskError(f"latency = {latency!r}: must be a finite number of seconds >= 0 (detection to move start)")
+
+
+def _method_params(a) -> dict:
+    """The method's parameters: --param NAME=VALUE, and --k1/--k2/--table where the method takes them."""
+    params: dict = _parse_params(a.param or [])
+    k_given = a.k1 is not None or a.k2 is not None
+    if a.method == MethodName.bspline:
+        params.update({"k1": a.k1, "k2": a.k2, "table": a.table})
+    elif a.method == MethodName.bspline_vel and a.table is not None and not k_given:
+        params.update({"solver": "seeded", "table": a.table})  # that table seeds the exact polish
+    elif k_given or a.table is not None:
+        _usage(f"--k1/--k2/--table belong to --method bspline (--table also to bspline-vel), not {a.method.value}")
+    return params
+
+
+def _check_shape_usage(a) -> None:
+    """Usage (exit 2) of --fit-workspace with --batch, --optimize shape and --hold-capacity."""
+    if a.batch is not None and a.fit_ws:
+        _usage("--fit-workspace is not available with --batch")
+    shape = a.optimize == OptimizeWhat.shape
+    if shape and a.method != MethodName.bspline:
+        _usage(f"--optimize shape chooses k1, k2, η of --method bspline; method {a.method.value} has no such shape")
+    if shape and a.time not in ("fit", "optimal"):
+        _usage(f"--optimize shape minimises the fitted duration on the robot's limits: use it with --time fit or "
+               f"--time optimal (not --time {a.time})")
+    if a.hold_capacity and a.time not in ("fit", "optimal"):
+        _usage(f"--hold-capacity applies to --time fit or optimal (--time {a.time} "
+               f"{'holds the capacity already' if a.time == 'auto' else 'is given'})")
+    if shape and (a.k1 is not None or a.k2 is not None):
+        _usage("--optimize shape chooses k1 and k2 itself: drop --k1/--k2 (or drop --optimize)")
+
+
+def _single_task(a, prof, params: dict):
+    """(task, workspace fit or None, velocity leaving the pick point) of a one-move plan: the points, height,
+    η and end velocities from the options and the profile; --fit-workspace applied."""
+    from ..model.errors import TaskError
+    from ..model.task import Task
+
+    p_from = _parse_point("from", a.from_)
+    p_to = _parse_point("to", a.to)
+    h = a.height if a.height is not None else prof.planning.height
+    e = a.eta if a.eta is not None else prof.planning.eta
+    wc = prof.workcell
+    vel_from = _parse_point("v-from", a.v_from, "m/s") if a.v_from is not None else (getattr(wc, "conveyor_pick_velocity", None) or (0.0, 0.0, 0.0))
+    vel_to = _parse_point("v-to", a.v_to, "m/s") if a.v_to is not None else (getattr(wc, "conveyor_place_velocity", None) or (0.0, 0.0, 0.0))
+    moving_ends = any(vel_from) or any(vel_to)
+    if a.method != MethodName.bspline_vel and (a.v_from is not None or a.v_to is not None) and moving_ends:
+        raise TaskError(
+            f"v-from/v-to: method {a.method.value} plans moves from rest to rest; use --method bspline-vel "
+            "for moving ends (conveyor tracking, Yang 2022)"
+        )
+    if a.method != MethodName.bspline_vel:
+        vel_from = vel_to = (0.0, 0.0, 0.0)  # the profile's conveyors concern bspline-vel only
+    if a.round_trip and moving_ends and a.method == MethodName.bspline_vel:
+        _usage("--round-trip dwells at rest between the legs: not possible with moving ends (--v-from/--v-to)")
+    task = Task(p_from, p_to, h, e, v_from=vel_from, v_to=vel_to)
+    workspace_fit = None
+    if a.fit_ws:
+        from ..studies.workspace import fit_workspace
+
+        _finite("max-shift", a.max_shift)
+        workspace_fit = fit_workspace(task, prof, a.method.value, params, adjust_points=a.adjust_points,
+                                      max_shift=a.max_shift)
+        for line in workspace_fit.changes():
+            sys.stderr.write(f"pickplace: {line}\n")
+        task = workspace_fit.task
+    return task, workspace_fit, vel_from
+
+
+def _render_legs(a, prof, legs: list, rendezvous, track) -> tuple[int, float]:
+    """Summary, limit table and verdict of every leg (and of the tracking segment) on stderr; (exit code,
+    cycle time [s])."""
+    quiet, round_trip = a.quiet, a.round_trip
+    for i, leg in enumerate(legs):
+        if not quiet:
+            if round_trip:
+                sys.stderr.write(f"--- move {i + 1} ({'there' if i == 0 else 'back'}) ---\n")
+            _print_summary(leg)
+            if rendezvous is not None and i == 0:
+                _print_rendezvous(rendezvous)
+            _print_limit_table(leg.report)
+        _print_verdict(leg.report, quiet, with_cycle=not round_trip)
+    code = max(leg.report.exit_code() for leg in legs)
+    if track is not None:  # the tracking segment after the rendezvous: checked like a move
+        if not quiet:
+            sys.stderr.write(f"--- tracking the part: t = {rendezvous.seconds:.4f} … "
+                             f"{rendezvous.seconds + track.duration.seconds:.4f} s at the belt velocity ---\n")
+            _print_limit_table(track.report)
+        _print_verdict(track.report, quiet, with_cycle=False)
+        code = max(code, track.report.exit_code())
+    dwell = prof.planning.dwell
+    cycle = sum(leg.report.duration for leg in legs) + len(legs) * dwell if round_trip else legs[0].report.round_trip
+    if round_trip and not quiet:
+        sys.stderr.write(
+            f"round trip: {legs[0].report.duration:.4f} s + {legs[1].report.duration:.4f} s + 2 × {dwell:g} s dwell "
+            f"= {cycle:.4f} s, {60.0 / cycle:.1f} picks/min; {'all limits hold' if code == 0 else 'LIMITS EXCEEDED'}\n"
+        )
+    return code, cycle
+
+
+def _write_plan_outputs(a, prof, writer, legs: list, track, code: int) -> None:
+    """--report, then the trajectory (before the JSON summary: a failed write is then the one JSON document on
+    stdout): the move, the round trip, or the move with its tracking segment; not written when a limit is
+    exceeded unless --report-only."""
+    if a.report is not None:
+        _write_report(legs + ([track] if track is not None else []), a.report)
+    if a.output is None or not (code == 0 or a.report_only):
+        return
+    if a.round_trip:
+        from ..pipelines.timeline import round_trip as make_round_trip
+
+        rate_hz = a.rate if a.rate is not None else prof.planning.rate
+        samples = make_round_trip(legs[0], legs[1], prof.planning.dwell, rate_hz)
+    elif track is not None:
+        from ..pipelines.rendezvous import with_tracking
+
+        samples = with_tracking(legs[0], track)
+    else:
+        samples = legs[0]
+    writer(samples, a.output)
+
+
+def _plan_json(legs: list, cycle: float, code: int, report_only: bool, workspace_fit, rendezvous, track) -> dict:
+    """The --json summary of a one-move plan (a round trip, a rendezvous with its tracking segment)."""
+    doc = _json_summary(legs, cycle, code, exit_code=0 if report_only else code)
+    if workspace_fit is not None:
+        doc["workspace_fit"] = workspace_fit.as_dict()
+    if rendezvous is not None:
+        doc["rendezvous"] = rendezvous.as_dict()
+        if track is not None:
+            doc["tracking"] = {"t_start_s": rendezvous.seconds, "duration_s": track.duration.seconds,
+                               "limits_ok": track.report.ok,
+                               "violations": [r.as_dict() for r in track.report.violations]}
+    return doc
+
+
+def _parse_params(items: list[str]) -> dict:
+    """--param NAME=VALUE items → {name: float}; one-line TaskError for a malformed item."""
+    import math
+
+    from ..model.errors import TaskError
+
+    out: dict = {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        name = name.strip()
+        if not sep or not name:
+            raise TaskError(f"param = {item!r}: write NAME=VALUE, e.g. --param m=0.025")
+        try:
+            x = float(value)
+        except ValueError:
+            raise TaskError(f"param {name} = {value!r}: not a number") from None
+        if not math.isfinite(x):
+            raise TaskError(f"param {name} = {value!r}: must be finite")
+        if name in out:
+            raise TaskError(f"param {name}: given twice")
+        out[name] = x
+    return out
+
+
+def _belt_method(ctx, method, to_belt, latency, v_to, batch, round_trip, fit_ws, optimize):
+    """--to-belt/--latency: the method that supports a moving end (bspline-vel) unless another is named; the
+    options that cannot apply to a rendezvous are refused (exit 2)."""
+    if to_belt is None:
+        _usage("--latency only applies with --to-belt (the part's detection time)")
+    for given, what in ((v_to is not None, "--v-to (the belt velocity is the arrival velocity)"),
+                        (batch is not None, "--batch"), (round_trip, "--round-trip"), (fit_ws, "--fit-workspace"),
+                        (optimize != OptimizeWhat.none, "--optimize")):
+        if given:
+            _usage(f"--to-belt: not available with {what}")
+    if method == MethodName.bspline_vel:
+        return method
+    source = ctx.get_parameter_source("method")
+    if source is None or source.name == "DEFAULT":
+        return MethodName.bspline_vel
+    from ..model.errors import TaskError
+
+    raise TaskError(f"to-belt: method {method.value} plans moves from rest to rest; a moving end needs "
+                    "--method bspline-vel (the default with --to-belt)")
+
+
+def _plan_to_belt(p_from, p_to, to_belt, latency, prof, time, height, eta, v_from, params, rate):
+    """The rendezvous move and its tracking segment (the profile's dwell; None when 0): ([plan], Rendezvous, track)."""
+    from ..pipelines.rendezvous import Part, plan_rendezvous
+
+    part = Part(p_to, _parse_point("to-belt", to_belt, "m/s"), 0.0 if latency is None else latency)
+    from ..pipelines.rendezvous import plan_tracking
+
+    plan, rv = plan_rendezvous(p_from, part, prof, time, height, eta, v_from, params, rate)
+    track = plan_tracking(plan, part, prof, rate=rate) if prof.planning.dwell > 0 else None
+    return [plan], rv, track
+
+
+def _run_plan(task, prof, options):
+    from ..planner import plan as run_plan
+
+    return run_plan(task, prof, options)

@@ -1,0 +1,285 @@
+"""Rendering for people and scripts: summaries, limit tables and verdicts on stderr, JSON lines on stdout, reports and trajectory writers."""
+
+from __future__ import annotations
+
+import sys
+from typing import Callable, Optional
+
+from .app import Compression, CsvDialectName, OutputFormat
+
+
+def _print_rendezvous(rv) -> None:
+    xyz = ", ".join(f"{c:.4f}" for c in rv.meeting_point)
+    wait = "; waits for the window (meets the part where it enters)" if rv.waited else ""
+    sys.stderr.write(
+        f"rendezvous: meets the part at ({xyz}) m at t = {rv.seconds:.4f} s ({rv.meeting_time_since_detection:.4f} s "
+        f"after its detection), arriving with the belt velocity {rv.part.speed:.4g} m/s; allowed meeting "
+        f"t = {rv.window_s[0]:.4f} … {rv.window_s[1]:.4f} s{wait}\n"
+    )
+
+
+def _writer(fmt, dialect, flavor, compression) -> Callable:
+    """A function (samples, output path) that writes atomically in the chosen format."""
+    from ..model.errors import ExportError
+
+    if fmt != OutputFormat.mcap and compression != Compression.none:
+        raise ExportError(f"compression = {compression.value}: only MCAP output is compressed (--format mcap)")
+    if fmt != OutputFormat.csv and dialect != CsvDialectName.default:
+        raise ExportError(f"csv-dialect = {dialect.value}: only applies to --format csv")
+
+    def write(samples, output: str) -> None:
+        from ..export import atomic_output
+
+        if fmt == OutputFormat.csv:
+            from ..export.csv import write_csv
+
+            with atomic_output(output) as stream:
+                write_csv(samples, stream, dialect=dialect.value)
+        elif fmt == OutputFormat.json:
+            from ..export.json import write_json
+
+            with atomic_output(output) as stream:
+                write_json(samples, stream)
+        else:
+            from ..export.mcap import write_mcap
+
+            with atomic_output(output, binary=True) as stream:
+                write_mcap(samples, stream, flavor=flavor.value,
+                           compression=None if compression == Compression.none else compression.value)
+
+    write.one_timeline = fmt == OutputFormat.mcap  # type: ignore[attr-defined]
+    write.csv_dialect = dialect.value if fmt == OutputFormat.csv else None  # type: ignore[attr-defined]
+    return write
+
+
+def _json_summary(legs, cycle: float, code: int, exit_code: int) -> dict:
+    """The --json document: per-move summaries plus the cycle and the verdict. ``exit_code`` is the process's
+    own (0 with --report-only); ``limits_ok`` says whether every limit holds."""
+    moves = []
+    for leg in legs:
+        s = leg.summary()
+        s["violations"] = [r.as_dict() for r in leg.report.violations]
+        moves.append(s)
+    doc = dict(moves[0]) if len(moves) == 1 else {"moves": moves}
+    doc.update({
+        "cycle_time_s": cycle,
+        "picks_per_minute": 60.0 / cycle,
+        "limits_ok": code == 0,
+        "exit_code": exit_code,
+    })
+    return doc
+
+
+def _emit_json(doc: dict) -> None:
+    import json
+
+    sys.stdout.write(json.dumps(doc, allow_nan=False, default=float) + "\n")
+    sys.stdout.flush()
+
+
+def _emit_row_json(res) -> None:
+    """A batch row's JSON line: row, exit code, error, and the plan's summary and violations when it has one."""
+    doc: dict = {"row": res.row, "exit_code": res.code, "error": res.error}
+    if res.plan is not None:
+        doc.update(res.plan.summary())
+        doc["violations"] = [v.as_dict() for v in res.plan.report.violations]
+    _emit_json(doc)
+
+
+def _batch_line(codes: list, first_failed, written) -> None:
+    """The batch's closing line on stderr (``written``: rows written to -o, None without -o)."""
+    n_ok = sum(1 for c in codes if c == 0)
+    sys.stderr.write(
+        f"batch: {len(codes)} rows, {n_ok} ok, {len(codes) - n_ok} failed"
+        + (f" (first failing row {first_failed})" if first_failed is not None else "")
+        + (f"; {written} written" if written is not None else "") + "\n"
+    )
+
+
+def _check_output_paths(output: str, report: Optional[str]) -> None:
+    """Refuse colliding or impossible outputs before anything is computed or written."""
+    import os
+
+    from ..model.errors import ExportError
+    from ..export import check_writable
+
+    check_writable(output)
+    if report is not None:
+        check_writable(report)
+        if report == "-" and output == "-":
+            raise ExportError("report = -: stdout already carries the trajectory; give --report a file or -o a file")
+        if report != "-" and output != "-" and os.path.abspath(report) == os.path.abspath(output):
+            raise ExportError(f"report = {report}: the same file as --output; give them different paths")
+
+
+def _write_report(results, path: str, rows: Optional[list] = None) -> None:
+    """--report: summary and limit rows of one plan, or of every move (a round trip, a batch)."""
+    import json
+
+    from ..export import atomic_output
+
+    results = list(results) if isinstance(results, (list, tuple)) else [results]
+    docs = [{"summary": r.summary(), "limits": r.report.as_dict()} for r in results]
+    if rows is not None:
+        for d, n in zip(docs, rows):
+            d["row"] = n
+    doc = docs[0] if len(docs) == 1 and rows is None else {"moves": docs}
+    with atomic_output(path) as stream:
+        json.dump(doc, stream, indent=2, allow_nan=False, default=float)
+        stream.write("\n")
+
+
+def _fmt(x: float) -> str:
+    return f"{x:.4g}"
+
+
+def _print_limit_table(report) -> None:
+    from rich.console import Console
+    from rich.markup import escape
+    from rich.table import Table
+
+    from ..limits.report import percent
+
+    table = Table(title=None, box=None, pad_edge=False, show_header=True, header_style="bold")
+    for col, just in (("joint", "left"), ("quantity", "left"), ("peak", "right"), ("limit", "right"),
+                      ("use %", "right"), ("t peak [s]", "right"), ("", "left")):
+        table.add_column(escape(col), justify=just)  # type: ignore[arg-type]  ("[s]" is not rich markup)
+    for r in report.rows:
+        mark = "ok" if r.ok else "[bold red]EXCEEDED[/]"
+        quantity = r.quantity
+        if quantity.startswith(("position", "workcell")):  # a [min, max] range: say which side the row is
+            quantity += " min" if r.bound == "lower" else " max"
+        table.add_row(
+            r.joint, escape(f"{quantity} [{r.unit}]"), _fmt(r.peak),
+            ("≥ " if r.bound == "lower" else "≤ ") + _fmt(r.limit), percent(r.utilisation),
+            "" if r.t_peak is None else f"{r.t_peak:.4f}", mark,
+        )
+    # a terminal wraps at its width; a pipe or log file gets whole rows (rich would assume 80 columns)
+    width = None if sys.stderr.isatty() else 200
+    Console(stderr=True, highlight=False, soft_wrap=True, width=width).print(table)
+
+
+def _print_verdict(report, quiet: bool, with_cycle: bool = True) -> None:
+    cycle = (
+        f"cycle: {report.duration:.4f} s one way, {report.round_trip:.4f} s round trip "
+        f"(dwell {report.dwell:g} s), {report.picks_per_minute:.1f} picks/min"
+    )
+    if not with_cycle:
+        cycle = f"move {report.duration:.4f} s"
+    if report.ok:
+        if not quiet:
+            sys.stderr.write(f"verdict: all limits hold; {cycle}\n")
+        return
+    from ..pipelines.batch import violation_text  # the same words as a batch row's limit lines
+
+    for r in report.violations:
+        sys.stderr.write(f"pickplace: {violation_text(r)}\n")
+    if not quiet:
+        sys.stderr.write(f"verdict: {len(report.violations)} limit(s) exceeded; {cycle}\n")
+
+
+def _print_summary(result) -> None:
+    s = result.summary()
+    d = result.duration
+    par = result.parameters
+    if "k1" in par:
+        ks = f"k1 = {par['k1']:.4f}, k2 = {par['k2']:.4f} ({par['k_source']})"
+    else:  # the method's scalar shape parameters (e.g. ph m, r; bspline-vel τ6 … λ3 and F)
+        skip = {"continuity", "eta", "height_m", "duration_s", "margin", "a_min", "j_min", "paper_time_factor"}
+        ks = ", ".join(
+            f"{k} = {v:.4g}" if isinstance(v, float) else f"{k} = {v}"
+            for k, v in par.items() if k not in skip and isinstance(v, (int, float, str)) and not isinstance(v, bool)
+        )
+    shape = par.get("shape")
+    if shape:
+        t_shape = d.t_fit if d.t_fit is not None else shape["screened_fit_s"]
+        tab = shape["table"]
+        versus = (f"the table's k1 = {tab['k1']:.4f}, k2 = {tab['k2']:.4f}, η = {tab['eta']:g} fits in {tab['fit_s']:.4f} s "
+                  f"→ {t_shape:.4f} s = {t_shape / tab['fit_s']:.3f} × table" if tab and tab.get("fit_s")
+                  else "the table has no shape for this move")
+        ks += f"\nshape: η = {shape['eta']:.4g} chosen with k1, k2 for this robot's limits (fit, uniform law): {versus}; {shape['note']}"
+    bounds = f"v {d.t_velocity:.4f} s, a {d.t_acceleration:.4f} s" + (f", j {d.t_jerk:.4f} s" if d.t_jerk else "")
+    fit = f"; fit {d.t_fit:.4f} s" if d.t_fit is not None else ""
+    if d.t_optimal is not None and d.t_fit:
+        fit += (f"; optimal {d.t_optimal:.4f} s = {d.t_optimal / d.t_fit:.3f} × fit, {d.t_optimal / d.t_auto:.3f} × auto"
+                f" ({60 / (2 * d.t_optimal + 2 * result.report.dwell):.1f} against "
+                f"{60 / (2 * d.t_fit + 2 * result.report.dwell):.1f} picks/min with fit)")
+        if d.t_bound:
+            fit += (f"; lower bound {d.t_bound:.4f} s (peak motor torque and speed alone: T = {d.seconds / d.t_bound:.3f} "
+                    "× bound; the rest is torque rate, RMS and smoothness)")
+    sys.stderr.write(
+        f"{s['profile']} / {s['method']}: b = {s['b_m']:.4g} m, h = {s['height_m']:.4g} m, λ = {s['lambda']:.4g}, η = {s['eta']:g}; {ks}\n"
+        f"duration T = {d.seconds:.4f} s ({d.mode}, binding: {d.binding}); auto {d.t_auto:.4f} s (Eq. 26: {bounds}){fit}; "
+        f"{s['samples']} samples\n"
+        f"peaks |v| = {s['peak_speed_m_s']:.4g} m/s, |a| = {s['peak_acceleration_m_s2']:.4g} m/s², "
+        f"|j| = {s['peak_jerk_m_s3']:.4g} m/s³\n"
+    )
+
+
+def _opt(x, fmt: str = "{:.4g}", scale: float = 1.0) -> str:
+    return "–" if x is None else fmt.format(x * scale)
+
+
+def _print_comparison(comparison) -> None:
+    """One column per method, one row per quantity (fits a terminal with every method of the registry)."""
+    from rich.console import Console
+    from rich.markup import escape
+    from rich.table import Table
+
+    rows = [r for r in comparison.rows if r.ok]
+
+    def geo(attr):
+        return lambda r: _opt(getattr(r.geometry, attr))
+
+    def vib(attr):
+        return lambda r: _opt(None if r.vibration is None else getattr(r.vibration, attr))
+
+    lines = [
+        ("duration T [s]", lambda r: f"{r.duration:.4f} ({r.duration_mode})"),
+        ("auto (true peaks) [s]", lambda r: _opt(r.auto, "{:.4f}")),
+        ("fit (motor limits) [s]", lambda r: _opt(r.fit, "{:.4f}")),
+        ("optimal law / fit [1]", lambda r: "–" if r.optimal is None or not r.fit else f"{r.optimal / r.fit:.3f}"),
+        ("paper formula [s]", lambda r: _opt(r.paper_duration, "{:.4f}")),
+        ("v_max (b = 1, T = 1)", lambda r: _opt(r.v_norm)),
+        ("a_max (b = 1, T = 1)", lambda r: _opt(r.a_norm)),
+        ("j_max (b = 1, T = 1)", lambda r: _opt(r.j_norm)),
+        ("peak |v| [m/s]", lambda r: _opt(r.peak_speed)),
+        ("peak |a| [m/s²]", lambda r: _opt(r.peak_acceleration)),
+        ("peak |j| [m/s³]", lambda r: _opt(r.peak_jerk)),
+        ("peak joint torque", lambda r: f"{r.joint_torque_peak:.4g} {r.joint_torque_unit}"),
+        ("motor torque use %", lambda r: _opt(r.motor_torque_use, "{:.1f}", 100)),
+        ("torque rate use %", lambda r: _opt(r.torque_rate_use, "{:.1f}", 100)),
+        ("limits", lambda r: "ok" if r.limits_ok else "EXCEEDED"),
+        ("max height above ends [m]", geo("max_height")),
+        ("overshoot of h [m]", geo("overshoot")),
+        ("backward drift [m]", geo("drift_back")),
+        ("past the target [m]", geo("drift_forward")),
+        ("continuity", lambda r: r.continuity.label),
+        ("residual vibration [m]", vib("max_amplitude")),
+        ("residual acceleration [m/s²]", vib("max_acceleration_amplitude")),
+    ]
+    if not any(r.optimal is not None for r in rows):  # the law's row only with --time optimal
+        lines = [ln for ln in lines if not ln[0].startswith("optimal law")]
+    table = Table(box=None, pad_edge=False, show_header=True, header_style="bold")
+    table.add_column("quantity", justify="left")
+    for r in rows:
+        table.add_column(escape(r.method), justify="right")
+    for name, fn in lines:
+        table.add_row(escape(name), *(escape(fn(r)) for r in rows))
+    t = comparison.task
+    # wide enough for every column (a pipe gets rich's 80 columns otherwise, and the names would be cut)
+    cells = [[name] + [fn(r) for r in rows] for name, fn in lines]
+    need = sum(max(len(c[i]) for c in cells + [["quantity"] + [r.method for r in rows]]) + 2 for i in range(len(rows) + 1))
+    out = Console(stderr=True, highlight=False, soft_wrap=True)
+    if out.width < need:
+        out = Console(stderr=True, highlight=False, soft_wrap=True, width=need)
+    out.print(escape(
+        f"{comparison.profile_name}: b = {t.b:.4g} m, h = {t.height:.4g} m, λ = {t.lam:.4g}, η = {t.eta:g}; "
+        f"duration: {comparison.time}"
+    ))
+    out.print(table)
+    for r in comparison.rows:
+        for note in r.notes:
+            sys.stderr.write(f"{r.method}: {note}\n")
+        if r.ok and not r.limits_ok:
+            sys.stderr.write(f"{r.method}: a limit is exceeded at T = {r.duration:.4f} s ({r.worst_limit})\n")

@@ -1,0 +1,109 @@
+"""What the limit check reports: one row per joint × quantity (:class:`LimitRow`) and the whole move
+(:class:`LimitReport`: verdict, exit code, cycle time).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+
+def percent(utilisation: float) -> str:
+    """A utilisation as a percentage for people: one decimal up to 9999.9 %, then 3 significant digits
+    (2.92e+07), so a wildly infeasible move does not print 29178779.3."""
+    p = 100.0 * utilisation
+    return f"{p:.1f}" if abs(p) < 9999.95 else f"{p:.3g}"
+
+
+@dataclass(slots=True)
+class LimitRow:
+    """One checked limit: the peak of a quantity over the move, its limit and where the peak is.
+
+    (A plain slotted record, not a frozen dataclass: a report has ~25 rows per move and a frozen
+    dataclass costs 5× as much to build, which the single-plan target of < 1 ms notices.)"""
+
+    joint: str  # "q1" … or "tool"
+    quantity: str
+    unit: str
+    peak: float  # signed for position bounds and the singularity minimum, |·| otherwise
+    limit: float
+    utilisation: float  # peak/limit (position: how far toward the bound, 1 = at it)
+    t_peak: float | None  # s from the start of the move (None for whole-cycle quantities)
+    ok: bool
+    kind: str = "limit"  # "limit" (exit 3) or "reach" (exit 4)
+    bound: str = "upper"  # "upper": peak ≤ limit; "lower": peak ≥ limit
+
+    @property
+    def excess(self) -> float:
+        """By how much the limit is exceeded (same unit; ≤ 0 when ok)."""
+        return self.limit - self.peak if self.bound == "lower" else self.peak - self.limit
+
+    def as_dict(self) -> dict[str, Any]:
+        return {
+            "joint": self.joint, "quantity": self.quantity, "unit": self.unit, "peak": self.peak,
+            "limit": self.limit, "utilisation": self.utilisation, "t_peak_s": self.t_peak, "ok": self.ok,
+            "kind": self.kind, "bound": self.bound, "excess": self.excess,
+        }
+
+
+@dataclass(frozen=True)
+class LimitReport:
+    """Every joint × quantity checked for one move of ``duration`` seconds, with the duty cycle."""
+
+    rows: tuple[LimitRow, ...]
+    duration: float
+    dwell: float
+    notes: tuple[str, ...] = ()
+
+    @property
+    def ok(self) -> bool:
+        return all(r.ok for r in self.rows)
+
+    @property
+    def violations(self) -> tuple[LimitRow, ...]:
+        return tuple(r for r in self.rows if not r.ok)
+
+    @property
+    def round_trip(self) -> float:
+        return 2.0 * (self.duration + self.dwell)
+
+    @property
+    def picks_per_minute(self) -> float:
+        return 60.0 / self.round_trip
+
+    def exit_code(self) -> int:
+        """0 ok · 3 a limit is exceeded · 4 a reach row (singularity, workcell) fails."""
+        bad = self.violations
+        if not bad:
+            return 0
+        return 4 if any(r.kind == "reach" for r in bad) else 3
+
+    def as_dict(self) -> dict[str, Any]:
+        return {
+            "ok": self.ok,
+            "duration_s": self.duration,
+            "dwell_s": self.dwell,
+            "cycle_time_one_way_s": self.duration,
+            "cycle_time_round_trip_s": self.round_trip,
+            "picks_per_minute": self.picks_per_minute,
+            "violations": [r.as_dict() for r in self.violations],
+            "rows": [r.as_dict() for r in self.rows],
+            "notes": list(self.notes),
+        }
+
+
+@dataclass(frozen=True)
+class _ReportPlan:
+    """:meth:`MotionModel.report_plan`: limits (column sign convention), exact-refinement bands and signs per
+    column; rows as ("single", column, (joint, quantity, unit, limit, kind, lower)), ("range", (column of the
+    max, of the min), (joint, base, unit, kind, lo, hi)) or ("rms", joint index, (joint, rated torque))."""
+
+    limits: np.ndarray
+    band: np.ndarray
+    signs: np.ndarray
+    rows: tuple
+    rms: bool
+    zoom: np.ndarray  # the duration-dependent columns (limit kind), whose peaks are zoomed in
+    zoom_sub: np.ndarray  # their indices among the columns without the singularity measure

@@ -1,0 +1,48 @@
+"""Execution engines for ``build-table``: anything with the ``concurrent.futures.Executor`` interface.
+
+:func:`pickplace_cli.lookup.bspline_build.run_build` takes an executor, so the engine is pluggable:
+
+* local: a ``ProcessPoolExecutor`` (``run_build`` makes one itself for ``workers`` > 1);
+* a Dask distributed cluster: :func:`dask_executor` yields ``distributed.Client(address).get_executor()``,
+  Dask's standard ``concurrent.futures`` adapter. The workers need ``pickplace-cli`` installed (they import
+  ``pickplace_cli.lookup.bspline_build`` and ``bspline_optimum`` to run a chunk of rows). Install with the extra ``pickplace-cli[dask]``.
+"""
+
+from __future__ import annotations
+
+from contextlib import contextmanager
+from typing import TYPE_CHECKING, Iterator
+
+from ..model.errors import TableError
+
+if TYPE_CHECKING:  # pragma: no cover
+    from concurrent.futures import Executor
+
+#: seconds to wait for the scheduler before giving up
+CONNECT_TIMEOUT = 10.0
+
+
+@contextmanager
+def dask_executor(address: str, timeout: float = CONNECT_TIMEOUT) -> Iterator[tuple["Executor", int]]:
+    """Connect to the Dask scheduler at ``address`` (e.g. ``tcp://10.0.0.5:8786``) and yield
+    ``(executor, threads)``: a ``concurrent.futures`` executor on the cluster and its total number of
+    worker threads (used to size the chunks). TableError, one line, when Dask is not installed or the
+    scheduler cannot be reached within ``timeout`` seconds. The client is closed on exit."""
+    try:
+        from distributed import Client
+    except ImportError:
+        raise TableError(
+            f"scheduler = {address}: Dask is not installed; install the extra: pip install 'pickplace-cli[dask]'"
+        ) from None
+    if not address or "://" not in address and ":" not in address:
+        raise TableError(f"scheduler = {address!r}: expected a scheduler address such as tcp://HOST:PORT")
+    try:
+        client = Client(address, timeout=timeout, set_as_default=False)
+    except (OSError, TimeoutError, ValueError) as exc:
+        detail = " ".join(str(exc).split()) or type(exc).__name__
+        raise TableError(f"scheduler = {address}: cannot reach the Dask scheduler within {timeout:g} s ({detail})") from None
+    try:
+        threads = sum(client.nthreads().values()) or 1
+        yield client.get_executor(), threads
+    finally:
+        client.close()

@@ -1,0 +1,620 @@
+"""Robot/workcell profiles: YAML validated by pydantic (unknown keys rejected, SI units everywhere).
+
+``load_profile(path)`` returns a frozen :class:`Profile`; every problem is a :class:`ProfileError` with a
+one-line message ``FILE:LINE: FIELD = VALUE: RULE``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated, Any, Literal, Union, get_origin
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+
+from .errors import ProfileError
+
+DEFAULT_PROFILE = "delta-su2018"
+
+
+class _Model(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
+
+
+class JointLimits(_Model):
+    """Kinematic limits of one joint. Units follow the joint: rad (revolute) or m (prismatic)."""
+
+    position: tuple[float, float] | None = Field(
+        default=None, description="Joint range [min, max] in rad or m (None: not limited; gantry: the axis travel)"
+    )
+    velocity: float | None = Field(default=None, gt=0, description="Max |joint velocity| in rad/s or m/s")
+    acceleration: float | None = Field(default=None, gt=0, description="Max |joint acceleration| in rad/s² or m/s²")
+    jerk: float | None = Field(default=None, gt=0, description="Max |joint jerk| in rad/s³ or m/s³ (optional)")
+
+    @model_validator(mode="after")
+    def _ordered(self) -> "JointLimits":
+        if self.position is not None and not self.position[0] < self.position[1]:
+            raise ValueError(f"position must be [min, max] with min < max, got {list(self.position)}")
+        return self
+
+
+class Drive(_Model):
+    """Motor + gearbox of one joint. Motor speed = N·q̇; motor torque = torque/(N·efficiency) + J_rotor·N·q̈."""
+
+    gear_ratio: float = Field(gt=0, description="N: motor angle per joint unit (rad/rad, or rad/m for a linear axis)")
+    efficiency: float = Field(default=1.0, gt=0, le=1, description="Gearbox efficiency (0, 1]")
+    rotor_inertia: float = Field(default=0.0, ge=0, description="Rotor (+ gearbox input) inertia in kg·m², motor side")
+    rated_torque: float | None = Field(default=None, gt=0, description="Continuous (rated) motor torque in N·m; limits the RMS over the duty cycle")
+    peak_torque: float | None = Field(default=None, gt=0, description="Peak motor torque in N·m")
+    max_speed: float | None = Field(default=None, gt=0, description="Max motor speed in rad/s (6000 rpm = 628.3 rad/s)")
+    torque_rate: float | None = Field(default=None, gt=0, description="Max |d(motor torque)/dt| in N·m/s (Yang 2022 Eq. 38)")
+
+    @model_validator(mode="after")
+    def _rated_within_peak(self) -> "Drive":
+        if self.rated_torque is not None and self.peak_torque is not None and self.rated_torque > self.peak_torque:
+            raise ValueError(
+                f"rated_torque = {self.rated_torque:g} N·m is above peak_torque = {self.peak_torque:g} N·m: a drive's "
+                "continuous (RMS) rating cannot exceed its peak torque"
+            )
+        return self
+
+
+class JointSpec(_Model):
+    """Limits and drive of one joint."""
+
+    limits: JointLimits = Field(default_factory=JointLimits, description="Kinematic limits (joint side)")
+    drive: Drive | None = Field(default=None, description="Motor and gearbox (None: no motor limits checked)")
+
+
+JointSpecs = Union[JointSpec, list[JointSpec]]
+
+
+def _per_joint(specs: "JointSpec | list[JointSpec]", n: int) -> list[JointSpec]:
+    if isinstance(specs, JointSpec):
+        return [specs] * n
+    if len(specs) != n:
+        raise ValueError(f"joints: give one entry for all joints or exactly {n}, got {len(specs)}")
+    return list(specs)
+
+
+class GantryAxis(_Model):
+    """One Cartesian axis of a gantry; joint q_i is the tool coordinate along that axis."""
+
+    name: Literal["x", "y", "z"] = Field(description="Cartesian axis this joint drives")
+    travel: tuple[float, float] = Field(description="Joint travel [min, max] in m (base frame)")
+    mass: float = Field(default=0.0, ge=0.0, description="Mass moved by this axis in kg")
+    limits: JointLimits = Field(default_factory=JointLimits, description="Velocity/acceleration/jerk limits (m/s, m/s², m/s³)")
+    drive: Drive | None = Field(default=None, description="Motor and gearbox; gear_ratio in rad/m (2π / lead)")
+
+    @model_validator(mode="after")
+    def _travel_ordered(self) -> "GantryAxis":
+        if not self.travel[0] < self.travel[1]:
+            raise ValueError(f"travel must be [min, max] with min < max, got {list(self.travel)}")
+        return self
+
+
+class GantryModel(_Model):
+    """Cartesian gantry: joints are x, y, z (identity kinematics); gravity acts on z."""
+
+    kind: Literal["gantry"]
+    axes: tuple[GantryAxis, GantryAxis, GantryAxis] = Field(description="The x, y and z axes, in that order")
+    payload: float = Field(default=0.0, ge=0, description="Payload in kg (added to every axis' moved mass)")
+
+    @model_validator(mode="after")
+    def _xyz(self) -> "GantryModel":
+        names = [a.name for a in self.axes]
+        if names != ["x", "y", "z"]:
+            raise ValueError(f"axes must be x, y, z in that order, got {names}")
+        return self
+
+    def joint_specs(self) -> list[JointSpec]:
+        return [
+            JointSpec(limits=a.limits.model_copy(update={"position": a.travel}), drive=a.drive) for a in self.axes
+        ]
+
+
+class DeltaGeometry(_Model):
+    R: float = Field(gt=0, description="Fixed platform radius: centre to motor axis, in m")
+    r: float = Field(gt=0, description="Moving platform radius: centre to forearm joint line, in m")
+    L: float = Field(gt=0, description="Upper arm length, motor axis to elbow, in m")
+    l: float = Field(gt=0, description="Forearm (parallelogram) length, elbow to platform, in m")  # noqa: E741
+
+    @model_validator(mode="after")
+    def _physical(self) -> "DeltaGeometry":
+        if not self.l > self.L:
+            raise ValueError(f"forearm l = {self.l} m must be longer than the upper arm L = {self.L} m (Clavel Delta)")
+        if not self.R > self.r:
+            raise ValueError(f"fixed platform R = {self.R} m must be larger than the moving platform r = {self.r} m")
+        return self
+
+
+class DeltaMasses(_Model):
+    upper_arm: float = Field(ge=0, description="Upper arm mass in kg")
+    upper_arm_inertia: float = Field(ge=0, description="Upper arm inertia about the motor axis in kg·m²")
+    upper_arm_com: float = Field(ge=0, description="Distance of the upper arm's centre of mass from the motor axis in m")
+    elbow: float = Field(default=0.0, ge=0, description="Mass lumped at each elbow in kg")
+    forearm_pair: float = Field(ge=0, description="Mass of one forearm pair in kg (2/3 to the elbow, 1/3 to the plate)")
+    plate: float = Field(ge=0, description="Travelling plate mass in kg (tool included)")
+
+
+class _ThreeJoints(_Model):
+    """A robot whose ``joints`` field is one JointSpec for all three joints or a list of three."""
+
+    def joint_specs(self) -> list[JointSpec]:
+        return _per_joint(self.joints, 3)  # type: ignore[attr-defined]
+
+    @model_validator(mode="after")
+    def _count(self) -> "_ThreeJoints":
+        _per_joint(self.joints, 3)  # type: ignore[attr-defined]
+        return self
+
+
+class DeltaModel(_ThreeJoints):
+    """Clavel Delta robot, lumped-mass dynamics (Codourey 1998)."""
+
+    kind: Literal["delta"]
+    geometry: DeltaGeometry
+    masses: DeltaMasses
+    payload: float = Field(default=0.0, ge=0, description="Payload in kg")
+    singularity_margin: float = Field(default=0.05, ge=0, lt=1, description="Minimum singularity measure (0 = singular, 1 = best)")
+    joints: JointSpecs = Field(default_factory=JointSpec, description="One joint spec for all three arms, or a list of three")
+
+
+class ScaraLink(_Model):
+    length: float = Field(gt=0, description="Link length in m")
+    mass: float = Field(default=0.0, ge=0, description="Link mass in kg")
+    com: float = Field(default=0.0, ge=0, description="Centre of mass from the proximal joint in m")
+    inertia: float = Field(default=0.0, ge=0, description="Inertia about its own centre of mass (vertical axis) in kg·m²")
+
+
+class ScaraModel(_ThreeJoints):
+    """Serial SCARA: two revolute links, a prismatic z axis (q3, m, positive up), tool rotation held fixed."""
+
+    kind: Literal["scara"]
+    link1: ScaraLink
+    link2: ScaraLink
+    elbow: Literal["left", "right"] = Field(default="right", description="Elbow branch: left = q2 > 0 (counter-clockwise seen from above)")
+    z0: float = Field(default=0.0, description="Tool height at q3 = 0 in m (base frame)")
+    z_mass: float = Field(default=0.0, ge=0, description="Mass moved by the z axis (quill + tool) in kg")
+    payload: float = Field(default=0.0, ge=0, description="Payload in kg")
+    singularity_margin: float = Field(default=0.05, ge=0, lt=1, description="Minimum |sin q2| (0 at full stretch or fold)")
+    joints: JointSpecs = Field(default_factory=JointSpec, description="One joint spec for all joints, or a list of three (q1, q2 rad; q3 m)")
+
+
+RobotModel = Annotated[Union[GantryModel, DeltaModel, ScaraModel], Field(discriminator="kind")]
+
+
+class Box(_Model):
+    """Axis-aligned box in the base frame, m."""
+
+    min: tuple[float, float, float] = Field(description="Lower corner x, y, z in m")
+    max: tuple[float, float, float] = Field(description="Upper corner x, y, z in m")
+
+    @model_validator(mode="after")
+    def _ordered(self) -> "Box":
+        if not all(a < b for a, b in zip(self.min, self.max)):
+            raise ValueError(f"min must be below max on every axis, got min={list(self.min)} max={list(self.max)}")
+        return self
+
+
+class Workcell(_Model):
+    box: Box | None = Field(default=None, description="The tool must stay inside this box (optional)")
+    conveyor_pick_velocity: tuple[float, float, float] | None = Field(
+        default=None,
+        description="Velocity of the pick conveyor in m/s (base frame): the tool leaves the pick point with it "
+        "(method bspline-vel, Yang 2022; --v-from overrides it)",
+    )
+    conveyor_place_velocity: tuple[float, float, float] | None = Field(
+        default=None,
+        description="Velocity of the place conveyor in m/s (base frame): the tool arrives at the place point with "
+        "it (method bspline-vel; --v-to overrides it)",
+    )
+    belt_window: Box | None = Field(
+        default=None,
+        description="Belt window in m (base frame), an axis-aligned box: where along the belt the robot may meet a "
+        "part (plan --to-belt) and track it for the dwell; a rendezvous or tracking segment that would leave it is "
+        "exit 4 (optional; without it the workspace alone bounds the rendezvous)",
+    )
+
+    @model_validator(mode="after")
+    def _window_in_box(self) -> "Workcell":
+        w, b = self.belt_window, self.box
+        if w is not None and b is not None and not all(max(w.min[c], b.min[c]) < min(w.max[c], b.max[c]) for c in range(3)):
+            raise ValueError(
+                f"belt_window min={list(w.min)} max={list(w.max)} m does not intersect the workcell box "
+                f"min={list(b.min)} max={list(b.max)} m: the robot could never work on the belt"
+            )
+        return self
+
+
+class Capacity(_Model):
+    """Cartesian movement capacity of the tool over the task workspace [Li2018, Eq. (24)–(25)]."""
+
+    velocity: float = Field(gt=0, description="[v]: allowed tool speed in m/s")
+    acceleration: float = Field(gt=0, description="[a]: allowed tool acceleration norm in m/s²")
+    jerk: float | None = Field(default=None, gt=0, description="[j]: allowed tool jerk norm in m/s³ (optional)")
+
+
+class Planning(_Model):
+    """Defaults for ``pickplace plan`` (each can be overridden on the command line)."""
+
+    height: float = Field(gt=0, description="Clearance of the path's midpoint above the higher end point, in m")
+    eta: float = Field(default=0.5, gt=0, lt=1, description="Lift-off/set-down ratio η (dimensionless, 0 < η < 1)")
+    rate: float = Field(default=1000.0, gt=0, le=1e6, description="Output sample rate in Hz")
+    dwell: float = Field(default=0.1, ge=0, description="Dwell at pick and at place in s (duty cycle: move, dwell, move back, dwell)")
+
+
+class Vibration(_Model):
+    """One flexible mode per base-frame axis x, y, z, excited by the tool acceleration (residual vibration:
+    ẍ + 2ζωẋ + ω²x = −a(t), ω = 2π·frequency; see ``pickplace_cli.studies.vibration``)."""
+
+    frequency: tuple[Annotated[float, Field(gt=0)], Annotated[float, Field(gt=0)], Annotated[float, Field(gt=0)]] = Field(
+        description="Natural frequency f_n of the mode along x, y, z in Hz"
+    )
+    damping: tuple[Annotated[float, Field(ge=0, lt=1)], Annotated[float, Field(ge=0, lt=1)], Annotated[float, Field(ge=0, lt=1)]] = Field(
+        description="Damping ratio ζ of the mode along x, y, z (dimensionless, 0 <= ζ < 1)"
+    )
+
+
+class Profile(_Model):
+    """A robot and its workcell."""
+
+    name: str = Field(min_length=1, description="Short name of the profile")
+    description: str = Field(default="", description="Free text: robot, sources of the numbers")
+    robot: RobotModel
+    capacity: Capacity
+    planning: Planning
+    workcell: Workcell = Field(default_factory=Workcell)
+    vibration: Vibration | None = Field(default=None, description="Flexible modes for the residual-vibration estimate (optional)")
+
+
+# --------------------------------------------------------------------------------------------- loading
+
+
+def shipped_profiles() -> dict[str, Path]:
+    """Names → paths of the profiles shipped with the package (``profiles/*.yaml``)."""
+    from .resources import data_dir
+
+    root = data_dir("profiles")
+    return {p.stem: p for p in sorted(root.glob("*.yaml"))}
+
+
+def resolve_profile_path(name_or_path: str | Path | None) -> Path:
+    """A path as given, or the shipped profile of that name (``gantry`` → profiles/gantry.yaml)."""
+    if name_or_path is None:
+        name_or_path = DEFAULT_PROFILE
+    p = Path(name_or_path)
+    if p.exists():
+        return p
+    shipped = shipped_profiles()
+    if str(name_or_path) in shipped:
+        return shipped[str(name_or_path)]
+    names = ", ".join(shipped) or "none"
+    raise ProfileError(f"profile {str(name_or_path)!r}: no such file, and no shipped profile of that name (shipped: {names})")
+
+
+#: a profile is a few kilobytes; anything larger than this is refused before it is parsed [bytes]
+PROFILE_MAX_BYTES = 1 << 20
+#: deepest nesting of mappings and sequences a profile may have (the real ones use 5)
+PROFILE_MAX_DEPTH = 32
+
+
+def _safe_loader(text: str, source: str):
+    """A yaml.SafeLoader that refuses aliases and anchors (a recursive alias or a "billion laughs" profile
+    must not exhaust the stack or the memory) and nesting deeper than ``PROFILE_MAX_DEPTH``, each with one
+    line naming the file, the line and the rule."""
+    import yaml
+
+    class Loader(yaml.SafeLoader):
+        depth = 0
+
+        def compose_node(self, parent, index):  # noqa: ANN001 - PyYAML's signature
+            if self.check_event(yaml.AliasEvent):
+                ev = self.peek_event()
+                raise ProfileError(f"{source}:{ev.start_mark.line + 1}: YAML alias *{ev.anchor} is not allowed in a "
+                                   "profile (write the value out; aliases can expand without bound)")
+            ev = self.peek_event()
+            if getattr(ev, "anchor", None):
+                raise ProfileError(f"{source}:{ev.start_mark.line + 1}: YAML anchor &{ev.anchor} is not allowed in a "
+                                   "profile (write the value out; aliases can expand without bound)")
+            self.depth += 1
+            try:
+                if self.depth > PROFILE_MAX_DEPTH:
+                    raise ProfileError(f"{source}:{ev.start_mark.line + 1}: nested deeper than {PROFILE_MAX_DEPTH} "
+                                       "levels (a profile needs 5)")
+                return super().compose_node(parent, index)
+            finally:
+                self.depth -= 1
+
+    return Loader(text)
+
+
+def _yaml_with_lines(text: str, source: str) -> tuple[Any, dict[tuple, int]]:
+    """Parse YAML; return the data and a map from each value's path (keys/indices) to its 1-based line."""
+    import yaml
+
+    if len(text) > PROFILE_MAX_BYTES:
+        raise ProfileError(f"{source}: {len(text)} characters; a profile may have at most {PROFILE_MAX_BYTES} "
+                           "(1 MiB): is this the right file?")
+    loader = _safe_loader(text, source)
+    try:
+        node = loader.get_single_node()
+        if node is None:
+            return None, {}
+        data = loader.construct_document(node)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f"{source}:{mark.line + 1}" if mark else source
+        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+        raise ProfileError(f"{where}: not valid YAML: {problem}") from None
+    finally:
+        loader.dispose()
+    lines: dict[tuple, int] = {}
+
+    def walk(n: Any, path: tuple) -> None:
+        lines[path] = n.start_mark.line + 1
+        if isinstance(n, yaml.MappingNode):
+            seen: dict[Any, int] = {}
+            for k, v in n.value:
+                key = k.value
+                if key in seen:
+                    raise ProfileError(
+                        f"{source}:{k.start_mark.line + 1}: duplicate key {key!r} (first at line {seen[key]})"
+                    )
+                seen[key] = k.start_mark.line + 1
+                walk(v, path + (key,))
+        elif isinstance(n, yaml.SequenceNode):
+            for i, v in enumerate(n.value):
+                walk(v, path + (i,))
+
+    walk(node, ())
+    return data, lines
+
+
+_ABSENT = object()  # a key or tuple element the document does not have
+
+
+def _resolve(loc: tuple, data: Any, kind: str = "") -> tuple[list, Any, int | None]:
+    """(real path, the value there or _ABSENT, index in loc of the last (innermost) union tag or None).
+
+    pydantic puts union branch names (``JointSpec``, ``list[JointSpec]``) and the discriminator tag
+    (``scara``) into ``loc``; only parts that are keys or indices of the document are kept. A key missing
+    from a mapping (``kind`` "missing" or "extra_forbidden": the last part of ``loc`` is a key), or an index
+    past the end of a list (a tuple that is too short), ends the path."""
+    names_key = kind in ("missing", "extra_forbidden")
+    real: list = []
+    node: Any = data
+    tag: int | None = None
+    loc = list(loc)
+    for n, part in enumerate(loc):
+        last = n == len(loc) - 1
+        if isinstance(node, dict) and part in node:
+            real.append(part)
+            node = node[part]
+        elif isinstance(node, (list, tuple)) and isinstance(part, int) and 0 <= part < len(node):
+            real.append(part)
+            node = node[part]
+        elif last and names_key and isinstance(node, dict):
+            real.append(part)  # a missing or unknown key: name it
+            node = _ABSENT
+        elif last and names_key and isinstance(node, (list, tuple)) and isinstance(part, int):
+            real.append(part)  # an element a fixed-length list lacks
+            node = _ABSENT
+        else:
+            tag = n  # a union branch / discriminator tag pydantic inserted; not a key of the document
+    return real, node, tag
+
+
+def _prune_union_branches(errors: list[dict], data: Any) -> list[dict]:
+    """Of the errors a union produced (one set per branch it tried), keep the branch that got furthest
+    into the document: for ``joints: [ {...} ]`` the list branch's own problem, not "should be a mapping"
+    from the single-spec branch."""
+    best: dict[tuple, tuple[int, Any]] = {}  # union site → (depth, branch tag)
+    info = []
+    for e in errors:
+        loc = tuple(e.get("loc", ()))
+        _, _, tag = _resolve(loc, data, e["type"])
+        if tag is None:
+            info.append(None)
+            continue
+        site, branch = loc[:tag], loc[tag]
+        info.append((site, branch))
+        if site not in best or len(loc) > best[site][0]:
+            best[site] = (len(loc), branch)
+    return [e for e, i in zip(errors, info) if i is None or best[i[0]][1] == i[1]]
+
+
+def _unwrap(ann: Any, node: Any) -> Any:
+    """The model class or container type of annotation ``ann`` that validates ``node`` (picks the branch
+    of a union by the node's shape and, for robots, its ``kind``)."""
+    import types
+    import typing
+
+    while True:
+        origin = typing.get_origin(ann)
+        if origin is Annotated:
+            ann = typing.get_args(ann)[0]
+        elif origin is Union or origin is types.UnionType:
+            options = [a for a in typing.get_args(ann) if a is not type(None)]
+            pick = options[0]
+            for a in options:
+                o = typing.get_origin(a)
+                if isinstance(node, (list, tuple)) and o in (list, tuple):
+                    pick = a
+                    break
+                if isinstance(node, dict) and isinstance(a, type) and issubclass(a, BaseModel):
+                    kind = a.model_fields.get("kind")
+                    if kind is None or node.get("kind") in typing.get_args(kind.annotation):
+                        pick = a
+                        break
+            ann = pick
+        else:
+            return ann
+
+
+def _field_of(path: list, data: Any) -> tuple[Any, Any]:
+    """(FieldInfo of the last key in ``path`` or None, the model class holding the last part or None)."""
+    import typing
+
+    ann: Any = Profile
+    node: Any = data
+    info = None
+    holder = None
+    for part in path:
+        cur = _unwrap(ann, node)
+        holder = cur if isinstance(cur, type) and issubclass(cur, BaseModel) else None
+        if isinstance(part, str):
+            if holder is None or part not in holder.model_fields:
+                return info, holder
+            info = holder.model_fields[part]
+            ann = info.annotation
+        else:
+            args = typing.get_args(cur)
+            if typing.get_origin(cur) is list and args:
+                ann = args[0]
+            elif typing.get_origin(cur) is tuple and args:
+                ann = args[0] if args[-1] is Ellipsis else (args[part] if part < len(args) else None)
+            else:
+                return info, None
+        node = node[part] if isinstance(node, (dict, list, tuple)) and _has(node, part) else None
+    return info, holder
+
+
+def _has(node: Any, part: Any) -> bool:
+    if isinstance(node, dict):
+        return part in node
+    return isinstance(part, int) and 0 <= part < len(node)
+
+
+def _show(value: Any, limit: int = 60) -> str:
+    """A value as the YAML it came from, shortened to ``limit`` characters."""
+
+    def fmt(v: Any) -> str:
+        if isinstance(v, bool):
+            return "true" if v else "false"
+        if v is None:
+            return "null"
+        if isinstance(v, str):
+            return repr(v)
+        if isinstance(v, dict):
+            return "{" + ", ".join(f"{k}: {fmt(x)}" for k, x in v.items()) + "}"
+        if isinstance(v, (list, tuple)):
+            return "[" + ", ".join(fmt(x) for x in v) + "]"
+        return repr(v)
+
+    text = fmt(value)
+    return text if len(text) <= limit else text[: limit - 1] + "…"
+
+
+#: what a pydantic type error expects, in words
+_EXPECTED = {
+    "float_type": "a number", "float_parsing": "a number", "int_type": "a whole number", "int_parsing": "a whole number",
+    "finite_number": "a finite number", "string_type": "text", "tuple_type": "a list [ … ]", "list_type": "a list [ … ]",
+    "dict_type": "a mapping of keys", "model_type": "a mapping of keys", "model_attributes_type": "a mapping of keys",
+}
+
+
+def _describe(err: dict, data: Any, lines: dict[tuple, int], source: str, errors: list[dict]) -> str:
+    """One line: ``FILE:LINE: FIELD = VALUE: RULE`` (FIELD a dotted path, list indices as numbers)."""
+    real, node, _ = _resolve(tuple(err.get("loc", ())), data, err["type"])
+    probe = tuple(real)
+    while probe not in lines and probe:
+        probe = probe[:-1]
+    line = lines.get(probe)
+    where = f"{source}:{line}" if line else source
+    field = ".".join(str(p) for p in real) or "(top level)"
+    info, holder = _field_of(real, data)
+    about = ""
+    if info is not None and info.description:
+        d = info.description
+        about = "; expected: " + (d[0].lower() + d[1:] if d[:2].istitle() and d[1:2].islower() else d)
+    kind = err["type"]
+    if kind == "extra_forbidden":
+        known = f"; fields here: {', '.join(holder.model_fields)}" if holder is not None else ""
+        return (f"{where}: unknown key {field!r}: not a field of this section (check spelling; keys are "
+                f"case-sensitive{known})")
+    if kind == "missing" and real and isinstance(real[-1], int):
+        # an element of a fixed-length list is absent: the list is too short
+        parent = tuple(err["loc"])[:-1]
+        absent = sum(1 for e in errors if e["type"] == "missing" and tuple(e["loc"])[:-1] == parent)
+        given = err.get("input")
+        n_given = len(given) if isinstance(given, (list, tuple)) else 0
+        name = ".".join(str(p) for p in real[:-1])  # ``about`` is the list's field: an index is not a key
+        return f"{where}: {name} = {_show(given)}: needs {n_given + absent} values, got {n_given}{about}"
+    if kind == "missing":
+        return f"{where}: {field}: required field is missing{about}"
+    value = err.get("input")
+    ctx = err.get("ctx") or {}
+    if kind in ("too_long", "too_short"):
+        n = ctx.get("max_length" if kind == "too_long" else "min_length")
+        got = ctx.get("actual_length", len(value) if isinstance(value, (list, tuple)) else "?")
+        return f"{where}: {field} = {_show(value)}: needs {n} values, got {got}{about}"
+    if kind in _EXPECTED:
+        what = _EXPECTED[kind]
+        if isinstance(value, (list, tuple)) and not what.startswith("a list"):
+            rule = f"must be {what}, not a list"
+        elif isinstance(value, dict) and not what.startswith("a mapping"):
+            rule = f"must be {what}, not a mapping"
+        else:
+            rule = f"must be {what}"
+        return f"{where}: {field} = {_show(value)}: {rule}{about}"
+    if kind == "union_tag_invalid":
+        line = lines.get(probe + ("kind",), line)
+        where = f"{source}:{line}" if line else source
+        return f"{where}: {field}.kind = {_show(ctx.get('tag'))}: must be one of {ctx.get('expected_tags')}"
+    msg = err["msg"].removeprefix("Value error, ")
+    if kind == "value_error":
+        if isinstance(value, dict):  # a rule across fields (a model validator): its message names the values
+            return f"{where}: {field}: {msg}"
+        return f"{where}: {field} = {_show(value)}: {msg}"
+    return f"{where}: {field} = {_show(value)}: {msg}{about}"
+
+
+def _reject_flags(node: Any, path: tuple, data: Any, lines: dict[tuple, int], source: str) -> None:
+    """No field of a profile is a flag: YAML's true/false/yes/no/on/off would pass pydantic's lax mode as
+    1.0/0.0 (or fail with a confusing message for text), so any of them is refused here, naming the field."""
+    if isinstance(node, bool):
+        info, _ = _field_of(list(path), data)
+        what = "text (quote it)" if info is not None and (info.annotation is str or get_origin(info.annotation) is Literal) else "a number"
+        field = ".".join(str(p) for p in path)
+        where = f"{source}:{lines[path]}" if path in lines else source
+        raise ProfileError(f"{where}: {field} = {_show(node)}: must be {what}, not a flag (YAML reads true/false/yes/no/on/off as one)")
+    if isinstance(node, dict):
+        for k, v in node.items():
+            _reject_flags(v, path + (k,), data, lines, source)
+    elif isinstance(node, list):
+        for i, v in enumerate(node):
+            _reject_flags(v, path + (i,), data, lines, source)
+
+
+def parse_profile(text: str, source: str = "<profile>") -> Profile:
+    """Validate profile YAML text (see :func:`load_profile`)."""
+    data, lines = _yaml_with_lines(text, source)
+    if not isinstance(data, dict):
+        raise ProfileError(f"{source}: a profile must be a YAML mapping of keys (name, robot, capacity, planning)")
+    _reject_flags(data, (), data, lines, source)
+    try:
+        return Profile.model_validate(data)
+    except ValidationError as exc:
+        errors = _prune_union_branches(exc.errors(), data)
+        first = _describe(errors[0], data, lines, source, errors)
+        more = f" (and {len(errors) - 1} more problem{'s' if len(errors) > 2 else ''})" if len(errors) > 1 else ""
+        raise ProfileError(first + more) from None
+
+
+def load_profile(name_or_path: str | Path | None = None) -> Profile:
+    """Load and validate a profile from a path or a shipped profile name (default: the default profile)."""
+    path = resolve_profile_path(name_or_path)
+    try:
+        with open(path, "rb") as fh:  # bounded: a huge file is refused without reading it all
+            raw = fh.read(PROFILE_MAX_BYTES + 1)
+        if len(raw) > PROFILE_MAX_BYTES:
+            raise ProfileError(f"{path}: larger than {PROFILE_MAX_BYTES} bytes (1 MiB); a profile is a few kB: is "
+                               "this the right file?")
+        if b"\0" in raw:
+            raise ProfileError(f"{path}: a binary file (NUL bytes), not a YAML profile")
+        text = raw.decode("utf-8")
+    except OSError as exc:
+        raise ProfileError(f"{path}: cannot read profile: {exc.strerror or exc}") from None
+    except UnicodeDecodeError:
+        raise ProfileError(f"{path}: not a text (UTF-8) file") from None
+    return parse_profile(text, str(path))

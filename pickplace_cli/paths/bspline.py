@@ -1,0 +1,282 @@
+"""Quintic B-spline pick-and-place path [Li2018, Sec. 2.3]: two time-ratio factors k1, k2 set the knots."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..curves.bspline import (
+    DEGREE,
+    batch_control_points,
+    batch_li_knots,
+    batch_piece_coefficients,
+    batch_pieces,
+    li_knots,
+    make_spline,
+    solve_control_points,
+)
+from ..model.errors import TableError, TaskError
+from ..curves.peaks import batch_norm_peaks
+from ..model.task import Task
+from ..model.trajectory import CartesianPath
+
+
+def bspline_curve(task: Task, k1: float, k2: float):
+    """The scipy BSpline (11 control points in 3-D, base frame) of [Li2018, Eq. (11)–(16)]
+    (:func:`bspline_control_points` wrapped by scipy; the planner uses the control points directly).
+
+    Equivalent to Eq. (15) r = b·(s_u, λ⁻¹ s_v) mapped by Eq. (1): the control points are solved in base-frame
+    axes directly (the map is affine, so the spline commutes with it). The spline holds the displacement
+    from P1 (add ``task.p_from`` for positions): small coordinates keep the round-off of the cancelling
+    end derivatives (|N‴| ~ 1/τ7³) at the level of the move, not of the robot's base offset.
+    """
+    return make_spline(*bspline_control_points(task, k1, k2))
+
+
+def bspline_control_points(task: Task, k1: float, k2: float) -> tuple[np.ndarray, np.ndarray]:
+    """Knots (17,) and control points (11, 3) [m, displacement from P1] of [Li2018, Eq. (11)–(16)]."""
+    knots = li_knots(k1, k2)
+    via_tau = knots[[0, 7, 8, 9, 16]]  # τ1 = 0, τ8, τ9, τ10, τ17 = 1 (Eq. 8 with f = 5)
+    return knots, solve_control_points(knots, via_tau, task.via_points() - task.p_from)
+
+
+#: range of the time-ratio factors k1, k2 (Eq. 14 needs 0 < k < 1; toward 0 or 1 a knot span shrinks to
+#: nothing, the jerk and the duration grow without bound and the control-point solve becomes singular; the
+#: table build's own floor for k2 is 1e-4)
+K_RANGE = (1e-4, 1.0 - 1e-4)
+
+
+def check_k(name: str, k: float) -> None:
+    """TaskError unless ``k`` lies in :data:`K_RANGE`."""
+    if not (np.isfinite(k) and K_RANGE[0] <= k <= K_RANGE[1]):
+        raise TaskError(f"{name} = {k!r}: time-ratio factors must lie in [{K_RANGE[0]:g}, {K_RANGE[1]:g}]")
+
+
+def plan_bspline(
+    task: Task, k1: float | None = None, k2: float | None = None, table: str | Path | None = None
+) -> CartesianPath:
+    """CartesianPath of the B-spline method; k1, k2 from the look-up table at λ unless both are given."""
+    if (k1 is None) != (k2 is None):
+        raise TaskError("k1/k2: give both time-ratio factors or neither (then they come from the table)")
+    source = "given"
+    if k1 is None:
+        from ..lookup.bspline_table import load_table
+
+        if task.b == 0:
+            raise TaskError(
+                "from/to are vertically aligned (b = 0): the k1/k2 table starts at λ = b/h ≥ 1; "
+                "give --k1 and --k2 for a purely vertical move"
+            )
+        tab = load_table(table)
+        try:
+            k1, k2 = tab.lookup(task.lam, eta=task.eta)
+            source = f"table {tab.source}"
+        except TableError as exc:  # a (λ, η) the table does not cover: the 2-D table, else solved for this move
+            k1, k2, source = _k_beyond_table(task, tab.source, "η" if str(exc).startswith("eta") else "λ",
+                                             two_d=table is None)
+    for name, k in (("k1", k1), ("k2", k2)):
+        check_k(name, k)
+    # numpy only (no scipy import on the online path), and the very arithmetic of the batch verdict
+    # engine (P = 1): control points, the exact polynomial of every piece, the exact peaks
+    via = (task.via_points() - task.p_from)[None]
+    k1a, k2a = np.array([float(k1)]), np.array([float(k2)])
+    sym = np.array([_symmetric_one(k1a[0], via[0])])  # _symmetric's decision, on floats (one move)
+    b_all, c_all, pk_all = batch_paths(k1a, k2a, via, symmetric=sym)
+    breaks, coef = b_all[0], c_all[0]  # (m+1,), (m, 3, 6): the exact polynomial of each piece
+    peaks = tuple(pk_all[0].tolist())
+    # the end states exactly (clamped ends, Eq. 9: Q1 = … = Q4 and Q8 = … = Q11, so the derivatives there
+    # are differences of equal control points, zero without round-off, as de Boor gives them)
+    ends = np.zeros((2, 4, 3))  # (τ = 0, τ = 1) × (p, p′, p″, p‴)
+    ends[0, 0], ends[1, 0] = via[0, 0], via[0, -1]
+
+    origin = task.p_from
+    # the polynomials of p, p′, p″, p‴ on every piece, highest power first, the derivatives padded with
+    # leading zeros (Horner then gives each order bitwise as its own shorter Horner would), stored as
+    # (m pieces, 6 powers, 12 = 4 orders × 3 axes): one gather per sample, then Horner on (N, 12) blocks
+    stacked = np.zeros((len(coef), DEGREE + 1, 4, 3))
+    stacked[:, :, 0] = coef.transpose(0, 2, 1)
+    for k in range(1, 4):
+        stacked[:, k:, k] = (coef[..., : DEGREE + 1 - k] * _FALLING[k]).transpose(0, 2, 1)
+    by_piece = stacked.reshape(len(coef), DEGREE + 1, 12)
+    ends12 = ends.reshape(2, 12)
+    memo: list = [None]  # one entry (τ, (N, 4, 3)): the pipeline asks orders 0…3 at the same τ in turn
+
+    def evaluate(tau: np.ndarray, order: int) -> np.ndarray:
+        entry = memo[0]
+        if entry is None or entry[0] is not tau:
+            entry = (tau, _all_orders(tau))
+            memo[0] = entry
+        out = entry[1][:, order]
+        return out + origin if order == 0 else out.copy()
+
+    def evaluate_all(tau: np.ndarray) -> list[np.ndarray]:
+        acc = _all_orders(tau)  # a new array: its views are the caller's alone
+        return [acc[:, 0] + origin, acc[:, 1], acc[:, 2], acc[:, 3]]
+
+    def _all_orders(tau: np.ndarray) -> np.ndarray:
+        """(N, 4, 3): p, p′, p″, p‴ by Horner on the piece polynomials (one search for every order)."""
+        i = np.minimum(np.maximum(np.searchsorted(breaks, tau, side="right") - 1, 0), len(coef) - 1)
+        dx = np.repeat((tau - breaks[i])[:, None], 12, axis=1)  # (N, 12): no broadcasting in the loop
+        c = by_piece[i]  # (N, 6, 12)
+        acc = c[:, 0] * dx
+        acc += c[:, 1]
+        for col in range(2, DEGREE + 1):  # one Horner pass for all four orders, in place
+            acc *= dx
+            acc += c[:, col]
+        # the end states exactly as de Boor gives them (v = a = 0 without round-off)
+        if tau[0] <= 0.0 or tau[-1] >= 1.0 or ((tau <= 0.0) | (tau >= 1.0)).any():
+            acc[tau <= 0.0] = ends12[0]
+            acc[tau >= 1.0] = ends12[1]
+        return acc.reshape(-1, 4, 3)
+
+    return CartesianPath(
+        evaluate=evaluate,
+        evaluate_all=evaluate_all,
+        method="bspline",
+        parameters={"k1": float(k1), "k2": float(k2), "k_source": source, "lambda": task.lam, "eta": task.eta},
+        peaks=peaks,  # type: ignore[arg-type]
+        breakpoints=breaks,
+        jumps=(),  # a quintic B-spline on simple knots is C⁴: nothing steps at its knots
+    )
+
+
+def _k_beyond_table(task: Task, table_source: str, why: str, two_d: bool) -> tuple[float, float, str]:
+    """(k1, k2, k_source) for a (λ, η) the 1-D table does not cover: bilinear in the shipped 2-D (λ, η) table
+    (``two_d``: only with the shipped 1-D table, whose settings it shares), else — outside its grid, in a cell
+    across a basin jump, or without it — build-table's optimiser for this one move (cached)."""
+    from ..lookup.bspline_optimum import solve_on_demand
+
+    lam, eta = round(task.lam, 12), round(task.eta, 12)
+    reason = f"{why} outside table {table_source}"
+    if two_d:
+        from ..lookup.table2d import TableJumpError, load_table_2d
+
+        try:
+            tab2 = load_table_2d()
+        except TableError:  # not installed or unreadable: the on-demand solve still answers
+            tab2 = None
+        if tab2 is not None:
+            try:
+                k1, k2 = tab2.lookup(lam, eta)
+                return k1, k2, f"2-D table {tab2.source}, interpolated"
+            except TableJumpError:
+                reason = f"(λ, η) in a cell of 2-D table {tab2.source} across a basin jump"
+            except TableError:
+                reason = f"{why} outside table {table_source} and outside 2-D table {tab2.source}"
+    k1, k2, _ = solve_on_demand(lam, eta)
+    return k1, k2, f"solved on demand: {reason}; build-table's optimiser, cached in this process"
+
+
+def _falling(n: np.ndarray, k: int) -> np.ndarray:
+    """n (n−1) … (n−k+1): the factor a power n picks up from k derivatives."""
+    out = np.ones_like(n)
+    for r in range(k):
+        out = out * (n - r)
+    return out
+
+
+#: the factors of the k-th derivative's coefficients (powers 5 … k, highest first), k = 0 … 3
+_FALLING = [_falling(np.arange(DEGREE, -1, -1.0)[: DEGREE + 1 - k], k) for k in range(4)]
+
+
+#: k1 range of the closed-form symmetric path (:func:`_unit_paths`): it loses digits towards k1 → 0 or 1
+#: (3e-10 relative at k1 = 0.05, tests/unit/test_table.py); every table optimum lies in [0.18, 0.6]
+UNIT_K1 = (0.1, 0.9)
+
+
+def batch_paths(k1: np.ndarray, k2: np.ndarray, via: np.ndarray, symmetric: np.ndarray | None = None):
+    """The B-spline paths of P moves: (breaks (P, 7), position coefficients (P, 6, 3, 6) [displacement from
+    P1, highest power first], peaks (P, 3) of ‖p′‖, ‖p″‖, ‖p‴‖ at T = 1). ``via`` (P, 5, 3) are the via
+    points minus P1.
+
+    Moves between end points at the same height (the common case; the path is then symmetric about
+    τ = 1/2) use the closed form of the table build (:func:`pickplace_cli.lookup.bspline_optimum.unit_pieces`, ~20 numpy
+    calls instead of the ~300 of the Cox–de Boor recursion); the others, and k1 outside ``UNIT_K1``, the
+    batched de Boor path. Either way every row is computed by operations on that row alone, so one move
+    planned alone and the same move in a batch of thousands get bitwise the same path (tested).
+    ``symmetric``: the rows' :func:`_symmetric` when the caller knows it already."""
+    k1 = np.asarray(k1, float)
+    k2 = np.asarray(k2, float)
+    via = np.asarray(via, float)
+    sym = _symmetric(k1, via) if symmetric is None else symmetric
+    if sym.all():
+        return _unit_paths(k1, k2, via)
+    if not sym.any():
+        return _deboor_paths(k1, k2, via)
+    breaks = np.empty((len(k1), 7))
+    coef = np.empty((len(k1), 6, 3, 6))
+    peaks = np.empty((len(k1), 3))
+    for rows, fn in ((sym, _unit_paths), (~sym, _deboor_paths)):
+        breaks[rows], coef[rows], peaks[rows] = fn(k1[rows], k2[rows], via[rows])
+    return breaks, coef, peaks
+
+
+def _symmetric(k1: np.ndarray, via: np.ndarray) -> np.ndarray:
+    """Rows whose via points are those of Task.via_points for end points at the same height (P5 − P1
+    horizontal, P2 and P4 straight above the ends at one height, P3 above the midpoint) with b > 0."""
+    d = via[:, 4]
+    expect = np.zeros(via.shape)  # the via points of a symmetric move with this P5 − P1, clearance and lift
+    expect[:, 1:4, 2] = via[:, [1, 2, 1], 2]
+    expect[:, 2, :2] = d[:, :2] / 2
+    expect[:, 3:, :2] = d[:, None, :2]
+    scale = np.abs(d).sum(axis=1) + np.abs(via[:, 2, 2])
+    off = np.abs(via - expect).reshape(len(via), -1).max(axis=1)
+    return (
+        (off <= 1e-13 * scale)
+        & (via[:, 2, 2] > 0.0)
+        & (np.hypot(d[:, 0], d[:, 1]) > 1e-9 * scale)
+        & (k1 >= UNIT_K1[0])
+        & (k1 <= UNIT_K1[1])
+    )
+
+
+def _symmetric_one(k1: float, via: np.ndarray) -> bool:
+    """:func:`_symmetric` of one move (``via`` (5, 3)) in Python floats: the same IEEE operations on the same
+    numbers (the same decision, bitwise), without the ~20 numpy calls of a one-row array."""
+    (x0, y0, z0), (x1, y1, z1), (x2, y2, z2), (x3, y3, z3), (x4, y4, z4) = via.tolist()
+    scale = abs(x4) + abs(y4) + abs(z4) + abs(z2)
+    off = max(abs(x0), abs(y0), abs(z0), abs(x1), abs(y1), abs(x2 - x4 / 2), abs(y2 - y4 / 2),
+              abs(x3 - x4), abs(y3 - y4), abs(z3 - z1), abs(z4))
+    return bool(off <= 1e-13 * scale and z2 > 0.0 and np.hypot(x4, y4) > 1e-9 * scale
+                and UNIT_K1[0] <= k1 <= UNIT_K1[1])
+
+
+def _unit_paths(k1: np.ndarray, k2: np.ndarray, via: np.ndarray):
+    """:func:`batch_paths` of symmetric moves from the closed-form unit path (s_u, s_v) of [Li2018,
+    Eq. (16)] on [0, 1/2] and its mirror image s_u(1 − τ) = 1 − s_u(τ), s_v(1 − τ) = s_v(τ):
+    p − P1 = s_u(τ)·(P5 − P1) + s_v(τ)·h e_z with h the clearance, and ‖p⁽ʳ⁾‖ = b ‖(s_u⁽ʳ⁾, s_v⁽ʳ⁾/λ)‖."""
+    from ..lookup.bspline_optimum import _EXP, _SHIFT, unit_peaks, unit_pieces
+
+    d = via[:, 4]
+    top = via[:, 2, 2]
+    eta = via[:, 1, 2] / top
+    h, half = unit_pieces(k1, k2, eta, rowwise=True)  # (P, 3), (P, 3, 2, 6) lowest power first
+    b = np.hypot(d[:, 0], d[:, 1])
+    peaks = b[:, None] * unit_peaks(h, half, (b / top)[:, None, None])
+    # the mirrored pieces 5, 4, 3 of pieces 0, 1, 2: Taylor shift to the piece's right end, x → −x
+    right = ((_SHIFT * h[:, :, None, None, None] ** _EXP) @ half[..., None])[..., 0] * _SIGN
+    right[:, :, 0] = -right[:, :, 0]  # s_u: 1 − s_u(1 − τ)
+    right[:, :, 0, 0] += 1.0
+    unit = np.concatenate([half, right[:, ::-1]], axis=1)[..., ::-1]  # (P, 6, 2, 6) highest power first
+    coef = np.empty((len(k1), 6, 3, 6))
+    coef[:, :, 0] = d[:, 0, None, None] * unit[:, :, 0]
+    coef[:, :, 1] = d[:, 1, None, None] * unit[:, :, 0]
+    coef[:, :, 2] = top[:, None, None] * unit[:, :, 1]
+    breaks = np.empty((len(k1), 7))  # the arithmetic of batch_li_knots (bitwise its interior knots)
+    breaks[:, 0], breaks[:, 3], breaks[:, 6] = 0.0, 0.5, 1.0
+    breaks[:, 1], breaks[:, 2] = k1 * k2 / 2, k1 / 2
+    breaks[:, 4], breaks[:, 5] = 1 - k1 / 2, 1 - k1 * k2 / 2
+    return breaks, coef, peaks
+
+
+_SIGN = (-1.0) ** np.arange(6)  # x → −x on Taylor coefficients, lowest power first
+
+
+def _deboor_paths(k1: np.ndarray, k2: np.ndarray, via: np.ndarray):
+    """:func:`batch_paths` by the batched Cox–de Boor recursion (any via points)."""
+    knots = batch_li_knots(k1, k2)
+    q = batch_control_points(knots, via)
+    breaks, derivs = batch_pieces(knots, q)
+    peaks = batch_norm_peaks(breaks, [batch_piece_coefficients(derivs, r) for r in (1, 2, 3)])
+    return breaks, batch_piece_coefficients(derivs, 0), peaks

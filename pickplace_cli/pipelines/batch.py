@@ -1,0 +1,344 @@
+"""Many moves from one CSV, planned in one process (``pickplace plan --batch FILE|-``).
+
+Input: a header row, then one move per row. Required columns ``from_x, from_y, from_z, to_x, to_y, to_z``
+[m, base frame]; optional ``height`` [m], ``eta`` [-], ``v_from_x … v_from_z``, ``v_to_x … v_to_z``
+[m/s] and ``time`` [s, or "auto"/"fit"]. An empty optional cell takes the command-line/profile value.
+Blank lines and lines starting with ``#`` are skipped. Rows are numbered from 1 (the first data row),
+which is the number every message and the output's ``move`` column use. The cells may be separated by
+``,``, ``;`` or a tab (:func:`sniff_delimiter`, as ``pickplace check`` reads), the decimal mark is ``.``,
+and a UTF-8 byte-order mark before the header (Excel's "CSV UTF-8") is ignored. A header with no move
+after it is an error.
+
+A row that cannot be planned is a result (``RowResult.error``), not an exception: the batch goes on
+(unless the caller stops at the first failure) and the exit code is the worst of all rows.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+from dataclasses import dataclass
+from typing import IO, Any, Iterator
+
+from ..model.errors import PickplaceError, TaskError
+
+REQUIRED = ("from_x", "from_y", "from_z", "to_x", "to_y", "to_z")
+OPTIONAL = ("height", "eta", "v_from_x", "v_from_y", "v_from_z", "v_to_x", "v_to_y", "v_to_z", "time")
+#: a belt schedule (a ``t_detect`` column; :mod:`~pickplace_cli.pipelines.schedule`): one detected part per row — where it
+#: was seen [m], the belt velocity [m/s], the detection time stamp [s] and where to place it [m]; optional
+#: ``latency`` [s, >= 0] (earliest move start after the detection), ``height`` [m], ``eta``, ``time``, and
+#: ``from_x … from_z`` [m] on row 1 only (where the robot starts; later moves start where the previous ended)
+SCHEDULE_REQUIRED = ("to_x", "to_y", "to_z", "to_belt_vx", "to_belt_vy", "to_belt_vz", "t_detect",
+                     "place_x", "place_y", "place_z")
+SCHEDULE_OPTIONAL = ("latency", "height", "eta", "time", "from_x", "from_y", "from_z")
+
+
+@dataclass(frozen=True)
+class BatchRow:
+    """One input row: its number (1 = first data row), line in the file, and parsed values (SI)."""
+
+    row: int
+    line: int
+    values: dict[str, Any]
+
+
+@dataclass(frozen=True)
+class RowResult:
+    """The outcome of one row: a plan, or an error with its exit code (1 input, 3 limit, 4 unreachable).
+    ``error`` is one line per problem ("row N (FILE:LINE): …"): a row that exceeds several limits has
+    several lines, one per exceeded limit."""
+
+    row: int
+    plan: Any = None
+    error: str | None = None
+    code: int = 0
+    text: str | None = None  # the plan's CSV rows, when formatted in a worker (see plan_rows_parallel)
+
+
+#: cell separators a batch or a checked trajectory may use (spreadsheets write ';' where ',' is the decimal mark)
+DELIMITERS = (",", ";", "\t")
+
+
+def sniff_delimiter(header: str) -> str:
+    """The cell separator of a CSV file from its header line: the most frequent of ``,`` ``;`` and tab
+    (``,`` on a tie or when there is none). Shared by the batch reader and ``pickplace check``."""
+    counts = [header.count(d) for d in DELIMITERS]
+    best = max(counts)
+    return DELIMITERS[counts.index(best)] if best else ","
+
+
+def violation_text(r) -> str:
+    """The one line that says a limit is exceeded (a :class:`~pickplace_cli.limits.report.LimitRow` that is not
+    ok), as a single plan and every batch row print it: joint, quantity, peak [unit], when (t [s] or the
+    duty cycle), limit, excess and utilisation, e.g. ``limit exceeded: q1 motor torque = 2.584 N·m at
+    t = 0.0479 s; limit 2 N·m (by 0.584 N·m, 129.2 %)``."""
+    from ..limits.report import percent
+
+    when = f" at t = {r.t_peak:.4f} s" if r.t_peak is not None else " over the duty cycle"
+    return (
+        f"limit exceeded: {r.joint} {r.quantity} = {r.peak:.4g} {r.unit}{when}; "
+        f"limit {r.limit:.4g} {r.unit} (by {abs(r.excess):.4g} {r.unit}, {percent(r.utilisation)} %)"
+    )
+
+
+#: the longest line a batch may have [characters]: a row is one move, a few hundred characters; a longer line
+#: (a binary file, a file with no line breaks) is one error line, never a read of the whole input into memory
+BATCH_MAX_LINE = 1 << 16
+
+
+def iter_batch(stream: IO[str], source: str = "batch", info: dict | None = None) -> Iterator[BatchRow | RowResult]:
+    """Parse the batch CSV lazily, one line at a time: a :class:`BatchRow` per good row, a :class:`RowResult`
+    (with its error) per row that failed to parse, each as soon as its line is read (a pipe is answered row
+    by row). A bad header, a header with no row after it (at the end of the input), a line longer than
+    :data:`BATCH_MAX_LINE`, a NUL byte or text that is not UTF-8 raise TaskError naming the line. ``info``
+    (a dict) receives ``columns`` and ``schedule`` (a ``t_detect`` column: a belt schedule) once the header
+    is read, i.e. before the first row is yielded."""
+    header: list[str] | None = None
+    required: tuple = REQUIRED
+    header_line = 0
+    sep = ","
+    number = 0
+    line = 0
+    while True:
+        try:
+            text = stream.readline(BATCH_MAX_LINE + 1)
+        except UnicodeDecodeError:
+            raise TaskError(f"{source}:{line + 1}: not UTF-8 text (a binary file?); a batch is a CSV file") from None
+        if text == "":
+            break
+        line += 1
+        if len(text) > BATCH_MAX_LINE and not text.endswith(("\n", "\r")):
+            raise TaskError(f"{source}:{line}: a line of more than {BATCH_MAX_LINE} characters; a batch row is one "
+                            "move (a binary file, or no line breaks?)")
+        if "\0" in text:
+            raise TaskError(f"{source}:{line}: a binary file (NUL bytes), not a CSV batch")
+        text = text.rstrip("\r\n")
+        if line == 1:
+            text = text.removeprefix("\ufeff")  # a BOM (the CLI opens files as utf-8-sig; stdin keeps it)
+        if not text.strip() or text.lstrip().startswith("#"):
+            continue
+        if header is None:
+            header_line = line
+            sep = sniff_delimiter(text)
+            header = _header(text, sep, source, line)
+            required = SCHEDULE_REQUIRED if "t_detect" in header else REQUIRED
+            if info is not None:
+                info.update(columns=list(header), schedule="t_detect" in header)
+            continue
+        number += 1
+        yield _row(number, line, text, header, sep, source, required)
+    if header is None:
+        raise TaskError(f"{source}: no header row (need columns {', '.join(REQUIRED)})")
+    if number == 0:
+        raise TaskError(
+            f"{source}:{header_line}: no moves after the header (need one row per move with {', '.join(REQUIRED)})"
+        )
+
+
+def _header(text: str, sep: str, source: str, line: int) -> list[str]:
+    header = [h.strip() for h in next(csv.reader([text], delimiter=sep))]
+    schedule = "t_detect" in header
+    required, optional = (SCHEDULE_REQUIRED, SCHEDULE_OPTIONAL) if schedule else (REQUIRED, OPTIONAL)
+    unknown = [h for h in header if h not in required + optional]
+    if unknown and not schedule and unknown[0] in SCHEDULE_REQUIRED + SCHEDULE_OPTIONAL:
+        raise TaskError(
+            f"{source}:{line}: column {unknown[0]!r} belongs to a belt schedule, which needs a t_detect column "
+            f"(detection time stamp, s) and the columns {', '.join(SCHEDULE_REQUIRED)}"
+        )
+    if unknown:
+        what = "a belt schedule's" if schedule else "the"
+        raise TaskError(
+            f"{source}:{line}: column {unknown[0]!r} is not known; {what} columns are {', '.join(required + optional)}"
+        )
+    missing = [h for h in required if h not in header]
+    if missing:
+        what = "a belt schedule (t_detect) requires" if schedule else "required:"
+        raise TaskError(f"{source}:{line}: column {missing[0]!r} is missing ({what} {', '.join(required)})")
+    dup = sorted({h for h in header if header.count(h) > 1})
+    if dup:
+        raise TaskError(f"{source}:{line}: column {dup[0]!r} appears twice")
+    return header
+
+
+def _row(number: int, line: int, text: str, header: list[str], sep: str, source: str,
+         required: tuple = REQUIRED) -> BatchRow | RowResult:
+    cells = [c.strip() for c in next(csv.reader([text], delimiter=sep))]
+    try:
+        if len(cells) != len(header):
+            raise TaskError(f"has {len(cells)} cells, the header has {len(header)}")
+        values: dict[str, Any] = {}
+        for name, cell in zip(header, cells):
+            if cell == "":
+                if name in required:
+                    unit = {"t_detect": "seconds"}.get(name, "m/s" if name.startswith("to_belt") else "metres")
+                    raise TaskError(f"{name} is empty: give a number in {unit}")
+                continue
+            if name == "time" and cell in ("auto", "fit", "optimal"):
+                values[name] = cell
+                continue
+            try:
+                x = float(cell)
+            except ValueError:
+                hint = " (the decimal mark is '.')" if "," in cell and sep != "," else ""
+                raise TaskError(f"{name} = {cell!r}: not a number{hint}") from None
+            if not math.isfinite(x):
+                raise TaskError(f"{name} = {cell!r}: must be finite")
+            if name == "latency" and x < 0:
+                raise TaskError(f"latency = {cell!r}: must be >= 0 s (the earliest move start after the detection)")
+            values[name] = x
+        return BatchRow(number, line, values)
+    except TaskError as exc:
+        return RowResult(number, error=f"row {number} ({source}:{line}): {exc}", code=exc.exit_code)
+
+
+def read_batch(stream: IO[str], source: str = "batch") -> tuple[list[BatchRow], list[RowResult]]:
+    """Parse the whole batch CSV → (good rows, rows that failed to parse) (:func:`iter_batch`)."""
+    rows: list[BatchRow] = []
+    bad: list[RowResult] = []
+    for item in iter_batch(stream, source):
+        (rows if isinstance(item, BatchRow) else bad).append(item)
+    return rows, bad
+
+
+def row_task(values: dict, profile, height: float | None = None, eta: float | None = None):
+    """The Task of one batch row: its cells, else ``height``/``eta`` (the command line), else the profile's
+    planning defaults; end velocities [m/s] default to 0. TaskError for an invalid move."""
+    import numpy as np
+
+    from ..model.task import Task
+
+    v = values
+    return Task(
+        [v["from_x"], v["from_y"], v["from_z"]],
+        [v["to_x"], v["to_y"], v["to_z"]],
+        v.get("height", height if height is not None else profile.planning.height),
+        v.get("eta", eta if eta is not None else profile.planning.eta),
+        v_from=np.array([v.get(f"v_from_{c}", 0.0) for c in "xyz"]),
+        v_to=np.array([v.get(f"v_to_{c}", 0.0) for c in "xyz"]),
+    )
+
+
+def plan_rows(
+    rows: list[BatchRow], profile, options, height: float | None = None, eta: float | None = None,
+    fail_fast: bool = False, source: str = "batch",
+) -> Iterator[RowResult]:
+    """Plan every row (in order); yields one RowResult per row. ``options`` is a PlanOptions template:
+    a row's ``time`` replaces its duration. Stops after the first failing row when ``fail_fast``."""
+    from dataclasses import replace
+
+    from ..planner import plan
+
+    for r in rows:
+        v = r.values
+        try:
+            task = row_task(v, profile, height, eta)
+            opts = replace(options, time=v["time"]) if "time" in v else options
+            result = plan(task, profile, opts)
+            code = result.report.exit_code()
+            err = None
+            if code:  # every exceeded limit, one line each, in the single plan's words
+                err = "\n".join(f"row {r.row} ({source}:{r.line}): {violation_text(x)}"
+                                 for x in result.report.violations)
+            yield RowResult(r.row, result, err, code)
+        except PickplaceError as exc:
+            yield RowResult(r.row, None, f"row {r.row} ({source}:{r.line}): {exc}", exc.exit_code)
+            code = exc.exit_code
+        if fail_fast and code:
+            return
+
+
+@dataclass(frozen=True)
+class PlanRecord:
+    """The picklable part of a Plan (samples, joint motion, limit report, summary) — what a worker process
+    sends back. It has the attributes every writer and :mod:`~pickplace_cli.pipelines.timeline` use."""
+
+    t: Any
+    p: Any
+    v: Any
+    a: Any
+    j: Any
+    joint: Any
+    report: Any
+    summary_doc: dict
+
+    def summary(self) -> dict:
+        return dict(self.summary_doc)
+
+    @classmethod
+    def of(cls, plan) -> "PlanRecord":
+        return cls(plan.t, plan.p, plan.v, plan.a, plan.j, plan.joint, plan.report, plan.summary())
+
+
+def _plan_chunk(args) -> list[RowResult]:
+    """Worker: plan a chunk of rows (no fail-fast inside a chunk; the parent stops in order). With a CSV
+    dialect, the rows of every plan that will be written are formatted here too (formatting costs as much
+    as planning, so it is worth spreading)."""
+    rows, profile, options, height, eta, source, csv_dialect, format_failed = args
+    out = []
+    for r in plan_rows(rows, profile, options, height, eta, False, source):
+        text = None
+        if csv_dialect is not None and r.plan is not None and (r.code == 0 or format_failed):
+            from ..export.csv import csv_rows
+
+            text = csv_rows(r.plan, csv_dialect, move=r.row)
+        out.append(RowResult(r.row, None if r.plan is None else PlanRecord.of(r.plan), r.error, r.code, text))
+    return out
+
+
+def plan_rows_parallel(
+    rows: list[BatchRow], profile, options, height: float | None = None, eta: float | None = None,
+    fail_fast: bool = False, source: str = "batch", workers: int = 2, chunk: int = 25,
+    csv_dialect: str | None = None, format_failed: bool = False,
+) -> Iterator[RowResult]:
+    """:func:`plan_rows` on ``workers`` processes, chunks of ``chunk`` rows, results in row order (the
+    plans come back as :class:`PlanRecord`). The same numbers as the sequential planner (same code).
+    ``csv_dialect``: also format each written plan's CSV rows in the worker (``RowResult.text``; rows whose
+    limits fail only when ``format_failed``)."""
+    if workers <= 1 or len(rows) <= chunk:
+        yield from plan_rows(rows, profile, options, height, eta, fail_fast, source)
+        return
+    chunks = [rows[i : i + chunk] for i in range(0, len(rows), chunk)]
+    yield from run_chunks_in_order(
+        _plan_chunk, [(c, profile, options, height, eta, source, csv_dialect, format_failed) for c in chunks],
+        workers, fail_fast,
+    )
+
+
+def run_chunks_in_order(fn, args: list, workers: int, fail_fast: bool) -> Iterator[RowResult]:
+    """``fn(a)`` → list of RowResult for every ``a`` of ``args`` on a process pool of ``workers``; yields the
+    results in the order of ``args`` (and within each list), stops after the first failing row when
+    ``fail_fast`` and cancels the chunks not started yet."""
+    from concurrent.futures import ProcessPoolExecutor
+
+    with ProcessPoolExecutor(max_workers=workers) as pool:
+        futures = [pool.submit(fn, a) for a in args]
+        try:
+            for fut in futures:
+                for res in fut.result():
+                    yield res
+                    if fail_fast and res.code:
+                        return
+        finally:
+            for fut in futures:
+                fut.cancel()
+
+
+def read_batch_text(text: str, source: str = "batch") -> tuple[list[BatchRow], list[RowResult]]:
+    """:func:`read_batch` on a string."""
+    return read_batch(io.StringIO(text), source)
+
+
+@dataclass(frozen=True)
+class ReportRecord:
+    """What ``--report`` keeps of a streamed row: its summary and limit report (not its samples)."""
+
+    report: Any
+    summary_doc: dict
+
+    def summary(self) -> dict:
+        return dict(self.summary_doc)
+
+    @classmethod
+    def of(cls, plan) -> "ReportRecord":
+        return cls(plan.report, plan.summary())

@@ -1,0 +1,289 @@
+"""Check a trajectory that was planned elsewhere (or by this tool) against a profile's limits.
+
+The CSV needs a header with ``t`` and the joint positions ``q1 … qn`` (unit suffixes like ``q1[rad]`` are
+ignored; ``,`` ``;`` or tab separated; ``#`` lines and blank lines are skipped). Positions go through forward
+kinematics to the tool path; a quintic spline through the tool positions (interpolating by default,
+smoothing with ``smoothing`` > 0) gives the continuous motion and its derivatives, which then run through
+the same joint mapping, dynamics and limit check as ``plan``.
+
+* **Several moves.** A file with a ``move`` column (this tool's ``plan --batch`` and ``--round-trip``
+  output) is checked move by move: the rows of each move are consecutive, and its time may restart at 0
+  (batch) or run on (round trip). Samples at the end of a move that repeat its last joint positions exactly
+  are the tool at rest (a round trip's dwell): they are not part of the move (the duty cycle's dwell is the
+  profile's, as for ``plan``). Without a ``move`` column a file is one move, and a time that goes back is an
+  error that says so.
+* **Positions as given.** The joint position rows use the file's values, not the model's inverse
+  kinematics of the tool path (which wraps revolute joints into (−π, π]): q1 = 5 rad is checked as 5 rad.
+  The file's joint positions must be the configuration the profile's model describes (the same branch, up
+  to whole turns of a revolute joint), or the dynamics would be those of another pose; otherwise the
+  check refuses the file (TaskError naming the line, joint and both values).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from ..model.errors import TaskError
+from ..limits.check import _range_row, check_limits
+from ..limits.grid import check_grid
+from ..limits.motion import MotionModel
+from ..limits.report import LimitReport
+from ..model.profile import Profile
+from ..robots import build_robot
+from ..model.trajectory import CartesianPath
+
+#: a joint position in the file may differ from the model's inverse kinematics of its own forward
+#: kinematics by this much (rad or m) before it counts as another branch. FK∘IK round trips to ~1e-12 and
+#: the CSV carries 12 digits; 1e-3 still separates real branch changes (an elbow flipped, a Delta arm
+#: folded in: tenths of a radian and more) and does not trip on a pose within 1e-3 of a singularity, where
+#: the singularity row reports the problem instead.
+BRANCH_TOL = 1e-3
+#: fewest samples a move needs: a quintic spline has 6 coefficients
+MIN_SAMPLES = 6
+
+
+@dataclass(frozen=True)
+class Samples:
+    """One move of a trajectory file: ``move`` its number in the file's move column (None: no such column),
+    ``t`` (N,) s and ``q`` (N, n) as in the file, ``lines`` (N,) the 1-based file line of every sample,
+    ``rest`` how many trailing samples at rest were set aside (see the module docstring) and ``last_line``
+    the file line of the move's last row (with them)."""
+
+    move: int | None
+    t: np.ndarray
+    q: np.ndarray
+    lines: np.ndarray
+    rest: int
+    last_line: int
+
+    def where(self, source: str) -> str:
+        name = f"move {self.move}" if self.move is not None else "the trajectory"
+        return f"{source}: {name} (lines {int(self.lines[0])}–{self.last_line})"
+
+
+@dataclass(frozen=True)
+class MoveCheck:
+    """The limit report of one move of a checked file (``move`` None for a file without a move column)."""
+
+    move: int | None
+    first_line: int
+    last_line: int
+    report: LimitReport
+
+
+def _number(cell: str, name: str, source: str, line: int, column: str) -> float:
+    """The number in one cell; TaskError naming file:line, the column and the cell's text."""
+    try:
+        x = float(cell)
+    except ValueError:
+        raise TaskError(f"{source}:{line}: {name} = {cell.strip()!r}: not a number (column {column})") from None
+    if not np.isfinite(x):
+        raise TaskError(f"{source}:{line}: {name} = {cell.strip()}: must be a finite number (column {column})")
+    return x
+
+
+def read_moves(text: str, source: str, joint_names: tuple[str, ...]) -> list[Samples]:
+    """The moves of a trajectory CSV (see the module docstring); TaskError naming the file, line, column and
+    value of the first problem."""
+    from .batch import sniff_delimiter
+
+    numbered = [(n, ln) for n, ln in enumerate(text.removeprefix("\ufeff").splitlines(), start=1)
+                if ln.strip() and not ln.lstrip().startswith("#")]
+    need = ["t", *joint_names]
+    if not numbered:
+        raise TaskError(f"{source}: empty file (need a header with {', '.join(need)})")
+    head_line, head = numbered[0]
+    sep = sniff_delimiter(head)
+    rows = list(csv.reader(io.StringIO("\n".join(ln for _, ln in numbered)), delimiter=sep))
+    header = [h.strip().split("[")[0].strip() for h in rows[0]]
+    missing = [c for c in need if c not in header]
+    if missing:
+        raise TaskError(
+            f"{source}:{head_line}: header lacks column(s) {', '.join(missing)} (need {', '.join(need)}; found {', '.join(header)})"
+        )
+    cols = need + (["move"] if "move" in header else [])
+    idx = [header.index(c) for c in cols]
+    data = np.empty((len(rows) - 1, len(cols)))
+    lines = np.array([n for n, _ in numbered[1:]], dtype=int)
+    for k, (r, line) in enumerate(zip(rows[1:], lines)):
+        for c, (name, i) in enumerate(zip(cols, idx)):
+            if i >= len(r):
+                raise TaskError(
+                    f"{source}:{line}: {name}: no value (the row has {len(r)} cells, the header {len(header)})"
+                )
+            data[k, c] = _number(r[i], name, source, int(line), f"{i + 1}, {rows[0][i].strip()!r}")
+    if "move" not in header:
+        return [_one_move(None, data[:, 0], data[:, 1:], lines, source, trim=False)]
+    move = data[:, -1]
+    bad = np.flatnonzero(move != np.round(move))
+    if bad.size:
+        raise TaskError(f"{source}:{lines[bad[0]]}: move = {move[bad[0]]:g}: must be a whole number (the move's index)")
+    starts = np.r_[0, np.flatnonzero(np.diff(move) != 0) + 1]
+    ends = np.r_[starts[1:], len(move)]
+    seen: dict[int, int] = {}
+    moves = []
+    for a, b in zip(starts, ends):
+        m = int(move[a])
+        if m in seen:
+            raise TaskError(
+                f"{source}:{lines[a]}: move = {m}: its rows must be consecutive (move {m} already ended at line {seen[m]})"
+            )
+        seen[m] = int(lines[b - 1])
+        moves.append(_one_move(m, data[a:b, 0], data[a:b, 1:-1], lines[a:b], source, trim=True))
+    return moves
+
+
+def _one_move(move: int | None, t: np.ndarray, q: np.ndarray, lines: np.ndarray, source: str, trim: bool) -> Samples:
+    what = f" (move {move})" if move is not None else ""
+    dt = np.diff(t)
+    if np.any(dt <= 0):
+        i = int(np.flatnonzero(dt <= 0)[0]) + 1
+        hint = ""
+        if move is None and t[i] <= t[0]:
+            hint = ("; the time starts again, as if the file held several moves one after another: keep their "
+                    "'move' column (plan --batch and --round-trip write one) and each move is checked on its own")
+        raise TaskError(
+            f"{source}:{lines[i]}: t = {t[i]:.9g} s is not after the previous row's t = {t[i - 1]:.9g} s{what}: "
+            f"t must increase strictly from row to row{hint}"
+        )
+    rest = 0
+    last_line = int(lines[-1])
+    if trim:
+        at_end = np.all(q == q[-1], axis=1)
+        rest = len(q) - 1 - int(np.flatnonzero(~at_end)[-1] + 1) if not at_end.all() else 0
+        if rest:
+            t, q, lines = t[: len(t) - rest], q[: len(q) - rest], lines[: len(lines) - rest]
+    if len(t) < MIN_SAMPLES:
+        raise TaskError(
+            f"{source}:{lines[0]}: {len(t)} samples{what}; a move needs at least {MIN_SAMPLES} for a quintic spline"
+        )
+    return Samples(move, t, q, lines, rest, last_line)
+
+
+def read_trajectory(text: str, source: str, joint_names: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:
+    """(t (N,) s from 0, q (N, n)) of a file holding one move; TaskError naming the file, line and problem
+    (also when the file holds several moves: :func:`read_moves` reads those)."""
+    moves = read_moves(text, source, joint_names)
+    if len(moves) > 1:
+        raise TaskError(f"{source}: {len(moves)} moves (a 'move' column); read them with read_moves")
+    s = moves[0]
+    return s.t - s.t[0], s.q
+
+
+def _check_branch(s: Samples, robot, pos: np.ndarray, source: str) -> None:
+    """TaskError when the file's joint positions are not the model's configuration (module docstring)."""
+    q_model = robot.inverse_kinematics(pos)
+    diff = s.q - q_model
+    revolute = np.array([u == "rad" for u in robot.joint_units])
+    turns = np.where(revolute, 2 * np.pi * np.round(diff / (2 * np.pi)), 0.0)
+    off = np.abs(diff - turns)
+    if np.max(off) > BRANCH_TOL:
+        k = int(np.flatnonzero(np.max(off, axis=1) > BRANCH_TOL)[0])  # the first such row
+        j = int(np.argmax(off[k]))
+        name, unit = robot.joint_names[j], robot.joint_units[j]
+        p = ", ".join(f"{c:.6g}" for c in pos[k])
+        raise TaskError(
+            f"{source}:{s.lines[k]}: {name} = {s.q[k, j]:.6g} {unit} is another configuration than the profile's "
+            f"model: for the same tool position ({p}) m its inverse kinematics gives {name} = {q_model[k, j]:.6g} "
+            f"{unit}; check the profile (e.g. the SCARA's robot.elbow), the joint order and the units"
+        )
+
+
+def check_samples(s: Samples, profile: Profile, smoothing: float = 0.0, source: str = "<trajectory>") -> LimitReport:
+    """Limit report of one move read by :func:`read_moves` (see the module docstring)."""
+    from scipy.interpolate import UnivariateSpline, make_interp_spline
+
+    robot = build_robot(profile.robot)
+    t = s.t - s.t[0]
+    pos = robot.forward_kinematics(s.q)
+    _check_branch(s, robot, pos, source)
+    T = float(t[-1])
+    if smoothing > 0:
+        splines = [UnivariateSpline(t, pos[:, k], k=5, s=smoothing * len(t)) for k in range(3)]
+
+        def ev(x: np.ndarray, order: int) -> np.ndarray:
+            return np.column_stack([sp.derivative(order)(x) if order else sp(x) for sp in splines])
+
+        how = f"a quintic smoothing spline (s = {smoothing:g}·N) of the tool positions FK(q)"
+    else:
+        spline = make_interp_spline(t, pos, k=5)
+
+        def ev(x: np.ndarray, order: int) -> np.ndarray:
+            return spline(x, nu=order)
+
+        how = "a quintic interpolating spline of the tool positions FK(q)"
+
+    def evaluate(tau: np.ndarray, order: int) -> np.ndarray:
+        return ev(np.clip(tau, 0.0, 1.0) * T, order) * T**order
+
+    # the quintic spline is C⁴ across the samples (its knots): nothing jumps, peaks are fitted across them
+    cpath = CartesianPath(evaluate, "checked", {"source": source}, (0.0, 0.0, 0.0), t / T, jumps=())
+    margin = getattr(profile.robot, "singularity_margin", None)
+    specs = profile.robot.joint_specs()
+    model = MotionModel(cpath, robot, specs, margin, profile.workcell.box)
+    tau = t / T
+    rest = f"; {s.rest} trailing samples at rest set aside as the dwell" if s.rest else ""
+    notes = (
+        f"{s.where(source)}: {len(t)} samples over {T:.6g} s{rest}; derivatives from {how}; joint positions "
+        "checked as given in the file",
+    )
+    grid = check_grid(tau, tau, jumps=())
+    report = check_limits(model, T, parts=model.parts(grid), dwell=profile.planning.dwell, notes=notes)
+    # the position ranges on the file's own values (the model's inverse kinematics wraps revolute joints)
+    given = {}
+    for j, (name, unit, spec) in enumerate(zip(robot.joint_names, robot.joint_units, specs)):
+        if spec.limits.position is not None:
+            lo, hi = spec.limits.position
+            kmax, kmin = int(np.argmax(s.q[:, j])), int(np.argmin(s.q[:, j]))
+            given[name] = _range_row((name, "position", unit, "reach", float(lo), float(hi)),
+                                     float(s.q[kmax, j]), float(s.q[kmin, j]), float(t[kmax]), float(t[kmin]))
+    rows = tuple(given.get(r.joint, r) if r.quantity == "position" else r for r in report.rows)
+    return replace(report, rows=rows)
+
+
+#: the largest trajectory file ``check`` reads [bytes] (~600,000 rows of a 3-joint trajectory at 1 kHz; its
+#: parse holds a few times this in memory): larger is one line, exit 1, never a swap storm
+CHECK_MAX_BYTES = 64 << 20
+
+
+def check_file(path: str | Path, profile: Profile, smoothing: float = 0.0) -> list[MoveCheck]:
+    """Limit report of every move in CSV file ``path`` (``-`` = stdin) on ``profile`` (module docstring)."""
+    import sys
+
+    p = Path(path)
+    source = "<stdin>" if str(path) == "-" else str(p)
+    try:
+        if str(path) == "-":
+            raw = sys.stdin.buffer.read(CHECK_MAX_BYTES + 1)
+        else:
+            with open(p, "rb") as fh:
+                raw = fh.read(CHECK_MAX_BYTES + 1)
+    except OSError as exc:
+        raise TaskError(f"{p}: cannot read: {exc.strerror}") from None
+    if len(raw) > CHECK_MAX_BYTES:
+        raise TaskError(f"{source}: larger than {CHECK_MAX_BYTES} bytes ({CHECK_MAX_BYTES >> 20} MiB), the most check "
+                        "reads at once; split the file by move (e.g. one file per move column value)")
+    if b"\0" in raw:
+        raise TaskError(f"{source}: a binary file (NUL bytes), not a CSV trajectory")
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError:
+        raise TaskError(f"{source}: not a text (UTF-8) file") from None
+    robot = build_robot(profile.robot)
+    out = []
+    for s in read_moves(text, source, robot.joint_names):
+        out.append(MoveCheck(s.move, int(s.lines[0]), s.last_line, check_samples(s, profile, smoothing, source)))
+    return out
+
+
+def check_trajectory(path: str | Path, profile: Profile, smoothing: float = 0.0) -> LimitReport:
+    """Limit report of the one move in CSV file ``path`` (a file of several moves: :func:`check_file`)."""
+    checks = check_file(path, profile, smoothing)
+    if len(checks) > 1:
+        raise TaskError(f"{path}: {len(checks)} moves (a 'move' column); check_file checks each")
+    return checks[0].report

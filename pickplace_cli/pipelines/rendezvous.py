@@ -1,0 +1,570 @@
+"""Conveyor rendezvous: meet a part moving on a belt, arrive with the belt's velocity, track it through the pick.
+
+A camera saw a part at ``position`` [m] on a belt moving at ``velocity`` [m/s]; the move starts ``latency``
+seconds after the detection, and t = 0 is the start of the move. The move of duration T therefore has to end
+at the meeting point
+
+    P(T) = position + velocity · (latency + T)
+
+with the tool's velocity equal to the belt's: the velocity-constrained B-spline of [Yang2022] with v1 = belt
+velocity (``--method bspline-vel``). T itself comes from the user's duration rule applied to the move to P(T),
+and P(T) from T — a fixed point T = T_rule(P(T)).
+
+**How the fixed point is solved.** For a rule that is a *feasibility* threshold (``auto``: the capacity bound
+of the path planned for T at most T, Eq. 26; ``fit``: every joint and motor limit holds at T, Eq. 38), the
+fixed point is the smallest T at which the move to P(T), planned for T, meets the rule: writing
+e(T) = (rule's excess of the move to P(T) in T), the rendezvous is the first root of e. This is the brief's
+g(T) = T_rule(P(T)) − T = 0 without nesting one root-find inside another: at the first root of e, the move to
+the fixed point P(T*) meets the rule at T* and at no shorter duration close by, so T_rule(P(T*)) = T*
+(a test re-plans the move to P(T*) with the plain ``--time auto`` and gets T* back). It is found in two
+phases, each bracketed before ``brentq``:
+
+1. screening on cheap paths (the conveyor table's answer, or the paper's initial shape where the table does
+   not apply, ~1-2 ms each): a few fixed-point steps give a start, then a scan in 10 % steps inside the
+   allowed interval brackets the first sign change;
+2. the exact shape (the default ``exact`` solver, continued from the nearest solved T as ``--time auto``
+   does): a 2 % scan around the screening root brackets it again, ``brentq`` finds it, a global solve confirms
+   the shape at the root, and T is nudged up until the rule holds exactly.
+
+A duration in seconds needs no search: P(T) follows from T.
+
+**Where the robot may meet the part.** The allowed meeting times form an interval [a, b] of move time: the
+part must be inside the workspace (the robot's reachable set, its joint ranges and the workcell box) and the
+profile's belt window (``workcell.belt_window``), from the meeting until the end of the tracking segment
+(the dwell, when the tool moves with the belt holding the grip). When the first root lies before a, the robot
+waits: it meets the part at a (a longer move, still within the rule). When no T ≤ b meets the rule, there is
+no rendezvous: :class:`~pickplace_cli.model.errors.UnreachableError` (exit 4) says by how much the part is missed
+(the distance along the belt between the last allowed meeting point and the earliest feasible one).
+Only the first stretch of allowed meeting times is used (a part that leaves the workspace and comes back is
+not chased into its second stretch). The workspace is sampled every millimetre of belt travel.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+
+from ..model.errors import TableError, TaskError, UnreachableError
+from ..model.task import Task
+
+#: the shortest move considered [s]
+T_MIN = 1e-2
+#: how far ahead in move time the part is followed [s]
+HORIZON = 20.0
+#: belt travel per workspace sample [m]
+WORKSPACE_STEP = 1e-3
+
+
+@dataclass(frozen=True)
+class Part:
+    """A part on a belt: detected at ``position`` [m, base frame], moving at ``velocity`` [m/s]; the move
+    starts ``latency`` [s] after the detection. ``name`` labels it in messages (e.g. "row 3")."""
+
+    position: np.ndarray
+    velocity: np.ndarray
+    latency: float = 0.0
+    name: str = "part"
+
+    def __post_init__(self) -> None:
+        for label, unit, value in (("to", "m", self.position), ("to-belt", "m/s", self.velocity)):
+            arr = np.asarray(value, float).reshape(-1)
+            if arr.shape != (3,) or not np.all(np.isfinite(arr)):
+                raise TaskError(f"{label} = {value!r}: give three finite components X,Y,Z in {unit}")
+            object.__setattr__(self, "position" if label == "to" else "velocity", arr)
+        lat = float(self.latency)
+        if not (math.isfinite(lat) and lat >= 0):
+            raise TaskError(f"latency = {self.latency!r}: must be a finite number of seconds >= 0 (detection to move start)")
+        object.__setattr__(self, "latency", lat)
+
+    def at(self, t_move: float | np.ndarray) -> np.ndarray:
+        """Position [m] at move time ``t_move`` [s] (t = 0: the move starts), (3,) or (N, 3)."""
+        t = np.asarray(t_move, float) + self.latency
+        return self.position + np.multiply.outer(t, self.velocity)
+
+    @property
+    def speed(self) -> float:
+        return float(np.linalg.norm(self.velocity))
+
+    def label(self) -> str:
+        xyz = ",".join(f"{c:g}" for c in self.position)
+        vel = ",".join(f"{c:g}" for c in self.velocity)
+        return f"{self.name} (detected at {xyz} m, belt {vel} m/s)"
+
+
+@dataclass(frozen=True)
+class Rendezvous:
+    """Where and when the move meets the part: ``task`` (from the start to the meeting point, arriving with
+    the belt velocity), its ``duration`` (T [s], how it was chosen), the exact ``path`` planned for T, the
+    allowed meeting interval ``window_s`` (a, b) [s of move time], and what the search did."""
+
+    part: Part
+    task: Task
+    duration: Any  # timing.Duration
+    path: Any  # CartesianPath planned for duration.seconds
+    window_s: tuple[float, float]
+    waited: bool = False
+    evaluations: dict = field(default_factory=dict)
+
+    @property
+    def seconds(self) -> float:
+        return float(self.duration.seconds)
+
+    @property
+    def meeting_point(self) -> np.ndarray:
+        return self.task.p_to
+
+    @property
+    def meeting_time_since_detection(self) -> float:
+        return self.part.latency + self.seconds
+
+    def as_dict(self) -> dict[str, Any]:
+        return {
+            "part_detected_m": self.part.position.tolist(),
+            "belt_velocity_m_s": self.part.velocity.tolist(),
+            "latency_s": self.part.latency,
+            "meeting_point_m": self.meeting_point.tolist(),
+            "meeting_time_s": self.seconds,
+            "meeting_time_since_detection_s": self.meeting_time_since_detection,
+            "allowed_meeting_s": list(self.window_s),
+            "waited_for_window": self.waited,
+            "evaluations": dict(self.evaluations),
+        }
+
+
+# ------------------------------------------------------------------------------------------ the factory
+
+
+def _factory_class():
+    from ..paths.bspline_vel import PathFactory
+
+    class RendezvousFactory(PathFactory):
+        """T [s] → the bspline-vel path from the start to P(T), arriving with the belt velocity, planned for T
+        (memoised; the exact solver continues its optimum from the nearest solved T, like ``--time auto``)."""
+
+        def __init__(self, start: np.ndarray, part: Part, height: float, eta: float, v_from, **params: Any) -> None:
+            self.start, self.part = np.asarray(start, float), part
+            self.height, self.eta, self.v_from = height, eta, np.asarray(v_from, float)
+            self._tasks: dict[float, Task] = {}
+            super().__init__(self.task_at(1.0), **params)
+
+        def task_at(self, duration: float) -> Task:
+            T = float(duration)
+            task = self._tasks.get(T)
+            if task is None:
+                if len(self._tasks) > 512:
+                    self._tasks.clear()
+                task = self._tasks[T] = Task(self.start, self.part.at(T), self.height, self.eta, self.v_from,
+                                             self.part.velocity)
+            return task
+
+    return RendezvousFactory
+
+
+def _screening_factory(start, part, height, eta, v_from, table):
+    """The cheap factory of phase 1: the table's answer where the table applies, else the paper's initial shape."""
+    from ..paths.bspline_vel import PAPER_INITIAL
+
+    cls = _factory_class()
+    fac = cls(start, part, height, eta, v_from, solver="table", **({"table": table} if table else {}))
+
+    def call(T: float):
+        nonlocal fac
+        try:
+            return fac(T)
+        except TableError:  # outside the table (other η, unequal heights, vertical belt …): the paper's shape
+            fac = cls(start, part, height, eta, v_from, params=PAPER_INITIAL)
+            return fac(T)
+
+    return call
+
+
+# ------------------------------------------------------------------------------------------ the rules
+
+
+class _Rule:
+    """e(T): the excess of the duration rule for the move to P(T) planned for T (≤ 0: the rule holds)."""
+
+    def __init__(self, kind: str, profile, factory, dwell: float) -> None:
+        self.kind, self.profile, self.factory, self.dwell = kind, profile, factory, dwell
+        self.count = 0
+
+    def __call__(self, T: float) -> float:
+        from ..timing import auto_duration
+
+        self.count += 1
+        try:
+            path = self.factory(T)
+        except TaskError:  # e.g. the meeting point straight below the start (b = 0): no move of this method
+            return math.inf
+        if self.kind == "auto":
+            tv, ta, tj, _ = auto_duration(path, self.profile.capacity)
+            return max(tv, ta, tj or 0.0) / T - 1.0
+        from ..planner import motion_model
+        from ..timing import _worst_utilisation
+
+        try:
+            found = _worst_utilisation(motion_model(path, self.profile), self.dwell)
+        except UnreachableError:  # this trial move leaves the workspace: not a feasible meeting
+            return math.inf
+        if found is None:
+            raise TaskError(
+                "time = fit: the profile sets no velocity, acceleration, jerk or motor limit that depends on the "
+                "duration; add joint limits or drives, or use --time auto / seconds"
+            )
+        return found[0](T)[0]
+
+
+def _finite(x: float) -> float:
+    return x if math.isfinite(x) else 1e6  # brentq needs finite values; the sign is what matters
+
+
+def _first_feasible(e, a: float, b: float, start: float, factor: float, rtol: float) -> float | None:
+    """The smallest T in [a, b] with e(T) ≤ 0 near ``start``: scanned down (while feasible) or up (while not)
+    in steps of ``factor`` < 1, the crossing bracketed and root-found (brentq). ``a`` when e(a) ≤ 0 is reached;
+    None when no scanned T ≤ b is feasible."""
+    from scipy.optimize import brentq
+
+    T = min(max(start, a), b)
+    if e(T) <= 0:
+        hi = T
+        while True:
+            if hi <= a:
+                return a
+            lo = max(hi * factor, a)
+            if e(lo) > 0:
+                break
+            hi = lo
+    else:
+        lo = T
+        while True:
+            if lo >= b:
+                return None
+            hi = min(lo / factor, b)
+            if e(hi) <= 0:
+                break
+            lo = hi
+    return float(brentq(lambda x: _finite(e(x)), lo, hi, xtol=1e-13, rtol=rtol))
+
+
+# ------------------------------------------------------------------------------------------ where
+
+
+def workspace_mask(profile, points: np.ndarray) -> np.ndarray:
+    """Boolean (N,): True where the tool can be at ``points`` (N, 3) [m]: the robot reaches it (IK), every
+    joint within its position range, inside the workcell box."""
+    from ..planner import motion_model_static
+
+    robot, specs, _margin, box, _memo = motion_model_static(profile)
+    p = np.asarray(points, float)
+    ok = np.all(np.isfinite(p), axis=1)
+    if box is not None:
+        ok &= np.all((p >= np.asarray(box.min) - 1e-12) & (p <= np.asarray(box.max) + 1e-12), axis=1)
+    if hasattr(robot, "reachable"):
+        ok &= robot.reachable(np.where(ok[:, None], p, 0.0))
+    travel = getattr(robot, "travel", None)  # the gantry: joints are the coordinates
+    if travel is not None:
+        ok &= np.all((p >= travel[:, 0] - 1e-12) & (p <= travel[:, 1] + 1e-12), axis=1)
+    idx = np.flatnonzero(ok)
+    if idx.size:
+        try:
+            q = robot.inverse_kinematics(p[idx])
+        except UnreachableError:  # pragma: no cover - reachable() and IK agree for the shipped robots
+            return np.zeros(len(p), bool)
+        for c, spec in enumerate(specs):
+            rng = spec.limits.position if spec.limits is not None else None
+            if rng is not None:
+                bad = (q[:, c] < rng[0] - 1e-12) | (q[:, c] > rng[1] + 1e-12)
+                ok[idx[bad]] = False
+    return ok
+
+
+def window_times(part: Part, window) -> tuple[float, float]:
+    """(enter, exit) [s since detection] of the part in the belt window (an axis-aligned box); (inf, -inf)
+    when its line misses the window. A static part inside the window: (-inf, inf)."""
+    lo_t, hi_t = -math.inf, math.inf
+    for c in range(3):
+        x0, v, lo, hi = part.position[c], part.velocity[c], window.min[c], window.max[c]
+        if abs(v) < 1e-15:
+            if not lo <= x0 <= hi:
+                return math.inf, -math.inf
+            continue
+        t1, t2 = (lo - x0) / v, (hi - x0) / v
+        lo_t, hi_t = max(lo_t, min(t1, t2)), min(hi_t, max(t1, t2))
+    return (lo_t, hi_t) if lo_t <= hi_t else (math.inf, -math.inf)
+
+
+def allowed_interval(part: Part, profile, dwell: float) -> tuple[float, float, str]:
+    """(a, b, what ends it) [s of move time]: the first stretch of meeting times T ≥ T_MIN at which the part
+    and the tracking segment [T, T + dwell] stay inside the workspace and the belt window; UnreachableError
+    (exit 4) naming the part when there is none. ``what`` is "window", "workspace" or "horizon"."""
+    window = getattr(profile.workcell, "belt_window", None)
+    a_w, b_w = -math.inf, math.inf
+    if window is not None:
+        enter, leave = window_times(part, window)
+        if enter > leave:
+            raise UnreachableError(f"{part.label()}: its path never crosses the belt window of profile {profile.name}")
+        if leave - part.latency < T_MIN + dwell:
+            past = part.speed * (part.latency + T_MIN + dwell - leave)
+            raise UnreachableError(
+                f"{part.label()}: already past the belt window when the move starts (latency {part.latency:g} s): "
+                f"it leaves the window {past * 1e3:.0f} mm before the earliest pick and {dwell:g} s of tracking could end"
+            )
+        a_w, b_w = enter - part.latency, leave - part.latency - dwell
+    speed = part.speed
+    dt = min(WORKSPACE_STEP / speed, HORIZON / 200) if speed > 0 else HORIZON
+    t = np.arange(0.0, HORIZON + dwell + dt, dt)
+    inside = workspace_mask(profile, part.at(t))
+    m = int(math.ceil(dwell / dt - 1e-9))  # samples the tracking segment spans after the meeting
+    cs = np.concatenate([[0], np.cumsum(~inside)])
+    n = len(t) - m
+    ok = (cs[m + 1: m + 1 + n] - cs[:n]) == 0  # every sample of [t_k, t_k + dwell] inside
+    tk = t[:n]
+    ok &= (tk >= max(T_MIN, a_w) - 1e-12) & (tk <= b_w + 1e-12)
+    first = np.flatnonzero(ok)
+    if not first.size:
+        where = "the belt window and " if window is not None else ""
+        raise UnreachableError(
+            f"{part.label()}: it is never inside {where}the workspace of profile {profile.name} for the pick and "
+            f"{dwell:g} s of tracking within {HORIZON:g} s of the move's start (at the start, latency "
+            f"{part.latency:g} s, it is at {','.join(f'{c:.4g}' for c in part.at(0.0))} m)"
+        )
+    k = int(first[0])
+    end = k + int(np.argmin(ok[k:])) if not ok[k:].all() else n
+    a = max(float(tk[k]), a_w, T_MIN)
+    if end >= n:
+        b, what = min(float(tk[-1]), b_w), "horizon"
+    else:
+        b = min(float(tk[end - 1]), b_w)
+        what = "window" if b_w <= float(tk[end - 1]) + dt else "workspace"
+    if window is not None and b_w <= b + 1e-12:
+        what = "window"
+    return a, b, what
+
+
+# ------------------------------------------------------------------------------------------ the solve
+
+
+def find_rendezvous(
+    start, part: Part, profile, time: str | float = "auto", height: float | None = None, eta: float | None = None,
+    v_from=None, method_params: dict | None = None, dwell: float | None = None,
+) -> Rendezvous:
+    """The duration T and meeting point P(T) of a bspline-vel move from ``start`` [m] (leaving with ``v_from``
+    [m/s], default 0) that meets ``part`` with the belt's velocity, under the duration rule ``time`` (seconds,
+    "auto" or "fit"; "optimal" is refused like for ``--method bspline-vel``). ``dwell`` [s]: the tracking
+    segment that must stay in the window and workspace after the meeting (default: the profile's dwell).
+    See the module docstring for the method; UnreachableError (exit 4) when there is no rendezvous."""
+    from ..model.errors import UsageError
+    from ..timing import Duration, auto_duration, parse_time
+
+    spec = parse_time(time)
+    if spec == "optimal":
+        raise UsageError(
+            "--time optimal: method bspline-vel plans its path for a duration (the end velocities enter as v·T), "
+            "so a time law would change the path; use --time fit"
+        )
+    params = dict(method_params or {})
+    if params.get("params") is not None or any(k in params for k in ("tau6", "lambda1")):
+        raise UsageError("--to-belt: the shape parameters are chosen for each trial meeting time; drop --param tau6 … lambda3")
+    h = float(height if height is not None else profile.planning.height)
+    e_ratio = float(eta if eta is not None else profile.planning.eta)
+    dwell = float(profile.planning.dwell if dwell is None else dwell)
+    start = np.asarray(start, float)
+    v0 = np.zeros(3) if v_from is None else np.asarray(v_from, float)
+    a, b, what = allowed_interval(part, profile, dwell)
+    cls = _factory_class()
+    exact = cls(start, part, h, e_ratio, v0, **params)
+    if isinstance(spec, float):
+        T = spec
+        if not a - 1e-12 <= T <= b + 1e-12:
+            _outside(part, T, a, b, what, f"--time {T:g} s")
+        path = exact(T)
+        tv, ta, tj, _ = auto_duration(path, profile.capacity)
+        return Rendezvous(part, exact.task_at(T), Duration(T, "given", tv, ta, tj, "given"), path, (a, b),
+                          evaluations={"exact": 1})
+    plan_dwell = profile.planning.dwell
+    screen = _Rule(spec, profile, _screening_factory(start, part, h, e_ratio, v0, params.get("table")), plan_dwell)
+    # a start near the root: fixed-point steps T ← T_auto(P(T)) on the cheap paths (capacity rule for both)
+    cap = _Rule("auto", profile, screen.factory, plan_dwell)
+    T0 = min(max(0.2, a), b)
+    for _ in range(3):
+        T0 = min(max(T0 * (1.0 + cap(T0)), a), b)
+        if not math.isfinite(T0):
+            T0 = min(max(0.2, a), b)
+            break
+    T_screen = _first_feasible(screen, a, b, T0, 0.9, 1e-6)
+    rule = _Rule(spec, profile, exact, plan_dwell)
+    if T_screen is None:  # by how much: the first feasible T beyond b, screened, then on the exact shape
+        beyond = _first_feasible(screen, b, HORIZON, b, 0.8, 1e-6) if b < HORIZON else None
+        if beyond is not None and math.isfinite(beyond):
+            beyond = _first_feasible(rule, b, HORIZON, beyond, 0.98, 1e-10)
+        _missed(part, rule, a, b, what, spec, known=beyond if beyond is not None else math.inf)
+    T = _first_feasible(rule, a, b, T_screen, 0.98, 1e-8)
+    if T is not None and T > a:
+        path, agreed = exact.final(T)  # a global solve confirms the continued shape at the root
+        if not agreed:  # the continuation had followed a worse branch: search again on the better one
+            T = _first_feasible(rule, a, b, T, 0.98, 1e-8)
+    if T is None:
+        _missed(part, rule, a, b, what, spec)
+    T = _nudge(rule, exact, profile, spec, T, plan_dwell)
+    if T > b + 1e-12:
+        _missed(part, rule, a, b, what, spec, known=T)
+    path = exact(T)
+    tv, ta, tj, binding = auto_duration(path, profile.capacity)
+    if spec == "auto":
+        duration = Duration(T, "auto", tv, ta, tj, binding)
+    else:
+        from ..timing import _worst_utilisation
+        from ..planner import motion_model
+
+        worst = _worst_utilisation(motion_model(path, profile), plan_dwell)[0]
+        duration = Duration(T, "fit", tv, ta, tj, worst(T * (1 - 1e-9))[1], T)
+    return Rendezvous(part, exact.task_at(T), duration, path, (a, b), waited=T <= a + 1e-12,
+                      evaluations={"screening": screen.count + cap.count, "exact": rule.count})
+
+
+def _nudge(rule: _Rule, factory, profile, spec: str, T: float, dwell: float) -> float:
+    """T nudged up until the rule holds exactly at T (a root is within brentq's tolerance of the crossing,
+    and each nudge moves P(T) a little); for fit, the exact (refined) limit check decides, as in --time fit."""
+    for _ in range(20):
+        if spec == "auto":
+            ex = rule(T)
+            if ex <= 0:
+                return T
+            T *= 1.0 + ex + 1e-13
+        else:
+            from ..limits.check import check_limits
+            from ..planner import motion_model
+
+            rep = check_limits(motion_model(factory(T), profile), T, dwell=dwell)
+            bad = [r for r in rep.violations if r.kind != "reach"]
+            if not bad:
+                return T
+            T *= max(r.utilisation for r in bad) * (1.0 + 1e-9)
+    return T  # pragma: no cover - converges in one or two steps (tests)
+
+
+def _outside(part: Part, T: float, a: float, b: float, what: str, rule: str) -> None:
+    if T < a:
+        raise UnreachableError(
+            f"{part.label()}: {rule} meets it at t = {T:.4f} s, {part.speed * (a - T) * 1e3:.0f} mm before it "
+            f"enters the {'window' if what == 'window' else 'workspace'} (earliest meeting t = {a:.4f} s)"
+        )
+    raise UnreachableError(
+        f"{part.label()}: {rule} meets it at t = {T:.4f} s, {part.speed * (T - b) * 1e3:.0f} mm after the last "
+        f"point where it can be picked and tracked inside the {what if what != 'horizon' else 'workspace'} "
+        f"(t = {b:.4f} s)"
+    )
+
+
+def _missed(part: Part, rule: _Rule, a: float, b: float, what: str, spec: str, known: float | None = None) -> None:
+    """UnreachableError: the robot cannot meet the part by ``b``; by how much (``known``, or the first feasible
+    T beyond b by ``rule``, when there is one within the horizon)."""
+    T_f = (known if math.isfinite(known) else None) if known is not None else (_first_feasible(rule, b, HORIZON, b, 0.8, 1e-6) if b < HORIZON else None)
+    place = {"window": "the belt window", "workspace": "the workspace", "horizon": "the workspace"}[what]
+    if T_f is None or not math.isfinite(T_f):
+        raise UnreachableError(
+            f"{part.label()}: the robot cannot reach it before it leaves {place} (last possible meeting "
+            f"t = {b:.4f} s after the move starts; --time {spec} needs longer)"
+        )
+    raise UnreachableError(
+        f"{part.label()}: the part leaves {place} {part.speed * (T_f - b) * 1e3:.0f} mm before the robot can reach "
+        f"it (--time {spec}: earliest meeting t = {T_f:.4f} s, last allowed t = {b:.4f} s after the move starts)"
+    )
+
+
+# ------------------------------------------------------------------------------------------ the plan
+
+
+def plan_rendezvous(start, part: Part, profile, time: str | float = "auto", height: float | None = None,
+                    eta: float | None = None, v_from=None, method_params: dict | None = None,
+                    rate: float | None = None, dwell: float | None = None):
+    """(Plan of the move to the meeting point, Rendezvous): :func:`find_rendezvous`, then the planner's
+    pipeline (samples, joint motion, limit check) on that move at T, with the found shape (no second solve).
+    The plan's duration says how T was chosen; ``parameters["rendezvous"]`` says where and when it meets."""
+    from ..planner import PlanOptions, plan
+
+    rv = find_rendezvous(start, part, profile, time, height, eta, v_from, method_params, dwell)
+    shape = [rv.path.parameters[k] for k in ("tau6", "tau7", "tau9", "tau10", "lambda1", "lambda2", "lambda3")]
+    options = PlanOptions(method="bspline-vel", method_params={"params": shape}, time=rv.seconds, rate=rate, fit=False)
+    got = plan(rv.task, profile, options)
+    parameters = {**rv.path.parameters, "rendezvous": rv.as_dict()}
+    return replace(got, duration=rv.duration, parameters=parameters), rv
+
+
+# ------------------------------------------------------------------------------------------ tracking
+
+
+def tracking_path(point, velocity, duration: float):
+    """CartesianPath of the tracking segment: from ``point`` [m] at constant ``velocity`` [m/s] for ``duration``
+    [s] (the tool moves with the belt while it grips the part: acceleration and jerk zero)."""
+    from ..model.trajectory import CartesianPath
+
+    p0, d = np.asarray(point, float), np.asarray(velocity, float) * float(duration)  # d = dp/dτ
+
+    def evaluate(tau: np.ndarray, order: int) -> np.ndarray:
+        if order == 0:
+            return p0 + np.multiply.outer(tau, d)
+        return np.broadcast_to(d if order == 1 else np.zeros(3), (len(tau), 3)).copy()
+
+    params = {"velocity_m_s": np.asarray(velocity, float).tolist(), "duration_s": float(duration), "continuity": 3}
+    return CartesianPath(evaluate, "track", params, (float(np.linalg.norm(d)), 0.0, 0.0), jumps=())
+
+
+def plan_tracking(move, part: Part, profile, duration: float | None = None, rate: float | None = None):
+    """Plan of the tracking segment after the rendezvous ``move`` (a Plan ending at the part): the tool follows
+    the part for ``duration`` [s] (default: the profile's dwell), joint motion by the robot's IK and dynamics,
+    checked against every limit like a move (its RMS row covers the segment alone). Its ``t`` runs from 0; its
+    report's ``t_peak`` is trajectory time (T … T + duration), like the joined samples of :func:`with_tracking`."""
+    from ..limits.check import check_limits
+    from ..limits.grid import check_grid_order
+    from ..planner import Plan, motion_model
+    from ..timing import Duration
+    from ..model.trajectory import CartesianTrajectory, JointTrajectory
+
+    D = float(profile.planning.dwell if duration is None else duration)
+    rate = float(profile.planning.rate if rate is None else rate)
+    T = float(move.duration.seconds)
+    path = tracking_path(part.at(T), part.velocity, D)
+    traj = CartesianTrajectory(path, D)
+    t = traj.sample_times(rate)
+    model = motion_model(path, profile)
+    grid, order = check_grid_order(t / D, path.breakpoints, path.jumps)
+    try:
+        parts = model.parts(grid, order=order)
+    except UnreachableError as exc:
+        raise UnreachableError(f"{part.label()}: the tracking segment (t = {T:.4f} … {T + D:.4f} s) leaves the "
+                               f"workspace: {exc}") from None
+    report = check_limits(model, D, parts=parts, dwell=0.0)
+    # t_peak in the trajectory's time (the segment runs from T to T + D), as the written samples and the
+    # segment's heading say; the segment's own clock would read 0 … D
+    shifted = tuple(replace(r, t_peak=None if r.t_peak is None else r.t_peak + T) for r in report.rows)
+    report = replace(report, rows=shifted)
+    n = len(t)
+    out = {k: getattr(parts, k)[:n] for k in ("p", "v1", "a1", "j1", "q", "qd1", "qdd1", "qddd1", "A", "G", "Am", "Gm")}
+    robot = model.robot
+    joint = JointTrajectory(
+        t, out["q"], out["qd1"] / D, out["qdd1"] / D**2, out["qddd1"] / D**3, robot.joint_names, robot.joint_units,
+        torque=out["A"] / D**2 + out["G"],
+        motor_speed=model.gear * out["qd1"] / D if model.has_drives else None,
+        motor_torque=out["Am"] / D**2 + out["Gm"] if model.has_drives else None,
+    )
+    duration_info = Duration(D, "tracking", 0.0, 0.0, None, "belt")
+    return Plan(move.task, "track", dict(path.parameters), duration_info, traj, t, out["p"], out["v1"] / D,
+                out["a1"] / D**2, out["j1"] / D**3, joint, report, profile.name)
+
+
+def with_tracking(move, track):
+    """One trajectory: the rendezvous ``move`` (t from 0 to T) then the ``track`` segment (t from T to T + dwell,
+    its first sample — the meeting, already the move's last — left out); a Timeline with ``move`` 1 for every
+    sample and the segments "move" and "track"."""
+    from .timeline import Segment, _join, _pieces_of
+
+    T = float(move.t[-1])
+    first = _pieces_of(move, 0.0)
+    rest = _pieces_of(track, T)
+    rest = {k: ({n: None if a is None else a[1:] for n, a in v.items()} if k == "joint" else v[1:]) for k, v in rest.items()}
+    segments = [Segment(1, "move", 0.0, T), Segment(1, "track", T, T + float(track.t[-1]))]
+    return _join([first, rest], [1, 1], move.joint, segments, [move.summary()])
