@@ -368,8 +368,8 @@ def format_table_2d(table: Table2D, version: str, extra_meta: dict | None = None
         out.write(f"# {key}: {val}\n")
     out.write("# units: eta, lambda = b/h, k1, k2 dimensionless; v_max, a_max, j_max, a_min, j_min are the normalised\n")
     out.write("#   peaks |v|, |a|, |j| of the path with b = 1 m, T = 1 s (m/s, m/s^2, m/s^3); F dimensionless\n")
-    out.write("# basin_jumps: grid edges (lambda, eta)-(lambda, eta) across which k1 or k2 changes by more than "
-              "jump_threshold; the cells beside them are not interpolated (plan solves those moves on demand)\n")
+    out.write("#   basin_jumps are the grid edges (lambda, eta)-(lambda, eta) across which k1 or k2 changes by more than\n")
+    out.write("#   jump_threshold; the cells beside them are not interpolated (plan solves those moves on demand)\n")
     out.write(",".join(COLUMNS_2D) + "\n")
     for e, r in zip((e for e in table.etas for _ in table.lams), table.rows):
         out.write(",".join(f"{x:.10g}" for x in (e, r.lam, r.k1, r.k2, r.a_max, r.j_max, r.v_max, r.F, r.a_min, r.j_min)) + "\n")

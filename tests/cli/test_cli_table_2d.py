@@ -20,7 +20,9 @@ def test_build_table_2d_csv_and_st(tmp_path):
     tab = load_table_2d(out)
     assert tab.etas == (0.3, 0.5) and tab.lams == (2.0, 4.0)
     text = out.read_text()
-    assert "# eta_grid: 0.3..0.5 step 0.2 (2 values)" in text and "# basin_jumps: none" in text
+    assert "# eta_grid: 0.3..0.5 step 0.2 (2 values)" in text
+    # so coarse a grid (λ 2 → 4, η 0.3 → 0.5) crosses basins: the header lists the edges and the table reads them
+    assert text.count("# basin_jumps: ") == 1 and len(tab.jumps) == text.split("# basin_jumps: ")[1].splitlines()[0].count(";") + 1
     st = tmp_path / "t2.st"
     r = run("build-table", "--lambda-min", "2", "--lambda-max", "4", "--lambda-points", "2", "--eta-list", "0.3,0.5",
             "-j", "1", "-q", "-f", "st", "-o", str(st))

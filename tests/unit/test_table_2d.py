@@ -15,9 +15,8 @@ from pickplace_cli.model.errors import TableError
 from pickplace_cli.export.table2d_st import format_table_2d_st
 
 
-def _row(lam, k1, k2):
-    nan = float("nan")
-    return O.TableRow(lam, k1, k2, nan, nan, nan, nan, nan, nan)
+def _row(lam, k1, k2):  # peaks and F are not used by the look-up: placeholders (a table file holds finite values)
+    return O.TableRow(lam, k1, k2, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0)
 
 
 def _synthetic(k1_of=lambda e, lam: 0.3 + 0.1 * e + 0.001 * lam, k2_of=lambda e, lam: 0.1 + 0.05 * e):
@@ -64,15 +63,16 @@ def test_a_jump_is_found_and_never_interpolated_across():
     """k2 steps by 0.5 between λ = 2 and 4 at η = 0.4 and 0.6: the two cells on each side of those edges
     refuse to interpolate (TableJumpError), the cells away from them still interpolate."""
     t = _synthetic(k2_of=lambda e, lam: 0.7 if (e >= 0.4 and lam >= 4) else 0.2)
-    assert [(ax, a, b) for ax, a, b in t.jumps] == [("lambda", (2.0, 0.4), (4.0, 0.4)), ("eta", (4.0, 0.2), (4.0, 0.4)),
-                                                    ("eta", (8.0, 0.2), (8.0, 0.4)), ("lambda", (2.0, 0.6), (4.0, 0.6))]
+    # listed by their lower end, η first then λ
+    assert [(ax, a, b) for ax, a, b in t.jumps] == [("eta", (4.0, 0.2), (4.0, 0.4)), ("eta", (8.0, 0.2), (8.0, 0.4)),
+                                                    ("lambda", (2.0, 0.4), (4.0, 0.4)), ("lambda", (2.0, 0.6), (4.0, 0.6))]
     with pytest.raises(T2.TableJumpError, match="jumps between basins"):
         t.lookup(3.0, 0.5)
     with pytest.raises(T2.TableJumpError):
         t.lookup(6.0, 0.3)
     assert t.lookup(1.5, 0.5) == pytest.approx((0.3 + 0.05 + 0.0015, 0.2), abs=1e-12)
     text = T2.format_table_2d(t, "TEST")
-    assert "# basin_jumps: (2, 0.4)-(4, 0.4); (4, 0.2)-(4, 0.4); (8, 0.2)-(8, 0.4); (2, 0.6)-(4, 0.6)" in text
+    assert "# basin_jumps: (4, 0.2)-(4, 0.4); (8, 0.2)-(8, 0.4); (2, 0.4)-(4, 0.4); (2, 0.6)-(4, 0.6)" in text
 
 
 def test_csv_round_trip_and_bad_files():
@@ -105,7 +105,11 @@ def test_shipped_table_covers_the_issue_range(shipped):
     lam = shipped.lams[20]
     s = O.TableSettings(eta=0.5)
     want = O.optimise_lambda(lam, O._coarse_for(s), s)
-    assert shipped.grid("k1")[i, 20] == pytest.approx(want.k1, abs=1e-8)  # 10 significant digits in the file
+    # the file keeps λ to 10 significant digits, so the optimiser here starts from a λ ~1e-9 away and its
+    # Nelder-Mead stops elsewhere within its xatol (refine_xatol = 1e-5): k within 2e-5, F within 1e-8 relative
+    assert shipped.grid("k1")[i, 20] == pytest.approx(want.k1, abs=2e-5)
+    assert shipped.grid("k2")[i, 20] == pytest.approx(want.k2, abs=2e-5)
+    assert shipped.grid("F")[i, 20] == pytest.approx(want.F, rel=1e-8)
 
 
 def test_interpolated_F_within_half_a_percent_at_seeded_points(shipped):
@@ -190,3 +194,35 @@ def test_st_2d_parses_with_blark_and_interpolates_like_lookup():
     assert ok is False and (out["fK1"], out["fK2"]) == (t.grid("k1")[2, 3], t.grid("k2")[2, 3])
     ok, out = st.call("F_PickplaceK2D", fLambda=20.0, fEta=0.3)  # outside: clamped to the nearest node
     assert ok is False and out["fK1"] == t.grid("k1")[0, 3]
+
+
+def test_shipped_jumps_are_never_interpolated_across(shipped):
+    """Every basin jump of the shipped table (listed in its header): a point just off the middle of the jump edge,
+    on either side of it, lies in a cell that is not interpolated (TableJumpError; plan solves it on demand)."""
+    jumps = shipped.jumps
+    assert jumps, "the shipped grid crosses basins at small λ and η (README)"
+    lams, etas = shipped.lams, shipped.etas
+    for axis, (lam_a, eta_a), (lam_b, eta_b) in jumps:
+        lam_m, eta_m = 0.5 * (lam_a + lam_b), 0.5 * (eta_a + eta_b)
+        il, ie = lams.index(lam_a), etas.index(eta_a)
+        if axis == "lambda":  # the edge runs along λ at η = eta_a: the cells below and above it in η
+            sides = [(lam_m, e) for e in (0.5 * (etas[ie - 1] + eta_a) if ie else None,
+                                          0.5 * (eta_a + etas[ie + 1]) if ie + 1 < len(etas) else None) if e is not None]
+        else:  # along η at λ = lam_a: the cells left and right of it in λ
+            sides = [(x, eta_m) for x in (0.5 * (lams[il - 1] + lam_a) if il else None,
+                                          0.5 * (lam_a + lams[il + 1]) if il + 1 < len(lams) else None) if x is not None]
+        assert sides
+        for lam, eta in sides:
+            with pytest.raises(T2.TableJumpError):
+                shipped.lookup(lam, eta)
+
+
+def test_plan_in_a_jump_cell_is_solved_on_demand_and_says_so():
+    from pickplace_cli.model.profile import load_profile
+    from pickplace_cli.model.task import Task
+    from pickplace_cli.planner import PlanOptions, plan
+
+    # λ = 0.305 / 0.2 = 1.525, η = 0.12: the cell (λ 1.466 … 1.709, η 0.1 … 0.15) holds a jump of k2 (0 → 0.92)
+    p = plan(Task([-0.1525, 0, -0.8], [0.1525, 0, -0.8], 0.2, 0.12), load_profile("delta-su2018"), PlanOptions())
+    assert p.parameters["k_source"].startswith("solved on demand: (λ, η) in a cell of 2-D table bspline-2d.csv")
+    assert "across a basin jump" in p.parameters["k_source"]
