@@ -83,7 +83,7 @@ def main() -> int:
         refs = [_reference(p) for p in points]
     result["reference_seconds"] = round(time.perf_counter() - t0, 2)
 
-    gaps, interp_gaps, jump_pts, worst = [], [], [], None
+    gaps, interp_gaps, jump_pts, worst, over = [], [], [], None, []
     t_lookup = 0.0
     for (lam, eta), (_, _, f_ref, a_min, j_min) in zip(points, refs):
         t1 = time.perf_counter()
@@ -101,6 +101,8 @@ def main() -> int:
         gaps.append(gap)
         if how == "interpolated":
             interp_gaps.append(gap)
+        if gap > 0.005:
+            over.append({"gap": gap, "lambda": lam, "eta": eta, "how": how, "k": [k1, k2]})
         if worst is None or gap > worst["gap"]:
             worst = {"gap": gap, "lambda": lam, "eta": eta, "how": how, "k": [k1, k2], "F_ref": f_ref, "F": f}
 
@@ -110,7 +112,7 @@ def main() -> int:
                 "within_0.5pct": int((a <= 0.005).sum())} if a.size else {"n": 0}
 
     result.update(points=args.points, seed=args.seed, all=stats(gaps), interpolated=stats(interp_gaps),
-                  jump_cell_points=jump_pts, worst=worst, basin_jumps=[[ax, a, b] for ax, a, b in tab.jumps])
+                  jump_cell_points=jump_pts, worst=worst, over_half_percent=over, basin_jumps=[[ax, a, b] for ax, a, b in tab.jumps])
     Path(args.out).write_text(json.dumps(result, indent=1) + "\n")
     print(json.dumps({k: result[k] for k in ("all", "interpolated", "worst")}, indent=1))
     print(f"{len(jump_pts)} points in jump cells; written {args.out}", file=sys.stderr)
