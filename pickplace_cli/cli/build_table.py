@@ -34,7 +34,16 @@ def build_table_cmd(
     lambda_min: float = typer.Option(1.0, "--lambda-min", help="Smallest width/height ratio λ = b/h."),
     lambda_max: float = typer.Option(40.0, "--lambda-max", help="Largest λ."),
     lambda_step: float = typer.Option(0.5, "--lambda-step", help="Step of the λ grid."),
+    lambda_points: int = typer.Option(
+        0, "--lambda-points", help="N values of λ spaced evenly in log λ from --lambda-min to --lambda-max "
+        "(instead of --lambda-step; 0 = use the step)."),
     eta: float = typer.Option(0.5, "--eta", help="Lift-off/set-down ratio η, 0 < η < 1."),
+    eta_min: Optional[float] = typer.Option(
+        None, "--eta-min", help="Build the 2-D (λ, η) table: smallest η of its η axis (with --eta-max, --eta-step)."),
+    eta_max: Optional[float] = typer.Option(None, "--eta-max", help="2-D table: largest η (default: --eta-min)."),
+    eta_step: float = typer.Option(0.05, "--eta-step", help="2-D table: step of the η axis."),
+    eta_list: Optional[str] = typer.Option(
+        None, "--eta-list", help="2-D table: the η axis as increasing values, e.g. 0.1,0.2,0.5 (instead of --eta-min …)."),
     weights: str = typer.Option("0.5,0.5", "--weights", help="Weights WA,WJ of F_a and F_j in F (Li 2018 Eq. 22); WA + WJ = 1."),
     grid_step: float = typer.Option(0.01, "--grid-step", help="Step of the coarse (k1, k2) search grid."),
     fit_min: float = typer.Option(5.0, "--fit-min", help="Fit the Eq. 23 cubic on rows with λ ≥ this (no cubic follows λ < 5)."),
@@ -68,7 +77,7 @@ def build_table_cmd(
     import os
 
     from ..model.errors import TableError
-    from ..lookup.bspline_build import checkpoint_path, lambda_grid, run_build
+    from ..lookup.bspline_build import checkpoint_path, run_build
     from ..lookup.bspline_optimum import TableSettings
     from ..lookup.bspline_table import format_table
 
@@ -81,7 +90,13 @@ def build_table_cmd(
     if not (0 < eta < 1):
         raise TableError(f"eta = {eta!r}: the lift-off/set-down ratio η must lie strictly between 0 and 1")
     settings = TableSettings(eta=eta, weights=_parse_weights(weights), grid_step=grid_step)
-    lams = lambda_grid(lambda_min, lambda_max, lambda_step)
+    lams, lam_text = _lambda_axis(lambda_min, lambda_max, lambda_step, lambda_points)
+    if eta_list is not None or eta_min is not None or eta_max is not None:
+        if eta_list is not None and (eta_min is not None or eta_max is not None):
+            _usage("--eta-list replaces --eta-min/--eta-max: give one or the other")
+        _build_table_2d(lams, lam_text, settings, eta_list, eta_min, eta_max, eta_step, workers, scheduler,
+                        resume, output, table_format, quiet)
+        return
     if workers < 0:
         raise TableError(f"workers = {workers}: must be 0 (all cores) or a positive number")
     to_file = output != "-"
@@ -135,7 +150,7 @@ def build_table_cmd(
     from ..export import atomic_output
 
     extra = {
-        "lambda_grid": f"{lambda_min:g}..{lambda_max:g} step {lambda_step:g} ({len(lams)} rows)",
+        "lambda_grid": lam_text,
         "optimiser": "coarse grid + bounded Nelder-Mead from each grid local optimum within basin_margin (one per basin); exact peaks",
         "fit_lambda_min": fit_min,
     }
@@ -157,6 +172,107 @@ def build_table_cmd(
             f"{len(lams)} rows{resumed}; cubic fit (Eq. 23) on λ ≥ {fit_min:g}: max |residual| {res:.3g}; "
             f"k1 = {g1[0]:.4g} + {g1[1]:.4g} λ + {g1[2]:.4g} λ² + {g1[3]:.4g} λ³\n"
         )
+
+
+def _lambda_axis(lambda_min: float, lambda_max: float, lambda_step: float, lambda_points: int):
+    """The λ values of a build and their description for the header: by --lambda-step, or --lambda-points
+    spaced evenly in log λ (the 2-D table's axis: λ from 0.5 to 200 by a constant ratio)."""
+    if lambda_points:
+        from ..lookup.table2d import log_lambda_grid
+
+        lams = log_lambda_grid(lambda_min, lambda_max, lambda_points)
+        return lams, f"{lambda_min:g}..{lambda_max:g} log-spaced ({len(lams)} values)"
+    from ..lookup.bspline_build import lambda_grid
+
+    lams = lambda_grid(lambda_min, lambda_max, lambda_step)
+    return lams, f"{lambda_min:g}..{lambda_max:g} step {lambda_step:g} ({len(lams)} rows)"
+
+
+def _build_table_2d(lams, lam_text, settings, eta_list, eta_min, eta_max, eta_step, workers, scheduler,
+                    resume, output, table_format, quiet) -> None:
+    """build-table over a λ × η grid (table2d.run_build_2d): checkpoint, resume and executors as the 1-D build."""
+    import contextlib
+    import os
+    import time
+
+    from ..model.errors import TableError
+    from ..lookup.bspline_build import checkpoint_path
+    from ..lookup.table2d import eta_grid, format_table_2d, parse_eta_list, run_build_2d
+
+    if table_format is TableFormat.json:
+        raise TableError("format = json: a 2-D (λ, η) table is written as csv or st")
+    if eta_list is not None:
+        etas = parse_eta_list(eta_list)
+        eta_text = ",".join(f"{e:g}" for e in etas)
+    else:
+        lo = eta_min if eta_min is not None else eta_max
+        hi = eta_max if eta_max is not None else eta_min
+        etas = eta_grid(lo, hi, eta_step)
+        eta_text = f"{lo:g}..{hi:g} step {eta_step:g}"
+    if workers < 0:
+        raise TableError(f"workers = {workers}: must be 0 (all cores) or a positive number")
+    to_file = output != "-"
+    if resume and not to_file:
+        raise TableError("--resume: needs -o FILE (the partial results live in FILE.partial.jsonl)")
+    if to_file:
+        from ..export import check_writable
+
+        check_writable(output)
+    ckpt = checkpoint_path(output) if to_file else None
+    n_workers = workers or os.cpu_count() or 1
+    total = len(lams) * len(etas)
+    t0 = time.perf_counter()
+    with contextlib.ExitStack() as stack:
+        executor = None
+        if scheduler:
+            from ..lookup.executors import dask_executor
+
+            executor, n_workers = stack.enter_context(dask_executor(scheduler))
+        tick = None
+        if not quiet:
+            from rich.console import Console
+            from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+            progress = stack.enter_context(Progress(
+                TextColumn("[progress.description]{task.description}"), BarColumn(),
+                TextColumn("{task.completed}/{task.total} (λ, η)"), TimeElapsedColumn(),
+                console=Console(stderr=True), transient=False))
+            engine = f"Dask {scheduler}" if scheduler else f"{n_workers} process{'es' if n_workers > 1 else ''}"
+            bar = progress.add_task(f"optimising k1, k2 ({engine})", total=total)
+
+            def tick(n_done: int, n_total: int) -> None:
+                progress.update(bar, completed=n_done, total=n_total)
+
+        try:
+            table, report = run_build_2d(lams, etas, settings, progress=tick, workers=n_workers, executor=executor,
+                                         checkpoint=ckpt, resume=resume)
+        except KeyboardInterrupt:
+            if ckpt is not None and ckpt.exists():
+                sys.stderr.write(f"pickplace: finished rows are saved in {ckpt}; run the same command with --resume\n")
+            raise
+    seconds = time.perf_counter() - t0
+    extra = {
+        "lambda_grid": lam_text,
+        "eta_grid": f"{eta_text} ({len(etas)} values)",
+        "optimiser": "coarse grid + bounded Nelder-Mead from each grid local optimum within basin_margin (one per basin); exact peaks",
+    }
+    if table_format is TableFormat.st:
+        from ..export.table2d_st import format_table_2d_st
+
+        text = format_table_2d_st(table, __version__, extra)
+    else:
+        text = format_table_2d(table, __version__, extra)
+    from ..export import atomic_output
+
+    with atomic_output(output) as stream:
+        stream.write(text)
+    if ckpt is not None:
+        ckpt.unlink(missing_ok=True)
+    if not quiet:
+        resumed = f"; {report.resumed} resumed from {ckpt}, {report.computed} computed" if report.resumed else ""
+        jumps = table.jumps
+        sys.stderr.write(f"{total} rows ({len(etas)} η × {len(lams)} λ){resumed} in {seconds:.1f} s; "
+                         f"{len(jumps)} grid edge(s) with a basin jump (listed in the header)\n")
 
 
 def _checkpointed_rows(ckpt, settings) -> int:

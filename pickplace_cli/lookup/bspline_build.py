@@ -29,8 +29,8 @@ def lambda_grid(lam_min: float, lam_max: float, step: float) -> np.ndarray:
     for name, v in (("lambda-min", lam_min), ("lambda-max", lam_max), ("lambda-step", step)):
         if not (np.isfinite(v) and v > 0):
             raise TableError(f"{name} = {v!r}: must be a finite number > 0")
-    if lam_max <= lam_min:
-        raise TableError(f"lambda-max = {lam_max:g}: must be greater than lambda-min = {lam_min:g}")
+    if lam_max < lam_min:
+        raise TableError(f"lambda-max = {lam_max:g}: must not be less than lambda-min = {lam_min:g}")
     n = int(math.floor((lam_max - lam_min) / step + 1e-9))
     grid = lam_min + step * np.arange(n + 1)
     if lam_max - grid[-1] > 1e-9 * step:

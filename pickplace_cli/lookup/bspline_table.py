@@ -52,8 +52,8 @@ class Table:
     def __post_init__(self) -> None:
         object.__setattr__(self, "_columns", {})  # column arrays, built once (a table is immutable)
         lam = self.lam
-        if len(lam) < 2:
-            raise TableError(f"{self.source}: a table needs at least two rows, got {len(lam)}")
+        if len(lam) < 1:
+            raise TableError(f"{self.source}: a table needs at least one row")
         if np.any(np.diff(lam) <= 0):
             raise TableError(f"{self.source}: lambda must increase strictly from row to row")
 

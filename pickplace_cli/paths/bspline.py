@@ -72,13 +72,9 @@ def plan_bspline(
         try:
             k1, k2 = tab.lookup(task.lam, eta=task.eta)
             source = f"table {tab.source}"
-        except TableError as exc:  # a (λ, η) the table does not cover: the same optimiser, for this move
-            from ..lookup.bspline_optimum import solve_on_demand
-
-            k1, k2, _ = solve_on_demand(round(task.lam, 12), round(task.eta, 12))
-            why = "η" if str(exc).startswith("eta") else "λ"
-            source = (f"solved on demand: {why} outside table {tab.source}; build-table's optimiser, cached in "
-                      "this process")
+        except TableError as exc:  # a (λ, η) the table does not cover: the 2-D table, else solved for this move
+            k1, k2, source = _k_beyond_table(task, tab.source, "η" if str(exc).startswith("eta") else "λ",
+                                             two_d=table is None)
     for name, k in (("k1", k1), ("k2", k2)):
         check_k(name, k)
     # numpy only (no scipy import on the online path), and the very arithmetic of the batch verdict
@@ -143,6 +139,33 @@ def plan_bspline(
         breakpoints=breaks,
         jumps=(),  # a quintic B-spline on simple knots is C⁴: nothing steps at its knots
     )
+
+
+def _k_beyond_table(task: Task, table_source: str, why: str, two_d: bool) -> tuple[float, float, str]:
+    """(k1, k2, k_source) for a (λ, η) the 1-D table does not cover: bilinear in the shipped 2-D (λ, η) table
+    (``two_d``: only with the shipped 1-D table, whose settings it shares), else — outside its grid, in a cell
+    across a basin jump, or without it — build-table's optimiser for this one move (cached)."""
+    from ..lookup.bspline_optimum import solve_on_demand
+
+    lam, eta = round(task.lam, 12), round(task.eta, 12)
+    reason = f"{why} outside table {table_source}"
+    if two_d:
+        from ..lookup.table2d import TableJumpError, load_table_2d
+
+        try:
+            tab2 = load_table_2d()
+        except TableError:  # not installed or unreadable: the on-demand solve still answers
+            tab2 = None
+        if tab2 is not None:
+            try:
+                k1, k2 = tab2.lookup(lam, eta)
+                return k1, k2, f"2-D table {tab2.source}, interpolated"
+            except TableJumpError:
+                reason = f"(λ, η) in a cell of 2-D table {tab2.source} across a basin jump"
+            except TableError:
+                reason = f"{why} outside table {table_source} and outside 2-D table {tab2.source}"
+    k1, k2, _ = solve_on_demand(lam, eta)
+    return k1, k2, f"solved on demand: {reason}; build-table's optimiser, cached in this process"
 
 
 def _falling(n: np.ndarray, k: int) -> np.ndarray:

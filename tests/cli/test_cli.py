@@ -80,8 +80,12 @@ def test_stdout_and_file_identical(tmp_path):
 
 
 def test_height_eta_change_the_path():
-    # the shipped table is for η = 0.5: another η is solved on demand (issue 16) and says so
+    # the 1-D table is for η = 0.5: another η is read from the 2-D (λ, η) table (issue 16) and says so
     r = run("plan", *ADEPT, "--height", "0.05", "--eta", "0.4", "--format", "json", "-q")
+    assert r.exit_code == 0
+    assert json.loads(r.stdout)["summary"]["parameters"]["k_source"] == "2-D table bspline-2d.csv (shipped), interpolated"
+    # outside the 2-D table's η range (0.1 … 0.9): solved on demand, and said so
+    r = run("plan", *ADEPT, "--height", "0.05", "--eta", "0.05", "--format", "json", "-q")
     assert r.exit_code == 0 and "solved on demand: η outside table" in json.loads(r.stdout)["summary"]["parameters"]["k_source"]
     r = run("plan", *ADEPT, "--height", "0.05", "--eta", "0.4", "--k1", "0.4", "--k2", "0.15", "--format", "json", "-q")
     doc = json.loads(r.stdout)

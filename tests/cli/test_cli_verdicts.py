@@ -70,7 +70,7 @@ def test_mixed_batch_identical_with_and_without_the_engine(monkeypatch, extra):
         assert seen[0] >= 2  # it decided rows 1, 2 (and 7) itself
     assert on.stdout == off.stdout
     assert on.stderr == off.stderr
-    # --eta 0.4: the rows are solved on demand (not in the η = 0.5 table); row 6 is unreachable (4);
+    # --eta 0.4: the rows go to plan() (not in the η = 0.5 table; plan reads the 2-D table); row 6 is unreachable (4);
     # --fail-fast: row 3 (λ = 3e5, beyond any optimum: 1) stops the batch
     assert on.exit_code == off.exit_code == {"--fail-fast": 1}.get(extra[0] if extra else "", 4)
     if not extra:

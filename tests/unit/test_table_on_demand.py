@@ -47,8 +47,10 @@ def test_on_demand_is_cached_and_extreme_lambda_is_one_line():
 
 def test_plan_off_the_table_says_so_instead_of_failing():
     prof = load_profile("delta-su2018")
-    for task, why in ((Task([-0.1525, 0, -0.8], [0.1525, 0, -0.8], 0.025, 0.4), "η outside"),
-                      (Task([-0.1525, 0, -0.8], [0.1525, 0, -0.8], 0.005, 0.5), "λ outside")):
+    # η = 0.05: outside the 1-D (η = 0.5) and the 2-D (η 0.1 … 0.9) tables
+    for task, why in ((Task([-0.1525, 0, -0.8], [0.1525, 0, -0.8], 0.025, 0.05), "η outside"),
+                      # λ = 305: beyond the 1-D (1 … 40) and the 2-D (0.5 … 200) tables
+                      (Task([-0.1525, 0, -0.8], [0.1525, 0, -0.8], 0.001, 0.5), "λ outside")):
         p = plan(task, prof, PlanOptions())
         assert p.report.ok and p.parameters["k_source"].startswith(f"solved on demand: {why}")
         k1, k2, _ = T_optimum.solve_on_demand(round(task.lam, 12), round(task.eta, 12))
