@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import sys
 from enum import Enum
 from typing import Optional
@@ -73,11 +74,8 @@ def build_table_cmd(
     With -o FILE, finished rows are also appended to FILE.partial.jsonl as they complete; after Ctrl-C
     or a kill, rerun the same command with --resume. The table replaces FILE only when it is complete.
     """
-    import contextlib
-    import os
-
     from ..model.errors import TableError
-    from ..lookup.bspline_build import checkpoint_path, run_build
+    from ..lookup.bspline_build import run_build
     from ..lookup.bspline_optimum import TableSettings
     from ..lookup.bspline_table import format_table
 
@@ -97,44 +95,9 @@ def build_table_cmd(
         _build_table_2d(lams, lam_text, settings, eta_list, eta_min, eta_max, eta_step, workers, scheduler,
                         resume, output, table_format, quiet)
         return
-    if workers < 0:
-        raise TableError(f"workers = {workers}: must be 0 (all cores) or a positive number")
-    to_file = output != "-"
-    if resume and not to_file:
-        raise TableError("--resume: needs -o FILE (the partial results live in FILE.partial.jsonl)")
-    if to_file:
-        from ..export import check_writable
-
-        check_writable(output)
-    ckpt = checkpoint_path(output) if to_file else None
-    n_workers = workers or os.cpu_count() or 1
-
+    ckpt = _checkpoint_for(output, resume, workers)
     with contextlib.ExitStack() as stack:
-        executor = None
-        if scheduler:
-            from ..lookup.executors import dask_executor
-
-            executor, n_workers = stack.enter_context(dask_executor(scheduler))
-        tick = None
-        if not quiet:
-            from rich.console import Console
-            from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
-
-            progress = stack.enter_context(Progress(
-                TextColumn("[progress.description]{task.description}"),
-                BarColumn(),
-                TextColumn("{task.completed}/{task.total} λ"),
-                TimeElapsedColumn(),
-                TimeRemainingColumn(),
-                console=Console(stderr=True),
-                transient=False,
-            ))
-            engine = f"Dask {scheduler}" if scheduler else (f"{n_workers} processes" if n_workers > 1 else "1 process")
-            bar = progress.add_task(f"optimising k1, k2 ({engine})", total=len(lams))
-
-            def tick(n_done: int, total: int) -> None:
-                progress.update(bar, completed=n_done, total=total)
-
+        executor, n_workers, tick = _engine(stack, scheduler, workers, quiet, len(lams), "λ", eta=False)
         try:
             table, report = run_build(
                 lams, settings, progress=tick, workers=n_workers, executor=executor, checkpoint=ckpt, resume=resume
@@ -191,12 +154,9 @@ def _lambda_axis(lambda_min: float, lambda_max: float, lambda_step: float, lambd
 def _build_table_2d(lams, lam_text, settings, eta_list, eta_min, eta_max, eta_step, workers, scheduler,
                     resume, output, table_format, quiet) -> None:
     """build-table over a λ × η grid (table2d.run_build_2d): checkpoint, resume and executors as the 1-D build."""
-    import contextlib
-    import os
     import time
 
     from ..model.errors import TableError
-    from ..lookup.bspline_build import checkpoint_path
     from ..lookup.table2d import eta_grid, format_table_2d, parse_eta_list, run_build_2d
 
     if table_format is TableFormat.json:
@@ -209,40 +169,11 @@ def _build_table_2d(lams, lam_text, settings, eta_list, eta_min, eta_max, eta_st
         hi = eta_max if eta_max is not None else eta_min
         etas = eta_grid(lo, hi, eta_step)
         eta_text = f"{lo:g}..{hi:g} step {eta_step:g}"
-    if workers < 0:
-        raise TableError(f"workers = {workers}: must be 0 (all cores) or a positive number")
-    to_file = output != "-"
-    if resume and not to_file:
-        raise TableError("--resume: needs -o FILE (the partial results live in FILE.partial.jsonl)")
-    if to_file:
-        from ..export import check_writable
-
-        check_writable(output)
-    ckpt = checkpoint_path(output) if to_file else None
-    n_workers = workers or os.cpu_count() or 1
+    ckpt = _checkpoint_for(output, resume, workers)
     total = len(lams) * len(etas)
     t0 = time.perf_counter()
     with contextlib.ExitStack() as stack:
-        executor = None
-        if scheduler:
-            from ..lookup.executors import dask_executor
-
-            executor, n_workers = stack.enter_context(dask_executor(scheduler))
-        tick = None
-        if not quiet:
-            from rich.console import Console
-            from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
-
-            progress = stack.enter_context(Progress(
-                TextColumn("[progress.description]{task.description}"), BarColumn(),
-                TextColumn("{task.completed}/{task.total} (λ, η)"), TimeElapsedColumn(),
-                console=Console(stderr=True), transient=False))
-            engine = f"Dask {scheduler}" if scheduler else f"{n_workers} process{'es' if n_workers > 1 else ''}"
-            bar = progress.add_task(f"optimising k1, k2 ({engine})", total=total)
-
-            def tick(n_done: int, n_total: int) -> None:
-                progress.update(bar, completed=n_done, total=n_total)
-
+        executor, n_workers, tick = _engine(stack, scheduler, workers, quiet, total, "(λ, η)", eta=True)
         try:
             table, report = run_build_2d(lams, etas, settings, progress=tick, workers=n_workers, executor=executor,
                                          checkpoint=ckpt, resume=resume)
@@ -312,3 +243,52 @@ def _build_vel_table(eta: float, workers: int, output: str, quiet: bool) -> None
                                     progress=lambda done, total: progress.update(bar, completed=done, total=total))
     with atomic_output(output) as stream:
         stream.write(format_vel_table(table, __version__))
+
+
+def _checkpoint_for(output: str, resume: bool, workers: int):
+    """The checkpoint file of a build writing ``output`` (None to stdout), after the checks every build makes:
+    workers ≥ 0, --resume needs a file, the file is writable."""
+    from ..lookup.bspline_build import checkpoint_path
+    from ..model.errors import TableError
+
+    if workers < 0:
+        raise TableError(f"workers = {workers}: must be 0 (all cores) or a positive number")
+    to_file = output != "-"
+    if resume and not to_file:
+        raise TableError("--resume: needs -o FILE (the partial results live in FILE.partial.jsonl)")
+    if not to_file:
+        return None
+    from ..export import check_writable
+
+    check_writable(output)
+    return checkpoint_path(output)
+
+
+def _engine(stack: contextlib.ExitStack, scheduler, workers: int, quiet: bool, total: int, unit: str, eta: bool):
+    """(executor or None, workers, progress callback or None) of a build: a Dask cluster when ``scheduler`` is
+    given, else ``workers`` local processes (0: all cores); a rich progress bar on stderr unless ``quiet``."""
+    import os
+
+    n_workers = workers or os.cpu_count() or 1
+    executor = None
+    if scheduler:
+        from ..lookup.executors import dask_executor
+
+        executor, n_workers = stack.enter_context(dask_executor(scheduler))
+    if quiet:
+        return executor, n_workers, None
+    from rich.console import Console
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+
+    columns = [TextColumn("[progress.description]{task.description}"), BarColumn(),
+               TextColumn("{task.completed}/{task.total} " + unit), TimeElapsedColumn()]
+    if not eta:
+        columns.append(TimeRemainingColumn())
+    progress = stack.enter_context(Progress(*columns, console=Console(stderr=True), transient=False))
+    engine = f"Dask {scheduler}" if scheduler else f"{n_workers} process{'es' if n_workers > 1 else ''}"
+    bar = progress.add_task(f"optimising k1, k2 ({engine})", total=total)
+
+    def tick(n_done: int, n_total: int) -> None:
+        progress.update(bar, completed=n_done, total=n_total)
+
+    return executor, n_workers, tick

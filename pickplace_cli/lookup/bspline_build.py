@@ -26,11 +26,21 @@ if TYPE_CHECKING:  # pragma: no cover
 
 
 def lambda_grid(lam_min: float, lam_max: float, step: float) -> np.ndarray:
-    for name, v in (("lambda-min", lam_min), ("lambda-max", lam_max), ("lambda-step", step)):
+    """λ from ``lam_min`` to ``lam_max`` (included) by ``step``; one value when they are equal."""
+    for name, v in (("lambda-min", lam_min), ("lambda-max", lam_max)):
         if not (np.isfinite(v) and v > 0):
             raise TableError(f"{name} = {v!r}: must be a finite number > 0")
-    if lam_max < lam_min:
-        raise TableError(f"lambda-max = {lam_max:g}: must not be less than lambda-min = {lam_min:g}")
+    return step_grid("lambda", lam_min, lam_max, step)
+
+
+def step_grid(axis: str, lo: float, hi: float, step: float) -> np.ndarray:
+    """``lo`` to ``hi`` (included) by ``step`` (the last step shorter when it does not divide), rounded to 1e-12;
+    one value when ``lo`` = ``hi``. ``axis`` names the options in the errors (``{axis}-min`` …)."""
+    if not (np.isfinite(step) and step > 0):
+        raise TableError(f"{axis}-step = {step!r}: must be a finite number > 0")
+    if hi < lo:
+        raise TableError(f"{axis}-max = {hi:g}: must not be less than {axis}-min = {lo:g}")
+    lam_min, lam_max = lo, hi
     n = int(math.floor((lam_max - lam_min) / step + 1e-9))
     grid = lam_min + step * np.arange(n + 1)
     if lam_max - grid[-1] > 1e-9 * step:

@@ -130,6 +130,14 @@ def default_table_path() -> Path:
     return data_dir("tables") / DEFAULT_TABLE
 
 
+def write_meta(out, meta: dict) -> None:
+    """The ``# key: value`` header lines of a table file, keys sorted (a list or tuple as comma-separated values)."""
+    for key in sorted(meta):
+        val = meta[key]
+        val = ",".join(f"{x:g}" for x in val) if isinstance(val, (list, tuple)) else val
+        out.write(f"# {key}: {val}\n")
+
+
 def format_table(table: Table, version: str, extra_meta: dict | None = None) -> str:
     """CSV text: ``#`` provenance lines, a header, one row per λ (fixed format, deterministic)."""
     meta = dict(table.meta)
@@ -139,10 +147,7 @@ def format_table(table: Table, version: str, extra_meta: dict | None = None) -> 
     out = io.StringIO()
     out.write("# pickplace look-up table: optimal time-ratio factors of the quintic B-spline method [Li2018, Eq. (20)-(23)]\n")
     out.write(f"# tool_version: {version}\n")
-    for key in sorted(meta):
-        val = meta[key]
-        val = ",".join(f"{x:g}" for x in val) if isinstance(val, (list, tuple)) else val
-        out.write(f"# {key}: {val}\n")
+    write_meta(out, meta)
     out.write("# units: lambda = b/h (dimensionless); k1, k2 dimensionless; v_max, a_max, j_max, a_min, j_min are the\n")
     out.write("#   normalised peaks |v|, |a|, |j| of the path with b = 1 m, T = 1 s (m/s, m/s^2, m/s^3); F dimensionless\n")
     out.write("# a_min, j_min: min over (k1, k2) of a_max, j_max at that lambda (the normalisers of Eq. 20-21)\n")

@@ -28,9 +28,9 @@ from typing import TYPE_CHECKING, Callable, Sequence
 import numpy as np
 
 from ..model.errors import TableError
-from .bspline_build import BuildReport, _drop_cut_line, _ignore_sigint
+from .bspline_build import BuildReport, _drop_cut_line, _ignore_sigint, step_grid
 from .bspline_optimum import ALGORITHM_VERSION, TableRow, TableSettings, _optimise_chunk
-from .bspline_table import COLUMNS, read_numeric_table, read_table_file
+from .bspline_table import COLUMNS, read_numeric_table, read_table_file, write_meta
 
 if TYPE_CHECKING:  # pragma: no cover
     from concurrent.futures import Executor
@@ -57,15 +57,7 @@ def eta_grid(eta_min: float, eta_max: float, step: float) -> np.ndarray:
     for name, v in (("eta-min", eta_min), ("eta-max", eta_max)):
         if not (np.isfinite(v) and lo <= v <= hi):
             raise TableError(f"{name} = {v!r}: must lie in [{lo:g}, {hi:g}]")
-    if not (np.isfinite(step) and step > 0):
-        raise TableError(f"eta-step = {step!r}: must be a finite number > 0")
-    if eta_max < eta_min:
-        raise TableError(f"eta-max = {eta_max:g}: must not be less than eta-min = {eta_min:g}")
-    n = int(math.floor((eta_max - eta_min) / step + 1e-9))
-    grid = eta_min + step * np.arange(n + 1)
-    if eta_max - grid[-1] > 1e-9 * step:
-        grid = np.append(grid, eta_max)
-    return np.round(grid, 12)
+    return step_grid("eta", eta_min, eta_max, step)
 
 
 def parse_eta_list(text: str) -> np.ndarray:
@@ -362,10 +354,7 @@ def format_table_2d(table: Table2D, version: str, extra_meta: dict | None = None
     out.write("# pickplace 2-D look-up table: optimal time-ratio factors of the quintic B-spline method over "
               "(lambda, eta) [Li2018, Eq. (20)-(22)]\n")
     out.write(f"# tool_version: {version}\n")
-    for key in sorted(meta):
-        val = meta[key]
-        val = ",".join(f"{x:g}" for x in val) if isinstance(val, (list, tuple)) else val
-        out.write(f"# {key}: {val}\n")
+    write_meta(out, meta)
     out.write("# units: eta, lambda = b/h, k1, k2 dimensionless; v_max, a_max, j_max, a_min, j_min are the normalised\n")
     out.write("#   peaks |v|, |a|, |j| of the path with b = 1 m, T = 1 s (m/s, m/s^2, m/s^3); F dimensionless\n")
     out.write("#   basin_jumps are the grid edges (lambda, eta)-(lambda, eta) across which k1 or k2 changes by more than\n")
