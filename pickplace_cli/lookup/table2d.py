@@ -40,6 +40,9 @@ DEFAULT_TABLE_2D = "bspline-2d.csv"
 #: an edge of the grid across which k1* or k2* changes by more than this is a jump between basins of F
 #: (on the shipped grid the smooth edges change k by < 0.06, the jumps by > 0.3: see the README)
 JUMP_K = 0.15
+#: below this λ (tall moves) ``lookup_polished`` polishes the interpolated (k1, k2) (F is steep there: the
+#: held-out points that lost > 0.5 % of F by interpolation alone all have λ < 1.7)
+POLISH_LAMBDA = 2.0
 #: the η a 2-D table may cover (the on-demand solve takes any 0 < η < 1)
 ETA_RANGE = (0.01, 0.99)
 
@@ -113,14 +116,15 @@ class Table2D:
         for name, axis in (("eta", self.etas), ("lambda", self.lams)):
             if any(b <= a for a, b in zip(axis, axis[1:])):
                 raise TableError(f"{self.source}: the {name} values of the grid must increase strictly")
-        grid = {name: np.array([getattr(r, name) for r in self.rows]).reshape(ne, nl) for name in ("k1", "k2", "F")}
+        grid = {name: np.array([getattr(r, name) for r in self.rows]).reshape(ne, nl)
+                for name in ("k1", "k2", "F", "a_min", "j_min")}
         for arr in grid.values():
             arr.flags.writeable = False
         object.__setattr__(self, "_grid", grid)
         object.__setattr__(self, "_jump_cells", _jump_cells(find_jumps(grid["k1"], grid["k2"]), ne, nl))
 
     def grid(self, name: str) -> np.ndarray:
-        """(len(etas), len(lams)) array of column ``name`` (k1, k2 or F)."""
+        """(len(etas), len(lams)) array of column ``name`` (k1, k2, F, a_min or j_min)."""
         return self._grid[name]  # type: ignore[attr-defined]
 
     @property
@@ -154,13 +158,79 @@ class Table2D:
                 f"(lambda, eta) = ({lam:.4g}, {eta:.4g}): the optimum jumps between basins inside this cell of the "
                 f"2-D table ({self.source}); not interpolated"
             )
+        k1, k2 = self._bilinear(("k1", "k2"), il, wl, ie, we)
+        return k1, k2
+
+    def _bilinear(self, names: tuple[str, ...], il: int, wl: float, ie: int, we: float) -> list[float]:
         out = []
-        for name in ("k1", "k2"):
+        il1, ie1 = min(il + 1, len(self.lams) - 1), min(ie + 1, len(self.etas) - 1)
+        for name in names:
             g = self.grid(name)
-            row0 = _lerp(g[ie, il], g[ie, min(il + 1, len(self.lams) - 1)], wl)
-            row1 = _lerp(g[min(ie + 1, len(self.etas) - 1), il], g[min(ie + 1, len(self.etas) - 1), min(il + 1, len(self.lams) - 1)], wl)
-            out.append(float(_lerp(row0, row1, we)))
-        return out[0], out[1]
+            out.append(float(_lerp(_lerp(g[ie, il], g[ie, il1], wl), _lerp(g[ie1, il], g[ie1, il1], wl), we)))
+        return out
+
+    def lookup_polished(self, lam: float, eta: float) -> tuple[float, float, bool]:
+        """(k1, k2, polished): :meth:`lookup`, then, for a tall move (λ < ``POLISH_LAMBDA``), a short bounded
+        Nelder–Mead on F of Eq. (22) from the interpolated point (:meth:`polish`). There F is steep across a
+        ridge and a k1 off by 1e-3 can cost 1 % of F (bench/bench_table2d.py); the polish only ever raises F,
+        ~10–30 ms."""
+        k1, k2 = self.lookup(lam, eta)
+        if lam >= POLISH_LAMBDA:
+            return k1, k2, False
+        p1, p2, _ = self.polish(lam, eta, k1, k2)
+        return p1, p2, (p1, p2) != (k1, k2)
+
+    def best_in_cell(self, lam: float, eta: float, others: Sequence[tuple[float, float]] = ()) -> tuple[float, float]:
+        """(k1, k2) at a (λ, η) in a cell beside a basin jump: the best of :meth:`polish` from each corner's
+        optimum (each a global optimum of a nearby problem, so every basin near the cell is a start) and from
+        ``others`` (e.g. the on-demand solve's answer)."""
+        il, _ = _cell(lam, self.lams)
+        ie, _ = _cell(eta, self.etas)
+        starts = list(others)
+        for de in (0, 1):
+            for dl in (0, 1):
+                e, l_ = min(ie + de, len(self.etas) - 1), min(il + dl, len(self.lams) - 1)
+                k = (float(self.grid("k1")[e, l_]), float(self.grid("k2")[e, l_]))
+                if all(max(abs(k[0] - s[0]), abs(k[1] - s[1])) > 1e-3 for s in starts):
+                    starts.append(k)
+        best = max((self.polish(lam, eta, *s) for s in starts), key=lambda r: r[2])
+        return best[0], best[1]
+
+    def polish(self, lam: float, eta: float, k1: float, k2: float) -> tuple[float, float, float]:
+        """(k1, k2, F): a bounded Nelder–Mead on F of Eq. (22) at (λ, η) from (k1, k2), with the cell's
+        interpolated normalisers a_min, j_min (smooth in λ and η, unlike the optimum) and the table's weights;
+        never worse than the start."""
+        from scipy.optimize import minimize
+
+        from .bspline_optimum import fast_peaks
+
+        il, wl = _cell(lam, self.lams)
+        ie, we = _cell(eta, self.etas)
+        a_min, j_min = self._bilinear(("a_min", "j_min"), il, wl, ie, we)
+        wa, wj = _weights(self.meta)
+        floor = float(self.meta.get("k2_floor", 1e-4))
+
+        def neg_f(x: np.ndarray) -> float:
+            _, a, j = fast_peaks(np.array([x[0]]), np.array([x[1]]), lam, eta)[0]
+            return -(wa * a_min / a + wj * j_min / j)
+
+        x0 = np.array([min(max(k1, 1e-3), 1 - 1e-3), min(max(k2, floor), 1 - 1e-3)])  # the build's bounds
+        f0 = neg_f(x0)
+        step = 2e-3
+        res = minimize(neg_f, x0, method="Nelder-Mead", bounds=[(1e-3, 1 - 1e-3), (floor, 1 - 1e-3)],
+                       options={"xatol": 1e-5, "fatol": 1e-9, "maxiter": 300,
+                                "initial_simplex": np.array([x0, x0 + [step, 0.0], x0 + [0.0, step]])})
+        if res.fun < f0:
+            return float(res.x[0]), float(res.x[1]), -float(res.fun)
+        return k1, k2, -f0
+
+
+def _weights(meta: dict) -> tuple[float, float]:
+    """The table's (w_a, w_j) of Eq. (22) from its header (default 0.5, 0.5)."""
+    w = meta.get("weights", (0.5, 0.5))
+    if isinstance(w, str):
+        w = tuple(float(x) for x in w.split(","))
+    return float(w[0]), float(w[1])
 
 
 def _within(x: float, axis: Sequence[float]) -> bool:

@@ -158,10 +158,14 @@ def _k_beyond_table(task: Task, table_source: str, why: str, two_d: bool) -> tup
             tab2 = None
         if tab2 is not None:
             try:
-                k1, k2 = tab2.lookup(lam, eta)
-                return k1, k2, f"2-D table {tab2.source}, interpolated"
-            except TableJumpError:
-                reason = f"(λ, η) in a cell of 2-D table {tab2.source} across a basin jump"
+                k1, k2, polished = tab2.lookup_polished(lam, eta)
+                how = "interpolated and polished (tall move: λ < 2)" if polished else "interpolated"
+                return k1, k2, f"2-D table {tab2.source}, {how}"
+            except TableJumpError:  # the on-demand solve, and a polish from every corner's basin: the best
+                k1, k2, _ = solve_on_demand(lam, eta)
+                k1, k2 = tab2.best_in_cell(lam, eta, others=[(k1, k2)])
+                return k1, k2, (f"(λ, η) in a cell of 2-D table {tab2.source} across a basin jump: solved on demand "
+                                "and from each corner's basin, the best; build-table's optimiser")
             except TableError:
                 reason = f"{why} outside table {table_source} and outside 2-D table {tab2.source}"
     k1, k2, _ = solve_on_demand(lam, eta)
