@@ -26,7 +26,7 @@ import math
 
 import numpy as np
 
-#: grid points of the bound (the steps are 1/POINTS in τ)
+#: steps of the bound's τ grid (:func:`bound_grid`: denser towards the ends)
 POINTS = 1000
 #: b where no constraint bounds it (the path stands still there)
 _CAP = 1e12
@@ -39,7 +39,7 @@ def path_constraints(model, tau: np.ndarray, speed: bool = True) -> tuple[np.nda
     from .optimal import _inertia_along
 
     path = model.path
-    pr = model.parts(tau)
+    pr = model.parts(tau, derivatives=False, singularity=False)  # torques and speeds only
     p, p1 = path.all_orders(tau)[:2]
     m = _inertia_along(model, tau, p, p1)
     A, B, C, g = [], [], [], []
