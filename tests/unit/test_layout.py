@@ -167,3 +167,13 @@ def test_documented_entry_points_still_import(entry):
 
     module, _, name = entry.partition(":")
     assert callable(getattr(importlib.import_module(module), name))
+
+
+def test_cli_enums_mirror_the_library():
+    """The CLI keeps its own str enums so ``--help`` needs no numpy; they must name the library's choices exactly."""
+    from pickplace_cli.cli.app import CsvDialectName, MethodName
+    from pickplace_cli.export.csv import CsvDialect
+    from pickplace_cli.paths import Method
+
+    assert [m.value for m in MethodName] == [m.value for m in Method]
+    assert [d.value for d in CsvDialectName] == [d.value for d in CsvDialect]
