@@ -179,14 +179,17 @@ def screened_root(worst, start: float = 0.1, rtol: float = 1e-10) -> float:
     return float(T)
 
 
-def fit_duration(model, dwell: float = 0.0, start: float = 0.1) -> tuple[float | None, str | None]:
+def fit_duration(model, dwell: float = 0.0, start: float = 0.1, margin: float = 1e-7) -> tuple[float | None, str | None]:
     """Smallest T [s] such that every T-dependent limit holds at T and at every longer duration.
 
     Velocity-type limits scale as 1/T^k (monotone). The peak motor torque max_τ |A_m s + G_m| is convex
     in s = 1/T², so its feasible set is an interval containing s = 0 when the holding torque fits. So
     scanning T down from a feasible value and root-finding the first crossing (brentq) gives the true
     minimum. Position, singularity and workcell limits do not depend on T and are not fitted (the limit
-    report shows them). The result is nudged up until the exact (refined) check passes.
+    report shows them). The result is nudged up until the exact (refined) check passes, starting ``margin``
+    (relative) above the sampled root: 1e-7 for a method's own path; a composed time law's torque rate peaks
+    sharply near the ends, where the sampled peak sits up to ~1e-5 under the continuous one (each failed
+    check costs a second one).
     Returns (T, the binding quantity "joint quantity"), or (None, None) when no limit depends on T.
     """
     from ..limits.check import check_limits
@@ -200,7 +203,7 @@ def fit_duration(model, dwell: float = 0.0, start: float = 0.1) -> tuple[float |
     # the sampled peaks can sit a hair under the continuous ones (~1e-8 relative on this grid): start the
     # exact check 1e-7 above the sampled root (far inside the 0.1 % criterion), nudge up until it passes
     binding = worst(T * (1 - 1e-9))[1]
-    T *= 1.0 + 1e-7
+    T *= 1.0 + margin
     for _ in range(10):
         rep = check_limits(model, T, parts=parts, dwell=dwell)
         bad = [r for r in rep.violations if r.kind != "reach"]
@@ -350,7 +353,7 @@ def choose_optimal(path: CartesianPath, profile, model, dwell: float, model_of,
     law = optimal_law(model, dwell, fit.seconds, capacity=profile.capacity if hold_capacity else None)
     composed = law.path
     try:
-        t_opt, binding = fit_duration(model_of(composed), dwell, start=max(law.t_estimate, 1e-3))
+        t_opt, binding = fit_duration(model_of(composed), dwell, start=max(law.t_estimate, 1e-3), margin=3e-5)
     except PickplaceError as exc:  # the composed path cannot be fitted: keep the uniform law, say why
         t_opt, binding, why = None, None, f" ({exc})"
     else:
