@@ -304,13 +304,12 @@ def _coarse_for(settings: TableSettings) -> _Coarse:
     k1, k2 = _coarse_grid(settings)
     h, coef = unit_pieces(k1, k2, settings.eta)
     u = np.linspace(0.0, 1.0, settings.samples_per_piece + 1)  # both ends: the mirror half is covered
-    x = h[:, :, None] * u  # (G, 3, S)
     comps = []
     for r in (2, 3):
-        d = coef[..., r:] * _DROW[r, r:]  # (G, 3, 2, k)
-        val = np.zeros((len(k1), 3, 2, u.size))
-        for p in range(d.shape[-1] - 1, -1, -1):
-            val = val * x[:, :, None, :] + d[..., p, None]
+        d = coef[..., r:] * _DROW[r, r:]  # (G, 3, 2, k): the r-th derivative's coefficients in x = h·u
+        k = d.shape[-1]
+        # Σ_p d_p (h u)^p = Σ_p (d_p h^p) u^p: one product with the powers of the sample points
+        val = (d * (h[:, :, None, None] ** np.arange(k))) @ (u[None, :] ** np.arange(k)[:, None])
         val = np.moveaxis(val, 2, 1).reshape(len(k1), 2, -1)
         comps += [val[:, 0] ** 2, val[:, 1] ** 2]
     n1 = len(np.unique(k1))
@@ -350,10 +349,11 @@ def _minimise(
     starts: Sequence[tuple[float, float]],
     lo2: float,
     xatol: float,
+    ftol: float = 1e-10,
 ):
     """Bounded Nelder–Mead (scipy) from each start not already in a found optimum's basin; the best.
 
-    Stops when the simplex is within ``xatol`` and its values within 1e-10 relative of the objective's
+    Stops when the simplex is within ``xatol`` and its values within ``ftol`` relative of the objective's
     value at the start (F ≈ 1, but j_max ≈ 100: an absolute tolerance would ask j for 1e-12)."""
     from scipy.optimize import minimize
 
@@ -366,7 +366,7 @@ def _minimise(
             x0=np.array([k1, k2]),
             method="Nelder-Mead",
             bounds=[(1e-3, 1 - 1e-3), (lo2, 1 - 1e-3)],
-            options={"xatol": xatol, "fatol": 1e-10 * abs(fun(k1, k2)), "maxiter": 2000,
+            options={"xatol": xatol, "fatol": ftol * abs(fun(k1, k2)), "maxiter": 2000,
                      "initial_simplex": np.array([[k1, k2], [k1 + 0.01, k2], [k1, k2 + 0.01]])},
         )
         found.append((float(res.x[0]), float(res.x[1]), float(res.fun)))
@@ -403,8 +403,12 @@ def _local_optima(values: np.ndarray, shape: tuple[int, int], count: int) -> lis
     return [int(i) for i in idx]
 
 
-def optimise_lambda(lam: float, coarse: _Coarse, settings: TableSettings) -> TableRow:
-    """Global optimum of F (Eq. 22) at one λ, from the coarse grid and a bounded local refinement."""
+def optimise_lambda(lam: float, coarse: _Coarse, settings: TableSettings,
+                    f_refine: tuple[float, float] | None = None) -> TableRow:
+    """Global optimum of F (Eq. 22) at one λ, from the coarse grid and a bounded local refinement (Nelder–Mead
+    to ``settings.refine_xatol`` in k and 1e-10 relative in the objective). ``f_refine`` = (xatol, ftol): a
+    looser end for the last search, F's own (the normalisers a_min, j_min stay tight: F's value depends on
+    them to first order, its argmax does not)."""
     eta = settings.eta
     wa, wj = settings.weights
     lo2 = settings.k2_floor
@@ -460,7 +464,8 @@ def optimise_lambda(lam: float, coarse: _Coarse, settings: TableSettings) -> Tab
 
     f_grid = -(wa * a_min / a_grid + wj * j_min / j_grid)
     # F may have two local maxima (small λ): refine every grid local maximum near the best
-    k1, k2, nf = _minimise(neg_f, neg_f_batch, starts(f_grid), lo2, xatol)
+    fx, ff = f_refine if f_refine is not None else (xatol, 1e-10)
+    k1, k2, nf = _minimise(neg_f, neg_f_batch, starts(f_grid), lo2, fx, ff)
     v, a, j = (float(x) for x in fast_peaks(k1, k2, lam, eta)[0])
     return TableRow(lam, k1, k2, a, j, v, -nf, a_min, j_min)
 
@@ -477,6 +482,9 @@ def _optimise_chunk(lams: Sequence[float], settings: TableSettings) -> list[Tabl
 #: 0.01) — the same F as build-table's settings on 20 random (λ, η) with η in [0.1, 0.9], λ in [0.5, 200]
 #: (worst difference 1.5e-8), ~60 ms per solve instead of ~250 ms
 ON_DEMAND_GRID = 0.025
+#: … and a looser end of F's own refinement (k to 1e-4 instead of 1e-5, F to 1e-8 relative instead of 1e-10;
+#: the normalisers a_min, j_min stay tight): fewer evaluations of the peaks, F within ~1e-8 of the tight end
+ON_DEMAND_F_REFINE = (1e-4, 1e-8)
 
 
 #: the λ = b/h an on-demand solve accepts (beyond, the optimum has run into the k bounds: see the README)
@@ -493,5 +501,5 @@ def solve_on_demand(lam: float, eta: float, weights: tuple[float, float] = (0.5,
         raise TableError(f"lambda = b/h = {lam:.4g}: outside [{lo:g}, {hi:g}], where the optimal (k1, k2) can be "
                          "solved (see README: extreme lambda); change --height or give --k1 and --k2")
     settings = TableSettings(eta=float(eta), weights=tuple(weights), grid_step=ON_DEMAND_GRID)
-    row = optimise_lambda(float(lam), _coarse_for(settings), settings)
+    row = optimise_lambda(float(lam), _coarse_for(settings), settings, f_refine=ON_DEMAND_F_REFINE)
     return row.k1, row.k2, row.F
