@@ -249,6 +249,59 @@ def _first_feasible(e, a: float, b: float, start: float, factor: float, rtol: fl
     return float(brentq(lambda x: _finite(e(x)), lo, hi, xtol=1e-13, rtol=rtol))
 
 
+def _root_near(e_raw, a: float, b: float, start: float, rtol: float = 1e-6, steps: int = 10,
+               power: float = 1.0) -> float | None:
+    """The smallest T in [a, b] with e(T) ≤ 0 near ``start``, by secant steps (the first one the fixed-point
+    step T·(1 + e), exact for the capacity rule when the shape does not change with T) kept inside the bracket
+    they find (a step that leaves it bisects). Returns the feasible end of a bracket narrower than ``rtol``
+    (relative; e is only smooth to ~1e-7 near the root, the exact shape being an optimiser's answer), or of a
+    step that predicts the root within ``rtol`` of it; ``a`` when e(a) ≤ 0 is reached. None when it does not
+    settle in ``steps`` evaluations or meets a non-finite value: the caller then scans (``_first_feasible``).
+
+    ``power`` k: the steps are taken on (1 + e)^(1/k) − 1 (same sign, same root), linear in 1/T when the
+    binding quantity scales as T^-k: 1 for the capacity rule (e = T_auto/T − 1), 3 for fit (the Delta's torque
+    rate, a jerk; a quantity that falls more slowly only makes the first step land short of the root)."""
+
+    def e(T: float) -> float:
+        v = e_raw(T)
+        return (1.0 + v) ** (1.0 / power) - 1.0 if power != 1.0 and math.isfinite(v) and v > -1.0 else v
+
+    T0 = min(max(start, a), b)
+    e0 = e(T0)
+    if not math.isfinite(e0):
+        return None
+    lo = hi = None  # the largest infeasible T below the root, the smallest feasible T above it
+    if e0 > 0:
+        lo = T0
+    else:
+        hi = T0
+    T1 = min(max(T0 * (1.0 + e0), a), b)
+    for _ in range(steps):
+        if hi is not None and (T1 >= hi or (lo is not None and T1 <= lo)):
+            T1 = 0.5 * (hi + lo) if lo is not None else T1
+        if T1 == T0:
+            return hi if hi is not None and abs(hi - T0) <= rtol * hi else None
+        e1 = e(T1)
+        if not math.isfinite(e1):
+            return None
+        if e1 > 0:
+            lo = T1 if lo is None else max(lo, T1)
+            if T1 >= b:
+                return None  # infeasible at the window's end: the caller reports the miss
+        else:
+            hi = T1 if hi is None else min(hi, T1)
+            if T1 <= a:
+                return a
+        if lo is not None and hi is not None and hi - lo <= rtol * hi:
+            return hi
+        T2 = T1 - e1 * (T1 - T0) / (e1 - e0) if e1 != e0 else T1 * (1.0 + e1)
+        T2 = min(max(T2, a), b)
+        if hi is not None and e1 <= 0 and abs(T2 - T1) <= rtol * T1 and (lo is None or T2 > lo):
+            return hi  # the step predicts the root within rtol below a feasible T
+        T0, e0, T1 = T1, e1, T2
+    return None
+
+
 # ------------------------------------------------------------------------------------------ where
 
 
@@ -401,11 +454,16 @@ def find_rendezvous(
         if beyond is not None and math.isfinite(beyond):
             beyond = _first_feasible(rule, b, HORIZON, beyond, 0.98, 1e-10)
         _missed(part, rule, a, b, what, spec, known=beyond if beyond is not None else math.inf)
-    T = _first_feasible(rule, a, b, T_screen, 0.98, 1e-8)
+    # the exact root: secant steps from the screened one (a few continued solves), the scan if they do not settle
+    power = 1.0 if spec == "auto" else 3.0
+    T = _root_near(rule, a, b, T_screen, power=power)
+    if T is None:
+        T = _first_feasible(rule, a, b, T_screen, 0.98, 1e-8)
     if T is not None and T > a:
         path, agreed = exact.final(T)  # a global solve confirms the continued shape at the root
         if not agreed:  # the continuation had followed a worse branch: search again on the better one
-            T = _first_feasible(rule, a, b, T, 0.98, 1e-8)
+            T2 = _root_near(rule, a, b, T, power=power)
+            T = T2 if T2 is not None else _first_feasible(rule, a, b, T, 0.98, 1e-8)
     if T is None:
         _missed(part, rule, a, b, what, spec)
     T = _nudge(rule, exact, profile, spec, T, plan_dwell)

@@ -66,8 +66,8 @@ def test_gantry_fit_has_no_timed_limit():
 
 def test_auto_is_the_fixed_point():
     """T* = T_auto(P(T*)): re-planning the move to the meeting point with the plain --time auto (the lead's
-    search, continuation from its own start) gives T* back (relative 1e-6: both are brentq roots refined to
-    1e-8 or better and nudged to the feasible side), and the capacity bound holds at T* to round-off."""
+    search, continuation from its own start) gives T* back (relative 1e-6: the lead's brentq root refined to
+    1e-8, the rendezvous's secant root to 1e-6, both nudged to the feasible side), and the capacity bound holds at T* to round-off."""
     from pickplace_cli.paths.bspline_vel import PathFactory
     from pickplace_cli.timing import auto_duration, choose_duration_for
 
@@ -94,6 +94,49 @@ def test_fit_is_the_fixed_point():
     d, _ = choose_duration_for(PathFactory(rv.task), prof.capacity, "fit",
                                model_of=lambda p: motion_model(p, prof), dwell=prof.planning.dwell)
     assert d.seconds == pytest.approx(rv.seconds, rel=1e-5)
+
+
+@pytest.mark.parametrize("power, k", [(1.0, 1), (3.0, 3), (3.0, 2), (3.0, 1)])
+def test_root_near_finds_the_crossing(power, k):
+    """The secant search lands on the feasible side within 1e-6 of the root of (c/T)^k − 1 from 40 % above or
+    below it, whatever the power it assumes; with noise of 1e-7 on e it still settles; e(a) ≤ 0 gives a, an
+    infeasible window end gives None (the caller's scan then reports the miss)."""
+    from pickplace_cli.pipelines.rendezvous import _root_near
+
+    c = 0.123
+    for start in (0.6 * c, 1.4 * c):
+        calls = []
+
+        def e(T):
+            calls.append(T)
+            return (c / T) ** k - 1.0
+
+        T = _root_near(e, 0.01, 10.0, start, power=power)
+        assert T is not None and e(T) <= 0 and T == pytest.approx(c, rel=1e-6)
+        assert len(calls) <= 12
+    rng = np.random.default_rng(3)
+    T = _root_near(lambda T: (c / T) ** k - 1.0 + 1e-7 * rng.standard_normal(), 0.01, 10.0, 1.3 * c, power=power)
+    assert T is None or T == pytest.approx(c, rel=1e-5)
+    assert _root_near(lambda T: (c / T) ** k - 1.0, 0.2, 10.0, 0.5, power=power) == 0.2
+    assert _root_near(lambda T: (c / T) ** k - 1.0, 0.01, 0.1, 0.05, power=power) is None
+
+
+@pytest.mark.parametrize("rule", ["auto", "fit"])
+def test_secant_root_is_the_scanned_root(rule, monkeypatch):
+    """The rendezvous's secant search (a few continued solves) finds the T of the scan it replaced (steps of
+    2 % down from the screened root, then brentq to 1e-8) on random Delta cases, to 1e-5 relative."""
+    import pickplace_cli.pipelines.rendezvous as R
+
+    prof = load_profile("delta-su2018")
+    rng = np.random.default_rng(21)
+    for _ in range(3):
+        start, part = random_case(rng, "delta-su2018")
+        fast = find_rendezvous(start, part, prof, rule)
+        with monkeypatch.context() as m:
+            m.setattr(R, "_root_near", lambda *a, **k: None)
+            scanned = find_rendezvous(start, part, prof, rule)
+        assert fast.seconds == pytest.approx(scanned.seconds, rel=1e-5)
+        assert fast.evaluations["exact"] < scanned.evaluations["exact"]
 
 
 def test_given_seconds_is_one_solve():
