@@ -30,7 +30,7 @@ def _plan_batch(source, prof, options, height, eta, fail_fast, writer, output, r
             return
         if belt.get("latency") is not None:
             _usage("--latency with --batch is the default latency of a belt schedule's rows (a batch with a "
-                   "t_detect column); this batch has none")
+                   "t_detect column); this batch has none (independent belt rows take a latency column)")
         if streamed:
             _stream_batch(items, name, prof, options, height, eta, fail_fast, writer, output, report,
                           report_only, json_summary, quiet, workers)

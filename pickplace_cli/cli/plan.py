@@ -113,7 +113,8 @@ def plan(
     batch: Optional[str] = typer.Option(
         None, "--batch", help="Plan many moves from a CSV ('-' = stdin or a named pipe: streamed, each row answered "
         "and flushed as soon as it is read): columns from_x,from_y,from_z,to_x,to_y,to_z "
-        "[m], optional height [m], eta, v_from_x.. v_to_z [m/s], time [s|auto|fit|optimal]. Output gets a move column. "
+        "[m], optional height [m], eta, v_from_x.. v_to_z [m/s], time [s|auto|fit|optimal]; a belt row (as "
+        "--to-belt): to_belt_vx,to_belt_vy,to_belt_vz [m/s] and optional latency [s >= 0]. Output gets a move column. "
         "A t_detect column makes it a belt schedule (one detected part per row, in time order, the robot's state "
         "carried over): t_detect [s], to_x,to_y,to_z [m, where the part was seen], to_belt_vx,to_belt_vy,to_belt_vz "
         "[m/s], place_x,place_y,place_z [m], optional latency [s >= 0, default --latency], height, eta, time, "

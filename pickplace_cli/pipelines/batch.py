@@ -24,7 +24,10 @@ from typing import IO, Any, Iterator
 from ..model.errors import PickplaceError, TaskError
 
 REQUIRED = ("from_x", "from_y", "from_z", "to_x", "to_y", "to_z")
-OPTIONAL = ("height", "eta", "v_from_x", "v_from_y", "v_from_z", "v_to_x", "v_to_y", "v_to_z", "time")
+#: a belt row of a plain batch (no ``t_detect``): the part was at ``to`` [m] when detected and moves at
+#: ``to_belt_v*`` [m/s]; the move starts ``latency`` [s, >= 0] after the detection (as ``--to-belt``/``--latency``)
+BELT = ("to_belt_vx", "to_belt_vy", "to_belt_vz")
+OPTIONAL = ("height", "eta", "v_from_x", "v_from_y", "v_from_z", "v_to_x", "v_to_y", "v_to_z", "time", *BELT, "latency")
 #: a belt schedule (a ``t_detect`` column; :mod:`~pickplace_cli.pipelines.schedule`): one detected part per row — where it
 #: was seen [m], the belt velocity [m/s], the detection time stamp [s] and where to place it [m]; optional
 #: ``latency`` [s, >= 0] (earliest move start after the detection), ``height`` [m], ``eta``, ``time``, and
@@ -151,6 +154,17 @@ def _header(text: str, sep: str, source: str, line: int) -> list[str]:
         raise TaskError(
             f"{source}:{line}: column {unknown[0]!r} is not known; {what} columns are {', '.join(required + optional)}"
         )
+    if not schedule:
+        belt = [h for h in BELT if h in header]
+        if belt and len(belt) < 3:
+            raise TaskError(f"{source}:{line}: column {next(h for h in BELT if h not in header)!r} is missing (a belt "
+                            f"row gives the belt velocity as {', '.join(BELT)}, m/s)")
+        if "latency" in header and not belt:
+            raise TaskError(f"{source}:{line}: column 'latency' needs the belt columns {', '.join(BELT)} (m/s), or a "
+                            "t_detect column for a belt schedule")
+        if belt and any(h in header for h in ("v_to_x", "v_to_y", "v_to_z")):
+            raise TaskError(f"{source}:{line}: columns v_to_* and to_belt_v* both give the end velocity: a belt row "
+                            "arrives with the belt's")
     missing = [h for h in required if h not in header]
     if missing:
         what = "a belt schedule (t_detect) requires" if schedule else "required:"
@@ -232,9 +246,12 @@ def plan_rows(
     for r in rows:
         v = r.values
         try:
-            task = row_task(v, profile, height, eta)
-            opts = replace(options, time=v["time"]) if "time" in v else options
-            result = plan(task, profile, opts)
+            if any(c in v for c in BELT):
+                result = _plan_belt_row(r, profile, options, height, eta, source)
+            else:
+                task = row_task(v, profile, height, eta)
+                opts = replace(options, time=v["time"]) if "time" in v else options
+                result = plan(task, profile, opts)
             code = result.report.exit_code()
             err = None
             if code:  # every exceeded limit, one line each, in the single plan's words
@@ -246,6 +263,29 @@ def plan_rows(
             code = exc.exit_code
         if fail_fast and code:
             return
+
+
+def _plan_belt_row(r: BatchRow, profile, options, height, eta, source: str):
+    """A plain batch's belt row: the conveyor rendezvous of ``--to-belt`` (bspline-vel) with its tracking segment
+    (:func:`~pickplace_cli.pipelines.rendezvous.plan_belt_move`). TaskError for a partial belt velocity or a
+    method that cannot meet a moving part."""
+    import numpy as np
+
+    from ..paths import Method
+    from .rendezvous import Part, plan_belt_move
+
+    v = r.values
+    missing = [c for c in BELT if c not in v]
+    if missing:
+        raise TaskError(f"{missing[0]} is empty: a belt row gives all of {', '.join(BELT)} (m/s), a fixed end none")
+    if Method(options.method) not in (Method.bspline, Method.bspline_vel):
+        raise TaskError(f"to_belt_v* = ({', '.join(f'{v[c]:g}' for c in BELT)}) m/s: method "
+                        f"{Method(options.method).value} plans moves from rest to rest; a belt row is planned by bspline-vel")
+    part = Part(np.array([v["to_x"], v["to_y"], v["to_z"]]), np.array([v[c] for c in BELT]),
+                v.get("latency", 0.0))
+    v_from = np.array([v.get(f"v_from_{c}", 0.0) for c in "xyz"])
+    return plan_belt_move(np.array([v["from_x"], v["from_y"], v["from_z"]]), part, profile, v.get("time", options.time),
+                          v.get("height", height), v.get("eta", eta), v_from, options.rate)
 
 
 @dataclass(frozen=True)

@@ -626,3 +626,23 @@ def with_tracking(move, track):
     rest = {k: ({n: None if a is None else a[1:] for n, a in v.items()} if k == "joint" else v[1:]) for k, v in rest.items()}
     segments = [Segment(1, "move", 0.0, T), Segment(1, "track", T, T + float(track.t[-1]))]
     return _join([first, rest], [1, 1], move.joint, segments, [move.summary()])
+
+
+def plan_belt_move(start, part: Part, profile, time: str | float = "auto", height: float | None = None,
+                   eta: float | None = None, v_from=None, rate: float | None = None):
+    """One Plan of the rendezvous move and its tracking segment (the profile's dwell), as a plain batch's belt
+    row writes it: the samples run from 0 to T + dwell (the tracking samples after the meeting), the limit
+    report holds the move's rows and the segment's (its quantities marked "(tracking)", its times
+    trajectory time), the summary describes the move (its duration, peaks and method) and its parameters
+    carry ``rendezvous`` and ``tracking``. Without a dwell it is the move alone."""
+    move, rv = plan_rendezvous(start, part, profile, time, height, eta, v_from, None, rate)
+    if profile.planning.dwell <= 0:
+        return move
+    track = plan_tracking(move, part, profile, rate=rate)
+    joined = with_tracking(move, track)
+    rows = move.report.rows + tuple(replace(r, quantity=f"{r.quantity} (tracking)") for r in track.report.rows)
+    parameters = {**move.parameters, "tracking": {"t_start_s": rv.seconds, "duration_s": track.duration.seconds,
+                                                 "velocity_m_s": part.velocity.tolist(),
+                                                 "limits_ok": track.report.ok}}
+    return replace(move, t=joined.t, p=joined.p, v=joined.v, a=joined.a, j=joined.j, joint=joined.joint,
+                   report=replace(move.report, rows=rows), parameters=parameters)

@@ -126,3 +126,67 @@ def test_window_miss_is_exit_4_nothing_written(tmp_path):
     assert len(r.stderr.strip().splitlines()) == 1
     assert "the part leaves the belt window 4" in r.stderr and "mm before the robot can reach it" in r.stderr
     assert not out.exists()
+
+
+BELT_BATCH = ("from_x,from_y,from_z,to_x,to_y,to_z,to_belt_vx,to_belt_vy,to_belt_vz,latency\n"
+              "-0.1525,0,-0.8,0.1525,-0.1,-0.8,0,0.5,0,0.05\n"   # a belt row
+              "-0.1525,0,-0.8,0.1525,-0.1,-0.8,,,,\n"             # a fixed end (empty belt cells)
+              "-0.1525,0,-0.8,0.1525,-0.2,-0.8,0,2.5,0,0.05\n")  # a part the robot cannot catch
+
+
+def test_batch_belt_rows_are_rendezvous_with_tracking(tmp_path):
+    """A plain batch (no t_detect) with to_belt_v* and latency columns: each belt row is the --to-belt plan of
+    that row (the same samples, tracking segment included), an empty belt row a fixed move, a missed part
+    exit 4 with its one line; --json carries rendezvous and tracking; a pipe gives the same answers."""
+    src = tmp_path / "belt.csv"
+    src.write_text(BELT_BATCH)
+    out = tmp_path / "out.csv"
+    r = run("plan", "--batch", str(src), "-o", str(out))
+    assert r.exit_code == 4
+    assert "belt.csv:4): part (detected at 0.1525,-0.2,-0.8 m, belt 0,2.5,0 m/s): the robot cannot reach it" in r.stderr
+    single = tmp_path / "single.csv"
+    assert run("plan", *BELT, "--latency", "0.05", "-o", str(single)).exit_code == 0
+    rows = list(csv.reader(io.StringIO(out.read_text())))
+    mine = [row for row in rows[1:] if row[0] == "1"]  # move 1: the --to-belt CSV numbers its move 1 too
+    assert mine == list(csv.reader(io.StringIO(single.read_text())))[1:]
+    assert {row[0] for row in rows[1:]} == {"1", "2"}
+    r = run("plan", "--batch", str(src), "--json")
+    docs = [json.loads(x) for x in r.stdout.splitlines()]
+    assert docs[0]["method"] == "bspline-vel" and docs[0]["parameters"]["rendezvous"]["latency_s"] == 0.05
+    assert docs[0]["parameters"]["tracking"]["duration_s"] == pytest.approx(0.1)
+    assert docs[1]["method"] == "bspline" and docs[2]["exit_code"] == 4
+    piped = runner.invoke(app, ["plan", "--batch", "-", "--json"], input=BELT_BATCH, catch_exceptions=False)
+    assert [json.loads(x)["exit_code"] for x in piped.stdout.splitlines()] == [0, 0, 4]
+    assert json.loads(piped.stdout.splitlines()[0])["duration_s"] == docs[0]["duration_s"]
+
+
+@pytest.mark.parametrize("header, cells, message", [
+    ("from_x,from_y,from_z,to_x,to_y,to_z,to_belt_vx,to_belt_vy", "0,0,-0.8,0.1,0,-0.8,0,0.5",
+     "column 'to_belt_vz' is missing (a belt row gives the belt velocity as to_belt_vx, to_belt_vy, to_belt_vz, m/s)"),
+    ("from_x,from_y,from_z,to_x,to_y,to_z,latency", "0,0,-0.8,0.1,0,-0.8,0.1", "column 'latency' needs the belt columns"),
+    ("from_x,from_y,from_z,to_x,to_y,to_z,to_belt_vx,to_belt_vy,to_belt_vz,v_to_y", "0,0,-0.8,0.1,0,-0.8,0,0.5,0,0.5",
+     "columns v_to_* and to_belt_v* both give the end velocity"),
+])
+def test_batch_belt_header_errors(tmp_path, header, cells, message):
+    src = tmp_path / "b.csv"
+    src.write_text(f"{header}\n{cells}\n")
+    r = run("plan", "--batch", str(src))
+    assert r.exit_code == 1 and message in r.stderr and len(r.stderr.strip().splitlines()) == 1
+
+
+def test_batch_belt_row_errors(tmp_path):
+    """A partial belt velocity in a row, a negative latency, a method that plans from rest to rest: that row's
+    one line (exit 1 or 2), the other rows planned."""
+    src = tmp_path / "b.csv"
+    src.write_text("from_x,from_y,from_z,to_x,to_y,to_z,to_belt_vx,to_belt_vy,to_belt_vz,latency\n"
+                   "-0.1525,0,-0.8,0.1525,-0.1,-0.8,0,0.5,,\n"
+                   "-0.1525,0,-0.8,0.1525,-0.1,-0.8,0,0.5,0,-0.1\n"
+                   "-0.1525,0,-0.8,0.1525,-0.1,-0.8,0,0.5,0,0\n")
+    r = run("plan", "--batch", str(src), "--json")
+    docs = [json.loads(x) for x in r.stdout.splitlines()]
+    assert "to_belt_vz is empty: a belt row gives all of to_belt_vx, to_belt_vy, to_belt_vz" in docs[0]["error"]
+    assert "latency = '-0.1': must be >= 0 s" in docs[1]["error"]
+    assert docs[2]["exit_code"] == 0
+    r = run("plan", "--batch", str(src), "--method", "lame", "--json")
+    assert "method lame plans moves from rest to rest; a belt row is planned by bspline-vel" in \
+        json.loads(r.stdout.splitlines()[2])["error"]

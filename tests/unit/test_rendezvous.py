@@ -288,3 +288,24 @@ def test_window_must_intersect_the_box():
     box = load_profile("delta-su2018").workcell.box
     with pytest.raises(ValidationError, match="does not intersect the workcell box"):
         Workcell(box=box, belt_window=Box(min=(0.0, 0.7, -0.9), max=(0.3, 0.9, -0.7)))
+
+
+def test_belt_move_is_the_move_and_its_tracking():
+    """plan_belt_move (a plain batch's belt row): the samples run to T + dwell, the limit report holds the move's
+    rows and the tracking segment's (marked, times after T), as plan_rendezvous and plan_tracking give them."""
+    from pickplace_cli.pipelines.rendezvous import plan_belt_move, plan_tracking
+
+    prof = load_profile("delta-su2018")
+    part = Part(np.array([0.1525, -0.1, -0.8]), np.array([0.0, 0.5, 0.0]), 0.05)
+    start = np.array([-0.1525, 0.0, -0.8])
+    both = plan_belt_move(start, part, prof)
+    move, rv = plan_rendezvous(start, part, prof)
+    track = plan_tracking(move, part, prof)
+    T = rv.seconds
+    assert both.t[-1] == pytest.approx(T + prof.planning.dwell) and len(both.t) == len(move.t) + len(track.t) - 1
+    assert len(both.report.rows) == len(move.report.rows) + len(track.report.rows)
+    marked = [r for r in both.report.rows if r.quantity.endswith("(tracking)")]
+    assert len(marked) == len(track.report.rows)
+    assert all(r.t_peak is None or r.t_peak >= T - 1e-12 for r in marked)
+    assert both.parameters["tracking"]["duration_s"] == prof.planning.dwell and "rendezvous" in both.parameters
+    np.testing.assert_allclose(both.p[len(move.t) - 1], part.at(T), atol=1e-9)
