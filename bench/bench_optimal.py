@@ -1,15 +1,16 @@
 """``--time optimal`` against ``--time fit`` and against an independent, slower solve (issue 15).
 
-    python bench/bench_optimal.py              # Adept cycle timing + 54 random moves (about 10 min on 2 cores)
-    python bench/bench_optimal.py --moves 2    # quick look
+    python bench/bench_optimal.py --moves 4                      # Adept timing + 60 random moves (~15 min, 2 cores)
+    python bench/bench_optimal.py --moves 4 --coefficients 37    # the same for plan --law-coefficients 37
+    python bench/bench_optimal.py --moves 2                      # quick look
 
-For each move: T_fit (uniform law), T_opt (the shipped optimiser: 20 law coefficients, 161-point grid) and
-T_slow (an independent slower solve: 40 coefficients on a 321-point grid, from the same uniform start),
-each fitted by the continuous check on the composed path.
-Reports T_opt/T_fit, the gap T_opt/T_slow − 1 (target ≤ 1 %), that T_opt ≤ T_fit always (a fallback to the
-uniform law is counted), and in-process medians of ``plan --time optimal`` on the Adept cycle.
-Random moves: 3 per method (bspline, ph, superposition, lame, piecewise-poly) × 3 robots (the gantry with
-the drives of ``tests/property/test_limit_truth.py``) → 45, plus the 9 Adept-like moves of each robot.
+For each move: T_fit (uniform law), T_opt (``plan --time optimal`` with ``--coefficients`` law coefficients,
+default 20, on its 161-point grid plus the check rounds) and T_slow (an independent slower solve: twice the
+coefficients on a 321-point grid, directly from the uniform law), each fitted by the continuous check on the
+composed path. Reports T_opt/T_fit, the gap T_opt/min(T_slow, T_opt) − 1 (target ≤ 1 %), that T_opt ≤ T_fit
+always (a fallback to the uniform law is counted), and in-process medians of ``plan --time optimal`` on the
+Adept cycle. Random moves: ``--moves`` per method (bspline, ph, superposition, lame, piecewise-poly) × 3 robots
+(the gantry with the drives of ``tests/property/test_limit_truth.py``).
 Results go to ``bench/results/optimal.json``.
 """
 
@@ -41,7 +42,7 @@ def slow_solve(model, dwell: float, t_fit: float) -> float:
     grid0 = O.LAW_GRID
     try:
         O.LAW_GRID = 321
-        law = O.optimal_law(model, dwell, t_fit, coefficients=2 * O.LAW_COEFFICIENTS)
+        law = O.optimal_law(model, dwell, t_fit, coefficients=2 * COEFFICIENTS[0], direct=True)
         T, _ = fit_duration(motion_model(law.path, _PROF[0]), dwell, start=law.t_estimate)
     finally:
         O.LAW_GRID = grid0
@@ -49,6 +50,8 @@ def slow_solve(model, dwell: float, t_fit: float) -> float:
 
 
 _PROF: list = [None]
+#: the shipped solve's law coefficients (``--coefficients``; the slow solve takes twice as many, directly)
+COEFFICIENTS: list = [20]
 
 
 def one(name: str, method: str, task: Task) -> dict | None:
@@ -60,7 +63,7 @@ def one(name: str, method: str, task: Task) -> dict | None:
     except PickplaceError:
         return None
     t0 = time.perf_counter()
-    opt = plan(task, prof, PlanOptions(method=method, time="optimal"))
+    opt = plan(task, prof, PlanOptions(method=method, time="optimal", law_coefficients=COEFFICIENTS[0]))
     dt = time.perf_counter() - t0
     model = motion_model(fit.cartesian.path, prof)
     t_slow = slow_solve(model, dwell, fit.duration.seconds)
@@ -74,8 +77,11 @@ def one(name: str, method: str, task: Task) -> dict | None:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--moves", type=int, default=3, help="random moves per method and robot")
+    ap.add_argument("--coefficients", type=int, default=20, help="the law's coefficients (plan --law-coefficients); "
+                    "the slow solve takes twice as many, from the uniform law")
     ap.add_argument("-o", "--output", default=str(Path(__file__).parent / "results" / "optimal.json"))
     args = ap.parse_args()
+    COEFFICIENTS[0] = args.coefficients
     from pickplace_cli.model.profile import load_profile
 
     prof = load_profile("delta-su2018")
@@ -83,7 +89,7 @@ def main() -> None:
     times = []
     for _ in range(7):
         t0 = time.perf_counter()
-        r = plan(adept, prof, PlanOptions(time="optimal"))
+        r = plan(adept, prof, PlanOptions(time="optimal", law_coefficients=args.coefficients))
         times.append(time.perf_counter() - t0)
     fit = plan(adept, prof, PlanOptions(time="fit"))
     print(f"Adept cycle, delta-su2018, bspline: T_fit {fit.duration.seconds:.4f} s, T_optimal "
@@ -111,6 +117,7 @@ def main() -> None:
     gaps = [r["gap"] for r in rows]
     ratios = [r["ratio"] for r in rows]
     summary = {
+        "command": "python bench/bench_optimal.py " + " ".join(sys.argv[1:]), "coefficients": args.coefficients,
         "adept": {"t_fit": fit.duration.seconds, "t_optimal": r.duration.seconds,
                   "median_ms": statistics.median(times) * 1e3},
         "moves": len(rows), "worst_gap": max(gaps), "median_gap": statistics.median(gaps),

@@ -37,6 +37,7 @@ class PlanOptions:
     shape: bool = False  # bspline: choose k1, k2 (and η unless hold_eta) for the smallest duration on the robot
     hold_eta: bool = False  # with shape: keep the task's η (the user gave it), search k1, k2 only
     hold_capacity: bool = False  # fit/optimal also hold the profile's Cartesian capacity (|v|, |a|, |j|)
+    law_coefficients: int = 20  # optimal: coefficients of the time law's cubic B-spline (more: finer, slower)
 
 
 @dataclass(frozen=True)
@@ -261,7 +262,8 @@ def _duration_stage(task: Task, profile: Profile, options: PlanOptions, path, fa
         from .timing import choose_optimal
 
         duration, law_path, law_note = choose_optimal(path, profile, model, dwell, model_of,
-                                                      hold_capacity=options.hold_capacity)
+                                                      hold_capacity=options.hold_capacity,
+                                                      coefficients=options.law_coefficients)
         if law_path is not model.path:  # the composed path: evaluated anew
             model = model_of(law_path)
         return duration, law_path, model, (law_note,)

@@ -336,7 +336,7 @@ def fit_duration_for(factory, model_of, dwell: float = 0.0, start: float = 0.1, 
 
 
 def choose_optimal(path: CartesianPath, profile, model, dwell: float, model_of,
-                   hold_capacity: bool = False) -> tuple[Duration, CartesianPath, str]:
+                   hold_capacity: bool = False, coefficients: int = 20) -> tuple[Duration, CartesianPath, str]:
     """``--time optimal``: the fit of the uniform law, then the optimised non-uniform law on the same path
     (:mod:`pickplace_cli.timing.optimal`), whose duration is fitted again by the continuous check on the
     composed path. Returns (Duration, the path to sample — the composed one, or ``path`` itself when the law
@@ -350,7 +350,7 @@ def choose_optimal(path: CartesianPath, profile, model, dwell: float, model_of,
         fit = replace(fit, t_bound=torque_bound(model))
     except ValueError:  # no motor torque or speed limit, or one exceeded at rest: no bound to show
         pass
-    law = optimal_law(model, dwell, fit.seconds, capacity=profile.capacity if hold_capacity else None)
+    law = optimal_law(model, dwell, fit.seconds, coefficients, capacity=profile.capacity if hold_capacity else None)
     composed = law.path
     try:
         t_opt, binding = fit_duration(model_of(composed), dwell, start=max(law.t_estimate, 1e-3), margin=3e-5)

@@ -322,34 +322,64 @@ def _solve(prob: _Problem, x: np.ndarray, keep: np.ndarray, t_fit: float) -> tup
 
 
 def optimal_law(model, dwell: float, t_fit: float, coefficients: int = LAW_COEFFICIENTS,
-                capacity=None, start: np.ndarray | None = None) -> LawResult:
+                capacity=None, start: np.ndarray | None = None, direct: bool = False) -> LawResult:
     """Minimise the duration of ``model``'s path over time laws b(τ) (module docstring), warm-started at the
     uniform law of duration ``t_fit`` [s]. ``capacity``: also hold the profile's Cartesian |v|, |a| (and |j|
     when set) — optional, off by default. ``start``: the law's coefficients to start from (relative to the
     uniform law, which is all ones; the benchmark's multi-start). Returns the composed path (not yet checked).
 
-    Two phases: every row of a coarse grid (``LAW_COARSE_GRID`` points and the path's knots and jump sides:
-    few rows, so SLSQP's subproblems are cheap) from the uniform law; then the full grid from that solution,
-    on the rows above ``LAW_ACTIVE`` of their limit there (the coarse solution already works the right rows
-    hardest), adding any row the solution breaks."""
+    Each solve has two phases: every row of a coarse grid (``LAW_COARSE_GRID`` points and the path's knots and
+    jump sides: few rows, so SLSQP's subproblems are cheap) from the start; then the full grid from that
+    solution, on the rows above ``LAW_ACTIVE`` of their limit there (the coarse solution already works the
+    right rows hardest), adding any row the solution breaks; then the check rounds (:func:`_check_rounds`).
+    More ``coefficients`` than ``LAW_COEFFICIENTS`` (``--law-coefficients``): the law of ``LAW_COEFFICIENTS``
+    first, then the finer one from it (its least-squares projection on the finer knots; unless ``direct``, the
+    benchmark's independent solve from the uniform law)."""
     path = model.path
-    knots = np.concatenate([[0.0] * 3, np.linspace(0.0, 1.0, coefficients - 2), [1.0] * 3])
     x0 = np.ones(coefficients)
-    nit, message = 0, ""
     x = x0 if start is None else np.clip(np.asarray(start, float), *LAW_BOUNDS)
-    if LAW_COARSE_GRID:
+    nit = 0
+    if coefficients > LAW_COEFFICIENTS and start is None and not direct:
+        first = optimal_law(model, dwell, t_fit, LAW_COEFFICIENTS, capacity)
+        s = np.linspace(0.0, 1.0, 8 * coefficients)
+        x = np.clip(np.linalg.lstsq(_basis(_knots(coefficients), s)[0], first.law(s) * t_fit**2, rcond=None)[0],
+                    *LAW_BOUNDS)
+        nit = first.iterations
+    knots = _knots(coefficients)
+    if LAW_COARSE_GRID and nit == 0:
         coarse = _Problem(model, _law_grid(path, LAW_COARSE_GRID, spans=False, clustered=True), knots, t_fit, dwell,
                           capacity)
         xc, nit, message, _ = _solve(coarse, x, np.ones(coarse.n_rows, bool), t_fit)
         if coarse.values(xc).min() > -1e-3:  # a usable warm start (the fine grid may still bend it)
             x = xc
+    x, n2, message, rounds, fine = _check_rounds(model, knots, t_fit, dwell, capacity, x)
+    nit += n2
+    # a law that breaks its own grid constraints (the solver stopped somewhere infeasible) is not used
+    worst = float(fine.values(x).min()) if np.all(np.isfinite(x)) else -np.inf
+    if worst < -1e-6:
+        message = f"{message}; the solver's point breaks a limit on its grid by {-worst:.2g}: the uniform law is kept"
+        x = x0
+    message = f"{message} ({rounds} round(s) on {fine.n_rows} grid rows)"
+    scale = 1.0 / t_fit**2
+    b = _law_spline(knots, scale * x)
+    return LawResult(compose(path, b), float(fine.objective(x)[0]), nit, message, b)
+
+
+def _knots(coefficients: int) -> np.ndarray:
+    """The law's knots: uniform in τ, the ends repeated (cubic)."""
+    return np.concatenate([[0.0] * 3, np.linspace(0.0, 1.0, coefficients - 2), [1.0] * 3])
+
+
+def _check_rounds(model, knots, t_fit: float, dwell: float, capacity, x: np.ndarray):
+    """The fine phase from ``x`` and its check rounds: between the grid's points the law may still break a limit
+    (a peak the grid straddles); the rows of a denser grid (``LAW_CHECK_GRID``) find where, those τ join the grid
+    and the solve continues from its answer (``LAW_CHECK_ROUNDS`` at most). Returns (x, iterations, message,
+    rounds, the last fine problem)."""
+    path = model.path
     grid = _law_grid(path)
     fine = _Problem(model, grid, knots, t_fit, dwell, capacity)
     keep = fine.values(x)[: fine.n_rows] < 1.0 - LAW_ACTIVE
-    x, n2, message, rounds = _solve(fine, x, keep, t_fit)
-    nit += n2
-    # between the grid's points the law may still break a limit (a peak the grid straddles): the rows of a
-    # denser grid find where, those τ join the grid and the solve continues from its answer
+    x, nit, message, rounds = _solve(fine, x, keep, t_fit)
     check = _Problem(model, _law_grid(path, LAW_CHECK_GRID), knots, t_fit, dwell, capacity)
     for _ in range(LAW_CHECK_ROUNDS):
         v = check.values(x)[: check.n_rows]
@@ -361,15 +391,7 @@ def optimal_law(model, dwell: float, t_fit: float, coefficients: int = LAW_COEFF
         keep = fine.values(x)[: fine.n_rows] < 1.0 - LAW_ACTIVE
         x, n3, message, r3 = _solve(fine, x, keep, t_fit)
         nit, rounds = nit + n3, rounds + r3
-    # a law that breaks its own grid constraints (the solver stopped somewhere infeasible) is not used
-    worst = float(fine.values(x).min()) if np.all(np.isfinite(x)) else -np.inf
-    if worst < -1e-6:
-        message = f"{message}; the solver's point breaks a limit on its grid by {-worst:.2g}: the uniform law is kept"
-        x = x0
-    message = f"{message} ({rounds} round(s) on {fine.n_rows} grid rows)"
-    scale = 1.0 / t_fit**2
-    b = _law_spline(knots, scale * x)
-    return LawResult(compose(path, b), float(fine.objective(x)[0]), nit, message, b)
+    return x, nit, message, rounds, fine
 
 
 def _law_spline(knots: np.ndarray, coef: np.ndarray):
