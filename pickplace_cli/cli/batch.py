@@ -168,9 +168,6 @@ def _plan_schedule(items, name, streamed, prof, options, height, eta, fail_fast,
     from ..model.errors import TaskError
     from ..pipelines.schedule import ScheduleSummary, check_order, plan_schedule
 
-    if report is not None or report_only:
-        _usage(f"{'--report' if report is not None else '--report-only'} is not available with a belt schedule "
-               "(a batch with t_detect): use --json for each row's limits")
     if belt.get("method_given") and options.method != "bspline-vel":
         raise TaskError(f"method = {options.method}: a belt schedule meets each part with its velocity; it "
                         "needs --method bspline-vel (the default for a schedule)")
@@ -181,10 +178,13 @@ def _plan_schedule(items, name, streamed, prof, options, height, eta, fail_fast,
         items = list(check_order(items, name))
     params = {k: v for k, v in options.method_params.items() if k in ("solver", "table") and v is not None}
     results = plan_schedule(items, prof, options.time, height, eta, options.rate, belt.get("latency") or 0.0,
-                            params, name, fail_fast)
+                            params, name, fail_fast, report_only)
+    report_rows: list = []  # --report: every row, its segments' summaries and limit reports
+    codes: list[int] = []
     summary = ScheduleSummary()
     kept: list = []
     csv_out = output is not None and writer.csv_dialect is not None
+    header_done = False
     with ExitStack() as stack:
         out = None
         if csv_out:
@@ -194,6 +194,10 @@ def _plan_schedule(items, name, streamed, prof, options, height, eta, fail_fast,
             out = stack.enter_context(atomic_output(output))
         for res in results:
             summary.add(res)
+            codes.append(res.code)
+            if report is not None:
+                report_rows.append({"row": res.row, "exit_code": res.code, "error": res.error,
+                                    **({"segments": res.cycle.report_doc()} if res.cycle is not None else {})})
             if res.error is not None:
                 sys.stderr.write("".join(f"pickplace: {ln}\n" for ln in res.error.splitlines()))
             elif not quiet:
@@ -205,11 +209,13 @@ def _plan_schedule(items, name, streamed, prof, options, height, eta, fail_fast,
             sys.stderr.flush()
             if json_summary:
                 _emit_json(res.as_dict())
-            if res.code == 0 and output is not None:
+            written = res.code == 0 or (report_only and res.code == 3 and res.cycle is not None)
+            if written and output is not None:
                 timeline = res.cycle.timeline()
                 if out is not None:
-                    if summary.picks == 1:
+                    if not header_done:
                         out.write(csv_header(timeline, writer.csv_dialect, move=True))
+                        header_done = True
                     out.write(csv_rows(timeline, writer.csv_dialect))
                     out.flush()
                 else:
@@ -221,11 +227,20 @@ def _plan_schedule(items, name, streamed, prof, options, height, eta, fail_fast,
                      [sg for tl in kept for sg in tl.segments], [sm for tl in kept for sm in tl.summaries]), output)
     if json_summary:
         _emit_json({"schedule": summary.as_dict()})
+    if report is not None:
+        import json
+
+        from ..export import atomic_output
+
+        with atomic_output(report) as stream:
+            json.dump({"schedule": summary.as_dict(), "rows": report_rows}, stream, indent=2, allow_nan=False,
+                      default=float)
+            stream.write("\n")
     if not quiet:
         sys.stderr.write(summary.line() + "\n")
-    if output is not None and summary.picks == 0:
+    if output is not None and not header_done and not kept:
         sys.stderr.write("pickplace: no part was picked: nothing written\n")
-    if summary.worst:
+    if summary.worst and not (report_only and all(c == 3 for c in codes if c)):
         raise typer.Exit(summary.worst)
 
 

@@ -98,6 +98,11 @@ class Cycle:
                            for r in leg.report.violations],
         }
 
+    def report_doc(self) -> list[dict[str, Any]]:
+        """The ``--report`` entries of the cycle: per segment (pick, track, place) its summary and limit report."""
+        names = ["pick"] + (["track"] if self.track is not None else []) + ["place"]
+        return [{"segment": n, "summary": leg.summary(), "limits": leg.report.as_dict()} for n, leg in zip(names, self.legs)]
+
     def timeline(self):
         """The cycle's samples on the detection clock: pick move, tracking, place move, place dwell at rest
         (a :class:`~pickplace_cli.pipelines.timeline.Timeline`, every sample in move = ``row``)."""
@@ -279,10 +284,12 @@ def plan_cycle(state: RobotState, r, profile, time: str = "auto", height: float 
 
 def plan_schedule(rows: Iterable, profile, time: str = "auto", height: float | None = None, eta: float | None = None,
                   rate: float | None = None, latency: float = 0.0, method_params: dict | None = None,
-                  source: str = "batch", fail_fast: bool = False) -> Iterator[ScheduleRow]:
+                  source: str = "batch", fail_fast: bool = False, report_only: bool = False) -> Iterator[ScheduleRow]:
     """Plan the rows (BatchRows from :func:`~pickplace_cli.pipelines.batch.iter_batch`, lazily: a streamed row is answered
     as soon as it is read) one after another, the robot's state carried from each picked part to the next;
-    yields a ScheduleRow per row. Input errors (order, a bad row) raise TaskError at that row."""
+    yields a ScheduleRow per row. Input errors (order, a bad row) raise TaskError at that row. ``report_only``:
+    a cycle that only exceeds a limit (exit 3) is run as planned (the robot's state goes on from it), so the
+    schedule is the one the robot would run if the limits were not checked."""
     state = None
     for r in check_order(rows, source):
         if state is None:
@@ -291,7 +298,7 @@ def plan_schedule(rows: Iterable, profile, time: str = "auto", height: float | N
             except TaskError as exc:
                 raise TaskError(f"row {r.row} ({source}:{r.line}): {exc}") from None
         res = plan_cycle(state, r, profile, time, height, eta, rate, latency, method_params, source)
-        if res.code == 0:
+        if res.code == 0 or (report_only and res.code == 3 and res.cycle is not None):
             state = RobotState(res.cycle.place.task.p_to, res.cycle.t_end)
         yield res
         if fail_fast and res.code:

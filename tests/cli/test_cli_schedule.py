@@ -103,11 +103,45 @@ def test_latency_needs_a_schedule(tmp_path):
     assert r.exit_code == 2 and "--latency with --batch" in r.stderr
 
 
-def test_report_refused(tmp_path):
+def test_report_holds_every_row_and_segment(tmp_path):
+    """--report with a schedule: the closing summary and, per row, its exit code, error and (for a cycle) the
+    summary and limit report of each segment (pick, track, place); the miss stays exit 4."""
     src = tmp_path / "p.csv"
     src.write_text(GOOD)
-    r = run("plan", "--batch", str(src), "--report", str(tmp_path / "r.json"))
-    assert r.exit_code == 2 and "not available with a belt schedule" in r.stderr
+    rep = tmp_path / "r.json"
+    r = run("plan", "--batch", str(src), "--report", str(rep), "-q")
+    assert r.exit_code == 4
+    doc = json.loads(rep.read_text())
+    assert doc["schedule"]["picks"] == 2 and [x["exit_code"] for x in doc["rows"]] == [0, 4, 0]
+    assert [s["segment"] for s in doc["rows"][0]["segments"]] == ["pick", "track", "place"]
+    assert all(s["limits"]["ok"] for s in doc["rows"][0]["segments"])
+    assert "segments" not in doc["rows"][1] and "the robot cannot reach it" in doc["rows"][1]["error"]
+
+
+def test_report_only_runs_the_cycles_that_break_a_limit(tmp_path):
+    """A profile whose motors' torque rate is too low for these cycles: every picked row is exit 3 (one line per
+    limit and segment) and moves nothing; with --report-only the cycles run as planned (the robot goes on from
+    each), are written, the report says which limits fail, and the exit code is 0."""
+    text = open("profiles/delta-su2018.yaml").read().replace("torque_rate: 418.0", "torque_rate: 100.0")
+    prof = tmp_path / "weak.yaml"
+    prof.write_text(text)
+    src = tmp_path / "p.csv"
+    src.write_text(HEAD + f"0.00,0.1525,-0.25,-0.8,0,0.3,0,{P},{P}\n0.20,0.20,-0.35,-0.8,0,0.3,0,{P},,,\n")
+    r = run("plan", "-p", str(prof), "--batch", str(src), "--json", "-o", str(tmp_path / "o.csv"))
+    assert r.exit_code == 3
+    docs = [json.loads(x) for x in r.stdout.splitlines()]
+    assert [d["exit_code"] for d in docs[:2]] == [3, 3]
+    assert docs[1]["start_m"] == [-0.1525, 0.0, -0.8]  # the failed row 1 moved nothing
+    assert "motor torque rate" in r.stderr and ": pick: limit exceeded:" in r.stderr
+    out, rep = tmp_path / "o2.csv", tmp_path / "r.json"
+    r = run("plan", "-p", str(prof), "--batch", str(src), "--json", "--report-only", "--report", str(rep), "-o", str(out))
+    assert r.exit_code == 0
+    docs = [json.loads(x) for x in r.stdout.splitlines()]
+    assert docs[1]["t_start_s"] == pytest.approx(docs[0]["t_end_s"], abs=1e-12)  # row 2 starts when row 1 ends
+    rows = list(csv.reader(io.StringIO(out.read_text())))
+    assert {row[0] for row in rows[1:]} == {"1", "2"}
+    bad = [v for s in json.loads(rep.read_text())["rows"][0]["segments"] for v in s["limits"]["violations"]]
+    assert bad and all(v["quantity"] == "motor torque rate" for v in bad)
 
 
 def test_help_names_the_columns():
