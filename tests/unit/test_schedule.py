@@ -120,7 +120,11 @@ def test_negative_latency_refused():
 
 
 def test_belt_columns_need_t_detect():
-    with pytest.raises(TaskError, match="column 'to_belt_vx' belongs to a belt schedule, which needs a t_detect column"):
+    """Schedule columns (place_*) need t_detect; belt velocity columns alone are a plain batch's belt rows, all
+    three of them."""
+    with pytest.raises(TaskError, match="column 'place_x' belongs to a belt schedule, which needs a t_detect column"):
+        read_batch(io.StringIO("from_x,from_y,from_z,to_x,to_y,to_z,place_x\n0,0,-0.8,0.1,0,-0.8,0\n"), "s.csv")
+    with pytest.raises(TaskError, match="column 'to_belt_vy' is missing \\(a belt row gives the belt velocity"):
         read_batch(io.StringIO("from_x,from_y,from_z,to_x,to_y,to_z,to_belt_vx\n0,0,-0.8,0.1,0,-0.8,0\n"), "s.csv")
     with pytest.raises(TaskError, match="column 'place_x' is missing \\(a belt schedule"):
         read_batch(io.StringIO("t_detect,to_x,to_y,to_z,to_belt_vx,to_belt_vy,to_belt_vz\n0,0,0,-0.8,0,0.3,0\n"), "s.csv")
