@@ -339,14 +339,15 @@ def optimal_law(model, dwell: float, t_fit: float, coefficients: int = LAW_COEFF
     x0 = np.ones(coefficients)
     x = x0 if start is None else np.clip(np.asarray(start, float), *LAW_BOUNDS)
     nit = 0
-    if coefficients > LAW_COEFFICIENTS and start is None and not direct:
+    refine = coefficients > LAW_COEFFICIENTS and start is None and not direct
+    if refine:  # the coarse law first; the finer one starts from it (no coarse phase of its own)
         first = optimal_law(model, dwell, t_fit, LAW_COEFFICIENTS, capacity)
         s = np.linspace(0.0, 1.0, 8 * coefficients)
         x = np.clip(np.linalg.lstsq(_basis(_knots(coefficients), s)[0], first.law(s) * t_fit**2, rcond=None)[0],
                     *LAW_BOUNDS)
         nit = first.iterations
     knots = _knots(coefficients)
-    if LAW_COARSE_GRID and nit == 0:
+    if LAW_COARSE_GRID and not refine:
         coarse = _Problem(model, _law_grid(path, LAW_COARSE_GRID, spans=False, clustered=True), knots, t_fit, dwell,
                           capacity)
         xc, nit, message, _ = _solve(coarse, x, np.ones(coarse.n_rows, bool), t_fit)
