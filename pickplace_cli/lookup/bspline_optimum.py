@@ -404,11 +404,14 @@ def _local_optima(values: np.ndarray, shape: tuple[int, int], count: int) -> lis
 
 
 def optimise_lambda(lam: float, coarse: _Coarse, settings: TableSettings,
-                    f_refine: tuple[float, float] | None = None) -> TableRow:
+                    f_refine: tuple[float, float] | None = None, top_starts: int = 0) -> TableRow:
     """Global optimum of F (Eq. 22) at one λ, from the coarse grid and a bounded local refinement (Nelder–Mead
     to ``settings.refine_xatol`` in k and 1e-10 relative in the objective). ``f_refine`` = (xatol, ftol): a
-    looser end for the last search, F's own (the normalisers a_min, j_min stay tight: F's value depends on
-    them to first order, its argmax does not)."""
+    looser end for the searches of j_min and of F (a_min, a cheap 1-D search as a rule, stays tight). F's
+    argmax hardly moves with its normaliser j_min, but its reported value does: on jerk's kinked minimum
+    Nelder–Mead can stop up to ~1e-5 above j_min, which raises the reported F by as much. ``top_starts``: F is also refined from that many
+    best grid points that are not in a found optimum's basin (a coarse grid can miss a narrow basin that
+    shows as no local maximum of the samples: a tall move at grid step 0.025)."""
     eta = settings.eta
     wa, wj = settings.weights
     lo2 = settings.k2_floor
@@ -452,7 +455,8 @@ def optimise_lambda(lam: float, coarse: _Coarse, settings: TableSettings,
         a_min = _minimise_on_floor(a_only, [k1 for k1, _ in a_starts], lo2, xatol)
     else:
         _, _, a_min = _minimise(a_only, lambda x, y: a_batch(x, y)[:, 0], a_starts, lo2, xatol)
-    _, _, j_min = _minimise(j_only, lambda x, y: j_batch(x, y)[:, 0], starts(j_grid), lo2, xatol)
+    fx, ff = f_refine if f_refine is not None else (xatol, 1e-10)
+    _, _, j_min = _minimise(j_only, lambda x, y: j_batch(x, y)[:, 0], starts(j_grid), lo2, fx, ff)
 
     def neg_f(k1: float, k2: float) -> float:
         a, j = peaks(k1, k2)
@@ -464,8 +468,12 @@ def optimise_lambda(lam: float, coarse: _Coarse, settings: TableSettings,
 
     f_grid = -(wa * a_min / a_grid + wj * j_min / j_grid)
     # F may have two local maxima (small λ): refine every grid local maximum near the best
-    fx, ff = f_refine if f_refine is not None else (xatol, 1e-10)
-    k1, k2, nf = _minimise(neg_f, neg_f_batch, starts(f_grid), lo2, fx, ff)
+    f_starts = starts(f_grid)
+    if top_starts:
+        limit = f_grid.min() + settings.basin_margin * abs(f_grid.min())
+        f_starts += [(float(coarse.k1[i]), float(coarse.k2[i])) for i in np.argsort(f_grid, kind="stable")[:top_starts]
+                     if f_grid[i] <= limit and (float(coarse.k1[i]), float(coarse.k2[i])) not in f_starts]
+    k1, k2, nf = _minimise(neg_f, neg_f_batch, f_starts, lo2, fx, ff)
     v, a, j = (float(x) for x in fast_peaks(k1, k2, lam, eta)[0])
     return TableRow(lam, k1, k2, a, j, v, -nf, a_min, j_min)
 
@@ -482,9 +490,15 @@ def _optimise_chunk(lams: Sequence[float], settings: TableSettings) -> list[Tabl
 #: 0.01) — the same F as build-table's settings on 20 random (λ, η) with η in [0.1, 0.9], λ in [0.5, 200]
 #: (worst difference 1.5e-8), ~60 ms per solve instead of ~250 ms
 ON_DEMAND_GRID = 0.025
-#: … and a looser end of F's own refinement (k to 1e-4 instead of 1e-5, F to 1e-8 relative instead of 1e-10;
-#: the normalisers a_min, j_min stay tight): fewer evaluations of the peaks, F within ~1e-8 of the tight end
-ON_DEMAND_F_REFINE = (1e-4, 1e-8)
+#: … and a looser end of the searches of j_min and of F (k to 1e-4 instead of 1e-5, values to 1e-7 relative
+#: instead of 1e-10; a_min stays tight): the (k1, k2) found lose at most 1.4e-6 of F against build-table's
+#: settings on 60 random (λ, η) (bench/bench_on_demand.py), ~46 ms per solve instead of ~56; the F reported
+#: can be up to ~1e-5 high (its normaliser j_min is found less tightly)
+ON_DEMAND_F_REFINE = (1e-4, 1e-7)
+
+
+#: … and F refined also from the best grid points outside a found basin (a narrow basin of a tall move)
+ON_DEMAND_TOP_STARTS = 6
 
 
 #: the λ = b/h an on-demand solve accepts (beyond, the optimum has run into the k bounds: see the README)
@@ -501,5 +515,6 @@ def solve_on_demand(lam: float, eta: float, weights: tuple[float, float] = (0.5,
         raise TableError(f"lambda = b/h = {lam:.4g}: outside [{lo:g}, {hi:g}], where the optimal (k1, k2) can be "
                          "solved (see README: extreme lambda); change --height or give --k1 and --k2")
     settings = TableSettings(eta=float(eta), weights=tuple(weights), grid_step=ON_DEMAND_GRID)
-    row = optimise_lambda(float(lam), _coarse_for(settings), settings, f_refine=ON_DEMAND_F_REFINE)
+    row = optimise_lambda(float(lam), _coarse_for(settings), settings, f_refine=ON_DEMAND_F_REFINE,
+                          top_starts=ON_DEMAND_TOP_STARTS)
     return row.k1, row.k2, row.F
