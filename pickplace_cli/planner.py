@@ -6,7 +6,7 @@ choose_duration (auto / seconds / fit) → samples → JointTrajectory → check
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -133,8 +133,6 @@ def _optimised_shape(task: Task, profile: Profile, options: PlanOptions) -> tupl
     """``--optimize shape``: the task with the chosen η, the options with the chosen k1, k2
     (:func:`pickplace_cli.timing.shape.optimise_shape`), and what the search found for the path parameters
     (``shape``: the chosen shape, its screened duration, the table's shape and its exact fit duration)."""
-    from dataclasses import replace
-
     from .model.errors import PickplaceError, UsageError
     from .timing.shape import optimise_shape
 
@@ -189,11 +187,38 @@ def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions()) -> 
     model = motion_model(path, profile)
     # reachability first, on the output samples of the auto (or given) duration, so an error names a time
     samples = _sample(model, path, first.seconds, rate)
-    duration, path, model, notes = _duration_stage(task, profile, options, path, factory, model, first)
-    if duration.seconds != first.seconds or model.path is not samples.path:
-        samples = _sample(model, path, duration.seconds, rate)
-    report = check_limits(model, duration.seconds, parts=samples.parts, dwell=profile.planning.dwell, notes=notes)
+    final = _FinalCheck(rate, profile.planning.dwell)
+    duration, path, model, notes = _duration_stage(task, profile, options, path, factory, model, first, final)
+    done = final.at(path, duration.seconds)
+    if done is not None:  # the search's last exact check was this one: same path, duration, grid and dwell
+        samples, report = done
+        report = replace(report, notes=notes)
+    else:
+        if duration.seconds != first.seconds or model.path is not samples.path:
+            samples = _sample(model, path, duration.seconds, rate)
+        report = check_limits(model, duration.seconds, parts=samples.parts, dwell=profile.planning.dwell, notes=notes)
     return _assemble(task, profile, path, duration, model, samples, report)
+
+
+class _FinalCheck:
+    """The plan's final limit check (on the output samples' grid: :func:`_sample`) as the fit's exact check:
+    a fit ends with a check at the T it returns, so when that T is the plan's the check is not run twice.
+    Keeps the last (path, T, samples, report)."""
+
+    def __init__(self, rate: float, dwell: float) -> None:
+        self.rate, self.dwell, self.last = rate, dwell, None
+
+    def __call__(self, model: MotionModel, T: float) -> LimitReport:
+        samples = _sample(model, model.path, T, self.rate)
+        report = check_limits(model, T, parts=samples.parts, dwell=self.dwell)
+        self.last = (model.path, T, samples, report)
+        return report
+
+    def at(self, path, T: float):
+        """(samples, report) of the last check when it was of ``path`` at ``T`` [s], else None."""
+        if self.last is not None and self.last[0] is path and self.last[1] == T:
+            return self.last[2], self.last[3]
+        return None
 
 
 def _refuse_moving_ends(task: Task, options: PlanOptions) -> None:
@@ -223,8 +248,6 @@ def _path_stage(task: Task, profile: Profile, options: PlanOptions, shape: dict 
         check_ends_reachable(task, profile)
         raise
     if shape is not None:
-        from dataclasses import replace
-
         path = replace(path, parameters={**path.parameters, "k_source": "--optimize shape", "shape": shape})
     return path, None, choose_duration(path, profile.capacity, first_spec)
 
@@ -245,10 +268,11 @@ def _refuse_retiming(options: PlanOptions) -> None:
 
 
 def _duration_stage(task: Task, profile: Profile, options: PlanOptions, path, factory, model: MotionModel,
-                    first: Duration) -> tuple[Duration, Any, MotionModel, tuple[str, ...]]:
+                    first: Duration, check=None) -> tuple[Duration, Any, MotionModel, tuple[str, ...]]:
     """(duration, path, model, notes) for ``options.time``: the first duration as it is, the fit (the smallest
     T at which every limit holds), or the time-optimal law (which composes a new path). The searches reach the
-    limit stage only through ``model_of`` (path → MotionModel), passed in."""
+    limit stage only through ``model_of`` (path → MotionModel) and ``check`` (the plan's final check, for the
+    fits of a fixed path), passed in."""
     dwell = profile.planning.dwell
 
     def model_of(p):
@@ -263,13 +287,13 @@ def _duration_stage(task: Task, profile: Profile, options: PlanOptions, path, fa
 
         duration, law_path, law_note = choose_optimal(path, profile, model, dwell, model_of,
                                                       hold_capacity=options.hold_capacity,
-                                                      coefficients=options.law_coefficients)
+                                                      coefficients=options.law_coefficients, check=check)
         if law_path is not model.path:  # the composed path: evaluated anew
             model = model_of(law_path)
         return duration, law_path, model, (law_note,)
     if factory is None and (options.fit or options.time == "fit"):
         return choose_duration(path, profile.capacity, options.time, model=model, dwell=dwell,
-                               hold_capacity=options.hold_capacity), path, model, ()
+                               hold_capacity=options.hold_capacity, check=check), path, model, ()
     return first, path, model, ()
 
 

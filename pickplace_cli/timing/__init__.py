@@ -83,17 +83,18 @@ def parse_time(spec: str | float) -> str | float:
 
 def choose_duration(
     path: CartesianPath, capacity: Capacity, spec: str | float = "auto", model=None, dwell: float = 0.0,
-    hold_capacity: bool = False,
+    hold_capacity: bool = False, check=None,
 ) -> Duration:
     """Duration of the move: explicit seconds, ``auto`` (Eq. 26), or ``fit`` (needs ``model``, a
     :class:`~pickplace_cli.limits.motion.MotionModel`): the smallest T at which every limit holds.
-    ``hold_capacity``: ``fit`` also holds the Cartesian capacity (T ≥ auto; the peaks scale exactly)."""
+    ``hold_capacity``: ``fit`` also holds the Cartesian capacity (T ≥ auto; the peaks scale exactly).
+    ``check``: the fit's exact check (see :func:`fit_duration`)."""
     spec = parse_time(spec)
     tv, ta, tj, binding = auto_duration(path, capacity)
     t_auto = max(tv, ta, tj or 0.0)
     t_fit = fit_binding = None
     if model is not None:
-        t_fit, fit_binding = fit_duration(model, dwell, start=t_auto)
+        t_fit, fit_binding = fit_duration(model, dwell, start=t_auto, check=check)
     if spec == "auto":
         return Duration(t_auto, "auto", tv, ta, tj, binding, t_fit)
     if spec in ("fit", "optimal"):
@@ -179,7 +180,8 @@ def screened_root(worst, start: float = 0.1, rtol: float = 1e-10) -> float:
     return float(T)
 
 
-def fit_duration(model, dwell: float = 0.0, start: float = 0.1, margin: float = 1e-7) -> tuple[float | None, str | None]:
+def fit_duration(model, dwell: float = 0.0, start: float = 0.1, margin: float = 1e-7,
+                 check=None) -> tuple[float | None, str | None]:
     """Smallest T [s] such that every T-dependent limit holds at T and at every longer duration.
 
     Velocity-type limits scale as 1/T^k (monotone). The peak motor torque max_τ |A_m s + G_m| is convex
@@ -190,6 +192,9 @@ def fit_duration(model, dwell: float = 0.0, start: float = 0.1, margin: float = 
     (relative) above the sampled root: 1e-7 for a method's own path; a composed time law's torque rate peaks
     sharply near the ends, where the sampled peak sits up to ~1e-5 under the continuous one (each failed
     check costs a second one).
+    ``check(model, T)`` → LimitReport: the exact check to use (default: :func:`check_limits` on the fit's
+    grid); the planner passes its own final check, on the output samples' grid, and keeps the last report,
+    which is then the plan's own when the fit's T is the plan's.
     Returns (T, the binding quantity "joint quantity"), or (None, None) when no limit depends on T.
     """
     from ..limits.check import check_limits
@@ -205,7 +210,7 @@ def fit_duration(model, dwell: float = 0.0, start: float = 0.1, margin: float = 
     binding = worst(T * (1 - 1e-9))[1]
     T *= 1.0 + margin
     for _ in range(10):
-        rep = check_limits(model, T, parts=parts, dwell=dwell)
+        rep = check_limits(model, T, parts=parts, dwell=dwell) if check is None else check(model, T)
         bad = [r for r in rep.violations if r.kind != "reach"]
         if not bad:
             break
@@ -336,16 +341,18 @@ def fit_duration_for(factory, model_of, dwell: float = 0.0, start: float = 0.1, 
 
 
 def choose_optimal(path: CartesianPath, profile, model, dwell: float, model_of,
-                   hold_capacity: bool = False, coefficients: int = 20) -> tuple[Duration, CartesianPath, str]:
+                   hold_capacity: bool = False, coefficients: int = 20, check=None) -> tuple[Duration, CartesianPath, str]:
     """``--time optimal``: the fit of the uniform law, then the optimised non-uniform law on the same path
     (:mod:`pickplace_cli.timing.optimal`), whose duration is fitted again by the continuous check on the
     composed path. Returns (Duration, the path to sample — the composed one, or ``path`` itself when the law
-    is not faster than uniform scaling —, a note for the user)."""
+    is not faster than uniform scaling —, a note for the user). ``check``: both fits' exact check
+    (:func:`fit_duration`)."""
     from ..model.errors import PickplaceError
     from .bound import torque_bound
     from .optimal import optimal_law
 
-    fit = choose_duration(path, profile.capacity, "fit", model=model, dwell=dwell, hold_capacity=hold_capacity)
+    fit = choose_duration(path, profile.capacity, "fit", model=model, dwell=dwell, hold_capacity=hold_capacity,
+                          check=check)
     try:
         fit = replace(fit, t_bound=torque_bound(model))
     except ValueError:  # no motor torque or speed limit, or one exceeded at rest: no bound to show
@@ -353,7 +360,8 @@ def choose_optimal(path: CartesianPath, profile, model, dwell: float, model_of,
     law = optimal_law(model, dwell, fit.seconds, coefficients, capacity=profile.capacity if hold_capacity else None)
     composed = law.path
     try:
-        t_opt, binding = fit_duration(model_of(composed), dwell, start=max(law.t_estimate, 1e-3), margin=3e-5)
+        t_opt, binding = fit_duration(model_of(composed), dwell, start=max(law.t_estimate, 1e-3), margin=3e-5,
+                                      check=check)
     except PickplaceError as exc:  # the composed path cannot be fitted: keep the uniform law, say why
         t_opt, binding, why = None, None, f" ({exc})"
     else:

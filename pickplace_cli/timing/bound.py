@@ -13,8 +13,8 @@ still be reached within the limits), and the forward pass takes the largest admi
 is the time-optimal law of the discretised problem (TOPP-RA's result), and its duration Σ 2Δ/(√b_k + √b_{k+1})
 is the bound. It allows what a smooth law cannot: the torque may jump (no torque-rate limit), nothing limits
 the RMS, the jerk is unbounded. So T_bound ≤ the duration of any law that holds the peak torque (and speed),
-up to the grid's error (τ denser towards the ends, 1000 points: 0.01 % from 500, 2000 and 4000 on the Adept
-cycle; ``bench/bench_bound.py`` holds it to ``toppra`` with the same constraint on the arc length).
+up to the grid's error (τ denser towards the ends, 500 points: within 0.01 % of 1000, 2000 and 4000 on the Adept
+cycle, at half the time of 1000; ``bench/bench_bound.py`` holds it to ``toppra`` with the same constraint on the arc length).
 
 The path's own τ is the parameter, not the arc length: where the path stands still (p′ = 0: its ends and the
 corners of ``piecewise-poly``) the constraints do not bound b, and b may grow without bound there (``_CAP``).
@@ -27,7 +27,7 @@ import math
 import numpy as np
 
 #: steps of the bound's τ grid (:func:`bound_grid`: denser towards the ends)
-POINTS = 1000
+POINTS = 500
 #: b where no constraint bounds it (the path stands still there)
 _CAP = 1e12
 
@@ -96,7 +96,9 @@ def topp(A: np.ndarray, B: np.ndarray, C: np.ndarray, g: np.ndarray, tau: np.nda
     if rest:
         beta_static[0] = beta_static[-1] = 0.0
     # backward pass: the largest controllable b_k
-    lows = [[(float(q), float(pd)) for q, pd in zip(Q[k], Pd[k]) if pd > 0] for k in range(n - 1)]
+    # (plain floats: the passes are sequential, and Python's arithmetic on floats beats numpy's on scalars)
+    Ql, Pdl = Q.tolist(), Pd.tolist()
+    lows = [[(q, pd) for q, pd in zip(Ql[k], Pdl[k]) if pd > 0] for k in range(n - 1)]
     bs, tw = beta_static.tolist(), two.tolist()
     beta = [0.0] * n
     beta[-1] = bs[-1]
@@ -111,7 +113,8 @@ def topp(A: np.ndarray, B: np.ndarray, C: np.ndarray, g: np.ndarray, tau: np.nda
             raise ValueError("no traversal holds the limits")
         beta[k] = bk
     # forward pass: the largest admissible a at every step, staying controllable
-    ups = [[(float(rr), float(ss)) for rr, ss in zip(r[k][up[k]], s[k][up[k]])] for k in range(n - 1)]
+    rl, sl, upl = r.tolist(), s.tolist(), up.tolist()
+    ups = [[(rr, ss) for rr, ss, u in zip(rl[k], sl[k], upl[k]) if u] for k in range(n - 1)]
     b = [0.0] * n
     b[0] = beta[0]
     for k in range(n - 1):

@@ -47,6 +47,9 @@ LAW_ACTIVE = 0.5
 #: the ends than uniform points: a uniform coarse grid let the law race between its first points (b up to
 #: 20× uniform) and the fine phase then needed 34 more iterations to undo it
 LAW_COARSE_GRID = 31
+#: … on its rows above this fraction of their limit at the start (a quadratic row's value is its utilisation
+#: squared); 0.2 and up left out rows the law then needed, and the restart cost more than the rows saved
+LAW_COARSE_ACTIVE = 0.1
 #: SLSQP's tolerance on the objective (the duration relative to T_fit). With the log-parametrised coefficients
 #: 1e-8 gives the T of 1e-9 within 1.2e-4 on 14 moves (all methods, three robots) with ~10 % fewer iterations
 #: (in the linear parametrisation 1e-7 had lost up to 1 %)
@@ -56,6 +59,7 @@ LAW_FTOL = 1e-8
 LAW_CHECK_GRID = 1001
 LAW_CHECK_ROUNDS = 2
 LAW_CHECK_TOL = 1e-5
+LAW_PEAK_SPREAD = 2
 #: points of the table that inverts t(τ) for the composed path
 LAW_TABLE = 4001
 
@@ -350,7 +354,10 @@ def optimal_law(model, dwell: float, t_fit: float, coefficients: int = LAW_COEFF
     if LAW_COARSE_GRID and not refine:
         coarse = _Problem(model, _law_grid(path, LAW_COARSE_GRID, spans=False, clustered=True), knots, t_fit, dwell,
                           capacity)
-        xc, nit, message, _ = _solve(coarse, x, np.ones(coarse.n_rows, bool), t_fit)
+        # the rows above LAW_COARSE_ACTIVE of their limit at the start (a quarter of them on the Adept cycle:
+        # SLSQP's cost per iteration grows with the rows); a row the solution breaks joins and the solve goes on
+        keep = coarse.values(x)[: coarse.n_rows] < 1.0 - LAW_COARSE_ACTIVE
+        xc, nit, message, _ = _solve(coarse, x, keep, t_fit)
         if coarse.values(xc).min() > -1e-3:  # a usable warm start (the fine grid may still bend it)
             x = xc
     x, n2, message, rounds, fine = _check_rounds(model, knots, t_fit, dwell, capacity, x)
@@ -377,11 +384,18 @@ def _check_rounds(model, knots, t_fit: float, dwell: float, capacity, x: np.ndar
     and the solve continues from its answer (``LAW_CHECK_ROUNDS`` at most). Returns (x, iterations, message,
     rounds, the last fine problem)."""
     path = model.path
-    grid = _law_grid(path)
+    check = _Problem(model, _law_grid(path, LAW_CHECK_GRID), knots, t_fit, dwell, capacity)
+    # the check grid's local peaks of every row above LAW_ACTIVE at x join the grid from the start (the fine
+    # solve then rarely needs a check round: each round is a cold SLSQP restart)
+    v = check.values(x)[: check.n_rows].reshape(-1, len(check.tau))
+    mid = v[:, 1:-1]
+    peak = (mid <= v[:, :-2]) & (mid <= v[:, 2:]) & (mid < 1.0 - LAW_ACTIVE)
+    at = np.flatnonzero(peak.any(axis=0)) + 1
+    near = (at[:, None] + np.arange(-LAW_PEAK_SPREAD, LAW_PEAK_SPREAD + 1)).ravel()
+    grid = np.union1d(_law_grid(path), check.tau[np.clip(near, 0, len(check.tau) - 1)])
     fine = _Problem(model, grid, knots, t_fit, dwell, capacity)
     keep = fine.values(x)[: fine.n_rows] < 1.0 - LAW_ACTIVE
     x, nit, message, rounds = _solve(fine, x, keep, t_fit)
-    check = _Problem(model, _law_grid(path, LAW_CHECK_GRID), knots, t_fit, dwell, capacity)
     for _ in range(LAW_CHECK_ROUNDS):
         v = check.values(x)[: check.n_rows]
         bad = np.unique(check.row_tau[v < -LAW_CHECK_TOL])
