@@ -42,7 +42,7 @@ LAW_MARGIN = 0.0
 #: path's ends, where the rest-to-rest path leaves b nearly free)
 LAW_BOUNDS = (1e-2, 1e2)
 #: grid rows used by the full solve from the start: those above this fraction of their limit at its warm start
-LAW_ACTIVE = 0.5
+LAW_ACTIVE = 0.8
 #: Chebyshev-spaced points of the coarse first phase's grid (every row used); 0: no coarse phase. Denser at
 #: the ends than uniform points: a uniform coarse grid let the law race between its first points (b up to
 #: 20× uniform) and the fine phase then needed 34 more iterations to undo it
