@@ -400,6 +400,15 @@ def allowed_interval(part: Part, profile, dwell: float) -> tuple[float, float, s
 # ------------------------------------------------------------------------------------------ the solve
 
 
+#: the solver of the first exact evaluation of a rendezvous search (bspline-vel's ``solver``; the confirming
+#: solve at the root is always "exact")
+FIRST_SOLVER = "seeded"
+#: relative width at which the secant search of the exact root stops (:func:`_root_near`): T is then within
+#: 1e-5 of the root (~1.4 µs on an Adept-size move; the meeting point is exact at whatever T is chosen), one
+#: continued solve fewer than 1e-6 for the capacity rule (bench/bench_rendezvous.py)
+ROOT_RTOL = 1e-5
+
+
 def find_rendezvous(
     start, part: Part, profile, time: str | float = "auto", height: float | None = None, eta: float | None = None,
     v_from=None, method_params: dict | None = None, dwell: float | None = None,
@@ -428,7 +437,9 @@ def find_rendezvous(
     v0 = np.zeros(3) if v_from is None else np.asarray(v_from, float)
     a, b, what = allowed_interval(part, profile, dwell)
     cls = _factory_class()
-    exact = cls(start, part, h, e_ratio, v0, **params)
+    # the first exact solve from the table's seeds only ("seeded": one SLSQP run per stage, about half the
+    # multi-start's time); later trial T continue from it, and a global solve confirms the shape at the root
+    exact = cls(start, part, h, e_ratio, v0, **({"solver": FIRST_SOLVER} | params))
     if isinstance(spec, float):
         T = spec
         if not a - 1e-12 <= T <= b + 1e-12:
@@ -456,13 +467,13 @@ def find_rendezvous(
         _missed(part, rule, a, b, what, spec, known=beyond if beyond is not None else math.inf)
     # the exact root: secant steps from the screened one (a few continued solves), the scan if they do not settle
     power = 1.0 if spec == "auto" else 3.0
-    T = _root_near(rule, a, b, T_screen, power=power)
+    T = _root_near(rule, a, b, T_screen, rtol=ROOT_RTOL, power=power)
     if T is None:
         T = _first_feasible(rule, a, b, T_screen, 0.98, 1e-8)
     if T is not None and T > a:
         path, agreed = exact.final(T)  # a global solve confirms the continued shape at the root
         if not agreed:  # the continuation had followed a worse branch: search again on the better one
-            T2 = _root_near(rule, a, b, T, power=power)
+            T2 = _root_near(rule, a, b, T, rtol=ROOT_RTOL, power=power)
             T = T2 if T2 is not None else _first_feasible(rule, a, b, T, 0.98, 1e-8)
     if T is None:
         _missed(part, rule, a, b, what, spec)

@@ -124,7 +124,8 @@ def test_root_near_finds_the_crossing(power, k):
 @pytest.mark.parametrize("rule", ["auto", "fit"])
 def test_secant_root_is_the_scanned_root(rule, monkeypatch):
     """The rendezvous's secant search (a few continued solves) finds the T of the scan it replaced (steps of
-    2 % down from the screened root, then brentq to 1e-8) on random Delta cases, to 1e-5 relative."""
+    2 % down from the screened root, then brentq to 1e-8) on random Delta cases, to 2e-5 relative (the secant
+    search stops at ROOT_RTOL = 1e-5)."""
     import pickplace_cli.pipelines.rendezvous as R
 
     prof = load_profile("delta-su2018")
@@ -135,7 +136,7 @@ def test_secant_root_is_the_scanned_root(rule, monkeypatch):
         with monkeypatch.context() as m:
             m.setattr(R, "_root_near", lambda *a, **k: None)
             scanned = find_rendezvous(start, part, prof, rule)
-        assert fast.seconds == pytest.approx(scanned.seconds, rel=1e-5)
+        assert fast.seconds == pytest.approx(scanned.seconds, rel=2e-5)
         assert fast.evaluations["exact"] < scanned.evaluations["exact"]
 
 
