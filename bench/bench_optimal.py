@@ -1,12 +1,13 @@
 """``--time optimal`` against ``--time fit`` and against an independent, slower solve (issue 15).
 
-    python bench/bench_optimal.py --moves 4                      # Adept timing + 60 random moves (~15 min, 2 cores)
-    python bench/bench_optimal.py --moves 4 --coefficients 37    # the same for plan --law-coefficients 37
+    python bench/bench_optimal.py --moves 4                      # Adept timing + 60 random moves (~20 min, 2 cores)
+    python bench/bench_optimal.py --moves 4 --coefficients 20    # the same for plan --law-coefficients 20
     python bench/bench_optimal.py --moves 2                      # quick look
 
 For each move: T_fit (uniform law), T_opt (``plan --time optimal`` with ``--coefficients`` law coefficients,
-default 20, on its 161-point grid plus the check rounds) and T_slow (an independent slower solve: twice the
-coefficients on a 321-point grid, directly from the uniform law), each fitted by the continuous check on the
+default auto: 20, refined to 40 when the law is more than 10 % faster than uniform; on its 161-point grid plus
+the check rounds) and T_slow (an independent slower solve: twice the most coefficients the plan may use — 80
+for auto — on uniform knots and a 321-point grid, directly from the uniform law), each fitted by the continuous check on the
 composed path. Reports T_opt/T_fit, the gap T_opt/min(T_slow, T_opt) − 1 (target ≤ 1 %), that T_opt ≤ T_fit
 always (a fallback to the uniform law is counted), and in-process medians of ``plan --time optimal`` on the
 Adept cycle. Random moves: ``--moves`` per method (bspline, ph, superposition, lame, piecewise-poly) × 3 robots
@@ -42,7 +43,7 @@ def slow_solve(model, dwell: float, t_fit: float) -> float:
     grid0 = O.LAW_GRID
     try:
         O.LAW_GRID = 321
-        law = O.optimal_law(model, dwell, t_fit, coefficients=2 * COEFFICIENTS[0], direct=True)
+        law = O.optimal_law(model, dwell, t_fit, coefficients=2 * (COEFFICIENTS[0] or O.LAW_REFINED), direct=True)
         T, _ = fit_duration(motion_model(law.path, _PROF[0]), dwell, start=law.t_estimate)
     finally:
         O.LAW_GRID = grid0
@@ -50,8 +51,9 @@ def slow_solve(model, dwell: float, t_fit: float) -> float:
 
 
 _PROF: list = [None]
-#: the shipped solve's law coefficients (``--coefficients``; the slow solve takes twice as many, directly)
-COEFFICIENTS: list = [20]
+#: the shipped solve's law coefficients (``--coefficients``; None: auto); the slow solve takes twice the most the
+#: plan may use, directly
+COEFFICIENTS: list = [None]
 
 
 def one(name: str, method: str, task: Task) -> dict | None:
@@ -71,14 +73,15 @@ def one(name: str, method: str, task: Task) -> dict | None:
     return {"profile": name, "method": method, "from": task.p_from.tolist(), "to": task.p_to.tolist(),
             "height": task.height, "t_fit": Tf, "t_optimal": T, "t_slow": t_slow, "ratio": T / Tf,
             "gap": T / min(t_slow, T) - 1.0, "slow_better_by": T / t_slow - 1.0, "ok": bool(opt.report.ok),
+            "coefficients": opt.parameters.get("law_coefficients"),
             "fallback": opt.duration.law == "uniform (fallback)", "seconds": dt}
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--moves", type=int, default=3, help="random moves per method and robot")
-    ap.add_argument("--coefficients", type=int, default=20, help="the law's coefficients (plan --law-coefficients); "
-                    "the slow solve takes twice as many, from the uniform law")
+    ap.add_argument("--coefficients", type=int, default=None, help="the law's coefficients (plan --law-coefficients; "
+                    "default auto); the slow solve takes twice the most the plan may use, from the uniform law")
     ap.add_argument("-o", "--output", default=str(Path(__file__).parent / "results" / "optimal.json"))
     args = ap.parse_args()
     COEFFICIENTS[0] = args.coefficients
@@ -112,7 +115,7 @@ def main() -> None:
                 done += 1
                 rows.append(res)
                 print(f"{name:13s} {method:15s} fit {res['t_fit']:.4f}  optimal {res['t_optimal']:.4f} "
-                      f"({res['ratio']:.3f} × fit)  slow {res['t_slow']:.4f}  gap {res['gap'] * 100:+.2f} %  "
+                      f"({res['ratio']:.3f} × fit, {res['coefficients']} coef.)  slow {res['t_slow']:.4f}  gap {res['gap'] * 100:+.2f} %  "
                       f"{'fallback ' if res['fallback'] else ''}{res['seconds'] * 1e3:.0f} ms  ok={res['ok']}", flush=True)
     gaps = [r["gap"] for r in rows]
     ratios = [r["ratio"] for r in rows]

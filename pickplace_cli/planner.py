@@ -37,7 +37,8 @@ class PlanOptions:
     shape: bool = False  # bspline: choose k1, k2 (and η unless hold_eta) for the smallest duration on the robot
     hold_eta: bool = False  # with shape: keep the task's η (the user gave it), search k1, k2 only
     hold_capacity: bool = False  # fit/optimal also hold the profile's Cartesian capacity (|v|, |a|, |j|)
-    law_coefficients: int = 20  # optimal: coefficients of the time law's cubic B-spline (more: finer, slower)
+    law_coefficients: int | None = None  # optimal: coefficients of the time law's cubic B-spline (None: auto, 20
+    # refined to 40 when the law is far from uniform; more: finer, slower)
 
 
 @dataclass(frozen=True)

@@ -98,10 +98,12 @@ def plan(
         "the table's values (Li 2018's Cartesian optimum); with --time fit or optimal (the fit and the law are then "
         "those of the chosen shape). The summary compares it with the table's shape. ~0.5-1 s more.",
     ),
-    law_coefficients: int = typer.Option(
-        20, "--law-coefficients", min=8, max=80, help="With --time optimal: coefficients of the time law's cubic "
-        "B-spline b(τ) [-]. More: a law closer to the continuous optimum (on hard moves 2-5 % shorter at 37 than at "
-        "20), solved from the 20-coefficient law; about 2 × the planning time at 37. [default: 20]",
+    law_coefficients: str = typer.Option(
+        "auto", "--law-coefficients", metavar="auto|N", help="With --time optimal: coefficients of the time law's "
+        "cubic B-spline b(τ) [-]. auto: 20 (uniform knots in the path parameter), refined to 40 (knots uniform in "
+        "the first law's time, the path's knots among them) when the first law is more than 10 % faster than "
+        "uniform; N (8 ... 80): N coefficients (more than 20: refined from the 20-coefficient law). More: closer to "
+        "the continuous optimum, slower (about 2-3 × the planning time at 40).",
     ),
     hold_capacity: bool = typer.Option(
         False, "--hold-capacity", help="With --time fit or optimal (and --optimize shape): also hold the profile's "
@@ -199,7 +201,8 @@ def plan(
     _check_shape_usage(a)
     options = PlanOptions(method=a.method.value, method_params=params, time=time, rate=rate,
                           fit=time == "fit" or show_fit, shape=a.optimize == OptimizeWhat.shape,
-                          hold_eta=eta is not None, hold_capacity=hold_capacity, law_coefficients=law_coefficients)
+                          hold_eta=eta is not None, hold_capacity=hold_capacity,
+                          law_coefficients=_law_coefficients(law_coefficients))
     if batch is not None:
         if workers < 0:
             from ..model.errors import TaskError
@@ -249,6 +252,19 @@ def _check_plan_values(a) -> None:
                 check_k(name, k)
     if a.eta is not None and not (0 < a.eta < 1):
         raise TaskError(f"eta = {a.eta!r}: the lift-off/set-down ratio η must lie strictly between 0 and 1")
+
+
+def _law_coefficients(text: str) -> int | None:
+    """--law-coefficients: None for auto, else an integer in 8 ... 80 (exit 2 otherwise)."""
+    if text.strip().lower() == "auto":
+        return None
+    try:
+        n = int(text)
+    except ValueError:
+        n = None
+    if n is None or not 8 <= n <= 80:
+        _usage(f"--law-coefficients = {text!r}: must be auto or a whole number in 8 ... 80")
+    return n
 
 
 def _check_plan_usage(a) -> None:
@@ -314,7 +330,7 @@ def _check_shape_usage(a) -> None:
     if shape and a.time not in ("fit", "optimal"):
         _usage(f"--optimize shape minimises the fitted duration on the robot's limits: use it with --time fit or "
                f"--time optimal (not --time {a.time})")
-    if a.law_coefficients != 20 and a.time != "optimal":
+    if _law_coefficients(a.law_coefficients) is not None and a.time != "optimal":
         _usage(f"--law-coefficients shapes the time law of --time optimal (--time {a.time} scales the path uniformly)")
     if a.hold_capacity and a.time not in ("fit", "optimal"):
         _usage(f"--hold-capacity applies to --time fit or optimal (--time {a.time} "

@@ -341,7 +341,7 @@ def fit_duration_for(factory, model_of, dwell: float = 0.0, start: float = 0.1, 
 
 
 def choose_optimal(path: CartesianPath, profile, model, dwell: float, model_of,
-                   hold_capacity: bool = False, coefficients: int = 20, check=None) -> tuple[Duration, CartesianPath, str]:
+                   hold_capacity: bool = False, coefficients: int | None = None, check=None) -> tuple[Duration, CartesianPath, str]:
     """``--time optimal``: the fit of the uniform law, then the optimised non-uniform law on the same path
     (:mod:`pickplace_cli.timing.optimal`), whose duration is fitted again by the continuous check on the
     composed path. Returns (Duration, the path to sample — the composed one, or ``path`` itself when the law

@@ -204,8 +204,10 @@ def test_law_holds_its_rows_between_the_grid_points(adept):
 
 def test_law_coefficients_finer_law_is_not_slower(adept):
     """--law-coefficients 37 solves the finer law from the 20-coefficient one: never slower than it (Adept: 0.9232
-    against 0.9267 × fit), every limit holding; the option is refused without --time optimal and outside 8 … 80."""
+    against 0.9267 × fit), every limit holding; the option is refused without --time optimal and outside 8 … 80.
+    The default (auto) keeps the Adept cycle's 20-coefficient law: it is less than 10 % faster than uniform."""
     prof, fit, opt = adept
+    assert opt.parameters["law_coefficients"] == 20
     fine = plan(ADEPT, prof, PlanOptions(time="optimal", law_coefficients=37))
     assert fine.report.ok and fine.parameters["law_coefficients"] == 37
     assert fine.duration.seconds <= opt.duration.seconds * (1 + 1e-6)
@@ -213,5 +215,25 @@ def test_law_coefficients_finer_law_is_not_slower(adept):
     base = ["plan", "--from", "-0.1525,0,-0.8", "--to", "0.1525,0,-0.8", "-q", "-o", "-"]
     r = runner.invoke(app, [*base, "--time", "fit", "--law-coefficients", "30"])
     assert r.exit_code == 2 and "--law-coefficients shapes the time law of --time optimal" in r.stderr
-    r = runner.invoke(app, [*base, "--time", "optimal", "--law-coefficients", "100"])
-    assert r.exit_code == 2 and "--law-coefficients" in r.stderr
+    for bad in ("100", "7", "many", "2.5"):
+        r = runner.invoke(app, [*base, "--time", "optimal", "--law-coefficients", bad])
+        assert r.exit_code == 2 and "--law-coefficients" in r.stderr and "auto or a whole number in 8 ... 80" in r.stderr
+    r = runner.invoke(app, [*base, "--time", "fit", "--law-coefficients", "auto"])
+    assert r.exit_code == 0, r.stderr
+
+
+def test_auto_refines_a_law_far_from_uniform():
+    """A law more than 10 % faster than uniform is refined to 40 coefficients (knots uniform in its own time, the
+    path's knots among them): on this PH move (the worst of bench_optimal.py's 20-coefficient runs, 4.8 % from the
+    40-coefficient solve) the refined law is at least 3 % shorter than the 20-coefficient one, holds every limit,
+    and is within 0.5 % of the independent 80-coefficient solve's 0.1143 s (bench/results)."""
+    prof = load_profile("delta-su2018")
+    task = Task([-0.0348442, 0.0579725, -0.7763692], [-0.1734869, 0.0153189, -0.7866191], 0.0512663, 0.5)
+    auto = plan(task, prof, PlanOptions(method="ph", time="optimal"))
+    first = plan(task, prof, PlanOptions(method="ph", time="optimal", law_coefficients=20))
+    assert auto.parameters["law_coefficients"] == 40 and first.parameters["law_coefficients"] == 20
+    assert auto.report.ok and first.report.ok
+    assert auto.duration.seconds <= 0.97 * first.duration.seconds
+    assert auto.duration.seconds == pytest.approx(0.1143, rel=5e-3)
+
+
