@@ -5,7 +5,8 @@
 
 For each random move (the generator of ``bench/bench_optimal.py``: 3 robots × 5 methods, the gantry with
 drives added) and the Adept cycle:
-* T_opt — the shipped law (20 coefficients, two phases from the uniform law), fitted by the continuous check;
+* T_opt — the shipped first law (20 coefficients, two phases from the uniform law; ``--law-coefficients auto``
+  refines it when it is far from uniform: bench/bench_optimal.py measures that), fitted by the continuous check;
 * T_ms — multi-start: the same law space solved from 4 other starts (uniform × 0.5, × 2, × 4 and a smooth
   random law), the best of them fitted the same way: a T_opt above T_ms is a local optimum;
 * T_fine — a finer law space that contains the shipped one (every knot interval halved: 37 coefficients, on a
@@ -57,7 +58,7 @@ def one(prof, method: str, task: Task, rng) -> dict | None:
     model = motion_model(fit.cartesian.path, prof)
     tf = fit.duration.seconds
     t0 = time.perf_counter()
-    shipped = O.optimal_law(model, dwell, tf)
+    shipped = O.optimal_law(model, dwell, tf, coefficients=O.LAW_COEFFICIENTS)  # auto's first law
     T_opt = min(fitted(shipped, prof), tf)  # plan falls back to fit's law
     dt = time.perf_counter() - t0
     n = O.LAW_COEFFICIENTS

@@ -3,6 +3,7 @@
     python bench/bench_optimal.py --moves 4                      # Adept timing + 60 random moves (~20 min, 2 cores)
     python bench/bench_optimal.py --moves 4 --coefficients 20    # the same for plan --law-coefficients 20
     python bench/bench_optimal.py --moves 2                      # quick look
+    python bench/bench_optimal.py --moves 4 --seed 1000          # a held-out set of 60 other random moves
 
 For each move: T_fit (uniform law), T_opt (``plan --time optimal`` with ``--coefficients`` law coefficients,
 default auto: 20, refined to 40 when the law is more than 10 % faster than uniform; on its 161-point grid plus
@@ -82,6 +83,8 @@ def main() -> None:
     ap.add_argument("--moves", type=int, default=3, help="random moves per method and robot")
     ap.add_argument("--coefficients", type=int, default=None, help="the law's coefficients (plan --law-coefficients; "
                     "default auto); the slow solve takes twice the most the plan may use, from the uniform law")
+    ap.add_argument("--seed", type=int, default=100, help="first seed of the random moves (another seed: a held-out "
+                    "set of moves, e.g. to check that constants tuned on the default set still hold)")
     ap.add_argument("-o", "--output", default=str(Path(__file__).parent / "results" / "optimal.json"))
     args = ap.parse_args()
     COEFFICIENTS[0] = args.coefficients
@@ -103,7 +106,7 @@ def main() -> None:
     for name in REGIONS:
         (lo, hi), (h0, h1) = REGIONS[name]
         for method in METHODS:
-            rng = np.random.default_rng(100 + len(rows))
+            rng = np.random.default_rng(args.seed + len(rows))
             done = 0
             while done < args.moves:
                 p0, p1 = rng.uniform(lo, hi), rng.uniform(lo, hi)

@@ -100,10 +100,10 @@ def plan(
     ),
     law_coefficients: str = typer.Option(
         "auto", "--law-coefficients", metavar="auto|N", help="With --time optimal: coefficients of the time law's "
-        "cubic B-spline b(τ) [-]. auto: 20 (uniform knots in the path parameter), refined to 40 (knots uniform in "
-        "the first law's time, the path's knots among them) when the first law is more than 10 % faster than "
-        "uniform; N (8 ... 80): N coefficients (more than 20: refined from the 20-coefficient law). More: closer to "
-        "the continuous optimum, slower (about 2-3 × the planning time at 40).",
+        "cubic B-spline b(τ) [-]. auto: 20 (uniform knots in the path parameter), refined to 40 when that law is "
+        "more than 10 % faster than uniform (two knot placements solved from it: uniform in its time and in the path "
+        "parameter, the path's knots among both; the shorter kept); N (8 ... 80): N coefficients (more than 20: "
+        "refined the same way). More: closer to the continuous optimum, slower (about 3-5 × the law's time at 40).",
     ),
     hold_capacity: bool = typer.Option(
         False, "--hold-capacity", help="With --time fit or optimal (and --optimize shape): also hold the profile's "
