@@ -418,9 +418,10 @@ def _refined_knots(law, path, coefficients: int, weight: float = 1.0) -> np.ndar
     t the law's own time (``weight`` w = 1: where the law is slow — the dips at its binding limits — gets more
     knots than uniform-in-τ gives; w = 0: uniform in τ), the path's interior knots and jumps among them (each
     takes the place of its nearest knot), where the limits' rows change slope or step and b‴ may then step too."""
+    from scipy.integrate import cumulative_trapezoid
+
     s = np.linspace(0.0, 1.0, 2001)
-    ib = law(s) ** -0.5
-    t = np.concatenate([[0.0], np.cumsum((ib[1:] + ib[:-1]) / 2 * np.diff(s))])
+    t = cumulative_trapezoid(law(s) ** -0.5, s, initial=0.0)  # the law's time (∫dτ/√b) on a fine grid
     inner = np.interp(np.linspace(0.0, 1.0, coefficients - 2), weight * t / t[-1] + (1.0 - weight) * s, s)
     free = np.ones(len(inner), bool)
     free[[0, -1]] = False
