@@ -90,7 +90,7 @@ def plan(
         help="Duration of the move in s, or 'auto' (from the profile's Cartesian capacity, Li 2018 Eq. 26), "
         "or 'fit' (the smallest duration at which every joint and motor limit holds, path scaled uniformly in time), "
         "or 'optimal' (the same path with a non-uniform, jerk-bounded time law that minimises the duration under the "
-        "same joint and motor limits, RMS included; ~0.3 s more; not for bspline-vel).",
+        "same joint and motor limits, RMS included; ~0.05-1 s more; not for bspline-vel).",
     ),
     optimize: OptimizeWhat = typer.Option(
         OptimizeWhat.none, "--optimize", help="'shape' (--method bspline): also choose the path's k1, k2 and η "
@@ -100,10 +100,12 @@ def plan(
     ),
     law_coefficients: str = typer.Option(
         "auto", "--law-coefficients", metavar="auto|N", help="With --time optimal: coefficients of the time law's "
-        "cubic B-spline b(τ) [-]. auto: 20 (uniform knots in the path parameter), refined to 40 when that law is "
-        "more than 10 % faster than uniform (two knot placements solved from it: uniform in its time and in the path "
-        "parameter, the path's knots among both; the shorter kept); N (8 ... 80): N coefficients (more than 20: "
-        "refined the same way). More: closer to the continuous optimum, slower (about 3-5 × the law's time at 40).",
+        "cubic B-spline b(τ) [-]. auto: 20, and when that law is more than 10 % shorter than --time fit, also 40 "
+        "solved from it on two knot placements (uniform in its own time and in the path parameter, the path's knots "
+        "among both); the better refinement and the 20-coefficient law are both fitted by the continuous check and "
+        "the shorter kept (the summary's time law says which). N (8 ... 80): N coefficients; above 20 always solved from the 20-coefficient law "
+        "the same way, which is kept if the refinement fits longer. More: closer to the continuous optimum, slower "
+        "(Adept cycle: 40 ms at 20, ~0.25 s at 40, ~1.4 s at 80).",
     ),
     hold_capacity: bool = typer.Option(
         False, "--hold-capacity", help="With --time fit or optimal (and --optimize shape): also hold the profile's "

@@ -358,18 +358,29 @@ def choose_optimal(path: CartesianPath, profile, model, dwell: float, model_of,
     except ValueError:  # no motor torque or speed limit, or one exceeded at rest: no bound to show
         pass
     law = optimal_law(model, dwell, fit.seconds, coefficients, capacity=profile.capacity if hold_capacity else None)
-    composed = law.path
-    try:
-        t_opt, binding = fit_duration(model_of(composed), dwell, start=max(law.t_estimate, 1e-3), margin=3e-5,
-                                      check=check)
-    except PickplaceError as exc:  # the composed path cannot be fitted: keep the uniform law, say why
-        t_opt, binding, why = None, None, f" ({exc})"
-    else:
+    # a refined law and the law it was refined from are both fitted and the shorter is kept: never longer than the
+    # first law, whatever the optimisers' estimates said
+    fitted, why, refined = [], "", ""
+    for cand in (law,) if law.first is None else (law, law.first):
+        try:
+            fitted.append((*fit_duration(model_of(cand.path), dwell, start=max(cand.t_estimate, 1e-3), margin=3e-5,
+                                         check=check), cand))
+        except PickplaceError as exc:  # this law's composed path cannot be fitted
+            why = why or f" ({exc})"
+    t_opt = binding = None
+    if fitted:
+        t_opt, binding, best = min(fitted, key=lambda f: f[0])
         why = ""
-        if hold_capacity:  # the composed path's exact Cartesian peaks scale as 1/T^k like any path's
-            tv, ta, tj, cap = auto_duration(composed, profile.capacity)
-            if t_opt is None or max(tv, ta, tj or 0.0) > t_opt:
-                t_opt, binding = max(tv, ta, tj or 0.0), f"capacity {cap}"
+        if law.first is not None:
+            n, n0 = law.law.c.size, law.first.law.c.size
+            refined = (f" (refined from {n0})" if best is law else
+                       f" (the {n}-coefficient refinement fitted longer: this {n0}-coefficient law is kept)")
+        law = replace(best, iterations=law.iterations, message=law.message)
+    composed = law.path
+    if t_opt is not None and hold_capacity:  # the composed path's exact Cartesian peaks scale as 1/T^k
+        tv, ta, tj, cap = auto_duration(composed, profile.capacity)
+        if max(tv, ta, tj or 0.0) > t_opt:
+            t_opt, binding = max(tv, ta, tj or 0.0), f"capacity {cap}"
     if t_opt is None or not t_opt < fit.seconds * (1 - 1e-6):
         got = f"{t_opt:.6g} s" if t_opt is not None else "no duration"
         note = (f"time = optimal: the optimised law ({got}{why}; {law.message}) is not faster than uniform "
@@ -378,5 +389,5 @@ def choose_optimal(path: CartesianPath, profile, model, dwell: float, model_of,
     note = (f"time = optimal: {t_opt:.4f} s = {t_opt / fit.seconds:.3f} × fit ({fit.seconds:.4f} s), "
             f"{t_opt / fit.t_auto:.3f} × auto; optimiser: {law.iterations} SLSQP iterations, {law.message}")
     return (replace(fit, seconds=t_opt, mode="optimal", binding=binding, t_optimal=t_opt,
-                    law=f"cubic B-spline b(τ), {composed.parameters['law_coefficients']} coefficients"),
+                    law=f"cubic B-spline b(τ), {composed.parameters['law_coefficients']} coefficients{refined}"),
             composed, note)

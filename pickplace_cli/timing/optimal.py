@@ -88,6 +88,9 @@ class LawResult:
     message: str
     #: the law b(τ) itself (a scipy BSpline; b = (dτ/dt)² [1/s²])
     law: object = None
+    #: a refined law's first law (``LAW_COEFFICIENTS`` coefficients): the plan fits both and keeps the shorter
+    #: (the optimisers' estimates rank them; the continuous fit can still reverse a close call)
+    first: object = None
 
 
 def _basis(knots: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -376,7 +379,7 @@ def optimal_law(model, dwell: float, t_fit: float, coefficients: int | None = No
         if not fine.t_estimate < first.t_estimate:
             return replace(first, iterations=nit,
                            message=f"{first.message}; the {n}-coefficient refinements ({', '.join(tried)}) were not shorter")
-        return replace(fine, iterations=nit,
+        return replace(fine, iterations=nit, first=first,
                        message=f"{fine.message}, refined from {LAW_COEFFICIENTS} coefficients "
                                f"({first.t_estimate:.5g} s → {', '.join(tried)}: the shortest kept)")
     n = coefficients or LAW_COEFFICIENTS
@@ -400,7 +403,10 @@ def _solve_law(model, dwell: float, t_fit: float, coefficients: int, knots: np.n
         xc, nit, message, _ = _solve(coarse_pr, x, keep, t_fit)
         if coarse_pr.values(xc).min() > -1e-3:  # a usable warm start (the fine grid may still bend it)
             x = xc
-    x, n2, message, rounds, fine = _check_rounds(model, knots, t_fit, dwell, capacity, x)
+    # the optimiser's grid: at least 4 points per knot interval (an 80-coefficient law on the 161 points that
+    # suit 40 coefficients came out longer than the 20-coefficient law on the Adept cycle)
+    points = max(LAW_GRID, 4 * (coefficients - 3) + 1)
+    x, n2, message, rounds, fine = _check_rounds(model, knots, t_fit, dwell, capacity, x, points)
     nit += n2
     # a law that breaks its own grid constraints (the solver stopped somewhere infeasible) is not used
     worst = float(fine.values(x).min()) if np.all(np.isfinite(x)) else -np.inf
@@ -439,7 +445,7 @@ def _knots(coefficients: int) -> np.ndarray:
     return np.concatenate([[0.0] * 3, np.linspace(0.0, 1.0, coefficients - 2), [1.0] * 3])
 
 
-def _check_rounds(model, knots, t_fit: float, dwell: float, capacity, x: np.ndarray):
+def _check_rounds(model, knots, t_fit: float, dwell: float, capacity, x: np.ndarray, points: int = 0):
     """The fine phase from ``x`` and its check rounds: between the grid's points the law may still break a limit
     (a peak the grid straddles); the rows of a denser grid (``LAW_CHECK_GRID``) find where, those τ join the grid
     and the solve continues from its answer (``LAW_CHECK_ROUNDS`` at most). Returns (x, iterations, message,
@@ -453,7 +459,7 @@ def _check_rounds(model, knots, t_fit: float, dwell: float, capacity, x: np.ndar
     peak = (mid <= v[:, :-2]) & (mid <= v[:, 2:]) & (mid < 1.0 - LAW_ACTIVE)
     at = np.flatnonzero(peak.any(axis=0)) + 1
     near = (at[:, None] + np.arange(-LAW_PEAK_SPREAD, LAW_PEAK_SPREAD + 1)).ravel()
-    grid = np.union1d(_law_grid(path), check.tau[np.clip(near, 0, len(check.tau) - 1)])
+    grid = np.union1d(_law_grid(path, points), check.tau[np.clip(near, 0, len(check.tau) - 1)])
     fine = _Problem(model, grid, knots, t_fit, dwell, capacity)
     keep = fine.values(x)[: fine.n_rows] < 1.0 - LAW_ACTIVE
     x, nit, message, rounds = _solve(fine, x, keep, t_fit)

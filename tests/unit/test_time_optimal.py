@@ -237,3 +237,28 @@ def test_auto_refines_a_law_far_from_uniform():
     assert auto.duration.seconds == pytest.approx(0.1143, rel=5e-3)
 
 
+
+
+def test_a_refinement_that_fits_longer_is_not_kept(monkeypatch):
+    """The optimisers' estimates rank a refined law; the continuous fit decides. A refinement that claims to be
+    shorter but fits longer (here: the uniform law posing as one) loses to the first law, and the plan says so."""
+    from scipy.interpolate import BSpline
+
+    import pickplace_cli.timing.optimal as O
+
+    prof = load_profile("delta-su2018")
+    task = Task([-0.0348442, 0.0579725, -0.7763692], [-0.1734869, 0.0153189, -0.7866191], 0.0512663, 0.5)
+    first = plan(task, prof, PlanOptions(method="ph", time="optimal", law_coefficients=20))
+    real = O.optimal_law
+
+    def fake(model, dwell, t_fit, coefficients=None, **kw):
+        good = real(model, dwell, t_fit, 20, **kw)
+        knots = O._knots(40)
+        uniform = BSpline(knots, np.full(40, 1.0 / t_fit**2), 3, extrapolate=False)
+        return O.LawResult(O.compose(model.path, uniform), 0.5 * good.t_estimate, 0, "fake", uniform, first=good)
+
+    monkeypatch.setattr(O, "optimal_law", fake)
+    kept = plan(task, prof, PlanOptions(method="ph", time="optimal"))
+    assert kept.duration.seconds == pytest.approx(first.duration.seconds, rel=1e-9)
+    assert kept.parameters["law_coefficients"] == 20 and kept.report.ok
+    assert "refinement fitted longer" in kept.duration.law
