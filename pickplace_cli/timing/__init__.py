@@ -375,7 +375,8 @@ def choose_optimal(path: CartesianPath, profile, model, dwell: float, model_of,
             n, n0 = law.law.c.size, law.first.law.c.size
             refined = (f" (refined from {n0})" if best is law else
                        f" (the {n}-coefficient refinement fitted longer: this {n0}-coefficient law is kept)")
-        law = replace(best, iterations=law.iterations, message=law.message)
+        law = replace(best, iterations=law.iterations,
+                      message=law.message if best is law else f"{law.message}; the refinement fitted longer: not used")
     composed = law.path
     if t_opt is not None and hold_capacity:  # the composed path's exact Cartesian peaks scale as 1/T^k
         tv, ta, tj, cap = auto_duration(composed, profile.capacity)
