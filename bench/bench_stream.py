@@ -31,6 +31,8 @@ ROW = "-0.1525,0,-0.8,0.1525,0,-0.8\n"
 
 
 def _cmd(root: Path, *args: str) -> tuple[list[str], dict]:
+    """The command and environment that run ``root``'s pickplace (run it with ``cwd=root``: ``-m`` puts the working
+    directory first on the path, before PYTHONPATH; an editable install's finder comes after both)."""
     env = dict(os.environ, PYTHONPATH=str(root))
     return [sys.executable, "-m", "pickplace_cli", "plan", "--batch", "-", *args], env
 
@@ -56,7 +58,7 @@ def _read_lines(stream, n: int, timeout: float = 30.0) -> None:
 def latency(args: list[str], lines_per_row: int, first_extra: int, rows: int, pause: float) -> list[float]:
     cmd, env = _cmd(ROOT, *args)
     proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
-                            env=env, bufsize=0)
+                            env=env, bufsize=0, cwd=ROOT)
     out = []
     try:
         os.write(proc.stdin.fileno(), HEADER.encode())
@@ -77,7 +79,8 @@ def throughput(root: Path, args: list[str], rows: int) -> float:
     cmd, env = _cmd(root, *args)
     text = HEADER + ROW * rows
     t0 = time.perf_counter()
-    r = subprocess.run(cmd, input=text.encode(), stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
+    r = subprocess.run(cmd, input=text.encode(), stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env,
+                       cwd=root)
     dt = time.perf_counter() - t0
     if r.returncode != 0:
         raise RuntimeError(f"{cmd} exited {r.returncode}")

