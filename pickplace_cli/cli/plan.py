@@ -142,6 +142,11 @@ def plan(
         CsvDialectName.default, "--csv-dialect",
         help="CSV flavour: default (',' LF, header), twincat (';' CRLF, header), tsv (tab, no header).",
     ),
+    columns: Optional[str] = typer.Option(
+        None, "--columns", help="CSV: write only these columns, in this order: header names without units "
+        "(t, x, vx, ax, jx, q1, qd1, qdd1, torque1, motor_speed1, motor_torque1, …) or globs (q?, motor_*), "
+        "comma-separated, e.g. t,q1,q2,q3 for a PLC's position feed. A batch's move column stays first. Default: all.",
+    ),
     mcap_flavor: McapFlavor = typer.Option(
         McapFlavor.ros2, "--mcap-flavor", help="MCAP: ros2 (CDR, ROS 2 messages) or foxglove (JSON, Foxglove schemas)."
     ),
@@ -199,7 +204,7 @@ def plan(
         a.method = _belt_method(ctx, method, to_belt, latency, v_to, batch, round_trip, fit_ws, optimize)
     prof = load_profile(profile)
     params = _method_params(a)
-    writer = _writer(fmt, csv_dialect, mcap_flavor, compression)
+    writer = _writer(fmt, csv_dialect, mcap_flavor, compression, _columns(columns, prof))
     _check_shape_usage(a)
     options = PlanOptions(method=a.method.value, method_params=params, time=time, rate=rate,
                           fit=time == "fit" or show_fit, shape=a.optimize == OptimizeWhat.shape,
@@ -269,6 +274,27 @@ def _law_coefficients(text: str) -> int | None:
     return n
 
 
+def _columns(text: str | None, prof) -> tuple[str, ...] | None:
+    """``--columns`` as names, checked against the profile's CSV columns (usage error, exit 2: no such column,
+    a column twice, none given)."""
+    if text is None:
+        return None
+    from ..export import column_names
+    from ..export.csv import parse_columns, select_columns
+    from ..model.errors import ExportError
+    from ..planner import motion_model_static
+
+    robot, specs = motion_model_static(prof)[:2]
+    names = column_names(robot.joint_units, motor_speed=all(s.drive is not None for s in specs),
+                         motor_torque=all(s.drive is not None for s in specs))
+    try:
+        cols = parse_columns(text)
+        select_columns(tuple(names), cols)
+    except ExportError as exc:
+        _usage(f"--{exc}")
+    return cols
+
+
 def _check_plan_usage(a) -> None:
     """Usage (exit 2): options that contradict each other, or are set where they have no effect (refused, not
     ignored)."""
@@ -288,6 +314,8 @@ def _check_plan_usage(a) -> None:
         _usage(f"{what} only applies to --format mcap (the format is {fmt.value})")
     if fmt != OutputFormat.csv and a.csv_dialect != CsvDialectName.default:
         _usage(f"--csv-dialect {a.csv_dialect.value} only applies to --format csv (the format is {fmt.value})")
+    if fmt != OutputFormat.csv and a.columns is not None:
+        _usage(f"--columns only applies to --format csv (the format is {fmt.value}: its schema is fixed)")
     if a.json_summary and a.output is None and (fmt != OutputFormat.csv or a.csv_dialect != CsvDialectName.default):
         _usage("--format/--csv-dialect: with --json and no -o FILE no trajectory is written (stdout carries the summary)")
     if a.adjust_points and not a.fit_ws:

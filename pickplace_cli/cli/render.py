@@ -18,14 +18,21 @@ def _print_rendezvous(rv) -> None:
     )
 
 
-def _writer(fmt, dialect, flavor, compression) -> Callable:
-    """A function (samples, output path) that writes atomically in the chosen format."""
+def _writer(fmt, dialect, flavor, compression, columns: tuple[str, ...] | None = None) -> Callable:
+    """A function (samples, output path) that writes atomically in the chosen format; ``columns``: the CSV
+    columns to write (:class:`~pickplace_cli.export.csv.CsvFormat`), None for all."""
     from ..model.errors import ExportError
 
     if fmt != OutputFormat.mcap and compression != Compression.none:
         raise ExportError(f"compression = {compression.value}: only MCAP output is compressed (--format mcap)")
     if fmt != OutputFormat.csv and dialect != CsvDialectName.default:
         raise ExportError(f"csv-dialect = {dialect.value}: only applies to --format csv")
+
+    csv_format = None
+    if fmt == OutputFormat.csv:
+        from ..export.csv import CsvFormat
+
+        csv_format = CsvFormat(dialect.value, columns)
 
     def write(samples, output: str) -> None:
         from ..export import atomic_output
@@ -34,7 +41,7 @@ def _writer(fmt, dialect, flavor, compression) -> Callable:
             from ..export.csv import write_csv
 
             with atomic_output(output) as stream:
-                write_csv(samples, stream, dialect=dialect.value)
+                write_csv(samples, stream, dialect=csv_format)
         elif fmt == OutputFormat.json:
             from ..export.json import write_json
 
@@ -48,7 +55,7 @@ def _writer(fmt, dialect, flavor, compression) -> Callable:
                            compression=None if compression == Compression.none else compression.value)
 
     write.one_timeline = fmt == OutputFormat.mcap  # type: ignore[attr-defined]
-    write.csv_dialect = dialect.value if fmt == OutputFormat.csv else None  # type: ignore[attr-defined]
+    write.csv_dialect = csv_format  # type: ignore[attr-defined]
     return write
 
 

@@ -121,28 +121,33 @@ def check_writable(path: str | Path | None) -> None:
         raise ExportError(f"output {path}: {'not writable' if in_place else f'directory {where} is not writable'}")
 
 
-def plan_columns(plan) -> tuple[list[str], np.ndarray]:
-    """Column names (with units) and the (N, n_columns) data of a plan's sampled trajectory."""
-    jt = plan.joint
+def column_names(units, torque: bool = True, motor_speed: bool = True, motor_torque: bool = True) -> list[str]:
+    """The header names (with units) of a trajectory with joints in ``units`` ("rad" or "m" each): t, tool
+    position … jerk, q/qd/qdd per joint, then per joint the torque and motor columns that are present."""
     names = ["t[s]"]
     names += [f"{c}[m]" for c in "xyz"]
     names += [f"v{c}[m/s]" for c in "xyz"]
     names += [f"a{c}[m/s^2]" for c in "xyz"]
     names += [f"j{c}[m/s^3]" for c in "xyz"]
-    blocks = [plan.t[:, None], plan.p, plan.v, plan.a, plan.j]
-    for i, unit in enumerate(jt.units):
-        k = i + 1
+    for k, unit in enumerate(units, 1):
         names += [f"q{k}[{unit}]", f"qd{k}[{unit}/s]", f"qdd{k}[{unit}/s^2]"]
-        blocks += [jt.q[:, i : i + 1], jt.qd[:, i : i + 1], jt.qdd[:, i : i + 1]]
-    for i, unit in enumerate(jt.units):
-        k = i + 1
-        force_unit = "N" if unit == "m" else "N*m"
-        for name, arr, u in (
-            (f"torque{k}", jt.torque, force_unit),
-            (f"motor_speed{k}", jt.motor_speed, "rad/s"),
-            (f"motor_torque{k}", jt.motor_torque, "N*m"),
-        ):
-            if arr is not None:
+    for k, unit in enumerate(units, 1):
+        for name, present, u in ((f"torque{k}", torque, "N" if unit == "m" else "N*m"),
+                                 (f"motor_speed{k}", motor_speed, "rad/s"), (f"motor_torque{k}", motor_torque, "N*m")):
+            if present:
                 names.append(f"{name}[{u}]")
+    return names
+
+
+def plan_columns(plan) -> tuple[list[str], np.ndarray]:
+    """Column names (with units, :func:`column_names`) and the (N, n_columns) data of a plan's sampled trajectory."""
+    jt = plan.joint
+    names = column_names(jt.units, jt.torque is not None, jt.motor_speed is not None, jt.motor_torque is not None)
+    blocks = [plan.t[:, None], plan.p, plan.v, plan.a, plan.j]
+    for i in range(len(jt.units)):
+        blocks += [jt.q[:, i : i + 1], jt.qd[:, i : i + 1], jt.qdd[:, i : i + 1]]
+    for i in range(len(jt.units)):
+        for arr in (jt.torque, jt.motor_speed, jt.motor_torque):
+            if arr is not None:
                 blocks.append(arr[:, i : i + 1])
     return names, np.hstack(blocks)

@@ -12,13 +12,14 @@ Columns (see :func:`pickplace_cli.export.plan_columns`): ``t[s]``, tool ``x y z 
 ``ax… [m/s^2]``, ``jx… [m/s^3]``, per joint ``q<i> qd<i> qdd<i>`` and, when computed, ``torque<i>``,
 ``motor_speed<i>``, ``motor_torque<i>``. A batch (samples with a ``move`` array) gets a leading
 ``move[-]`` column: the move number of each sample as the samples give it, printed as an integer.
-Floats use ``%.12g``; the decimal separator is always ``.``.
+Floats use ``%.12g``; the decimal separator is always ``.``. :class:`CsvFormat` selects columns (``plan --columns``).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 from enum import Enum
+from functools import lru_cache
 from typing import IO
 
 import numpy as np
@@ -41,6 +42,17 @@ class DialectSpec:
     sep: str
     newline: str
     header: bool
+    columns: tuple[str, ...] | None = None  # the columns written (:func:`select_columns`); None: all
+
+
+@dataclass(frozen=True)
+class CsvFormat:
+    """A dialect and the columns to write (``plan --columns``): header names without their units, or globs
+    such as ``q?`` or ``motor_*``, in the order wanted; None writes every column. A batch's ``move`` column
+    always comes first. Accepted wherever a dialect name is."""
+
+    dialect: str = "default"
+    columns: tuple[str, ...] | None = None
 
 
 DIALECTS: dict[CsvDialect, DialectSpec] = {
@@ -50,10 +62,15 @@ DIALECTS: dict[CsvDialect, DialectSpec] = {
 }
 
 
-def dialect_spec(dialect: CsvDialect | str) -> DialectSpec:
-    """Separator, line end and header flag of ``dialect``; ExportError for an unknown name."""
+def dialect_spec(dialect: CsvDialect | str | CsvFormat) -> DialectSpec:
+    """Separator, line end, header flag (and columns, for a :class:`CsvFormat`) of ``dialect``; ExportError for
+    an unknown name."""
+    columns = None
+    if isinstance(dialect, CsvFormat):
+        dialect, columns = dialect.dialect, dialect.columns
     try:
-        return DIALECTS[CsvDialect(dialect)]
+        spec = DIALECTS[CsvDialect(dialect)]
+        return spec if columns is None else DialectSpec(spec.sep, spec.newline, spec.header, columns)
     except ValueError:
         raise ExportError(f"csv dialect = {dialect!r}: must be one of {', '.join(d.value for d in CsvDialect)}") from None
 
@@ -89,9 +106,42 @@ def format_rows(data: np.ndarray, sep: str = ",", newline: str = "\n", int_colum
     return "".join(parts)
 
 
-def csv_columns(samples) -> tuple[list[str], np.ndarray, int]:
-    """Column names, data (N, n_columns) and the number of leading integer columns (1 with ``move``)."""
+def parse_columns(text: str) -> tuple[str, ...]:
+    """``--columns`` text: comma-separated names or globs, blanks ignored; ExportError when none is given."""
+    names = tuple(c.strip() for c in text.split(",") if c.strip())
+    if not names:
+        raise ExportError(f"columns = {text!r}: give at least one column name (e.g. t,q1,q2,q3)")
+    return names
+
+
+@lru_cache(maxsize=64)
+def select_columns(names: tuple[str, ...], columns: tuple[str, ...]) -> tuple[int, ...]:
+    """The indices into ``names`` (header names with units) of ``columns`` (names without units, or globs
+    such as ``q?``), in the order given, each glob's matches in the header's order. ExportError for a name
+    that matches nothing or a column selected twice."""
+    import fnmatch
+
+    bare = [n.split("[", 1)[0] for n in names]
+    out: list[int] = []
+    for c in columns:
+        hits = [i for i, b in enumerate(bare) if fnmatch.fnmatchcase(b, c)]
+        if not hits:
+            raise ExportError(f"columns = {c!r}: no such column; the columns are {', '.join(bare)} "
+                              "(names without units; globs such as q? or motor_* allowed)")
+        for i in hits:
+            if i in out:
+                raise ExportError(f"columns = {','.join(columns)}: {bare[i]} is selected twice")
+            out.append(i)
+    return tuple(out)
+
+
+def csv_columns(samples, columns: tuple[str, ...] | None = None) -> tuple[list[str], np.ndarray, int]:
+    """Column names, data (N, n_columns) and the number of leading integer columns (1 with ``move``);
+    ``columns``: only those (:func:`select_columns`), the ``move`` column still first."""
     names, data = plan_columns(samples)
+    if columns is not None:
+        idx = select_columns(tuple(names), tuple(columns))
+        names, data = [names[i] for i in idx], data[:, idx]
     move = getattr(samples, "move", None)
     if move is None:
         return names, data, 0
@@ -103,13 +153,13 @@ def csv_columns(samples) -> tuple[list[str], np.ndarray, int]:
     return [MOVE_COLUMN, *names], np.hstack([move.astype(float)[:, None], data]), 1
 
 
-def csv_header(samples, dialect: CsvDialect | str = CsvDialect.default, move: bool | None = None) -> str:
+def csv_header(samples, dialect: CsvDialect | str | CsvFormat = CsvDialect.default, move: bool | None = None) -> str:
     """The header line of ``samples`` in ``dialect`` ("" for a dialect without header). ``move``: add the
     ``move[-]`` column (default: when the samples have ``move``)."""
     spec = dialect_spec(dialect)
     if not spec.header:
         return ""
-    names, _data, n_int = csv_columns(samples)
+    names, _data, n_int = csv_columns(samples, spec.columns)
     if move and not n_int:
         names = [MOVE_COLUMN, *names]
     elif move is False and n_int:
@@ -117,11 +167,11 @@ def csv_header(samples, dialect: CsvDialect | str = CsvDialect.default, move: bo
     return spec.sep.join(names) + spec.newline
 
 
-def csv_rows(samples, dialect: CsvDialect | str = CsvDialect.default, move: int | None = None) -> str:
+def csv_rows(samples, dialect: CsvDialect | str | CsvFormat = CsvDialect.default, move: int | None = None) -> str:
     """The data lines of ``samples`` in ``dialect``. ``move``: a move number for a leading ``move`` column
     on every row (for writing a batch one plan at a time); otherwise the samples' own ``move``, if any."""
     spec = dialect_spec(dialect)
-    _names, data, n_int = csv_columns(samples)
+    _names, data, n_int = csv_columns(samples, spec.columns)
     if move is not None:
         if n_int:
             data = data[:, 1:]
@@ -130,7 +180,7 @@ def csv_rows(samples, dialect: CsvDialect | str = CsvDialect.default, move: int 
     return format_rows(data, spec.sep, spec.newline, n_int)
 
 
-def write_csv(samples, stream: IO[str], dialect: CsvDialect | str = CsvDialect.default) -> None:
+def write_csv(samples, stream: IO[str], dialect: CsvDialect | str | CsvFormat = CsvDialect.default) -> None:
     """Write the samples: [move,] t, x, y, z, vx…, ax…, jx…, then q<i>, qd<i>, qdd<i> per joint, torques.
 
     ``stream`` is a text stream opened with ``newline=""`` (as :func:`~pickplace_cli.export.atomic_output`
