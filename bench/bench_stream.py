@@ -1,16 +1,17 @@
 """``plan --batch -`` as a pipeline stage (issue 16, part 2): latency per row and throughput.
 
     python bench/bench_stream.py                      # ~2 min on 2 cores
-    python bench/bench_stream.py --old /tmp/oldclone  # also the throughput of another checkout (before streaming)
+    python bench/bench_stream.py --old /tmp/oldclone  # also another checkout, side by side
 
 Latency: one `pickplace plan --batch -` process; rows of the Adept cycle on the default Delta are written one
 at a time with a pause between them (a vision system's pace); the latency of a row is from the moment its
 last byte is written (after flush) to the moment the last byte of its answer is read: the JSON line (verdicts
-only, ``--json``) or all its CSV rows at 1 kHz (``--rate 1000``). Reports p50 and p99 (targets with samples:
-2 ms and 5 ms).
+only, ``--json``) or all its CSV rows at 1 kHz (``--rate 1000``: every column, and ``--columns t,q1,q2,q3``,
+a PLC's position feed). Reports p50 and p99 (targets with samples: 2 ms and 5 ms).
 Throughput: a file of rows piped in at full speed (``--json`` verdicts and CSV samples, ``-j 1`` and ``-j 2``),
 rows per second including start-up; with ``--old`` the same commands on another checkout side by side.
-Results go to ``bench/results/stream.json``.
+With ``--old`` the latencies of the other checkout too, in interleaved rounds. Results go to
+``bench/results/stream.json``.
 """
 
 from __future__ import annotations
@@ -55,10 +56,12 @@ def _read_lines(stream, n: int, timeout: float = 30.0) -> None:
         raise RuntimeError(f"read {got} lines, expected {n}: the answer is not where this benchmark thinks")
 
 
-def latency(args: list[str], lines_per_row: int, first_extra: int, rows: int, pause: float) -> list[float]:
-    cmd, env = _cmd(ROOT, *args)
+def latency(args: list[str], lines_per_row: int, first_extra: int, rows: int, pause: float,
+            root: Path | None = None) -> list[float]:
+    root = root or ROOT
+    cmd, env = _cmd(root, *args)
     proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
-                            env=env, bufsize=0, cwd=ROOT)
+                            env=env, bufsize=0, cwd=root)
     out = []
     try:
         os.write(proc.stdin.fileno(), HEADER.encode())
@@ -103,13 +106,23 @@ def main() -> None:
                        PlanOptions(rate=1000.0)).t)
     result: dict = {"rows": args.rows, "pause_s": args.pause, "samples_per_row": samples}
     for name, cli, lines, extra in (("verdicts (--json)", ["--json", "-q"], 1, 0),
-                                    ("samples (CSV, 1 kHz)", ["--rate", "1000", "-q"], samples, 1)):
-        lat = sorted(latency(cli, lines, extra, args.rows, args.pause))
-        p50 = statistics.median(lat) * 1e3
-        p99 = lat[min(len(lat) - 1, int(round(0.99 * (len(lat) - 1))))] * 1e3
-        result[name] = {"p50_ms": p50, "p99_ms": p99, "max_ms": lat[-1] * 1e3}
-        print(f"latency, {name}: p50 {p50:.2f} ms, p99 {p99:.2f} ms, max {lat[-1] * 1e3:.2f} ms "
-              f"({len(lat)} rows, {args.pause * 1e3:.0f} ms apart)", flush=True)
+                                    ("samples (CSV, 1 kHz)", ["--rate", "1000", "-q"], samples, 1),
+                                    ("samples t,q1,q2,q3 (CSV, 1 kHz, --columns)",
+                                     ["--rate", "1000", "-q", "--columns", "t,q1,q2,q3"], samples, 1)):
+        roots = [ROOT] + ([args.old] if args.old and "--columns" not in cli else [])
+        rounds = 3 if len(roots) > 1 else 1  # with --old: interleaved rounds, the VM's pace shared by both
+        lats: dict = {r: [] for r in roots}
+        for k in range(rounds):
+            for r in (roots if k % 2 == 0 else roots[::-1]):
+                lats[r] += latency(cli, lines, extra, args.rows // rounds, args.pause, r)
+        for r in roots:
+            lat = sorted(lats[r])
+            p50 = statistics.median(lat) * 1e3
+            p99 = lat[min(len(lat) - 1, int(round(0.99 * (len(lat) - 1))))] * 1e3
+            key = name if r == ROOT else f"{name}, other checkout"
+            result[key] = {"p50_ms": p50, "p99_ms": p99, "max_ms": lat[-1] * 1e3}
+            print(f"latency, {key}: p50 {p50:.2f} ms, p99 {p99:.2f} ms, max {lat[-1] * 1e3:.2f} ms "
+                  f"({len(lat)} rows, {args.pause * 1e3:.0f} ms apart)", flush=True)
     runs = (("verdicts -j 1", ["--json", "-q", "-j", "1"], 3000), ("verdicts -j 2", ["--json", "-q", "-j", "2"], 3000),
             ("CSV -j 1", ["-q", "-j", "1"], 600), ("CSV -j 2", ["-q", "-j", "2"], 600))
     for name, cli, rows in runs:
