@@ -75,6 +75,8 @@ def dialect_spec(dialect: CsvDialect | str | CsvFormat) -> DialectSpec:
         raise ExportError(f"csv dialect = {dialect!r}: must be one of {', '.join(d.value for d in CsvDialect)}") from None
 
 
+#: rows printed per call of the fast printer (its temporaries: ~20 arrays of this many rows)
+_FAST_BLOCK_ROWS = 4096
 #: rows formatted per ``%`` call: one big format string per block is ~25 % faster than one per row
 _BLOCK_ROWS = 512
 
@@ -87,8 +89,10 @@ def format_rows(data: np.ndarray, sep: str = ",", newline: str = "\n", int_colum
         return ""
     from .fastfloat import format_block
 
-    text = format_block(data, int_columns)  # the same bytes as below, ~2.5 x faster (None without orjson)
-    if text is not None:
+    # the same bytes as the % below, ~2.6 x faster (None without orjson); in blocks of rows: bounded temporaries
+    blocks = [format_block(data[i : i + _FAST_BLOCK_ROWS], int_columns) for i in range(0, n, _FAST_BLOCK_ROWS)]
+    if blocks[0] is not None:
+        text = "".join(blocks)
         if sep != ",":
             text = text.replace(",", sep)
         if newline != "\n":
