@@ -142,14 +142,15 @@ def _batch_input(source: str, name: str):
 
     with contextlib.ExitStack() as stack:
         if source == "-":
-            try:  # undecodable bytes are an error, not surrogates (a C/POSIX locale's stdin escapes them)
-                sys.stdin.reconfigure(errors="strict")
+            try:  # undecodable bytes kept as surrogates, so iter_batch names their line (strict decoding fails on
+                # the whole chunk read, before the rows above the bad line are answered)
+                sys.stdin.reconfigure(errors="surrogateescape")
             except (AttributeError, ValueError, OSError):  # pragma: no cover - a test runner's stand-in
                 pass
             fh = sys.stdin
         else:
             try:  # -sig: Excel's BOM
-                fh = stack.enter_context(open(source, encoding="utf-8-sig", newline=""))
+                fh = stack.enter_context(open(source, encoding="utf-8-sig", newline="", errors="surrogateescape"))
             except OSError as exc:
                 raise TaskError(f"batch = {source}: cannot read it: {exc.strerror}") from None
         info: dict = {}
@@ -185,41 +186,45 @@ def _plan_schedule(items, name, streamed, prof, options, height, eta, fail_fast,
     kept: list = []
     csv_out = output is not None and writer.csv_dialect is not None
     header_done = False
-    with ExitStack() as stack:
-        out = None
-        if csv_out:
-            from ..export import atomic_output
-            from ..export.csv import csv_header, csv_rows
+    try:
+        with ExitStack() as stack:
+            out = None
+            if csv_out:
+                from ..export import atomic_output
+                from ..export.csv import csv_header, csv_rows
 
-            out = stack.enter_context(atomic_output(output))
-        for res in results:
-            summary.add(res)
-            codes.append(res.code)
-            if report is not None:
-                report_rows.append({"row": res.row, "exit_code": res.code, "error": res.error,
-                                    **({"segments": res.cycle.report_doc()} if res.cycle is not None else {})})
-            if res.error is not None:
-                sys.stderr.write("".join(f"pickplace: {ln}\n" for ln in res.error.splitlines()))
-            elif not quiet:
-                c = res.cycle
-                xyz = ", ".join(f"{x:.4f}" for x in c.rendezvous.meeting_point)
-                sys.stderr.write(f"row {res.row}: starts t = {c.t_start:.4f} s (latency {c.latency:.4f} s), meets the part "
-                                 f"at ({xyz}) m at t = {c.t_meet:.4f} s, placed t = {c.t_place:.4f} s, free "
-                                 f"t = {c.t_end:.4f} s\n")
-            sys.stderr.flush()
-            if json_summary:
-                _emit_json(res.as_dict())
-            written = res.code == 0 or (report_only and res.code == 3 and res.cycle is not None)
-            if written and output is not None:
-                timeline = res.cycle.timeline()
-                if out is not None:
-                    if not header_done:
-                        out.write(csv_header(timeline, writer.csv_dialect, move=True))
-                        header_done = True
-                    out.write(csv_rows(timeline, writer.csv_dialect))
-                    out.flush()
-                else:
-                    kept.append(timeline)
+                out = stack.enter_context(atomic_output(output))
+            for res in results:
+                summary.add(res)
+                codes.append(res.code)
+                if report is not None:
+                    report_rows.append({"row": res.row, "exit_code": res.code, "error": res.error,
+                                        **({"segments": res.cycle.report_doc()} if res.cycle is not None else {})})
+                if res.error is not None:
+                    sys.stderr.write("".join(f"pickplace: {ln}\n" for ln in res.error.splitlines()))
+                elif not quiet:
+                    c = res.cycle
+                    xyz = ", ".join(f"{x:.4f}" for x in c.rendezvous.meeting_point)
+                    sys.stderr.write(f"row {res.row}: starts t = {c.t_start:.4f} s (latency {c.latency:.4f} s), meets the part "
+                                     f"at ({xyz}) m at t = {c.t_meet:.4f} s, placed t = {c.t_place:.4f} s, free "
+                                     f"t = {c.t_end:.4f} s\n")
+                sys.stderr.flush()
+                if json_summary:
+                    _emit_json(res.as_dict())
+                written = res.code == 0 or (report_only and res.code == 3 and res.cycle is not None)
+                if written and output is not None:
+                    timeline = res.cycle.timeline()
+                    if out is not None:
+                        if not header_done:
+                            out.write(csv_header(timeline, writer.csv_dialect, move=True))
+                            header_done = True
+                        out.write(csv_rows(timeline, writer.csv_dialect))
+                        out.flush()
+                    else:
+                        kept.append(timeline)
+            _keep_unless_empty(out, output, header_done)
+    except _NothingWritten:
+        pass
     if kept:
         from ..pipelines.timeline import _join, _pieces_of
 
@@ -242,6 +247,17 @@ def _plan_schedule(items, name, streamed, prof, options, height, eta, fail_fast,
         sys.stderr.write("pickplace: no part was picked: nothing written\n")
     if summary.worst and not (report_only and all(c == 3 for c in codes if c)):
         raise typer.Exit(summary.worst)
+
+
+class _NothingWritten(Exception):
+    """Raised inside an atomic output that received no row: its temporary file is removed, the target neither
+    created nor changed (as a file batch that writes nothing)."""
+
+
+def _keep_unless_empty(out, output: str | None, written: bool) -> None:
+    """_NothingWritten when ``out`` is a temporary file (``-o FILE``) that got no row."""
+    if out is not None and not written and output not in (None, "-"):
+        raise _NothingWritten
 
 
 def _is_fifo(path: str) -> bool:
@@ -278,40 +294,44 @@ def _stream_batch(items, name, prof, options, height, eta, fail_fast, writer, ou
     codes: list[int] = []
     first_failed = None
     n_written = 0
-    with ExitStack() as stack:
-        out = None
-        if csv_out:
-            from ..export import atomic_output
-            from ..export.csv import csv_header, csv_rows
+    try:
+        with ExitStack() as stack:
+            out = None
+            if csv_out:
+                from ..export import atomic_output
+                from ..export.csv import csv_header, csv_rows
 
-            out = stack.enter_context(atomic_output(output))
-        results = plan_stream(items, prof, options, height, eta, fail_fast, name,
-                              workers=max(workers, 1), csv_dialect=writer.csv_dialect if csv_out else None,
-                              format_failed=report_only, verdicts=engine)
-        for res in results:
-            codes.append(res.code)
-            if res.code and first_failed is None:
-                first_failed = res.row
-            if res.error is not None:
-                sys.stderr.write("".join(f"pickplace: {ln}\n" for ln in res.error.splitlines()))
-                sys.stderr.flush()
-            if json_summary:
-                _emit_row_json(res)
-            if res.plan is not None and report is not None:
-                reports.append((res.row, ReportRecord.of(res.plan)))
-            if res.plan is not None and output is not None and (res.code == 0 or report_only):
-                n_written += 1
-                if out is not None:
-                    if n_written == 1:
-                        out.write(csv_header(res.plan, writer.csv_dialect, move=True))
-                    out.write(res.text if res.text is not None else csv_rows(res.plan, writer.csv_dialect, move=res.row))
-                    out.flush()
-                else:
-                    from ..pipelines.batch import PlanRecord
+                out = stack.enter_context(atomic_output(output))
+            results = plan_stream(items, prof, options, height, eta, fail_fast, name,
+                                  workers=max(workers, 1), csv_dialect=writer.csv_dialect if csv_out else None,
+                                  format_failed=report_only, verdicts=engine)
+            for res in results:
+                codes.append(res.code)
+                if res.code and first_failed is None:
+                    first_failed = res.row
+                if res.error is not None:
+                    sys.stderr.write("".join(f"pickplace: {ln}\n" for ln in res.error.splitlines()))
+                    sys.stderr.flush()
+                if json_summary:
+                    _emit_row_json(res)
+                if res.plan is not None and report is not None:
+                    reports.append((res.row, ReportRecord.of(res.plan)))
+                if res.plan is not None and output is not None and (res.code == 0 or report_only):
+                    n_written += 1
+                    if out is not None:
+                        if n_written == 1:
+                            out.write(csv_header(res.plan, writer.csv_dialect, move=True))
+                        out.write(res.text if res.text is not None else csv_rows(res.plan, writer.csv_dialect, move=res.row))
+                        out.flush()
+                    else:
+                        from ..pipelines.batch import PlanRecord
 
-                    kept.append((res.row, res.plan if isinstance(res.plan, PlanRecord) else PlanRecord.of(res.plan)))
-            if fail_fast and res.code:
-                break
+                        kept.append((res.row, res.plan if isinstance(res.plan, PlanRecord) else PlanRecord.of(res.plan)))
+                if fail_fast and res.code:
+                    break
+            _keep_unless_empty(out, output, n_written > 0)
+    except _NothingWritten:
+        pass
     if kept:
         from ..pipelines.timeline import concatenate
 

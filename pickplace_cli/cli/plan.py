@@ -318,6 +318,8 @@ def _check_plan_usage(a) -> None:
         _usage(f"--columns only applies to --format csv (the format is {fmt.value}: its schema is fixed)")
     if a.json_summary and a.output is None and (fmt != OutputFormat.csv or a.csv_dialect != CsvDialectName.default):
         _usage("--format/--csv-dialect: with --json and no -o FILE no trajectory is written (stdout carries the summary)")
+    if a.json_summary and a.output is None and a.columns is not None:
+        _usage("--columns: with --json and no -o FILE no trajectory is written (stdout carries the summary)")
     if a.adjust_points and not a.fit_ws:
         _usage("--adjust-points only applies with --fit-workspace")
     if a.max_shift != MAX_SHIFT and not a.adjust_points:

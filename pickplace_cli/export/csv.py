@@ -128,13 +128,17 @@ def select_columns(names: tuple[str, ...], columns: tuple[str, ...]) -> tuple[in
     bare = [n.split("[", 1)[0] for n in names]
     out: list[int] = []
     for c in columns:
-        hits = [i for i, b in enumerate(bare) if fnmatch.fnmatchcase(b, c)]
+        if c in names:  # a header name with its unit, as printed
+            hits = [names.index(c)]
+        else:
+            hits = [i for i, b in enumerate(bare) if fnmatch.fnmatchcase(b, c)]
         if not hits:
-            raise ExportError(f"columns = {c!r}: no such column; the columns are {', '.join(bare)} "
-                              "(names without units; globs such as q? or motor_* allowed)")
+            move = " (a batch's move column is always written, first)" if fnmatch.fnmatchcase("move", c.split("[")[0]) else ""
+            raise ExportError(f"columns = {c!r}: no such column{move}; the columns are {', '.join(bare)} "
+                              "(names without units, or as in the header; globs such as q? or motor_* allowed)")
         for i in hits:
             if i in out:
-                raise ExportError(f"columns = {','.join(columns)}: {bare[i]} is selected twice")
+                raise ExportError(f"columns = {','.join(columns)!r}: {bare[i]} is selected twice")
             out.append(i)
     return tuple(out)
 

@@ -116,6 +116,11 @@ def iter_batch(stream: IO[str], source: str = "batch", info: dict | None = None)
                             "move (a binary file, or no line breaks?)")
         if "\0" in text:
             raise TaskError(f"{source}:{line}: a binary file (NUL bytes), not a CSV batch")
+        if not text.isascii():
+            try:  # bytes the reader kept as surrogates (errors="surrogateescape"): this line is not UTF-8
+                text.encode("utf-8")
+            except UnicodeEncodeError:
+                raise TaskError(f"{source}:{line}: not UTF-8 text (a binary file?); a batch is a CSV file") from None
         text = text.rstrip("\r\n")
         if line == 1:
             text = text.removeprefix("\ufeff")  # a BOM (the CLI opens files as utf-8-sig; stdin keeps it)

@@ -56,12 +56,16 @@ def plan_stream(
             inbox.put(exc)
         inbox.put(end)
 
-    threading.Thread(target=reader, daemon=True, name="batch-reader").start()
     pool = None
     if workers > 1:
         from concurrent.futures import ProcessPoolExecutor
 
         pool = ProcessPoolExecutor(max_workers=workers)
+        # fork every worker now, before the reader thread exists: a worker forked while that thread is blocked in
+        # a read of stdin inherits stdin's lock held, and hangs closing stdin at start-up (multiprocessing's
+        # _close_stdin); with the fork method the first submit starts them all
+        pool.submit(int).result()
+    threading.Thread(target=reader, daemon=True, name="batch-reader").start()
     try:
         finished = False
         while not finished:

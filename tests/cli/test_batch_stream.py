@@ -137,3 +137,53 @@ def test_a_named_pipe_streams_too(tmp_path):
         assert json.loads(proc.stdout.read())["row"] == 2
     finally:
         proc.kill()
+
+
+def test_workers_with_rows_arriving_slowly_do_not_hang():
+    """-j 2 on a stream whose rows come in bursts: the worker processes are forked before the reader thread
+    starts (a worker forked while that thread held stdin's lock used to hang, and the stream with it)."""
+    proc = _start("--json", "-q", "-j", "2")
+    try:
+        proc.stdin.write(HEADER + ROW + ROW2 + ROW)
+        proc.stdin.flush()
+        docs = [json.loads(_readline(proc.stdout)) for _ in range(3)]
+        assert [d["row"] for d in docs] == [1, 2, 3]
+        time.sleep(0.5)
+        proc.stdin.write(ROW2)
+        proc.stdin.flush()
+        assert json.loads(_readline(proc.stdout))["row"] == 4
+        proc.stdin.close()
+        assert proc.wait(TIMEOUT) == 0
+    finally:
+        proc.kill()
+
+
+@pytest.mark.parametrize("fail_fast", [True, False])
+def test_a_stream_that_writes_no_row_leaves_the_output_alone(tmp_path, fail_fast):
+    """No row written: -o FILE is neither created nor changed (as a file batch), not replaced by an empty file."""
+    keep, new = tmp_path / "keep.csv", tmp_path / "new.csv"
+    keep.write_text("a good file\n")
+    bad = HEADER + "0.5,0.5,-0.2,0.1,0,-0.8\n"  # unreachable: exit 4
+    for out in (keep, new):
+        r = subprocess.run([sys.executable, "-m", "pickplace_cli", "plan", "--batch", "-", "-q", "-o", str(out),
+                            *(["--fail-fast"] if fail_fast else [])], input=bad, capture_output=True, text=True,
+                           timeout=TIMEOUT)
+        assert r.returncode == 4 and "no row could be written" in r.stderr
+    assert keep.read_text() == "a good file\n" and not new.exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["keep.csv"]  # no temp file left
+
+
+def test_invalid_utf8_is_named_at_its_line_after_the_rows_before_it(tmp_path):
+    """A bad byte on line 3 of a stream: row 1 is answered, the error names line 3 (decoding used to fail on
+    the whole chunk read, naming line 1 and answering nothing)."""
+    payload = (HEADER + ROW).encode() + b"-0.1,\xe9,0,0,0,0\n" + ROW.encode()
+    r = subprocess.run([sys.executable, "-m", "pickplace_cli", "plan", "--batch", "-", "--json", "-q"],
+                       input=payload, capture_output=True, timeout=TIMEOUT)
+    assert r.returncode == 1
+    assert [json.loads(x)["row"] for x in r.stdout.decode().splitlines()] == [1]
+    assert "stdin:3: not UTF-8 text" in r.stderr.decode()
+    f = tmp_path / "latin.csv"
+    f.write_bytes(payload)
+    r = subprocess.run([sys.executable, "-m", "pickplace_cli", "plan", "--batch", str(f), "--json", "-q"],
+                       capture_output=True, timeout=TIMEOUT)
+    assert r.returncode == 1 and "latin.csv:3: not UTF-8 text" in r.stderr.decode()

@@ -86,3 +86,15 @@ def test_columns_with_another_format_is_refused(tmp_path):
     r = run("plan", *MOVE, "--columns", "t", "-f", "mcap", "-o", str(tmp_path / "x.mcap"))
     assert r.exit_code == 2 and "--columns only applies to --format csv" in r.stderr
     assert not (tmp_path / "x.mcap").exists()
+
+
+def test_columns_without_a_trajectory_output_is_refused():
+    r = run("plan", *MOVE, "--json", "-q", "--columns", "t,q1")
+    assert r.exit_code == 2 and "--columns: with --json and no -o FILE" in r.stderr
+
+
+def test_header_names_with_units_and_the_move_column():
+    got = run("plan", *MOVE, "-q", "--columns", "q1[rad],t")
+    assert got.exit_code == 0 and got.stdout.splitlines()[0] == "q1[rad],t[s]"
+    r = run("plan", *MOVE, "-q", "--columns", "move,t")
+    assert r.exit_code == 2 and "move column is always written" in r.stderr

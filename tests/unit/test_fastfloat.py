@@ -73,3 +73,10 @@ def test_format_rows_same_text_with_and_without_the_fast_printer(monkeypatch, se
     assert fastfloat.format_block(data, 1) is None
     slow = format_rows(data, sep, newline, 1)
     assert fast == slow == _reference(data, 1, sep, newline)
+
+
+def test_not_a_table_is_left_to_percent():
+    assert fastfloat.format_block(np.zeros((0, 3))) == ""
+    assert fastfloat.format_block(np.zeros(3)) is None
+    assert fastfloat.format_block(np.zeros((2, 2)), int_columns=3) is None
+    assert format_rows(np.zeros((0, 3))) == ""
