@@ -285,8 +285,8 @@ def _columns(text: str | None, prof) -> tuple[str, ...] | None:
     from ..planner import motion_model_static
 
     robot, specs = motion_model_static(prof)[:2]
-    names = column_names(robot.joint_units, motor_speed=all(s.drive is not None for s in specs),
-                         motor_torque=all(s.drive is not None for s in specs))
+    drives = all(s.drive is not None for s in specs)  # the motor columns: as the planner's MotionModel.has_drives
+    names = column_names(robot.joint_units, motor_speed=drives, motor_torque=drives)
     try:
         cols = parse_columns(text)
         select_columns(tuple(names), cols)
