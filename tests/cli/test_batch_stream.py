@@ -139,19 +139,34 @@ def test_a_named_pipe_streams_too(tmp_path):
         proc.kill()
 
 
+def _raw_lines(fd: int, n: int, timeout: float = TIMEOUT) -> list[bytes]:
+    """Exactly ``n`` lines from the raw file descriptor ``fd`` within ``timeout`` s (unbuffered: answers that
+    arrive together are all counted, which select() on a buffered stream would miss)."""
+    buf = b""
+    deadline = time.monotonic() + timeout
+    got = 0
+    while got < n:
+        ready, _, _ = select.select([fd], [], [], max(0.0, deadline - time.monotonic()))
+        assert ready, f"{got} of {n} lines within {timeout} s"
+        chunk = os.read(fd, 1 << 16)
+        assert chunk, f"output ended after {got} of {n} lines"
+        buf += chunk
+        got = buf.count(b"\n")
+    return buf.splitlines()
+
+
 def test_workers_with_rows_arriving_slowly_do_not_hang():
     """-j 2 on a stream whose rows come in bursts: the worker processes are forked before the reader thread
     starts (a worker forked while that thread held stdin's lock used to hang, and the stream with it)."""
-    proc = _start("--json", "-q", "-j", "2")
+    proc = subprocess.Popen([sys.executable, "-m", "pickplace_cli", "plan", "--batch", "-", "--json", "-q", "-j", "2"],
+                            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, bufsize=0)
     try:
-        proc.stdin.write(HEADER + ROW + ROW2 + ROW)
-        proc.stdin.flush()
-        docs = [json.loads(_readline(proc.stdout)) for _ in range(3)]
+        os.write(proc.stdin.fileno(), (HEADER + ROW + ROW2 + ROW).encode())
+        docs = [json.loads(x) for x in _raw_lines(proc.stdout.fileno(), 3)]
         assert [d["row"] for d in docs] == [1, 2, 3]
         time.sleep(0.5)
-        proc.stdin.write(ROW2)
-        proc.stdin.flush()
-        assert json.loads(_readline(proc.stdout))["row"] == 4
+        os.write(proc.stdin.fileno(), ROW2.encode())
+        assert json.loads(_raw_lines(proc.stdout.fileno(), 1)[0])["row"] == 4
         proc.stdin.close()
         assert proc.wait(TIMEOUT) == 0
     finally:
