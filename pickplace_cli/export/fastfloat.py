@@ -1,4 +1,4 @@
-"""``%.12g`` for a whole float array at once, byte for byte what the ``%`` operator prints, ~3 x faster.
+"""``%.12g`` for a whole float array at once, byte for byte what the ``%`` operator prints, ~2.6 x faster (181 x 32 numbers: 0.29 vs 0.77 ms).
 
 CPython spends ~140 ns per number in ``"%.12g" % x`` (a correctly rounded 12-digit decimal conversion), which is
 most of the time of a streamed CSV answer (181 rows x 32 columns: 0.8 ms). This module rounds every number to
