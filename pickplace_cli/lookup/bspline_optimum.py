@@ -112,6 +112,31 @@ _DROW = np.array([[math.perm(k, r) for k in range(_NC)] for r in range(_NC)], fl
 _CONDITIONS = np.array([[0, 1, 3, 5], [0, 1, 2, 4]])
 
 
+def _piece_system(k1, k2, rowwise: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The pieces' lengths ``h`` (N, 3), the maps ``m`` (N, 3 pieces, 6 coefficients, 4 unknowns) from the
+    unknowns z = (d3, d4, d5, g2) of one axis to its Taylor coefficients on each piece of [0, 1/2], and the
+    condition ``rows`` (N, 6, 4): the value at τ8, then derivatives 0 … 4 at τ = 1/2 (:func:`unit_pieces`)."""
+    k1 = np.atleast_1d(np.asarray(k1, dtype=float))
+    k2 = np.atleast_1d(np.asarray(k2, dtype=float))
+    n = k1.size
+    a = 0.5 * k1 * k2
+    c = 0.5 * k1
+    h = np.empty((n, 3))
+    h[:, 0], h[:, 1], h[:, 2] = a, c - a, 0.5 - c
+    # pieces 0 and 1 as M @ z, z = (d3, d4, d5, g2), entries powers of a (start value s(0) = 0)
+    m = np.empty((n, 3, _NC, 4))
+    if rowwise:
+        m[:, :2] = ((a[:, None, None] ** _A_POWERS) @ _A_TERMS).reshape(n, 2, _NC, 4)
+    else:
+        m[:, :2] = ((a[:, None] ** _A_POWERS) @ _A_TERMS).reshape(n, 2, _NC, 4)
+    m[:, 2] = (_SHIFT * h[:, 1, None, None] ** _EXP) @ m[:, 1]  # piece 2 continues piece 1 (C⁴) …
+    m[:, 2, 5, 3] += 1.0  # … plus its own fifth coefficient g2
+    rows = np.empty((n, 6, 4))
+    rows[:, 0] = m[:, 2, 0]  # value at τ8
+    rows[:, 1:] = (_DROW[:5] * h[:, 2, None, None] ** _EXP[:5]) @ m[:, 2]  # derivatives 0..4 at τ = 1/2
+    return h, m, rows
+
+
 def unit_pieces(
     k1: np.ndarray | float, k2: np.ndarray | float, eta: float | np.ndarray, rowwise: bool = False
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -136,24 +161,8 @@ def unit_pieces(
     depend on the batch it is in: the planner (one move) and the batch verdict engine (thousands) agree
     bitwise. ``eta`` may then be an array (one η per row).
     """
-    k1 = np.atleast_1d(np.asarray(k1, dtype=float))
-    k2 = np.atleast_1d(np.asarray(k2, dtype=float))
-    n = k1.size
-    a = 0.5 * k1 * k2
-    c = 0.5 * k1
-    h = np.empty((n, 3))
-    h[:, 0], h[:, 1], h[:, 2] = a, c - a, 0.5 - c
-    # pieces 0 and 1 as M @ z, z = (d3, d4, d5, g2), entries powers of a (start value s(0) = 0)
-    m = np.empty((n, 3, _NC, 4))
-    if rowwise:
-        m[:, :2] = ((a[:, None, None] ** _A_POWERS) @ _A_TERMS).reshape(n, 2, _NC, 4)
-    else:
-        m[:, :2] = ((a[:, None] ** _A_POWERS) @ _A_TERMS).reshape(n, 2, _NC, 4)
-    m[:, 2] = (_SHIFT * h[:, 1, None, None] ** _EXP) @ m[:, 1]  # piece 2 continues piece 1 (C⁴) …
-    m[:, 2, 5, 3] += 1.0  # … plus its own fifth coefficient g2
-    rows = np.empty((n, 6, 4))
-    rows[:, 0] = m[:, 2, 0]  # value at τ8
-    rows[:, 1:] = (_DROW[:5] * h[:, 2, None, None] ** _EXP[:5]) @ m[:, 2]  # derivatives 0..4 at τ = 1/2
+    h, m, rows = _piece_system(k1, k2, rowwise)
+    n = h.shape[0]
     if rowwise:
         rhs = np.zeros((n, 2, 4, 1))
         rhs[:, 0, 1, 0] = 0.5
@@ -169,6 +178,34 @@ def unit_pieces(
 def _rhs(eta: float) -> np.ndarray:
     """Right-hand sides of the conditions: s_u(τ8) = 0, s_u(1/2) = 1/2; s_v(τ8) = η, s_v(1/2) = 1."""
     return np.array([[0.0, 0.5, 0.0, 0.0], [eta, 1.0, 0.0, 0.0]])[:, :, None]
+
+
+#: right-hand sides of :func:`plane_pieces`' four cardinal combinations (value at τ8, value at 1/2, then zero
+#: derivatives): antisymmetric about τ = 1/2 (conditions 0), A1 = s_u (0 at τ8, 1/2 at 1/2) and A2 (−1 at τ8, 0
+#: at 1/2); symmetric (conditions 1), S1 (1 at τ8, 0 at 1/2) and S2 (0 at τ8, 1 at 1/2)
+_PLANE_RHS = np.array([[[0.0, -1.0], [0.5, 0.0], [0.0, 0.0], [0.0, 0.0]],
+                       [[1.0, 0.0], [0.0, 1.0], [0.0, 0.0], [0.0, 0.0]]])
+
+
+def plane_pieces(k1: np.ndarray, k2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Four cardinal functions of the B-spline of [Li2018, Eq. (11)–(16)] on τ ∈ [0, 1/2], for a batch of
+    (k1, k2): with them the path through any via values (0, V1, V2, V3, V4) at (0, τ8, 1/2, τ10, 1) is
+    V4·A1 + (V3 − V4 − V1)/2·A2 + (V3 − V4 + V1)/2·S1 + (V2 − V4/2)·S2 (the spline is linear in its via points,
+    and on Li's knots, symmetric about 1/2, every via vector splits into these symmetric and antisymmetric
+    parts). A1 = s_u and A2 are antisymmetric about τ = 1/2 (A(1 − τ) = 2A(1/2) − A(τ); A1(1/2) = 1/2,
+    A2(1/2) = 0), S1 and S2 symmetric (S(1 − τ) = S(τ)); s_v = η S1 + S2. What moves between end points at
+    two heights need (their via points are in one vertical plane, see
+    :func:`pickplace_cli.paths.bspline._plane_paths`).
+
+    Returns ``h`` (N, 3) as :func:`unit_pieces` and ``coef`` (N, 3 pieces, 4 functions A1, A2, S1, S2, 6
+    Taylor coefficients, lowest power first); every row by operations on that row alone."""
+    h, m, rows = _piece_system(k1, k2, True)
+    n = h.shape[0]
+    rhs = np.empty((n, 2, 4, 2))
+    rhs[:] = _PLANE_RHS
+    z = np.linalg.solve(rows[:, _CONDITIONS], rhs)  # (N, 2 symmetries, 4 unknowns, 2 functions)
+    coef = m[:, :, None] @ z[:, None]  # (N, 3 pieces, 2 symmetries, 6, 2 functions)
+    return h, coef.transpose(0, 1, 2, 4, 3).reshape(n, 3, 4, _NC)
 
 
 def _piece_terms() -> tuple[np.ndarray, np.ndarray]:
@@ -222,7 +259,8 @@ def _peak_plan(orders: tuple[int, ...]) -> tuple:
 def unit_peaks(h: np.ndarray, coef: np.ndarray, lam: float, orders: tuple[int, ...] = (1, 2, 3)) -> np.ndarray:
     """(N, len(orders)) exact max over τ ∈ [0, 1] of ‖(s_u^(r), s_v^(r)/λ)‖ for the pieces of
     :func:`unit_pieces` (Eq. 17–19 with b = 1, T = 1; the symmetric half is enough). ``lam`` is a number or
-    an (N, 1, 1) array (one λ per row).
+    an (N, 1, 1) array (one λ per row). Any number of pieces: ``h`` (N, pieces), ``coef`` (N, pieces, 2, 6)
+    (a move at two heights passes all six, :func:`pickplace_cli.paths.bspline._plane_paths`).
 
     On each piece ‖·‖² is a polynomial; its maximum is at an end or at a real root of its derivative.
     The square norms and their derivatives come from the products of the position coefficients by one
@@ -236,9 +274,10 @@ def unit_peaks(h: np.ndarray, coef: np.ndarray, lam: float, orders: tuple[int, .
     n = h.shape[0]
     nr = len(orders)
     k, m, n_sq, maps, expo, companion = _peak_plan(tuple(orders))
-    scaled = coef.copy()  # (N, 3 pieces, 2 axes, 6)
+    scaled = coef.copy()  # (N, pieces, 2 axes, 6)
     scaled[..., 1, :] *= 1.0 / lam
-    prod = (scaled[..., :, None] * scaled[..., None, :]).sum(axis=2).reshape(n, 3, _NC * _NC)
+    pieces = coef.shape[1]
+    prod = (scaled[..., :, None] * scaled[..., None, :]).sum(axis=2).reshape(n, pieces, _NC * _NC)
     both = prod @ maps  # (N, 3 pieces, nr·n_sq + nr·m)
     sq = both[..., : nr * n_sq].reshape(-1, n_sq, 1)  # rows (N, piece, order), lowest power first
     hf = both[..., nr * n_sq :].reshape(-1, m)  # derivative, highest power first
@@ -260,7 +299,7 @@ def unit_peaks(h: np.ndarray, coef: np.ndarray, lam: float, orders: tuple[int, .
             v = np.roots(hf[i]).real if np.any(hf[i]) else np.zeros(0)
             x[i, 2:] = 0.0
             x[i, 2 : 2 + v.size] = np.minimum(np.maximum(v, 0.0), hh[i])
-    vals = ((x[..., None] ** expo) @ sq).reshape(n, 3, nr, m + 1)
+    vals = ((x[..., None] ** expo) @ sq).reshape(n, pieces, nr, m + 1)
     return np.sqrt(np.maximum(vals.max(axis=(1, 3)), 0.0))
 
 

@@ -81,8 +81,8 @@ def plan_bspline(
     # engine (P = 1): control points, the exact polynomial of every piece, the exact peaks
     via = (task.via_points() - task.p_from)[None]
     k1a, k2a = np.array([float(k1)]), np.array([float(k2)])
-    sym = np.array([_symmetric_one(k1a[0], via[0])])  # _symmetric's decision, on floats (one move)
-    b_all, c_all, pk_all = batch_paths(k1a, k2a, via, symmetric=sym)
+    route = np.array([_route_one(k1a[0], via[0])])  # _route's decision, on floats (one move)
+    b_all, c_all, pk_all = batch_paths(k1a, k2a, via, route=route)
     breaks, coef = b_all[0], c_all[0]  # (m+1,), (m, 3, 6): the exact polynomial of each piece
     peaks = tuple(pk_all[0].tolist())
     # the end states exactly (clamped ends, Eq. 9: Q1 = … = Q4 and Q8 = … = Q11, so the derivatives there
@@ -189,31 +189,82 @@ _FALLING = [_falling(np.arange(DEGREE, -1, -1.0)[: DEGREE + 1 - k], k) for k in 
 UNIT_K1 = (0.1, 0.9)
 
 
-def batch_paths(k1: np.ndarray, k2: np.ndarray, via: np.ndarray, symmetric: np.ndarray | None = None):
+def batch_paths(k1: np.ndarray, k2: np.ndarray, via: np.ndarray, route: np.ndarray | None = None):
     """The B-spline paths of P moves: (breaks (P, 7), position coefficients (P, 6, 3, 6) [displacement from
     P1, highest power first], peaks (P, 3) of ‖p′‖, ‖p″‖, ‖p‴‖ at T = 1). ``via`` (P, 5, 3) are the via
     points minus P1.
 
-    Moves between end points at the same height (the common case; the path is then symmetric about
-    τ = 1/2) use the closed form of the table build (:func:`pickplace_cli.lookup.bspline_optimum.unit_pieces`, ~20 numpy
-    calls instead of the ~300 of the Cox–de Boor recursion); the others, and k1 outside ``UNIT_K1``, the
-    batched de Boor path. Either way every row is computed by operations on that row alone, so one move
-    planned alone and the same move in a batch of thousands get bitwise the same path (tested).
-    ``symmetric``: the rows' :func:`_symmetric` when the caller knows it already."""
+    Closed forms of the table build instead of the ~300 numpy calls of the Cox–de Boor recursion: moves
+    between end points at the same height (the path is then symmetric about τ = 1/2) from the unit path
+    (:func:`pickplace_cli.lookup.bspline_optimum.unit_pieces`, :func:`_unit_paths`); moves between end points
+    at two heights (their via points lie in one vertical plane) from four cardinal functions
+    (:func:`~pickplace_cli.lookup.bspline_optimum.plane_pieces`, :func:`_plane_paths`). Any other via points,
+    and k1 outside ``UNIT_K1``, take the batched de Boor path. Either way every row is computed by operations
+    on that row alone, so one move planned alone and the same move in a batch of thousands get bitwise the
+    same path (tested). ``route``: the rows' :func:`_route` when the caller knows it already."""
     k1 = np.asarray(k1, float)
     k2 = np.asarray(k2, float)
     via = np.asarray(via, float)
-    sym = _symmetric(k1, via) if symmetric is None else symmetric
-    if sym.all():
-        return _unit_paths(k1, k2, via)
-    if not sym.any():
-        return _deboor_paths(k1, k2, via)
+    route = _route(k1, via) if route is None else route
+    fns = (_unit_paths, _plane_paths, _deboor_paths)
+    first = route[0] if len(route) else ROUTE_DEBOOR
+    if (route == first).all():
+        return fns[first](k1, k2, via)
     breaks = np.empty((len(k1), 7))
     coef = np.empty((len(k1), 6, 3, 6))
     peaks = np.empty((len(k1), 3))
-    for rows, fn in ((sym, _unit_paths), (~sym, _deboor_paths)):
-        breaks[rows], coef[rows], peaks[rows] = fn(k1[rows], k2[rows], via[rows])
+    for r, fn in enumerate(fns):
+        rows = route == r
+        if rows.any():
+            breaks[rows], coef[rows], peaks[rows] = fn(k1[rows], k2[rows], via[rows])
     return breaks, coef, peaks
+
+
+#: :func:`batch_paths`' ways to a path: the symmetric closed form, the planar one, the de Boor recursion
+ROUTE_UNIT, ROUTE_PLANE, ROUTE_DEBOOR = 0, 1, 2
+
+
+def _route(k1: np.ndarray, via: np.ndarray) -> np.ndarray:
+    """Each row's way to its path (ROUTE_*): symmetric (:func:`_symmetric`), else planar (:func:`_planar`), else
+    de Boor."""
+    return np.where(_symmetric(k1, via), ROUTE_UNIT, np.where(_planar(k1, via), ROUTE_PLANE, ROUTE_DEBOOR))
+
+
+def _route_one(k1: float, via: np.ndarray) -> int:
+    """:func:`_route` of one move in Python floats (the same decisions, bitwise)."""
+    if _symmetric_one(k1, via):
+        return ROUTE_UNIT
+    return ROUTE_PLANE if _planar_one(k1, via) else ROUTE_DEBOOR
+
+
+def _planar(k1: np.ndarray, via: np.ndarray) -> np.ndarray:
+    """Rows whose via points are those of Task.via_points at any heights: P2 straight above P1, P3 above the
+    midpoint, P4 above P5 (so the path is P1 + s_u(τ)·(P5 − P1) horizontally), with b > 0, P3 above P1
+    and k1 in ``UNIT_K1``."""
+    d = via[:, 4]
+    expect = np.zeros(via.shape[:2] + (2,))
+    expect[:, 2] = d[:, :2] / 2
+    expect[:, 3:] = d[:, None, :2]
+    scale = np.abs(via).reshape(len(via), -1).max(axis=1)
+    off = np.abs(via[:, :, :2] - expect).reshape(len(via), -1).max(axis=1)
+    return (
+        (off <= 1e-13 * scale)
+        & (np.abs(via[:, 0, 2]) <= 1e-13 * scale)
+        & (via[:, 2, 2] > 0.0)
+        & (np.hypot(d[:, 0], d[:, 1]) > 1e-9 * scale)
+        & (k1 >= UNIT_K1[0])
+        & (k1 <= UNIT_K1[1])
+    )
+
+
+def _planar_one(k1: float, via: np.ndarray) -> bool:
+    """:func:`_planar` of one move (``via`` (5, 3)) in Python floats."""
+    (x0, y0, z0), (x1, y1, z1), (x2, y2, z2), (x3, y3, z3), (x4, y4, z4) = via.tolist()
+    scale = max(abs(x0), abs(y0), abs(z0), abs(x1), abs(y1), abs(z1), abs(x2), abs(y2), abs(z2), abs(x3), abs(y3),
+                abs(z3), abs(x4), abs(y4), abs(z4))
+    off = max(abs(x0), abs(y0), abs(x1), abs(y1), abs(x2 - x4 / 2), abs(y2 - y4 / 2), abs(x3 - x4), abs(y3 - y4))
+    return bool(off <= 1e-13 * scale and abs(z0) <= 1e-13 * scale and z2 > 0.0
+                and np.hypot(x4, y4) > 1e-9 * scale and UNIT_K1[0] <= k1 <= UNIT_K1[1])
 
 
 def _symmetric(k1: np.ndarray, via: np.ndarray) -> np.ndarray:
@@ -275,6 +326,47 @@ def _unit_paths(k1: np.ndarray, k2: np.ndarray, via: np.ndarray):
 
 
 _SIGN = (-1.0) ** np.arange(6)  # x → −x on Taylor coefficients, lowest power first
+
+
+def _plane_paths(k1: np.ndarray, k2: np.ndarray, via: np.ndarray):
+    """:func:`batch_paths` of moves whose via points lie in one vertical plane (:func:`_planar`: end points at
+    two heights) from the cardinal functions A1 = s_u, A2, S1, S2 of
+    :func:`~pickplace_cli.lookup.bspline_optimum.plane_pieces` and their mirror images on [1/2, 1]: p − P1 =
+    s_u(τ)·(P5 − P1) horizontally and w(τ) = Σ c_i F_i(τ) vertically, c from the via heights; the peaks
+    ‖p⁽ʳ⁾‖ = b ‖(s_u⁽ʳ⁾, (w/h)⁽ʳ⁾/λ)‖ (h = P3's height over P1, λ = b/h) on all six pieces (no symmetry)."""
+    from ..lookup.bspline_optimum import _EXP, _SHIFT, plane_pieces, unit_peaks
+
+    n = len(k1)
+    d = via[:, 4]
+    top = via[:, 2, 2]
+    zt = via[:, :, 2] / top[:, None]  # the via heights over P3's
+    h, half = plane_pieces(k1, k2)  # (P, 3), (P, 3, 4, 6) lowest power first
+    # the mirrored pieces 5, 4, 3 of pieces 0, 1, 2: Taylor shift to the piece's right end, x → −x
+    right = ((_SHIFT * h[:, :, None, None, None] ** _EXP) @ half[..., None])[..., 0] * _SIGN
+    right[:, :, 0] = -right[:, :, 0]  # A1: 1 − A1(1 − τ)
+    right[:, :, 0, 0] += 1.0
+    right[:, :, 1] = -right[:, :, 1]  # A2: −A2(1 − τ); S1, S2 as they are
+    full = np.concatenate([half, right[:, ::-1]], axis=1)  # (P, 6 pieces, 4 functions, 6)
+    c = np.empty((n, 4, 1, 1))  # the vertical path's via values (0, z1, z2, z3, z4)/h in the cardinal basis
+    c[:, 0, 0, 0] = zt[:, 4]
+    c[:, 1, 0, 0] = (zt[:, 3] - zt[:, 4] - zt[:, 1]) / 2
+    c[:, 2, 0, 0] = (zt[:, 3] - zt[:, 4] + zt[:, 1]) / 2
+    c[:, 3, 0, 0] = zt[:, 2] - zt[:, 4] / 2
+    unit = np.empty((n, 6, 2, 6))
+    unit[:, :, 0] = full[:, :, 0]
+    unit[:, :, 1] = full[:, :, 0] * c[:, 0] + full[:, :, 1] * c[:, 1] + full[:, :, 2] * c[:, 2] + full[:, :, 3] * c[:, 3]
+    b = np.hypot(d[:, 0], d[:, 1])
+    peaks = b[:, None] * unit_peaks(np.concatenate([h, h[:, ::-1]], axis=1), unit, (b / top)[:, None, None])
+    unit = unit[..., ::-1]  # highest power first
+    coef = np.empty((n, 6, 3, 6))
+    coef[:, :, 0] = d[:, 0, None, None] * unit[:, :, 0]
+    coef[:, :, 1] = d[:, 1, None, None] * unit[:, :, 0]
+    coef[:, :, 2] = top[:, None, None] * unit[:, :, 1]
+    breaks = np.empty((n, 7))  # the arithmetic of batch_li_knots (bitwise its interior knots)
+    breaks[:, 0], breaks[:, 3], breaks[:, 6] = 0.0, 0.5, 1.0
+    breaks[:, 1], breaks[:, 2] = k1 * k2 / 2, k1 / 2
+    breaks[:, 4], breaks[:, 5] = 1 - k1 / 2, 1 - k1 * k2 / 2
+    return breaks, coef, peaks
 
 
 def _deboor_paths(k1: np.ndarray, k2: np.ndarray, via: np.ndarray):

@@ -242,7 +242,8 @@ def test_symmetric_closed_form_path_equals_de_boor():
     band: piece polynomials to 1e-9 of the largest coefficient of each power (measured 1.4e-10 at
     k1 = 0.1 with k2 = 1e-4, ~3e-12 inside; the closed form loses digits towards k1 → 0, hence UNIT_K1)
     and exact peaks to 1e-10 relative (measured 1.3e-11). Moves at two heights, and k1 outside UNIT_K1,
-    take the de Boor path, and a batch mixing both gives each row what it gets alone."""
+    take another path (two heights: the planar closed form, test_planar_closed_form_path_equals_de_boor; k1
+    outside the band: de Boor), and a batch mixing them gives each row what it gets alone."""
     from pickplace_cli.paths.bspline import UNIT_K1, _deboor_paths, _symmetric, _unit_paths, batch_paths
     from pickplace_cli.model.task import Task
 
@@ -271,6 +272,59 @@ def test_symmetric_closed_form_path_equals_de_boor():
     b, c, p = batch_paths(k1, np.full(4, 0.3), via2)
     for i in range(4):
         bi, ci, pi = batch_paths(k1[i : i + 1], np.full(1, 0.3), via2[i : i + 1])
+        assert np.array_equal(bi[0], b[i]) and np.array_equal(ci[0], c[i]) and np.array_equal(pi[0], p[i])
+
+
+def test_planar_closed_form_path_equals_de_boor():
+    """batch_paths' closed form for moves between end points at two heights (four cardinal functions of
+    plane_pieces, mirrored, combined by the via heights) against the batched de Boor path through the same via
+    points, on 200 random moves per k1 band (ends 0 to 20 cm apart in height, P1 the lower or the higher):
+    piece polynomials to 1e-9 of the largest coefficient of each power (measured 1.5e-10 at k1 = 0.1 with
+    k2 = 1e-4, ~1e-11 inside), exact peaks to 1e-10 relative (measured 8e-12). Routing: a move at one height
+    takes the symmetric form, at two heights the planar one, other via points and k1 outside UNIT_K1 de Boor;
+    the one-move decision (_route_one, on floats) is the batch's; a batch mixing all three gives each row
+    bitwise what it gets alone."""
+    from pickplace_cli.model.task import Task
+    from pickplace_cli.paths.bspline import (ROUTE_DEBOOR, ROUTE_PLANE, ROUTE_UNIT, UNIT_K1, _deboor_paths,
+                                             _plane_paths, _route, _route_one, _unit_paths, batch_paths)
+
+    rng = np.random.default_rng(11)
+    tasks = []
+    for _ in range(200):
+        r, a, z = rng.uniform(0.03, 0.3), rng.uniform(0, 2 * np.pi), rng.uniform(-0.9, -0.7)
+        dz = rng.uniform(-0.2, 0.2)
+        tasks.append(Task([-r * np.cos(a), -r * np.sin(a), z], [r * np.cos(a), r * np.sin(a), z + dz],
+                          rng.uniform(0.01, 0.06), rng.uniform(0.2, 0.8)))
+    via = np.stack([t.via_points() - t.p_from for t in tasks])
+    for lo, hi in ((UNIT_K1[0], UNIT_K1[0] + 0.02), UNIT_K1, (UNIT_K1[1] - 0.02, UNIT_K1[1])):
+        k1 = rng.uniform(lo, hi, 200)
+        k2 = np.r_[rng.uniform(0.01, 0.99, 190), np.full(10, 1e-4)]
+        assert (_route(k1, via) == ROUTE_PLANE).all()
+        assert all(_route_one(a, v) == ROUTE_PLANE for a, v in zip(k1[:20], via[:20]))
+        b1, c1, p1 = _plane_paths(k1, k2, via)
+        b2, c2, p2 = _deboor_paths(k1, k2, via)
+        np.testing.assert_array_equal(b1, b2)
+        for o in range(6):
+            np.testing.assert_allclose(c1[..., o], c2[..., o], rtol=0, atol=1e-9 * np.abs(c2[..., o]).max())
+        np.testing.assert_allclose(p1, p2, rtol=1e-10)
+    # the same form reduces to the symmetric one for a move at one height
+    flat = Task([-0.1525, 0, -0.8], [0.1525, 0, -0.8], 0.025, 0.5)
+    vf = (flat.via_points() - flat.p_from)[None]
+    bu, cu, pu = _unit_paths(np.r_[0.3], np.r_[0.2], vf)
+    bp, cp, pp = _plane_paths(np.r_[0.3], np.r_[0.2], vf)
+    np.testing.assert_allclose(cp, cu, rtol=0, atol=1e-11 * np.abs(cu).max())
+    np.testing.assert_allclose(pp, pu, rtol=1e-12)
+    # routing and a mixed batch: one height, two heights, P3 off the midpoint, k1 outside the band
+    odd = via[2].copy()
+    odd[2, 0] += 0.01
+    mixed = np.stack([vf[0], via[0], odd, via[1]])
+    k1 = np.r_[0.5, 0.5, 0.5, 0.05]
+    route = _route(k1, mixed)
+    assert list(route) == [ROUTE_UNIT, ROUTE_PLANE, ROUTE_DEBOOR, ROUTE_DEBOOR]
+    assert [_route_one(a, v) for a, v in zip(k1, mixed)] == list(route)
+    b, c, p = batch_paths(k1, np.full(4, 0.3), mixed)
+    for i in range(4):
+        bi, ci, pi = batch_paths(k1[i : i + 1], np.full(1, 0.3), mixed[i : i + 1])
         assert np.array_equal(bi[0], b[i]) and np.array_equal(ci[0], c[i]) and np.array_equal(pi[0], p[i])
 
 
