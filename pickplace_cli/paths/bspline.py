@@ -308,7 +308,7 @@ def _unit_paths(k1: np.ndarray, k2: np.ndarray, via: np.ndarray):
     eta = via[:, 1, 2] / top
     h, half = unit_pieces(k1, k2, eta, rowwise=True)  # (P, 3), (P, 3, 2, 6) lowest power first
     b = np.hypot(d[:, 0], d[:, 1])
-    peaks = b[:, None] * unit_peaks(h, half, (b / top)[:, None, None])
+    peaks = b[:, None] * unit_peaks(h, half, (b / top)[:, None, None], prune=True)
     # the mirrored pieces 5, 4, 3 of pieces 0, 1, 2: Taylor shift to the piece's right end, x → −x
     right = ((_SHIFT * h[:, :, None, None, None] ** _EXP) @ half[..., None])[..., 0] * _SIGN
     right[:, :, 0] = -right[:, :, 0]  # s_u: 1 − s_u(1 − τ)
@@ -356,7 +356,8 @@ def _plane_paths(k1: np.ndarray, k2: np.ndarray, via: np.ndarray):
     unit[:, :, 0] = full[:, :, 0]
     unit[:, :, 1] = full[:, :, 0] * c[:, 0] + full[:, :, 1] * c[:, 1] + full[:, :, 2] * c[:, 2] + full[:, :, 3] * c[:, 3]
     b = np.hypot(d[:, 0], d[:, 1])
-    peaks = b[:, None] * unit_peaks(np.concatenate([h, h[:, ::-1]], axis=1), unit, (b / top)[:, None, None])
+    peaks = b[:, None] * unit_peaks(np.concatenate([h, h[:, ::-1]], axis=1), unit, (b / top)[:, None, None],
+                                    prune=True)
     unit = unit[..., ::-1]  # highest power first
     coef = np.empty((n, 6, 3, 6))
     coef[:, :, 0] = d[:, 0, None, None] * unit[:, :, 0]
