@@ -202,3 +202,32 @@ def test_invalid_utf8_is_named_at_its_line_after_the_rows_before_it(tmp_path):
     r = subprocess.run([sys.executable, "-m", "pickplace_cli", "plan", "--batch", str(f), "--json", "-q"],
                        capture_output=True, timeout=TIMEOUT)
     assert r.returncode == 1 and "latin.csv:3: not UTF-8 text" in r.stderr.decode()
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="F_SETPIPE_SZ is Linux's")
+def test_streamed_csv_widens_a_piped_stdout():
+    """A streamed CSV on a pipe asks for a 1 MiB pipe buffer (one 1 kHz answer of the Adept cycle, ~72 kB, is
+    more than Linux's 64 KiB default), so a row's answer goes in with one write; the pipe is the same object on
+    both ends, so its size is read here. JSON verdicts (a line per row) leave the pipe as it is."""
+    import fcntl
+
+    from pickplace_cli.cli.batch import STREAM_PIPE_BYTES
+
+    with open("/proc/sys/fs/pipe-max-size") as fh:
+        if int(fh.read()) < STREAM_PIPE_BYTES:
+            pytest.skip("this machine's pipe-max-size is below 1 MiB")
+    get = getattr(fcntl, "F_GETPIPE_SZ", 1032)
+    for args, widened in ((["-q", "--rate", "1000"], True), (["--json", "-q"], False)):
+        r, w = os.pipe()
+        try:
+            before = fcntl.fcntl(r, get)
+            proc = subprocess.run([sys.executable, "-m", "pickplace_cli", "plan", "--batch", "-", *args],
+                                  input=(HEADER + ROW).encode(), stdout=w, stderr=subprocess.PIPE, timeout=TIMEOUT)
+            assert proc.returncode == 0, proc.stderr
+            after = fcntl.fcntl(r, get)
+            assert after == (STREAM_PIPE_BYTES if widened else before)
+            if widened:  # the whole answer sat in the pipe with no reader: more than the 64 KiB default holds
+                assert len(os.read(r, 1 << 20)) > 65_536
+        finally:
+            os.close(r)
+            os.close(w)
