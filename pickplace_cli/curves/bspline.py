@@ -6,11 +6,13 @@ scipy's :class:`scipy.interpolate.BSpline` (table builds, the conveyor method, t
 
 **One evaluation path without scipy, on purpose.** Importing ``scipy.interpolate`` costs ~0.45 s of cold
 start (it pulls in scipy.special and scipy.optimize), more than half of the 0.8 s budget of one
-``pickplace plan`` [issue 7]. The online path of the default method (``methods.bspline.batch_paths``, for
-one move in ``plan`` and for thousands in the batch verdict engine) therefore uses the batched Cox–de Boor
-recursion at the end of this module (:func:`batch_control_points`, :func:`batch_pieces`: the same arithmetic
-scipy's de Boor does; the conveyor optimiser uses it for hundreds of knot vectors at once). Tests hold it to
-scipy's BSpline at 1e-12 (values and every derivative order).
+``pickplace plan`` [issue 7]. The online path of the default method (``paths.bspline.batch_paths``, for
+one move in ``plan`` and for thousands in the batch verdict engine) therefore uses numpy only: closed forms
+for a Task's via points (one height or two: ``lookup.bspline_optimum.unit_pieces`` / ``plane_pieces``), and
+for any other via points the batched Cox–de Boor recursion at the end of this module
+(:func:`batch_control_points`, :func:`batch_pieces`: the same arithmetic scipy's de Boor does; the conveyor
+optimiser uses it for hundreds of knot vectors at once). Tests hold it to scipy's BSpline at 1e-12 (values and
+every derivative order), and the closed forms to it.
 """
 
 from __future__ import annotations
