@@ -17,7 +17,7 @@ app = typer.Typer(
     help=(
         "Plan smooth, fast pick-and-place moves for high-speed robots and write the sampled joint "
         "trajectories (SI units: m, s, rad). Exit codes: 0 ok, 1 invalid input, 2 usage error, "
-        "3 limit exceeded, 4 unreachable point."
+        "3 limit exceeded, 4 unreachable point, 130 interrupted, 143 terminated (SIGTERM)."
     ),
     no_args_is_help=True,
     add_completion=True,
@@ -80,14 +80,43 @@ def _err(message: str) -> None:
     sys.stderr.write(f"pickplace: error: {message}\n")
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM (``kill``, ``timeout``, ``docker stop``, systemd), raised in the main thread: a KeyboardInterrupt, so
+    every clean-up Ctrl-C runs (the temporary ``-o`` file removed, worker processes stopped, build-table's
+    checkpoint reported) runs for it too; the CLI exits 143."""
+
+
+def _on_sigterm(signum, frame) -> None:  # noqa: ARG001 - signal handler signature
+    import os
+    import signal
+
+    if os.getpid() != _MAIN_PID[0]:  # a forked worker (-j N, build-table): die as SIGTERM would have it
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
+        os.kill(os.getpid(), signal.SIGTERM)
+        return
+    raise Terminated()
+
+
+_MAIN_PID = [0]
+
+
 def _handle_errors(fn: Callable) -> Callable:
-    """Turn the library's typed errors into one line on stderr and the documented exit code."""
+    """Turn the library's typed errors into one line on stderr and the documented exit code; SIGTERM is handled
+    like Ctrl-C (clean-up, one line) with exit 143."""
 
     @functools.wraps(fn)
     def wrapper(*args, **kwargs):
+        import os
+        import signal
+        import threading
+
         from ..model.errors import PickplaceError
 
         _JSON_ERRORS[0] = False
+        previous = None
+        if threading.current_thread() is threading.main_thread():
+            _MAIN_PID[0] = os.getpid()
+            previous = signal.signal(signal.SIGTERM, _on_sigterm)
         try:
             return fn(*args, **kwargs)
         except PickplaceError as exc:
@@ -97,6 +126,9 @@ def _handle_errors(fn: Callable) -> Callable:
 
                 sys.stdout.write(json.dumps({"exit_code": exc.exit_code, "error": str(exc)}) + "\n")
             raise typer.Exit(exc.exit_code) from None
+        except Terminated:
+            _err("terminated (SIGTERM); no output file was changed")
+            raise typer.Exit(143) from None
         except KeyboardInterrupt:
             _err("interrupted; no output file was changed")
             raise typer.Exit(130) from None
@@ -106,6 +138,13 @@ def _handle_errors(fn: Callable) -> Callable:
                 sys.stdout = None  # type: ignore[assignment]
             finally:
                 raise typer.Exit(0) from None
+        except OSError as exc:  # stdout or stdin itself failed (e.g. `> /dev/full`: no space left on device)
+            _err(f"standard input/output: read or write failed: {exc.strerror or exc}")
+            sys.stdout = None  # type: ignore[assignment]  # (its buffer cannot be flushed at exit either)
+            raise typer.Exit(1) from None
+        finally:
+            if previous is not None:
+                signal.signal(signal.SIGTERM, previous)
 
     return wrapper
 

@@ -103,8 +103,9 @@ def _batch_line(codes: list, first_failed, written) -> None:
     )
 
 
-def _check_output_paths(output: str, report: Optional[str]) -> None:
-    """Refuse colliding or impossible outputs before anything is computed or written."""
+def _check_output_paths(output: Optional[str], report: Optional[str]) -> None:
+    """Refuse colliding or impossible outputs before anything is computed or written (``output`` None: no
+    trajectory is written, as with ``--json`` alone)."""
     import os
 
     from ..model.errors import ExportError
@@ -115,7 +116,7 @@ def _check_output_paths(output: str, report: Optional[str]) -> None:
         check_writable(report)
         if report == "-" and output == "-":
             raise ExportError("report = -: stdout already carries the trajectory; give --report a file or -o a file")
-        if report != "-" and output != "-" and os.path.abspath(report) == os.path.abspath(output):
+        if output is not None and report != "-" and output != "-" and os.path.abspath(report) == os.path.abspath(output):
             raise ExportError(f"report = {report}: the same file as --output; give them different paths")
 
 

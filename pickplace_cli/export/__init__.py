@@ -31,8 +31,13 @@ def atomic_output(path: str | Path | None, binary: bool = False) -> Iterator[IO]
     link points to) on success; a device or named pipe is written in place (see the module docstring)."""
     if path is None or str(path) == "-":
         stream = sys.stdout.buffer if binary else sys.stdout
-        yield stream
-        stream.flush()
+        try:
+            yield stream
+            stream.flush()
+        except BrokenPipeError:  # the reader of the pipe went away: the CLI's own handling (exit 0)
+            raise
+        except OSError as exc:  # e.g. `> /dev/full`: no space left
+            raise ExportError(f"output -: write failed: {exc.strerror or exc}") from None
         return
     target, in_place = _output_target(path)
     if in_place:

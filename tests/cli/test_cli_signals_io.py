@@ -1,0 +1,113 @@
+"""The process's own edges (found by a new-user review, session 14): SIGTERM handled like Ctrl-C (exit 143, one
+line, the temporary `-o` file removed, worker processes gone), a failing stdout (`> /dev/full`) as one line, and
+`--json --report FILE` without `-o`. Real subprocesses: signals and file descriptors are the point."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+HEADER = "from_x,from_y,from_z,to_x,to_y,to_z\n"
+ROW = "-0.1525,0,-0.8,0.1525,0,-0.8\n"
+ADEPT = ["--from", "-0.1525,0,-0.8", "--to", "0.1525,0,-0.8"]
+TIMEOUT = 60.0
+
+
+def _cli(*args: str) -> list[str]:
+    return [sys.executable, "-m", "pickplace_cli", *args]
+
+
+def _children(pid: int) -> list[int]:
+    """The live child processes of ``pid`` (from /proc: no psutil)."""
+    out = []
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            try:
+                with open(f"/proc/{entry}/stat") as fh:
+                    fields = fh.read().rsplit(")", 1)[1].split()
+            except OSError:
+                continue
+            if int(fields[1]) == pid and fields[0] != "Z":
+                out.append(int(entry))
+    return out
+
+
+def _alive(pid: int) -> bool:
+    try:
+        with open(f"/proc/{pid}/stat") as fh:
+            return fh.read().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc"), reason="reads the process table from /proc")
+@pytest.mark.parametrize("workers", ["1", "2"])
+def test_sigterm_stream_exits_143_cleanly(tmp_path, workers):
+    """SIGTERM to a stream (`kill`, `timeout`, `docker stop`): one line, exit 143, the temporary -o file removed,
+    an existing -o untouched, and no worker process left behind (they used to outlive the main process forever,
+    holding stdout open, so the next stage of the pipeline never saw its end)."""
+    out = tmp_path / "moves.csv"
+    out.write_text("the previous good file\n")
+    proc = subprocess.Popen(_cli("plan", "--batch", "-", "-q", "-j", workers, "-o", str(out)), stdin=subprocess.PIPE,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path)
+    try:
+        proc.stdin.write(HEADER + ROW)
+        proc.stdin.flush()
+        deadline = time.monotonic() + TIMEOUT
+        while not list(tmp_path.glob(".moves.csv.*.tmp")):  # the first row is planned and being written
+            assert time.monotonic() < deadline and proc.poll() is None, proc.stderr.read()
+            time.sleep(0.05)
+        kids = _children(proc.pid)
+        assert len(kids) >= (2 if workers == "2" else 0)
+        proc.send_signal(signal.SIGTERM)
+        assert proc.wait(TIMEOUT) == 143
+        err = proc.stderr.read()
+        assert err.strip() == "pickplace: error: terminated (SIGTERM); no output file was changed"
+        assert out.read_text() == "the previous good file\n"
+        assert not list(tmp_path.glob(".moves.csv.*"))
+        deadline = time.monotonic() + 10
+        while any(_alive(k) for k in kids):
+            assert time.monotonic() < deadline, f"worker processes {kids} outlived the main process"
+            time.sleep(0.05)
+    finally:
+        proc.kill()
+        proc.wait()
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full")
+@pytest.mark.parametrize("args, stdin", [
+    (["plan", *ADEPT, "-q"], None),
+    (["plan", *ADEPT, "-q", "-f", "mcap"], None),
+    (["plan", "--batch", "-", "-q"], HEADER + ROW),
+    (["plan", "--batch", "-", "-q", "--json"], HEADER + ROW),
+])
+def test_a_full_stdout_is_one_line_exit_1(args, stdin):
+    """`> /dev/full` (no space left on device): one line naming the output, exit 1, no traceback."""
+    with open("/dev/full", "w") as full:
+        r = subprocess.run(_cli(*args), input=stdin, stdout=full, stderr=subprocess.PIPE, text=True, timeout=TIMEOUT)
+    assert r.returncode == 1
+    assert "Traceback" not in r.stderr
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("pickplace: error: ") and "No space left on device" in lines[0]
+
+
+@pytest.mark.parametrize("batch", [False, True])
+def test_json_with_report_file_and_no_output(tmp_path, batch):
+    """`--json --report FILE` without -o: the summary on stdout, the report in the file (it raised a TypeError
+    traceback: the output-collision check compared the report's path with no output)."""
+    rep = tmp_path / "rep.json"
+    args = ["plan", "--batch", "-"] if batch else ["plan", *ADEPT]
+    r = subprocess.run(_cli(*args, "--json", "-q", "--report", str(rep)), input=HEADER + ROW if batch else None,
+                       capture_output=True, text=True, timeout=TIMEOUT)
+    assert r.returncode == 0, r.stderr
+    line = json.loads(r.stdout.splitlines()[0])
+    assert line["exit_code"] == 0
+    doc = json.loads(rep.read_text())
+    limits = doc["moves"][0]["limits"] if batch else doc["limits"]
+    assert limits["ok"] is True
