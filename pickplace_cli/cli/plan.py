@@ -120,8 +120,8 @@ def plan(
     ),
     rate: Optional[float] = typer.Option(None, "--rate", help="Samples per second in Hz. [default: profile]"),
     batch: Optional[str] = typer.Option(
-        None, "--batch", help="Plan many moves from a CSV ('-' = stdin or a named pipe: streamed, each row answered "
-        "and flushed as soon as it is read): columns from_x,from_y,from_z,to_x,to_y,to_z "
+        None, "--batch", help="Plan many moves from a CSV file; '-' (stdin) or the path of a named pipe is streamed: "
+        "each row answered and flushed as soon as it is read. Columns from_x,from_y,from_z,to_x,to_y,to_z "
         "[m], optional height [m], eta, v_from_x.. v_to_z [m/s], time [s|auto|fit|optimal]; a belt row (as "
         "--to-belt): to_belt_vx,to_belt_vy,to_belt_vz [m/s] and optional latency [s >= 0]. Output gets a move column. "
         "A t_detect column makes it a belt schedule (one detected part per row, in time order, the robot's state "
@@ -144,8 +144,9 @@ def plan(
     ),
     columns: Optional[str] = typer.Option(
         None, "--columns", help="CSV: write only these columns, in this order: header names without units "
-        "(t, x, vx, ax, jx, q1, qd1, qdd1, torque1, motor_speed1, motor_torque1, …) or globs (q?, motor_*), "
-        "comma-separated, e.g. t,q1,q2,q3 for a PLC's position feed. A batch's move column stays first. Default: all.",
+        "(t, x, vx, ax, jx, q1, qd1, qdd1, torque1, motor_speed1, motor_torque1, …), or with the unit exactly as the "
+        "header prints it (q1[rad], torque1[N*m]), or shell-style globs (q?, q[12], motor_*), comma-separated, e.g. "
+        "t,q1,q2,q3 for a PLC's position feed. A batch's move column stays first. Default: all.",
     ),
     mcap_flavor: McapFlavor = typer.Option(
         McapFlavor.ros2, "--mcap-flavor", help="MCAP: ros2 (CDR, ROS 2 messages) or foxglove (JSON, Foxglove schemas)."
@@ -181,7 +182,7 @@ def plan(
     """Plan one move (or a round trip, or a batch), check it against the robot's limits, write the samples.
 
     CSV columns: t[s], x y z [m], vx… [m/s], ax… [m/s^2], jx… [m/s^3], then per joint q<i>, qd<i>, qdd<i>,
-    then torque<i> (joint side, N·m or N), motor_speed<i> [rad/s], motor_torque<i> [N·m]; a batch or round
+    then torque<i> (joint side, N*m or N), motor_speed<i> [rad/s], motor_torque<i> [N*m]; a batch or round
     trip adds a leading move column. Exit 3 when a limit is exceeded, 4 when a point is unreachable or
     outside the workcell, 1 for invalid input; a batch exits with the highest code of its rows.
     """

@@ -111,11 +111,16 @@ def format_rows(data: np.ndarray, sep: str = ",", newline: str = "\n", int_colum
 
 
 def parse_columns(text: str) -> tuple[str, ...]:
-    """``--columns`` text: comma-separated names or globs, blanks ignored; ExportError when none is given."""
-    names = tuple(c.strip() for c in text.split(",") if c.strip())
-    if not names:
+    """``--columns`` text: comma-separated names or globs (blanks around a name ignored); ExportError when none is
+    given or one is empty (``t,,q1``, a trailing comma: a typo, not silently dropped)."""
+    parts = [c.strip() for c in text.split(",")]
+    if not any(parts):
         raise ExportError(f"columns = {text!r}: give at least one column name (e.g. t,q1,q2,q3)")
-    return names
+    if not all(parts):
+        where = parts.index("") + 1
+        raise ExportError(f"columns = {text!r}: name {where} of {len(parts)} is empty; give comma-separated names "
+                          "(e.g. t,q1,q2,q3)")
+    return tuple(parts)
 
 
 @lru_cache(maxsize=64)
@@ -133,9 +138,13 @@ def select_columns(names: tuple[str, ...], columns: tuple[str, ...]) -> tuple[in
         else:
             hits = [i for i, b in enumerate(bare) if fnmatch.fnmatchcase(b, c)]
         if not hits:
-            move = " (a batch's move column is always written, first)" if fnmatch.fnmatchcase("move", c.split("[")[0]) else ""
+            base = c.split("[", 1)[0]
+            move = " (a batch's move column is always written, first)" if fnmatch.fnmatchcase("move", base) else ""
+            if "[" in c and base in bare:  # the right name with another unit (q1[deg], torque1[N·m])
+                raise ExportError(f"columns = {c!r}: no such column; the header writes {names[bare.index(base)]} "
+                                  "(give the name without its unit, or the unit as in the header)")
             raise ExportError(f"columns = {c!r}: no such column{move}; the columns are {', '.join(bare)} "
-                              "(names without units, or as in the header; globs such as q? or motor_* allowed)")
+                              "(names without units, or as in the header; globs such as q? or q[12] allowed)")
         for i in hits:
             if i in out:
                 raise ExportError(f"columns = {','.join(columns)!r}: {bare[i]} is selected twice")

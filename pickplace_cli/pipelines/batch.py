@@ -200,6 +200,8 @@ def _row(number: int, line: int, text: str, header: list[str], sep: str, source:
                 x = float(cell)
             except ValueError:
                 hint = " (the decimal mark is '.')" if "," in cell and sep != "," else ""
+                if name == "time":
+                    hint += "; give seconds, or auto, fit or optimal"
                 raise TaskError(f"{name} = {cell!r}: not a number{hint}") from None
             if not math.isfinite(x):
                 raise TaskError(f"{name} = {cell!r}: must be finite")

@@ -73,6 +73,10 @@ def test_tsv_and_twincat_dialects(tmp_path):
     ("t,q1,q?", "q1 is selected twice"),
     (" , ", "give at least one column name"),
     ("T", "'T': no such column"),  # names are case-sensitive, like the header
+    ("t,,q1", "name 2 of 3 is empty"),  # a typo is not silently dropped
+    ("t,", "name 2 of 2 is empty"),
+    ("q1[deg]", "the header writes q1[rad]"),  # the right name with another unit
+    ("torque1[N·m]", "the header writes torque1[N*m]"),
 ])
 def test_bad_columns_are_a_usage_error_naming_the_value(value, says):
     r = subprocess.run([sys.executable, "-m", "pickplace_cli", "plan", *MOVE, "--columns", value],
