@@ -301,7 +301,7 @@ def _unit_paths(k1: np.ndarray, k2: np.ndarray, via: np.ndarray):
     """:func:`batch_paths` of symmetric moves from the closed-form unit path (s_u, s_v) of [Li2018,
     Eq. (16)] on [0, 1/2] and its mirror image s_u(1 − τ) = 1 − s_u(τ), s_v(1 − τ) = s_v(τ):
     p − P1 = s_u(τ)·(P5 − P1) + s_v(τ)·h e_z with h the clearance, and ‖p⁽ʳ⁾‖ = b ‖(s_u⁽ʳ⁾, s_v⁽ʳ⁾/λ)‖."""
-    from ..lookup.bspline_optimum import _EXP, _SHIFT, unit_peaks, unit_pieces
+    from ..lookup.bspline_optimum import unit_peaks, unit_pieces
 
     d = via[:, 4]
     top = via[:, 2, 2]
@@ -309,23 +309,8 @@ def _unit_paths(k1: np.ndarray, k2: np.ndarray, via: np.ndarray):
     h, half = unit_pieces(k1, k2, eta, rowwise=True)  # (P, 3), (P, 3, 2, 6) lowest power first
     b = np.hypot(d[:, 0], d[:, 1])
     peaks = b[:, None] * unit_peaks(h, half, (b / top)[:, None, None], prune=True)
-    # the mirrored pieces 5, 4, 3 of pieces 0, 1, 2: Taylor shift to the piece's right end, x → −x
-    right = ((_SHIFT * h[:, :, None, None, None] ** _EXP) @ half[..., None])[..., 0] * _SIGN
-    right[:, :, 0] = -right[:, :, 0]  # s_u: 1 − s_u(1 − τ)
-    right[:, :, 0, 0] += 1.0
-    unit = np.concatenate([half, right[:, ::-1]], axis=1)[..., ::-1]  # (P, 6, 2, 6) highest power first
-    coef = np.empty((len(k1), 6, 3, 6))
-    coef[:, :, 0] = d[:, 0, None, None] * unit[:, :, 0]
-    coef[:, :, 1] = d[:, 1, None, None] * unit[:, :, 0]
-    coef[:, :, 2] = top[:, None, None] * unit[:, :, 1]
-    breaks = np.empty((len(k1), 7))  # the arithmetic of batch_li_knots (bitwise its interior knots)
-    breaks[:, 0], breaks[:, 3], breaks[:, 6] = 0.0, 0.5, 1.0
-    breaks[:, 1], breaks[:, 2] = k1 * k2 / 2, k1 / 2
-    breaks[:, 4], breaks[:, 5] = 1 - k1 / 2, 1 - k1 * k2 / 2
-    return breaks, coef, peaks
-
-
-_SIGN = (-1.0) ** np.arange(6)  # x → −x on Taylor coefficients, lowest power first
+    unit = _mirror(h, half, odd=((0, 1.0),))  # s_u: 1 − s_u(1 − τ); s_v symmetric
+    return _li_breaks(k1, k2), _position_coefficients(d, top, unit), peaks
 
 
 def _plane_paths(k1: np.ndarray, k2: np.ndarray, via: np.ndarray):
@@ -334,19 +319,14 @@ def _plane_paths(k1: np.ndarray, k2: np.ndarray, via: np.ndarray):
     :func:`~pickplace_cli.lookup.bspline_optimum.plane_pieces` and their mirror images on [1/2, 1]: p − P1 =
     s_u(τ)·(P5 − P1) horizontally and w(τ) = Σ c_i F_i(τ) vertically, c from the via heights; the peaks
     ‖p⁽ʳ⁾‖ = b ‖(s_u⁽ʳ⁾, (w/h)⁽ʳ⁾/λ)‖ (h = P3's height over P1, λ = b/h) on all six pieces (no symmetry)."""
-    from ..lookup.bspline_optimum import _EXP, _SHIFT, plane_pieces, unit_peaks
+    from ..lookup.bspline_optimum import plane_pieces, unit_peaks
 
     n = len(k1)
     d = via[:, 4]
     top = via[:, 2, 2]
     zt = via[:, :, 2] / top[:, None]  # the via heights over P3's
     h, half = plane_pieces(k1, k2)  # (P, 3), (P, 3, 4, 6) lowest power first
-    # the mirrored pieces 5, 4, 3 of pieces 0, 1, 2: Taylor shift to the piece's right end, x → −x
-    right = ((_SHIFT * h[:, :, None, None, None] ** _EXP) @ half[..., None])[..., 0] * _SIGN
-    right[:, :, 0] = -right[:, :, 0]  # A1: 1 − A1(1 − τ)
-    right[:, :, 0, 0] += 1.0
-    right[:, :, 1] = -right[:, :, 1]  # A2: −A2(1 − τ); S1, S2 as they are
-    full = np.concatenate([half, right[:, ::-1]], axis=1)  # (P, 6 pieces, 4 functions, 6)
+    full = _mirror(h, half, odd=((0, 1.0), (1, 0.0)))  # A1: 1 − A1(1 − τ), A2: −A2(1 − τ); S1, S2 symmetric
     c = np.empty((n, 4, 1, 1))  # the vertical path's via values (0, z1, z2, z3, z4)/h in the cardinal basis
     c[:, 0, 0, 0] = zt[:, 4]
     c[:, 1, 0, 0] = (zt[:, 3] - zt[:, 4] - zt[:, 1]) / 2
@@ -358,16 +338,46 @@ def _plane_paths(k1: np.ndarray, k2: np.ndarray, via: np.ndarray):
     b = np.hypot(d[:, 0], d[:, 1])
     peaks = b[:, None] * unit_peaks(np.concatenate([h, h[:, ::-1]], axis=1), unit, (b / top)[:, None, None],
                                     prune=True)
-    unit = unit[..., ::-1]  # highest power first
-    coef = np.empty((n, 6, 3, 6))
+    return _li_breaks(k1, k2), _position_coefficients(d, top, unit), peaks
+
+
+_SIGN = (-1.0) ** np.arange(6)  # x → −x on Taylor coefficients, lowest power first
+
+
+def _mirror(h: np.ndarray, half: np.ndarray, odd: tuple[tuple[int, float], ...]) -> np.ndarray:
+    """The six pieces (P, 6, F, 6), lowest power first, of F functions given on [0, 1/2] by ``half`` (P, 3, F, 6)
+    with piece lengths ``h`` (P, 3): pieces 5, 4, 3 mirror pieces 0, 1, 2 (a Taylor shift to the piece's right end,
+    then x → −x). A function listed in ``odd`` as (index, c) is antisymmetric about τ = 1/2, f(1 − τ) = c − f(τ);
+    the others are symmetric, f(1 − τ) = f(τ)."""
+    from ..lookup.bspline_optimum import _EXP, _SHIFT
+
+    right = ((_SHIFT * h[:, :, None, None, None] ** _EXP) @ half[..., None])[..., 0] * _SIGN
+    for i, c in odd:
+        right[:, :, i] = -right[:, :, i]
+        if c:
+            right[:, :, i, 0] += c
+    return np.concatenate([half, right[:, ::-1]], axis=1)
+
+
+def _position_coefficients(d: np.ndarray, top: np.ndarray, unit: np.ndarray) -> np.ndarray:
+    """(P, 6, 3, 6) position coefficients [m, highest power first] of p − P1 = u(τ)·(P5 − P1) horizontally and
+    w(τ)·h vertically, from ``unit`` (P, 6, 2 (u, w), 6) lowest power first; ``d`` = P5 − P1, ``top`` = h."""
+    unit = unit[..., ::-1]
+    coef = np.empty((len(d), 6, 3, 6))
     coef[:, :, 0] = d[:, 0, None, None] * unit[:, :, 0]
     coef[:, :, 1] = d[:, 1, None, None] * unit[:, :, 0]
     coef[:, :, 2] = top[:, None, None] * unit[:, :, 1]
-    breaks = np.empty((n, 7))  # the arithmetic of batch_li_knots (bitwise its interior knots)
+    return coef
+
+
+def _li_breaks(k1: np.ndarray, k2: np.ndarray) -> np.ndarray:
+    """(P, 7) piece breaks 0, τ7, τ8, 1/2, τ10, τ11, 1 by the arithmetic of batch_li_knots (bitwise its interior
+    knots)."""
+    breaks = np.empty((len(k1), 7))
     breaks[:, 0], breaks[:, 3], breaks[:, 6] = 0.0, 0.5, 1.0
     breaks[:, 1], breaks[:, 2] = k1 * k2 / 2, k1 / 2
     breaks[:, 4], breaks[:, 5] = 1 - k1 / 2, 1 - k1 * k2 / 2
-    return breaks, coef, peaks
+    return breaks
 
 
 def _deboor_paths(k1: np.ndarray, k2: np.ndarray, via: np.ndarray):

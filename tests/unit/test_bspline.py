@@ -236,6 +236,19 @@ def test_batched_pieces_match_scipy():
             np.testing.assert_allclose(derivs[r][p], ref, rtol=0, atol=1e-10 * np.max(np.abs(ref)))
 
 
+def _assert_matches_de_boor(closed_form, k1, k2, via):
+    """A closed-form path (breaks, coefficients, peaks) against the batched de Boor path through the same via
+    points: breaks bitwise, piece polynomials to 1e-9 of the largest coefficient of each power, peaks 1e-10."""
+    from pickplace_cli.paths.bspline import _deboor_paths
+
+    b1, c1, p1 = closed_form(k1, k2, via)
+    b2, c2, p2 = _deboor_paths(k1, k2, via)
+    np.testing.assert_array_equal(b1, b2)
+    for o in range(6):
+        np.testing.assert_allclose(c1[..., o], c2[..., o], rtol=0, atol=1e-9 * np.abs(c2[..., o]).max())
+    np.testing.assert_allclose(p1, p2, rtol=1e-10)
+
+
 def test_symmetric_closed_form_path_equals_de_boor():
     """batch_paths' closed form for moves between end points at one height (the table's unit path and its
     mirror image) against the batched de Boor path through the same via points, on 200 random moves per k1
@@ -244,7 +257,7 @@ def test_symmetric_closed_form_path_equals_de_boor():
     and exact peaks to 1e-10 relative (measured 1.3e-11). Moves at two heights, and k1 outside UNIT_K1,
     take another path (two heights: the planar closed form, test_planar_closed_form_path_equals_de_boor; k1
     outside the band: de Boor), and a batch mixing them gives each row what it gets alone."""
-    from pickplace_cli.paths.bspline import UNIT_K1, _deboor_paths, _symmetric, _unit_paths, batch_paths
+    from pickplace_cli.paths.bspline import UNIT_K1, _symmetric, _unit_paths, batch_paths
     from pickplace_cli.model.task import Task
 
     rng = np.random.default_rng(5)
@@ -258,13 +271,8 @@ def test_symmetric_closed_form_path_equals_de_boor():
         k1 = rng.uniform(lo, hi, 200)
         k2 = np.r_[rng.uniform(0.01, 0.99, 190), np.full(10, 1e-4)]
         assert _symmetric(k1, via).all()
-        b1, c1, p1 = _unit_paths(k1, k2, via)
-        b2, c2, p2 = _deboor_paths(k1, k2, via)
-        np.testing.assert_array_equal(b1, b2)
-        for o in range(6):
-            np.testing.assert_allclose(c1[..., o], c2[..., o], rtol=0, atol=1e-9 * np.abs(c2[..., o]).max())
-        np.testing.assert_allclose(p1, p2, rtol=1e-10)
-    # outside the band, or at two heights: de Boor; a mixed batch row by row as alone
+        _assert_matches_de_boor(_unit_paths, k1, k2, via)
+    # outside the band: de Boor, at two heights the planar form; a mixed batch row by row as alone
     k1 = np.r_[0.05, 0.5, 0.95, 0.5]
     via2 = via[:4].copy()
     via2[3, 4, 2] = 0.01  # P5 1 cm higher (the via points no longer symmetric)
@@ -285,8 +293,8 @@ def test_planar_closed_form_path_equals_de_boor():
     the one-move decision (_route_one, on floats) is the batch's; a batch mixing all three gives each row
     bitwise what it gets alone."""
     from pickplace_cli.model.task import Task
-    from pickplace_cli.paths.bspline import (ROUTE_DEBOOR, ROUTE_PLANE, ROUTE_UNIT, UNIT_K1, _deboor_paths,
-                                             _plane_paths, _route, _route_one, _unit_paths, batch_paths)
+    from pickplace_cli.paths.bspline import (ROUTE_DEBOOR, ROUTE_PLANE, ROUTE_UNIT, UNIT_K1, _plane_paths, _route,
+                                             _route_one, _unit_paths, batch_paths)
 
     rng = np.random.default_rng(11)
     tasks = []
@@ -301,12 +309,7 @@ def test_planar_closed_form_path_equals_de_boor():
         k2 = np.r_[rng.uniform(0.01, 0.99, 190), np.full(10, 1e-4)]
         assert (_route(k1, via) == ROUTE_PLANE).all()
         assert all(_route_one(a, v) == ROUTE_PLANE for a, v in zip(k1[:20], via[:20]))
-        b1, c1, p1 = _plane_paths(k1, k2, via)
-        b2, c2, p2 = _deboor_paths(k1, k2, via)
-        np.testing.assert_array_equal(b1, b2)
-        for o in range(6):
-            np.testing.assert_allclose(c1[..., o], c2[..., o], rtol=0, atol=1e-9 * np.abs(c2[..., o]).max())
-        np.testing.assert_allclose(p1, p2, rtol=1e-10)
+        _assert_matches_de_boor(_plane_paths, k1, k2, via)
     # the same form reduces to the symmetric one for a move at one height
     flat = Task([-0.1525, 0, -0.8], [0.1525, 0, -0.8], 0.025, 0.5)
     vf = (flat.via_points() - flat.p_from)[None]
