@@ -144,8 +144,34 @@ def iter_batch(stream: IO[str], source: str = "batch", info: dict | None = None)
         )
 
 
+def _unit_of(name: str) -> str:
+    """The SI unit of a batch column (``1`` for η), as a header may write it: ``from_x[m]``, ``time[s]``."""
+    if name == "eta":
+        return "1"
+    if name in ("time", "latency", "t_detect"):
+        return "s"
+    if name.startswith(("v_from_", "v_to_", "to_belt_v")):
+        return "m/s"
+    return "m"
+
+
+def _without_unit(name: str, source: str, line: int) -> str:
+    """A header name with its unit in brackets (``from_x[m]``, the tool's own CSV style) as the bare name; a known
+    column with another unit is a TaskError naming the unit it takes (values are read in SI units only)."""
+    if not name.endswith("]") or "[" not in name:
+        return name
+    base, unit = name[:-1].split("[", 1)
+    base, unit = base.strip(), unit.strip()
+    if base not in REQUIRED + OPTIONAL + SCHEDULE_REQUIRED + SCHEDULE_OPTIONAL:
+        return name  # an unknown column: reported as such, with its text
+    if unit != _unit_of(base) and not (base == "eta" and unit in ("", "-")):
+        raise TaskError(f"{source}:{line}: column {name!r}: {base} is read in {_unit_of(base)} "
+                        f"(write {base} or {base}[{_unit_of(base)}])")
+    return base
+
+
 def _header(text: str, sep: str, source: str, line: int) -> list[str]:
-    header = [h.strip() for h in next(csv.reader([text], delimiter=sep))]
+    header = [_without_unit(h.strip(), source, line) for h in next(csv.reader([text], delimiter=sep))]
     schedule = "t_detect" in header
     required, optional = (SCHEDULE_REQUIRED, SCHEDULE_OPTIONAL) if schedule else (REQUIRED, OPTIONAL)
     unknown = [h for h in header if h not in required + optional]

@@ -114,3 +114,19 @@ def test_violation_text_wording():
     assert violation_text(low) == (
         "limit exceeded: q1 position = -0.61 rad at t = 0.0100 s; limit -0.5 rad (by 0.11 rad, 120.0 %)"
     )
+
+
+def test_header_names_may_carry_their_si_units():
+    """A header written in the tool's own CSV style, `from_x[m]`, `time[s]`, `eta[1]`, reads as the bare names;
+    another unit (`from_x[mm]`) is refused naming the unit the column is read in (no silent scaling)."""
+    with_units = MOVES.replace("from_x,from_y,from_z,to_x,to_y,to_z,height,time",
+                               "from_x[m],from_y[m],from_z[m],to_x[m],to_y[m],to_z[m],height[m],time[s]")
+    assert parsed(with_units) == parsed(MOVES)
+    extra = "from_x,from_y,from_z,to_x,to_y,to_z,eta[1],v_to_x[m/s]\n-0.1525,0,-0.8,0.1525,0,-0.8,0.4,0\n"
+    assert parsed(extra)[0][2] == {"from_x": -0.1525, "from_y": 0.0, "from_z": -0.8, "to_x": 0.1525, "to_y": 0.0,
+                                   "to_z": -0.8, "eta": 0.4, "v_to_x": 0.0}
+    for header, says in (("from_x[mm],from_y,from_z,to_x,to_y,to_z", "'from_x[mm]': from_x is read in m"),
+                         ("from_x,from_y,from_z,to_x,to_y,to_z,time[ms]", "'time[ms]': time is read in s"),
+                         ("from_x,from_y,from_z,to_x,to_y,to_z,v_to_x[m]", "'v_to_x[m]': v_to_x is read in m/s")):
+        with pytest.raises(TaskError, match=r"m:1: column " + says.replace("[", r"\[").replace("]", r"\]")):
+            read_batch_text(header + "\n-0.1525,0,-0.8,0.1525,0,-0.8" + ",1" * (header.count(",") - 5) + "\n", "m")
