@@ -80,29 +80,46 @@ def _err(message: str) -> None:
     sys.stderr.write(f"pickplace: error: {message}\n")
 
 
-class Terminated(KeyboardInterrupt):
-    """SIGTERM (``kill``, ``timeout``, ``docker stop``, systemd), raised in the main thread: a KeyboardInterrupt, so
-    every clean-up Ctrl-C runs (the temporary ``-o`` file removed, worker processes stopped, build-table's
-    checkpoint reported) runs for it too; the CLI exits 143."""
-
-
 def _on_sigterm(signum, frame) -> None:  # noqa: ARG001 - signal handler signature
+    """SIGTERM (``kill``, ``timeout``, ``docker stop``, systemd; to the process or its whole group): stop at once, in
+    the handler, whatever the main thread is doing — remove the temporary ``-o`` files being written
+    (:data:`pickplace_cli.export.PENDING`), say so in one line, kill the worker processes and exit 143. Not by
+    unwinding: a pool worker killed while sending a result leaves the pool's result pipe half-written, and a pool
+    shut down in an orderly way then waits forever for the rest of it. A forked worker whose parent is alive
+    leaves the signal to the parent (which kills it); an orphaned one dies of it."""
     import os
     import signal
 
-    if os.getpid() != _MAIN_PID[0]:  # a forked worker (-j N, build-table): die as SIGTERM would have it
+    if os.getpid() != _MAIN_PID[0]:  # a forked worker (-j N, build-table)
+        if os.getppid() == _MAIN_PID[0]:
+            return
         signal.signal(signal.SIGTERM, signal.SIG_DFL)
         os.kill(os.getpid(), signal.SIGTERM)
         return
-    raise Terminated()
+    try:
+        from ..export import remove_pending
+
+        remove_pending()
+        _err("terminated (SIGTERM); no output file was changed")
+        for note in _TERM_NOTES:
+            sys.stderr.write(note)
+        sys.stderr.flush()
+        import multiprocessing
+
+        for child in multiprocessing.active_children():
+            child.kill()
+    finally:
+        os._exit(143)
 
 
 _MAIN_PID = [0]
+#: lines to print when SIGTERM stops the command (build-table: where its finished rows are, for --resume)
+_TERM_NOTES: list[str] = []
 
 
 def _handle_errors(fn: Callable) -> Callable:
-    """Turn the library's typed errors into one line on stderr and the documented exit code; SIGTERM is handled
-    like Ctrl-C (clean-up, one line) with exit 143."""
+    """Turn the library's typed errors into one line on stderr and the documented exit code; SIGTERM stops the
+    command with exit 143 (:func:`_on_sigterm`)."""
 
     @functools.wraps(fn)
     def wrapper(*args, **kwargs):
@@ -113,6 +130,7 @@ def _handle_errors(fn: Callable) -> Callable:
         from ..model.errors import PickplaceError
 
         _JSON_ERRORS[0] = False
+        _TERM_NOTES.clear()
         previous = None
         if threading.current_thread() is threading.main_thread():
             _MAIN_PID[0] = os.getpid()
@@ -126,9 +144,6 @@ def _handle_errors(fn: Callable) -> Callable:
 
                 sys.stdout.write(json.dumps({"exit_code": exc.exit_code, "error": str(exc)}) + "\n")
             raise typer.Exit(exc.exit_code) from None
-        except Terminated:
-            _err("terminated (SIGTERM); no output file was changed")
-            raise typer.Exit(143) from None
         except KeyboardInterrupt:
             _err("interrupted; no output file was changed")
             raise typer.Exit(130) from None
@@ -138,9 +153,12 @@ def _handle_errors(fn: Callable) -> Callable:
                 sys.stdout = None  # type: ignore[assignment]
             finally:
                 raise typer.Exit(0) from None
-        except OSError as exc:  # stdout or stdin itself failed (e.g. `> /dev/full`: no space left on device)
-            _err(f"standard input/output: read or write failed: {exc.strerror or exc}")
-            sys.stdout = None  # type: ignore[assignment]  # (its buffer cannot be flushed at exit either)
+        except OSError as exc:  # an I/O failure no layer above named (the writers name their output themselves)
+            _err(f"{exc.filename}: {exc.strerror or exc}" if exc.filename else f"I/O error: {exc.strerror or exc}")
+            try:
+                sys.stdout.flush()
+            except (OSError, ValueError, AttributeError):
+                sys.stdout = None  # type: ignore[assignment]  # a broken stdout: not flushed again at exit
             raise typer.Exit(1) from None
         finally:
             if previous is not None:

@@ -96,6 +96,7 @@ def build_table_cmd(
                         resume, output, table_format, quiet)
         return
     ckpt = _checkpoint_for(output, resume, workers)
+    _note_checkpoint_on_sigterm(ckpt)
     with contextlib.ExitStack() as stack:
         executor, n_workers, tick = _engine(stack, scheduler, workers, quiet, len(lams), "λ", eta=False)
         try:
@@ -170,6 +171,7 @@ def _build_table_2d(lams, lam_text, settings, eta_list, eta_min, eta_max, eta_st
         etas = eta_grid(lo, hi, eta_step)
         eta_text = f"{lo:g}..{hi:g} step {eta_step:g}"
     ckpt = _checkpoint_for(output, resume, workers)
+    _note_checkpoint_on_sigterm(ckpt)
     total = len(lams) * len(etas)
     t0 = time.perf_counter()
     with contextlib.ExitStack() as stack:
@@ -243,6 +245,15 @@ def _build_vel_table(eta: float, workers: int, output: str, quiet: bool) -> None
                                     progress=lambda done, total: progress.update(bar, completed=done, total=total))
     with atomic_output(output) as stream:
         stream.write(format_vel_table(table, __version__))
+
+
+def _note_checkpoint_on_sigterm(ckpt) -> None:
+    """SIGTERM stops a build at once (:func:`~pickplace_cli.cli.app._on_sigterm`): it then says where the finished
+    rows are, as Ctrl-C does."""
+    if ckpt is not None:
+        from .app import _TERM_NOTES
+
+        _TERM_NOTES.append(f"pickplace: finished rows are saved in {ckpt}; run the same command with --resume\n")
 
 
 def _checkpoint_for(output: str, resume: bool, workers: int):

@@ -78,10 +78,14 @@ def _json_summary(legs, cycle: float, code: int, exit_code: int) -> dict:
 
 
 def _emit_json(doc: dict) -> None:
+    """One JSON document as a line on stdout, flushed; a failing stdout (``> /dev/full``) is an ExportError."""
     import json
 
-    sys.stdout.write(json.dumps(doc, allow_nan=False, default=float) + "\n")
-    sys.stdout.flush()
+    from ..export import _CheckedStdout
+
+    out = _CheckedStdout(sys.stdout)
+    out.write(json.dumps(doc, allow_nan=False, default=float) + "\n")
+    out.flush()
 
 
 def _emit_row_json(res) -> None:

@@ -25,19 +25,60 @@ from ..model.errors import ExportError
 FLOAT_FORMAT = "%.12g"
 
 
+#: the temporary files being written by :func:`atomic_output` (removed by :func:`remove_pending` when SIGTERM
+#: stops the process at once, without unwinding)
+PENDING: set[str] = set()
+
+
+def remove_pending() -> int:
+    """Remove every temporary output file still being written (SIGTERM); → how many."""
+    n = 0
+    for tmp in list(PENDING):
+        try:
+            os.unlink(tmp)
+            n += 1
+        except OSError:
+            pass
+        PENDING.discard(tmp)
+    return n
+
+
+class _CheckedStdout:
+    """stdout as :func:`atomic_output` yields it: a failed write or flush (``> /dev/full``: no space left) is an
+    ExportError naming the output; a reader that went away stays a BrokenPipeError (the CLI exits 0). Every
+    other attribute is the stream's."""
+
+    def __init__(self, stream) -> None:
+        self._stream = stream
+
+    def write(self, data):
+        try:
+            return self._stream.write(data)
+        except BrokenPipeError:
+            raise
+        except OSError as exc:
+            raise ExportError(f"output -: write failed: {exc.strerror or exc}") from None
+
+    def flush(self) -> None:
+        try:
+            self._stream.flush()
+        except BrokenPipeError:
+            raise
+        except OSError as exc:
+            raise ExportError(f"output -: write failed: {exc.strerror or exc}") from None
+
+    def __getattr__(self, name: str):
+        return getattr(self._stream, name)
+
+
 @contextmanager
 def atomic_output(path: str | Path | None, binary: bool = False) -> Iterator[IO]:
     """Yield a stream: stdout for None or '-'; else a temp file renamed onto ``path`` (onto the file a symbolic
     link points to) on success; a device or named pipe is written in place (see the module docstring)."""
     if path is None or str(path) == "-":
-        stream = sys.stdout.buffer if binary else sys.stdout
-        try:
-            yield stream
-            stream.flush()
-        except BrokenPipeError:  # the reader of the pipe went away: the CLI's own handling (exit 0)
-            raise
-        except OSError as exc:  # e.g. `> /dev/full`: no space left
-            raise ExportError(f"output -: write failed: {exc.strerror or exc}") from None
+        stream = _CheckedStdout(sys.stdout.buffer if binary else sys.stdout)
+        yield stream  # type: ignore[misc]
+        stream.flush()
         return
     target, in_place = _output_target(path)
     if in_place:
@@ -59,6 +100,7 @@ def atomic_output(path: str | Path | None, binary: bool = False) -> Iterator[IO]
         fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=directory)
     except OSError as exc:
         raise ExportError(f"output {path}: cannot create a file in {directory}: {exc.strerror}") from None
+    PENDING.add(tmp)
     try:
         with os.fdopen(fd, "wb" if binary else "w", newline="" if not binary else None, encoding=None if binary else "utf-8") as fh:
             yield fh
@@ -66,11 +108,13 @@ def atomic_output(path: str | Path | None, binary: bool = False) -> Iterator[IO]
             os.fsync(fh.fileno())
         os.chmod(tmp, _mode_for(target))
         os.replace(tmp, target)
+        PENDING.discard(tmp)
     except BaseException as exc:
         try:
             os.unlink(tmp)
         except FileNotFoundError:
             pass
+        PENDING.discard(tmp)
         if isinstance(exc, OSError) and not isinstance(exc, BrokenPipeError):  # disk full, quota, I/O error
             raise ExportError(f"output {path}: write failed, nothing changed: {exc.strerror or exc}") from None
         raise

@@ -81,7 +81,7 @@ def plan_bspline(
     # engine (P = 1): control points, the exact polynomial of every piece, the exact peaks
     via = (task.via_points() - task.p_from)[None]
     k1a, k2a = np.array([float(k1)]), np.array([float(k2)])
-    route = np.array([_route_one(k1a[0], via[0])])  # _route's decision, on floats (one move)
+    route = np.array([_route_one(k1a[0], k2a[0], via[0])])  # _route's decision, on floats (one move)
     b_all, c_all, pk_all = batch_paths(k1a, k2a, via, route=route)
     breaks, coef = b_all[0], c_all[0]  # (m+1,), (m, 3, 6): the exact polynomial of each piece
     peaks = tuple(pk_all[0].tolist())
@@ -205,7 +205,7 @@ def batch_paths(k1: np.ndarray, k2: np.ndarray, via: np.ndarray, route: np.ndarr
     k1 = np.asarray(k1, float)
     k2 = np.asarray(k2, float)
     via = np.asarray(via, float)
-    route = _route(k1, via) if route is None else route
+    route = _route(k1, k2, via) if route is None else route
     fns = (_unit_paths, _plane_paths, _deboor_paths)
     first = route[0] if len(route) else ROUTE_DEBOOR
     if (route == first).all():
@@ -224,14 +224,24 @@ def batch_paths(k1: np.ndarray, k2: np.ndarray, via: np.ndarray, route: np.ndarr
 ROUTE_UNIT, ROUTE_PLANE, ROUTE_DEBOOR = 0, 1, 2
 
 
-def _route(k1: np.ndarray, via: np.ndarray) -> np.ndarray:
+#: shortest middle piece [τ7, τ8] = k1 (1 − k2)/2 of the closed forms: shorter (k2 → 1, given by the user; the
+#: table's optima have k2 ≤ 0.4) they lose digits (2.5e-9 of a coefficient at k1 = 0.1, k2 = 0.99; 7e-7 at
+#: k2 = 0.9999), so such paths take de Boor
+UNIT_PIECE_MIN = 1e-3
+
+
+def _route(k1: np.ndarray, k2: np.ndarray, via: np.ndarray) -> np.ndarray:
     """Each row's way to its path (ROUTE_*): symmetric (:func:`_symmetric`), else planar (:func:`_planar`), else
-    de Boor."""
-    return np.where(_symmetric(k1, via), ROUTE_UNIT, np.where(_planar(k1, via), ROUTE_PLANE, ROUTE_DEBOOR))
+    de Boor; de Boor too when the middle piece is shorter than ``UNIT_PIECE_MIN``."""
+    closed = k1 * (1.0 - k2) / 2 >= UNIT_PIECE_MIN
+    return np.where(closed & _symmetric(k1, via), ROUTE_UNIT,
+                    np.where(closed & _planar(k1, via), ROUTE_PLANE, ROUTE_DEBOOR))
 
 
-def _route_one(k1: float, via: np.ndarray) -> int:
+def _route_one(k1: float, k2: float, via: np.ndarray) -> int:
     """:func:`_route` of one move in Python floats (the same decisions, bitwise)."""
+    if not k1 * (1.0 - k2) / 2 >= UNIT_PIECE_MIN:
+        return ROUTE_DEBOOR
     if _symmetric_one(k1, via):
         return ROUTE_UNIT
     return ROUTE_PLANE if _planar_one(k1, via) else ROUTE_DEBOOR

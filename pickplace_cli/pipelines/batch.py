@@ -108,6 +108,10 @@ def iter_batch(stream: IO[str], source: str = "batch", info: dict | None = None)
             text = stream.readline(BATCH_MAX_LINE + 1)
         except UnicodeDecodeError:
             raise TaskError(f"{source}:{line + 1}: not UTF-8 text (a binary file?); a batch is a CSV file") from None
+        except BrokenPipeError:
+            raise
+        except OSError as exc:  # a device or special file that fails to read (EIO …)
+            raise TaskError(f"{source}:{line + 1}: cannot read: {exc.strerror or exc}") from None
         if text == "":
             break
         line += 1

@@ -80,6 +80,60 @@ def test_sigterm_stream_exits_143_cleanly(tmp_path, workers):
         proc.wait()
 
 
+def _group(pgid: int) -> list[int]:
+    """The live processes of process group ``pgid`` (from /proc)."""
+    out = []
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            try:
+                with open(f"/proc/{entry}/stat") as fh:
+                    fields = fh.read().rsplit(")", 1)[1].split()
+            except OSError:
+                continue
+            if int(fields[2]) == pgid and fields[0] != "Z":
+                out.append(int(entry))
+    return out
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc"), reason="reads the process table from /proc")
+@pytest.mark.parametrize("streamed", [True, False])
+def test_sigterm_to_the_whole_process_group_never_hangs(tmp_path, streamed):
+    """SIGTERM to the whole group (`timeout`, `kill -- -PGID`, systemd), which also hits the -j 2 workers, three
+    times at different points of a big batch at 1 kHz (large results in flight between the processes): every
+    time exit 143 within 20 s, the one line, no temporary file, no process of the group left. (Unwinding with
+    the workers dead could leave the pool's result pipe half-written and the pool's shutdown waiting forever.)"""
+    rows = "".join(f"{-0.15 + 0.0001 * (i % 50)},0,-0.8,0.15,{0.0002 * (i % 30)},-0.79\n" for i in range(6000))
+    src = tmp_path / "big.csv"
+    src.write_text(HEADER + rows)
+    for attempt, delay in enumerate((0.6, 1.2, 2.0)):
+        out = tmp_path / f"o{attempt}.csv"
+        args = ["plan", "--batch", "-" if streamed else str(src), "-q", "-j", "2", "--rate", "1000", "-o", str(out)]
+        proc = subprocess.Popen(_cli(*args), stdin=subprocess.PIPE if streamed else subprocess.DEVNULL,
+                                stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, cwd=tmp_path,
+                                start_new_session=True)
+        try:
+            if streamed:
+                proc.stdin.write(HEADER + rows)  # and keep stdin open: still streaming when the signal comes
+                proc.stdin.flush()
+            time.sleep(delay)
+            assert proc.poll() is None
+            os.killpg(proc.pid, signal.SIGTERM)
+            assert proc.wait(20) == 143
+            err = proc.stderr.read()
+            assert err.strip() == "pickplace: error: terminated (SIGTERM); no output file was changed", err
+            assert not out.exists() and not list(tmp_path.glob(f".o{attempt}.csv.*"))
+            deadline = time.monotonic() + 10
+            while _group(proc.pid):
+                assert time.monotonic() < deadline, f"processes {_group(proc.pid)} of the group outlived it"
+                time.sleep(0.05)
+        finally:
+            try:
+                os.killpg(proc.pid, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
+            proc.wait()
+
+
 @pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full")
 @pytest.mark.parametrize("args, stdin", [
     (["plan", *ADEPT, "-q"], None),

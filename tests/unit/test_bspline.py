@@ -293,8 +293,8 @@ def test_planar_closed_form_path_equals_de_boor():
     the one-move decision (_route_one, on floats) is the batch's; a batch mixing all three gives each row
     bitwise what it gets alone."""
     from pickplace_cli.model.task import Task
-    from pickplace_cli.paths.bspline import (ROUTE_DEBOOR, ROUTE_PLANE, ROUTE_UNIT, UNIT_K1, _plane_paths, _route,
-                                             _route_one, _unit_paths, batch_paths)
+    from pickplace_cli.paths.bspline import (ROUTE_DEBOOR, ROUTE_PLANE, ROUTE_UNIT, UNIT_K1, UNIT_PIECE_MIN,
+                                             _plane_paths, _route, _route_one, _unit_paths, batch_paths)
 
     rng = np.random.default_rng(11)
     tasks = []
@@ -307,9 +307,13 @@ def test_planar_closed_form_path_equals_de_boor():
     for lo, hi in ((UNIT_K1[0], UNIT_K1[0] + 0.02), UNIT_K1, (UNIT_K1[1] - 0.02, UNIT_K1[1])):
         k1 = rng.uniform(lo, hi, 200)
         k2 = np.r_[rng.uniform(0.01, 0.99, 190), np.full(10, 1e-4)]
-        assert (_route(k1, via) == ROUTE_PLANE).all()
-        assert all(_route_one(a, v) == ROUTE_PLANE for a, v in zip(k1[:20], via[:20]))
+        closed = k1 * (1 - k2) / 2 >= UNIT_PIECE_MIN
+        assert (_route(k1, k2, via) == np.where(closed, ROUTE_PLANE, ROUTE_DEBOOR)).all()
+        assert all(_route_one(a, b, v) == r for a, b, v, r in zip(k1, k2, via, _route(k1, k2, via)))
         _assert_matches_de_boor(_plane_paths, k1, k2, via)
+    # a short middle piece (k2 → 1, only from the user) takes de Boor: the closed forms lose digits there
+    assert _route(np.r_[0.1, 0.1], np.r_[0.97, 0.99], via[:2]).tolist() == [ROUTE_PLANE, ROUTE_DEBOOR]
+    assert _route_one(0.1, 0.99, via[0]) == ROUTE_DEBOOR
     # the same form reduces to the symmetric one for a move at one height
     flat = Task([-0.1525, 0, -0.8], [0.1525, 0, -0.8], 0.025, 0.5)
     vf = (flat.via_points() - flat.p_from)[None]
@@ -322,9 +326,9 @@ def test_planar_closed_form_path_equals_de_boor():
     odd[2, 0] += 0.01
     mixed = np.stack([vf[0], via[0], odd, via[1]])
     k1 = np.r_[0.5, 0.5, 0.5, 0.05]
-    route = _route(k1, mixed)
+    route = _route(k1, np.full(4, 0.3), mixed)
     assert list(route) == [ROUTE_UNIT, ROUTE_PLANE, ROUTE_DEBOOR, ROUTE_DEBOOR]
-    assert [_route_one(a, v) for a, v in zip(k1, mixed)] == list(route)
+    assert [_route_one(a, 0.3, v) for a, v in zip(k1, mixed)] == list(route)
     b, c, p = batch_paths(k1, np.full(4, 0.3), mixed)
     for i in range(4):
         bi, ci, pi = batch_paths(k1[i : i + 1], np.full(1, 0.3), mixed[i : i + 1])
