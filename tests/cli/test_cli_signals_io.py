@@ -23,8 +23,9 @@ def _cli(*args: str) -> list[str]:
     return [sys.executable, "-m", "pickplace_cli", *args]
 
 
-def _children(pid: int) -> list[int]:
-    """The live child processes of ``pid`` (from /proc: no psutil)."""
+def _procs(field: int, value: int) -> list[int]:
+    """The live processes whose /proc stat field ``field`` (after the name: 1 = parent, 2 = process group) is
+    ``value`` (no psutil)."""
     out = []
     for entry in os.listdir("/proc"):
         if entry.isdigit():
@@ -33,9 +34,17 @@ def _children(pid: int) -> list[int]:
                     fields = fh.read().rsplit(")", 1)[1].split()
             except OSError:
                 continue
-            if int(fields[1]) == pid and fields[0] != "Z":
+            if int(fields[field]) == value and fields[0] != "Z":
                 out.append(int(entry))
     return out
+
+
+def _children(pid: int) -> list[int]:
+    return _procs(1, pid)
+
+
+def _group(pgid: int) -> list[int]:
+    return _procs(2, pgid)
 
 
 def _alive(pid: int) -> bool:
@@ -78,21 +87,6 @@ def test_sigterm_stream_exits_143_cleanly(tmp_path, workers):
     finally:
         proc.kill()
         proc.wait()
-
-
-def _group(pgid: int) -> list[int]:
-    """The live processes of process group ``pgid`` (from /proc)."""
-    out = []
-    for entry in os.listdir("/proc"):
-        if entry.isdigit():
-            try:
-                with open(f"/proc/{entry}/stat") as fh:
-                    fields = fh.read().rsplit(")", 1)[1].split()
-            except OSError:
-                continue
-            if int(fields[2]) == pgid and fields[0] != "Z":
-                out.append(int(entry))
-    return out
 
 
 @pytest.mark.skipif(not os.path.isdir("/proc"), reason="reads the process table from /proc")
