@@ -318,7 +318,9 @@ def _unit_paths(k1: np.ndarray, k2: np.ndarray, via: np.ndarray):
     eta = via[:, 1, 2] / top
     h, half = unit_pieces(k1, k2, eta, rowwise=True)  # (P, 3), (P, 3, 2, 6) lowest power first
     b = np.hypot(d[:, 0], d[:, 1])
-    peaks = b[:, None] * unit_peaks(h, half, (b / top)[:, None, None], prune=True)
+    # pruning pays on batches (8.3 vs 9.5 ms per 250 moves) but not on one move's 9 pieces (0.119 vs 0.108 ms);
+    # the maxima are bitwise the same either way
+    peaks = b[:, None] * unit_peaks(h, half, (b / top)[:, None, None], prune=len(k1) > 1)
     unit = _mirror(h, half, odd=((0, 1.0),))  # s_u: 1 − s_u(1 − τ); s_v symmetric
     return _li_breaks(k1, k2), _position_coefficients(d, top, unit), peaks
 
