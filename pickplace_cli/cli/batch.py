@@ -13,9 +13,10 @@ from .render import _batch_line, _emit_json, _emit_row_json, _write_report
 
 
 def _plan_batch(source, prof, options, height, eta, fail_fast, writer, output, report, report_only, json_summary,
-                quiet, workers: int = 1, belt: Optional[dict] = None) -> None:
+                quiet, workers: int = 1, belt: Optional[dict] = None, keep_warm: float = 0.0) -> None:
     """--batch: plan every row, report failures by row number, write the good ones, exit with the worst code.
-    A batch with a t_detect column is a belt schedule (:func:`_plan_schedule`)."""
+    A batch with a t_detect column is a belt schedule (:func:`_plan_schedule`). ``keep_warm`` [s]: a streamed
+    batch re-plans its last move after each such idle time (:mod:`~pickplace_cli.pipelines.warm`)."""
     import os
 
     from ..pipelines.batch import BatchRow, plan_rows_parallel
@@ -23,8 +24,18 @@ def _plan_batch(source, prof, options, height, eta, fail_fast, writer, output, r
     belt = belt or {}
     name = "stdin" if source == "-" else source
     streamed = source == "-" or _is_fifo(source)  # a pipe: answer each row as it is read
-    with _batch_input(source, name) as (items, info):
+    warmer = None
+    if keep_warm:
+        if not streamed:
+            _usage(f"--keep-warm only applies to a streamed batch (- or a named pipe); {source} is a file, read whole")
+        from ..pipelines.warm import Warmer
+
+        csv_out = output is not None and writer.csv_dialect is not None
+        warmer = Warmer(prof, options, writer.csv_dialect if csv_out else None, keep_warm)
+    with _batch_input(source, name, warmer) as (items, info):
         if info.get("schedule"):
+            if warmer is not None:
+                _usage("--keep-warm does not apply to a belt schedule (a batch with a t_detect column)")
             _plan_schedule(items, name, streamed, prof, options, height, eta, fail_fast, writer, output, report,
                            report_only, json_summary, quiet, workers, belt)
             return
@@ -33,7 +44,7 @@ def _plan_batch(source, prof, options, height, eta, fail_fast, writer, output, r
                    "t_detect column); this batch has none (independent belt rows take a latency column)")
         if streamed:
             _stream_batch(items, name, prof, options, height, eta, fail_fast, writer, output, report,
-                          report_only, json_summary, quiet, workers)
+                          report_only, json_summary, quiet, workers, warmer)
             return
         rows, bad = [], []
         for item in items:
@@ -132,16 +143,37 @@ def _write_batch_file(planned, writer, output, dwell: float) -> None:
 
 
 @contextlib.contextmanager
-def _batch_input(source: str, name: str):
+def _batch_input(source: str, name: str, warmer=None):
     """The batch's rows (:func:`~pickplace_cli.pipelines.batch.iter_batch`, lazily) and its header ``info`` (plain batch or
-    belt schedule), the header already read; the file (or stdin) stays open inside the ``with``."""
+    belt schedule), the header already read; the file (or stdin) stays open inside the ``with``. With a
+    ``warmer`` (``--keep-warm``) the lines are read by :class:`~pickplace_cli.pipelines.warm.WarmLines`, which
+    calls it while it waits."""
     import itertools
 
     from ..pipelines.batch import iter_batch
     from ..model.errors import TaskError
 
     with contextlib.ExitStack() as stack:
-        if source == "-":
+        fd = None
+        if warmer is not None:
+            if source == "-":
+                try:
+                    fd = sys.stdin.fileno()
+                except (AttributeError, ValueError, OSError):  # pragma: no cover - a test runner's stand-in: no fd
+                    fd = None
+            else:
+                import os
+
+                try:
+                    fd = os.open(source, os.O_RDONLY)
+                except OSError as exc:
+                    raise TaskError(f"batch = {source}: cannot read it: {exc.strerror}") from None
+                stack.callback(os.close, fd)
+        if fd is not None:
+            from ..pipelines.warm import WarmLines
+
+            fh = WarmLines(fd, warmer.interval, warmer)
+        elif source == "-":
             try:  # undecodable bytes kept as surrogates, so iter_batch names their line (strict decoding fails on
                 # the whole chunk read, before the rows above the bad line are answered)
                 sys.stdin.reconfigure(errors="surrogateescape")
@@ -296,7 +328,7 @@ def _widen_pipe(out) -> None:
 
 
 def _stream_batch(items, name, prof, options, height, eta, fail_fast, writer, output, report, report_only,
-                  json_summary, quiet, workers: int) -> None:
+                  json_summary, quiet, workers: int, warmer=None) -> None:
     """--batch - (or a named pipe): the rows of :func:`~pickplace_cli.pipelines.batch.iter_batch` (``items``), each
     answered as soon as its line is read — a JSON line (``--json``)
     or its CSV rows, flushed — with the same row numbers, messages and exit codes as a file batch. Memory:
@@ -309,7 +341,7 @@ def _stream_batch(items, name, prof, options, height, eta, fail_fast, writer, ou
 
     verdicts_only = json_summary and output is None and report is None
     engine = False
-    if verdicts_only:
+    if verdicts_only and warmer is None:  # (--keep-warm: every row planned alone, as it comes)
         from ..pipelines.verdicts import engine_applies
 
         engine = engine_applies(prof, options)
@@ -340,6 +372,8 @@ def _stream_batch(items, name, prof, options, height, eta, fail_fast, writer, ou
                     sys.stderr.flush()
                 if json_summary:
                     _emit_row_json(res)
+                if warmer is not None and res.plan is not None:
+                    warmer.remember(res.plan)
                 if res.plan is not None and report is not None:
                     reports.append((res.row, ReportRecord.of(res.plan)))
                 if res.plan is not None and output is not None and (res.code == 0 or report_only):

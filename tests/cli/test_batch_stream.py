@@ -231,3 +231,79 @@ def test_streamed_csv_widens_a_piped_stdout():
         finally:
             os.close(r)
             os.close(w)
+
+
+def test_keep_warm_answers_the_same_bytes_row_by_row(tmp_path):
+    """--keep-warm: rows that arrive with pauses between them (warm-ups run in the pauses) get byte for byte the
+    answers of a stream without it, each before the next row is written; a parse error still names its row."""
+    rows = [ROW, ROW2, "1,2,3\n", ROW]
+    plain = subprocess.run([sys.executable, "-m", "pickplace_cli", "plan", "--batch", "-", "--rate", "1000", "-q"],
+                           input=HEADER + "".join(rows), capture_output=True, text=True, timeout=TIMEOUT)
+    assert plain.returncode == 1 and "row 3 (stdin:4)" in plain.stderr
+    proc = subprocess.Popen([sys.executable, "-m", "pickplace_cli", "plan", "--batch", "-", "--rate", "1000", "-q",
+                             "--keep-warm", "0.002"], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, bufsize=0)
+    try:
+        out = []
+        expected = plain.stdout.encode().splitlines()
+        os.write(proc.stdin.fileno(), HEADER.encode())
+        for i, row in enumerate(rows):
+            os.write(proc.stdin.fileno(), row.encode())
+            if row != "1,2,3\n":
+                want = sum(1 for ln in expected[1:] if ln.split(b",", 1)[0] == str(i + 1).encode())
+                out += _raw_lines(proc.stdout.fileno(), want + (1 if not out else 0))
+            time.sleep(0.1)  # ~50 warm-up intervals
+        proc.stdin.close()
+        assert proc.wait(TIMEOUT) == 1
+        out += proc.stdout.read().splitlines()
+        assert out == expected
+        assert "row 3 (stdin:4)" in proc.stderr.read().decode()
+    finally:
+        proc.kill()
+
+
+def test_keep_warm_on_a_named_pipe(tmp_path):
+    fifo = tmp_path / "moves"
+    os.mkfifo(fifo)
+    proc = subprocess.Popen([sys.executable, "-m", "pickplace_cli", "plan", "--batch", str(fifo), "--json",
+                             "--keep-warm", "0.005"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        with open(fifo, "w") as w:
+            w.write(HEADER + ROW)
+            w.flush()
+            first = json.loads(_readline(proc.stdout))
+            assert first["row"] == 1 and proc.poll() is None
+            time.sleep(0.05)
+            w.write(ROW2)
+        assert proc.wait(TIMEOUT) == 0
+        assert json.loads(proc.stdout.read())["row"] == 2
+    finally:
+        proc.kill()
+
+
+@pytest.mark.parametrize("args, code, words", [
+    (["--from", "0,0,-0.8", "--to", "0.1,0,-0.8", "--keep-warm", "0.005"], 2, "only applies to a streamed --batch"),
+    (["--batch", "FILE", "--keep-warm", "0.005"], 2, "is a file, read whole"),
+    (["--batch", "-", "--keep-warm", "0.005", "-j", "2"], 2, "give -j 1 (not -j 2)"),
+    (["--batch", "-", "--keep-warm", "0.0001"], 1, "keep_warm = 0.0001 s: must be 0 (off) or in 0.001 ... 10 s"),
+    (["--batch", "-", "--keep-warm", "nan"], 1, "keep_warm = nan s"),
+    (["--batch", "-", "--keep-warm", "-1"], 1, "keep_warm = -1.0 s"),
+])
+def test_keep_warm_usage(tmp_path, args, code, words):
+    batch = tmp_path / "moves.csv"
+    batch.write_text(HEADER + ROW)
+    args = [str(batch) if a == "FILE" else a for a in args]
+    r = subprocess.run([sys.executable, "-m", "pickplace_cli", "plan", *args], input=HEADER + ROW,
+                       capture_output=True, text=True, timeout=TIMEOUT)
+    assert r.returncode == code, r.stderr
+    assert words in r.stderr and "Traceback" not in r.stderr
+    if code == 1:  # a bad value: one line (a usage error, exit 2, has click's usage lines above its own)
+        assert len(r.stderr.strip().splitlines()) == 1
+
+
+def test_keep_warm_refuses_a_belt_schedule():
+    text = ("t_detect,to_x,to_y,to_z,to_belt_vx,to_belt_vy,to_belt_vz,place_x,place_y,place_z\n"
+            "0,0.0,0.05,-0.85,0.2,0,0,0.15,0,-0.8\n")
+    r = subprocess.run([sys.executable, "-m", "pickplace_cli", "plan", "--batch", "-", "--keep-warm", "0.005"],
+                       input=text, capture_output=True, text=True, timeout=TIMEOUT)
+    assert r.returncode == 2 and "does not apply to a belt schedule" in r.stderr and "Traceback" not in r.stderr

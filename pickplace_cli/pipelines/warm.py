@@ -1,0 +1,103 @@
+"""``plan --batch - --keep-warm MS``: a streamed batch that keeps the planner's caches warm while it waits.
+
+A row that arrives after a pause of 10 ms or more is planned on a cold CPU: on a 2-core VM, one plan of the Adept
+cycle at 1 kHz takes ~0.75 ms back to back and ~1.2–1.6 ms after a 10 ms pause (the interpreter's and numpy's
+code and data were evicted, by the host's other work while this process slept; busy-waiting does not keep them,
+re-running the same code does). :class:`WarmLines` reads the batch's lines from a file descriptor and, each time
+``interval`` seconds pass with no complete line, calls ``idle(ready)``; :class:`Warmer` is that ``idle``: it plans
+the last row's move again (and formats its CSV text) and throws the result away. The cost is CPU time while the
+stream is idle, about one plan per ``interval`` (measured in ``bench/bench_stream.py --keep-warm``); nothing is
+written and no state is changed. A row that arrives during a warm-up waits for the stage running (``ready`` is
+polled between the stages: the plan, then the CSV text).
+"""
+
+from __future__ import annotations
+
+import os
+import select
+from typing import Callable
+
+#: bytes asked of one read
+_CHUNK = 1 << 16
+
+
+class WarmLines:
+    """``readline(limit)`` over the file descriptor ``fd`` (UTF-8, undecodable bytes kept as surrogates, as the
+    CLI's own stdin), a line being ended by ``\\n``, ``\\r\\n`` or ``\\r``. While no complete line is buffered it
+    waits on ``fd`` at most ``interval`` seconds at a time and, each time that passes with nothing read, calls
+    ``idle(ready)`` (``ready()``: True once a line can be read without waiting)."""
+
+    def __init__(self, fd: int, interval: float, idle: Callable[[Callable[[], bool]], None]) -> None:
+        self.fd, self.interval, self.idle = fd, interval, idle
+        self._buf = b""
+        self._eof = False
+
+    def ready(self) -> bool:
+        """True when a line (or the end of the input) can be read now."""
+        if self._eof or self._line_end() >= 0:
+            return True
+        r, _, _ = select.select([self.fd], [], [], 0)
+        return bool(r)
+
+    def _line_end(self) -> int:
+        """Index just past the first complete line's end in the buffer, or -1."""
+        buf = self._buf
+        n = buf.find(b"\n")
+        r = buf.find(b"\r", 0, n if n >= 0 else len(buf))
+        if r >= 0 and r + 1 < len(buf):  # a lone \r ends a line; \r\n is one end (wait for the byte after a last \r)
+            return r + 2 if buf[r + 1 : r + 2] == b"\n" else r + 1
+        return n + 1 if n >= 0 else -1
+
+    def readline(self, limit: int = -1) -> str:
+        """The next line with its end (``""`` at the end of the input); at most ``limit`` characters when a line
+        is longer (as ``TextIOWrapper.readline``)."""
+        while True:
+            end = self._line_end()
+            if 0 <= limit < (end if end >= 0 else len(self._buf)):  # maybe more than ``limit`` characters
+                head = self._buf[: end if end >= 0 else len(self._buf)].decode("utf-8", "surrogateescape")
+                if len(head) > limit or (end < 0 and len(head) == limit):
+                    end = len(head[:limit].encode("utf-8", "surrogateescape"))
+            if end < 0 and self._eof:
+                end = len(self._buf)
+            if end >= 0:
+                line, self._buf = self._buf[:end], self._buf[end:]
+                return line.decode("utf-8", "surrogateescape")
+            r, _, _ = select.select([self.fd], [], [], self.interval)
+            if not r:
+                self.idle(self.ready)
+                continue
+            chunk = os.read(self.fd, _CHUNK)
+            if chunk:
+                self._buf += chunk
+            else:
+                self._eof = True
+
+
+class Warmer:
+    """The ``idle`` of :class:`WarmLines` (every ``interval`` s [s] of waiting): plans the last move answered again (:meth:`remember`), then formats
+    its CSV text when the stream writes CSV, each stage skipped once a line is ready; results are discarded."""
+
+    def __init__(self, profile, options, csv_dialect: str | None, interval: float) -> None:
+        self.profile, self.options, self.csv_dialect, self.interval = profile, options, csv_dialect, interval
+        self.task = None
+        self.warm_ups = 0
+
+    def remember(self, plan) -> None:
+        """The move to warm up with: the last one planned (a Plan)."""
+        self.task = getattr(plan, "task", None)
+
+    def __call__(self, ready: Callable[[], bool]) -> None:
+        if self.task is None or ready():
+            return
+        from ..model.errors import PickplaceError
+        from ..planner import plan
+
+        try:
+            p = plan(self.task, self.profile, self.options)
+            if self.csv_dialect is not None and not ready():
+                from ..export.csv import csv_rows
+
+                csv_rows(p, self.csv_dialect, move=1)
+        except PickplaceError:  # the move re-planned with the stream's options (not the row's time): any outcome
+            pass
+        self.warm_ups += 1

@@ -1,0 +1,128 @@
+"""``--keep-warm``'s line reader and warmer (pickplace_cli/pipelines/warm.py) on real pipes."""
+
+from __future__ import annotations
+
+import os
+import threading
+import time
+
+import pytest
+
+from pickplace_cli.model.profile import load_profile
+from pickplace_cli.model.task import Task
+from pickplace_cli.pipelines.batch import BATCH_MAX_LINE, iter_batch
+from pickplace_cli.pipelines.warm import WarmLines, Warmer
+from pickplace_cli.planner import PlanOptions, plan
+
+
+def _pipe_with(data: bytes) -> tuple[int, threading.Thread]:
+    """A pipe's read end, ``data`` written (by a thread: more than the pipe's buffer) and the write end closed."""
+    r, w = os.pipe()
+
+    def write():
+        os.write(w, data)
+        os.close(w)
+
+    t = threading.Thread(target=write, daemon=True)
+    t.start()
+    return r, t
+
+
+def _lines(data: bytes, limit: int = -1) -> list[str]:
+    r, _ = _pipe_with(data)
+    try:
+        reader = WarmLines(r, 0.01, lambda ready: None)
+        out = []
+        while (line := reader.readline(limit)) != "":
+            out.append(line)
+        return out
+    finally:
+        os.close(r)
+
+
+def test_line_ends_as_a_text_file_reads_them():
+    """\\n, \\r\\n and a lone \\r end a line (universal newlines, kept as read); the last line may have none."""
+    assert _lines(b"a,b\nc\r\nd\re") == ["a,b\n", "c\r\n", "d\r", "e"]
+    assert _lines(b"") == []
+    assert _lines(b"\n\n") == ["\n", "\n"]
+
+
+def test_undecodable_bytes_are_kept_as_surrogates_and_text_is_utf8():
+    """As the CLI's stdin (errors=surrogateescape): iter_batch names the line that is not UTF-8."""
+    assert _lines("é,ü\n".encode()) == ["é,ü\n"]
+    assert _lines(b"\xff\xfe\n") == ["\udcff\udcfe\n"]
+
+
+def test_limit_cuts_a_long_line_by_characters():
+    assert _lines(b"abcdefgh", limit=3) == ["abc", "def", "gh"]
+    assert _lines("ééééé\n".encode(), limit=2) == ["éé", "éé", "é\n"]
+
+
+def test_a_line_longer_than_the_batch_limit_is_refused_as_from_stdin():
+    from pickplace_cli.model.errors import TaskError
+
+    r, _ = _pipe_with(b"from_x,from_y,from_z,to_x,to_y,to_z\n" + b"1" * (BATCH_MAX_LINE + 10) + b"\n")
+    try:
+        with pytest.raises(TaskError, match="a line of more than"):
+            list(iter_batch(WarmLines(r, 0.01, lambda ready: None), "stdin"))
+    finally:
+        os.close(r)
+
+
+def test_idle_is_called_while_waiting_and_ready_says_when_a_line_came():
+    """No line for a while: idle(ready) every interval, ready() False; then a line: it is read at once."""
+    r, w = os.pipe()
+    calls: list[bool] = []
+    reader = WarmLines(r, 0.005, lambda ready: calls.append(ready()))
+
+    def later():
+        time.sleep(0.1)
+        os.write(w, b"x,y\n")
+
+    t = threading.Thread(target=later)
+    try:
+        t.start()
+        t0 = time.perf_counter()
+        assert reader.readline() == "x,y\n"
+        assert time.perf_counter() - t0 >= 0.09
+        assert len(calls) >= 3 and not any(calls)  # ~20 intervals of 5 ms: at least a few, even on a slow machine
+        os.write(w, b"a\nb\n")
+        time.sleep(0.02)
+        assert reader.readline() == "a\n"
+        assert reader.ready()  # "b" is buffered: no wait, no idle call
+        n = len(calls)
+        assert reader.readline() == "b\n" and len(calls) == n
+    finally:
+        t.join()
+        os.close(w)
+        os.close(r)
+
+
+def test_warmer_plans_the_last_move_and_changes_nothing():
+    """The warm-up plans the remembered move (and formats its CSV), skips when a line is ready, and leaves no
+    trace: the next plan of that move is identical."""
+    prof = load_profile(None)
+    opts = PlanOptions(rate=1000.0)
+    task = Task([-0.1525, 0, -0.8], [0.1525, 0, -0.8], 0.025, 0.5)
+    warmer = Warmer(prof, opts, "default", 0.005)
+    warmer(lambda: False)
+    assert warmer.warm_ups == 0  # nothing planned yet: nothing to warm
+    before = plan(task, prof, opts)
+    warmer.remember(before)
+    warmer(lambda: True)
+    assert warmer.warm_ups == 0  # a row is waiting: no warm-up
+    warmer(lambda: False)
+    warmer(lambda: False)
+    assert warmer.warm_ups == 2
+    after = plan(task, prof, opts)
+    assert after.duration.seconds == before.duration.seconds
+    assert (after.joint.q == before.joint.q).all()
+
+
+def test_warmer_survives_a_move_that_fails():
+    """A remembered move whose plan raises (here: outside the workcell with these options) is warmed quietly."""
+    prof = load_profile(None)
+    warmer = Warmer(prof, PlanOptions(rate=1000.0), None, 0.005)
+    warmer.task = Task([-0.1525, 0, -0.8], [3.0, 0, -0.8], 0.025, 0.5)  # unreachable: plan raises
+    warmer(lambda: False)
+    assert warmer.warm_ups == 1
