@@ -1,6 +1,6 @@
 """``plan --batch -`` as a pipeline stage (issue 16, part 2): latency per row and throughput.
 
-    python bench/bench_stream.py                      # ~3 min on 2 cores (~5 min with --old)
+    python bench/bench_stream.py                      # ~6 min on 2 cores (~8 min with --old)
     python bench/bench_stream.py --old /tmp/oldclone  # also another checkout, side by side
 
 Latency: one `pickplace plan --batch -` process; rows of the Adept cycle on the default Delta are written one
@@ -12,6 +12,8 @@ by a repeated input), 10 ms apart and at a picking pace (``--long-pause``, 100 m
 between rows, the worst case). Reports p50 and p99 (targets with samples: 2 ms and 5 ms).
 Throughput: a file of rows piped in at full speed (``--json`` verdicts and CSV samples, ``-j 1`` and ``-j 2``),
 rows per second including start-up; with ``--old`` the same commands on another checkout side by side.
+``--keep-warm S,…`` (default 0.002,0.005): the CSV latency cases also with ``--keep-warm S`` for each S, in
+interleaved rounds, and the CPU time ``--keep-warm`` costs while the stream waits (0.002, 0.005, 0.01, 0.02 s).
 With ``--old`` the latencies of the other checkout too, in interleaved rounds. Results go to
 ``bench/results/stream.json``.
 """
@@ -109,6 +111,31 @@ def varied_rows(n: int, seed: int = 16) -> tuple[list[str], list[int]]:
     return rows, counts
 
 
+def idle_cpu(interval: float, seconds: float = 10.0) -> float:
+    """CPU time of a ``--keep-warm interval`` stream that waits ``seconds`` after answering one CSV row at 1 kHz,
+    as a share of one core (user + system time from /proc: what the warm-ups cost while no row comes)."""
+    cmd, env = _cmd(ROOT, "--rate", "1000", "-q", "--keep-warm", f"{interval:g}")
+    proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                            env=env, cwd=ROOT)
+
+    def cpu() -> float:
+        fields = Path(f"/proc/{proc.pid}/stat").read_text().rsplit(")", 1)[1].split()
+        return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+    try:
+        proc.stdin.write((HEADER + ROW).encode())
+        proc.stdin.flush()
+        time.sleep(2.0)  # start-up and the row's answer
+        c0, w0 = cpu(), time.perf_counter()
+        time.sleep(seconds)
+        c1, w1 = cpu(), time.perf_counter()
+        proc.stdin.close()
+        proc.wait(30)
+    finally:
+        proc.kill()
+    return (c1 - c0) / (w1 - w0)
+
+
 def throughput(root: Path, args: list[str], rows: int) -> float:
     cmd, env = _cmd(root, *args)
     text = HEADER + ROW * rows
@@ -130,6 +157,9 @@ def main() -> None:
     ap.add_argument("--pause", type=float, default=0.01, help="s between two rows in the latency runs")
     ap.add_argument("--long-pause", type=float, default=0.1,
                     help="s between two rows in the realistic-pace case (a pick every 100 ms or more)")
+    ap.add_argument("--keep-warm", default="0.002,0.005",
+                    help="s, comma-separated: the CSV latency cases also with --keep-warm each (0: none), side by "
+                         "side; and the idle CPU time it costs")
     ap.add_argument("--old", type=Path, help="another checkout to compare the throughput with")
     ap.add_argument("-o", "--output", default=str(Path(__file__).parent / "results" / "stream.json"))
     args = ap.parse_args()
@@ -149,23 +179,35 @@ def main() -> None:
              ("samples, varied moves (CSV, 1 kHz)", ["--rate", "1000", "-q"], varied_counts, 1, varied, args.pause),
              (f"samples, varied moves, {args.long_pause * 1e3:.0f} ms apart (CSV, 1 kHz)", ["--rate", "1000", "-q"],
               varied_counts, 1, varied, args.long_pause))
+    warms = [float(x) for x in args.keep_warm.split(",") if float(x) > 0]
     for name, cli, lines, extra, texts, pause in cases:
         long = pause != args.pause
-        roots = [ROOT] + ([args.old] if args.old and "--columns" not in cli else [])
-        rounds = 3 if len(roots) > 1 else 1  # with --old: interleaved rounds, the VM's pace shared by both
+        # (label, checkout, extra args): with --old the other checkout; the CSV cases also with --keep-warm
+        variants = [("", ROOT, [])]
+        if args.old and "--columns" not in cli:
+            variants.append((", other checkout", args.old, []))
+        if "--rate" in cli and "--columns" not in cli:
+            variants += [(f", --keep-warm {w:g}", ROOT, ["--keep-warm", f"{w:g}"]) for w in warms]
+        rounds = 3 if len(variants) > 1 else 1  # interleaved rounds: the VM's pace shared by every variant
         n_rows = max(args.rows // 3, 30) if long else args.rows  # a long pause: fewer rows, same run time order
-        lats: dict = {r: [] for r in roots}
+        lats: dict = {v[0]: [] for v in variants}
         for k in range(rounds):
-            for r in (roots if k % 2 == 0 else roots[::-1]):
-                lats[r] += latency(cli, lines, extra, n_rows // rounds, pause, r, texts)
-        for r in roots:
-            lat = sorted(lats[r])
+            for label, root, more in (variants if k % 2 == 0 else variants[::-1]):
+                lats[label] += latency(cli + more, lines, extra, n_rows // rounds, pause, root, texts)
+        for label, _, _ in variants:
+            lat = sorted(lats[label])
             p50 = statistics.median(lat) * 1e3
             p99 = lat[min(len(lat) - 1, int(round(0.99 * (len(lat) - 1))))] * 1e3
-            key = name if r == ROOT else f"{name}, other checkout"
+            key = name + label
             result[key] = {"p50_ms": p50, "p99_ms": p99, "max_ms": lat[-1] * 1e3, "pause_s": pause, "rows": len(lat)}
             print(f"latency, {key}: p50 {p50:.2f} ms, p99 {p99:.2f} ms, max {lat[-1] * 1e3:.2f} ms "
                   f"({len(lat)} rows, {pause * 1e3:.0f} ms apart)", flush=True)
+    if warms:
+        for interval in sorted({0.002, 0.005, 0.01, 0.02, *warms}):
+            share = idle_cpu(interval)
+            result[f"idle CPU, --keep-warm {interval:g}"] = {"core_share": share}
+            print(f"idle CPU, --keep-warm {interval:g}: {share * 100:.1f} % of a core (a stream waiting 10 s "
+                  f"after a CSV row)", flush=True)
     runs = (("verdicts -j 1", ["--json", "-q", "-j", "1"], 3000), ("verdicts -j 2", ["--json", "-q", "-j", "2"], 3000),
             ("CSV -j 1", ["-q", "-j", "1"], 600), ("CSV -j 2", ["-q", "-j", "2"], 600))
     for name, cli, rows in runs:

@@ -7,7 +7,7 @@ choose_duration (auto / seconds / fit) → samples → JointTrajectory → check
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
@@ -171,23 +171,36 @@ def _optimised_shape(task: Task, profile: Profile, options: PlanOptions) -> tupl
     return shaped, replace(options, method_params={**base, "k1": found.k1, "k2": found.k2}, shape=False), info
 
 
-def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions()) -> Plan:
+class PlanInterrupted(Exception):
+    """Raised by :func:`plan` when its ``interrupt`` returned True (not an error: the caller asked to stop)."""
+
+
+def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions(), *,
+         interrupt: Callable[[], bool] | None = None) -> Plan:
     """Plan ``task`` on ``profile``: path, duration, samples, joint motion, limit report.
 
     The pipeline, each stage once, in order: the task (and, with ``--optimize shape``, its shape) → the path
     (:func:`_path_stage`) → the motion model (:func:`motion_model`) → the duration or time law
     (:func:`_duration_stage`; the fit/optimal searches test feasibility through ``model_of``, passed in) →
     the samples (:func:`_sample`) → the limit check (:func:`check_limits`) → the Plan (:func:`_assemble`).
+    ``interrupt`` (``--keep-warm``'s warm-ups) is called between the stages; once it returns True, plan raises
+    :class:`PlanInterrupted`.
     """
+    def stop() -> None:
+        if interrupt is not None and interrupt():
+            raise PlanInterrupted
+
     _refuse_moving_ends(task, options)
     rate = options.rate if options.rate is not None else profile.planning.rate
     shape = None
     if options.shape:
         task, options, shape = _optimised_shape(task, profile, options)
     path, factory, first = _path_stage(task, profile, options, shape)
+    stop()
     model = motion_model(path, profile)
     # reachability first, on the output samples of the auto (or given) duration, so an error names a time
     samples = _sample(model, path, first.seconds, rate)
+    stop()
     final = _FinalCheck(rate, profile.planning.dwell)
     duration, path, model, notes = _duration_stage(task, profile, options, path, factory, model, first, final)
     done = final.at(path, duration.seconds)
@@ -197,6 +210,7 @@ def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions()) -> 
     else:
         if duration.seconds != first.seconds or model.path is not samples.path:
             samples = _sample(model, path, duration.seconds, rate)
+        stop()
         report = check_limits(model, duration.seconds, parts=samples.parts, dwell=profile.planning.dwell, notes=notes)
     return _assemble(task, profile, path, duration, model, samples, report)
 

@@ -7,8 +7,9 @@ re-running the same code does). :class:`WarmLines` reads the batch's lines from 
 ``interval`` seconds pass with no complete line, calls ``idle(ready)``; :class:`Warmer` is that ``idle``: it plans
 the last row's move again (and formats its CSV text) and throws the result away. The cost is CPU time while the
 stream is idle, about one plan per ``interval`` (measured in ``bench/bench_stream.py --keep-warm``); nothing is
-written and no state is changed. A row that arrives during a warm-up waits for the stage running (``ready`` is
-polled between the stages: the plan, then the CSV text).
+written and no state is changed. A row that arrives during a warm-up waits for the stage running: ``ready`` is
+polled between the plan's stages (:func:`~pickplace_cli.planner.plan`'s ``interrupt``: path, samples, limit check;
+~0.3 ms each) and before the CSV text (~0.4 ms).
 """
 
 from __future__ import annotations
@@ -74,13 +75,15 @@ class WarmLines:
 
 
 class Warmer:
-    """The ``idle`` of :class:`WarmLines` (every ``interval`` s [s] of waiting): plans the last move answered again (:meth:`remember`), then formats
-    its CSV text when the stream writes CSV, each stage skipped once a line is ready; results are discarded."""
+    """The ``idle`` of :class:`WarmLines` (every ``interval`` s [s] of waiting): plans the last move answered again
+    (:meth:`remember`), then formats its CSV text when the stream writes CSV, stopping between two stages once a
+    line is ready; results are discarded."""
 
     def __init__(self, profile, options, csv_dialect: str | None, interval: float) -> None:
         self.profile, self.options, self.csv_dialect, self.interval = profile, options, csv_dialect, interval
         self.task = None
-        self.warm_ups = 0
+        self.warm_ups = 0  # started
+        self.interrupted = 0  # of them, stopped between two stages of the plan by a line that came
 
     def remember(self, plan) -> None:
         """The move to warm up with: the last one planned (a Plan)."""
@@ -90,14 +93,16 @@ class Warmer:
         if self.task is None or ready():
             return
         from ..model.errors import PickplaceError
-        from ..planner import plan
+        from ..planner import PlanInterrupted, plan
 
+        self.warm_ups += 1
         try:
-            p = plan(self.task, self.profile, self.options)
+            p = plan(self.task, self.profile, self.options, interrupt=ready)
             if self.csv_dialect is not None and not ready():
                 from ..export.csv import csv_rows
 
                 csv_rows(p, self.csv_dialect, move=1)
+        except PlanInterrupted:  # a line came: the row goes first
+            self.interrupted += 1
         except PickplaceError:  # the move re-planned with the stream's options (not the row's time): any outcome
             pass
-        self.warm_ups += 1

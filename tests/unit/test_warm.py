@@ -126,3 +126,39 @@ def test_warmer_survives_a_move_that_fails():
     warmer.task = Task([-0.1525, 0, -0.8], [3.0, 0, -0.8], 0.025, 0.5)  # unreachable: plan raises
     warmer(lambda: False)
     assert warmer.warm_ups == 1
+
+
+def test_plan_interrupt_is_polled_between_stages():
+    """plan(interrupt=…) stops with PlanInterrupted once it says so, and changes nothing when it never does."""
+    from pickplace_cli.planner import PlanInterrupted
+
+    prof = load_profile(None)
+    task = Task([-0.1525, 0, -0.8], [0.1525, 0, -0.78], 0.025, 0.5)
+    opts = PlanOptions(rate=1000.0)
+    polls = []
+
+    def after(n):
+        def interrupt():
+            polls.append(n)
+            return len(polls) >= n
+        return interrupt
+
+    with pytest.raises(PlanInterrupted):
+        plan(task, prof, opts, interrupt=after(1))
+    assert polls == [1]  # the first poll, after the path
+    polls.clear()
+    p = plan(task, prof, opts, interrupt=lambda: polls.append(0) or False)
+    assert len(polls) >= 3  # path, samples, before the limit check
+    ref = plan(task, prof, opts)
+    assert p.duration.seconds == ref.duration.seconds and (p.joint.q == ref.joint.q).all()
+    assert p.report.ok == ref.report.ok
+
+
+def test_warmer_stops_when_a_line_comes_mid_plan():
+    prof = load_profile(None)
+    opts = PlanOptions(rate=1000.0)
+    warmer = Warmer(prof, opts, "default", 0.005)
+    warmer.remember(plan(Task([-0.1525, 0, -0.8], [0.1525, 0, -0.8], 0.025, 0.5), prof, opts))
+    answers = iter([False, False, True])  # at the start, after the path: nothing; after the samples: a line
+    warmer(lambda: next(answers, True))
+    assert warmer.warm_ups == 1 and warmer.interrupted == 1
