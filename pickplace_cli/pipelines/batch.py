@@ -388,7 +388,11 @@ def run_chunks_in_order(fn, args: list, workers: int, fail_fast: bool) -> Iterat
     ``fail_fast`` and cancels the chunks not started yet."""
     from concurrent.futures import ProcessPoolExecutor
 
-    with ProcessPoolExecutor(max_workers=workers) as pool:
+    from ..lookup.bspline_build import _ignore_sigint
+
+    # the workers leave Ctrl-C (SIGINT to the terminal's whole process group) to this process: it cancels the chunks
+    # not started and waits for the running ones (one chunk: 25 plans, or 500 verdicts) without a traceback from each
+    with ProcessPoolExecutor(max_workers=workers, initializer=_ignore_sigint) as pool:
         futures = [pool.submit(fn, a) for a in args]
         try:
             for fut in futures:

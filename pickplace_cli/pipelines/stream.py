@@ -61,7 +61,9 @@ def plan_stream(
     if workers > 1:
         from concurrent.futures import ProcessPoolExecutor
 
-        pool = ProcessPoolExecutor(max_workers=workers)
+        from ..lookup.bspline_build import _ignore_sigint
+
+        pool = ProcessPoolExecutor(max_workers=workers, initializer=_ignore_sigint)  # Ctrl-C: this process's
         # fork every worker now, before the reader thread exists: a worker forked while that thread is blocked in
         # a read of stdin inherits stdin's lock held, and hangs closing stdin at start-up (multiprocessing's
         # _close_stdin); with the fork method the first submit starts them all

@@ -128,6 +128,46 @@ def test_sigterm_to_the_whole_process_group_never_hangs(tmp_path, streamed):
             proc.wait()
 
 
+@pytest.mark.skipif(not os.path.isdir("/proc"), reason="reads the process table from /proc")
+@pytest.mark.parametrize("mode", ["streamed", "streamed-idle", "file", "verdicts"])
+def test_ctrl_c_to_the_whole_process_group_is_one_line(tmp_path, mode):
+    """Ctrl-C in a terminal sends SIGINT to the whole foreground group, the -j 2 workers too: exit 130 within 20 s,
+    the one line, no temporary file, no process of the group left. (Workers waiting for work — a stream whose
+    rows have all been answered — used to print a KeyboardInterrupt traceback each.)"""
+    n = 200 if mode == "streamed-idle" else 6000
+    rows = "".join(f"{-0.15 + 0.0001 * (i % 50)},0,-0.8,0.15,{0.0002 * (i % 30)},-0.79\n" for i in range(n))
+    src = tmp_path / "big.csv"
+    src.write_text(HEADER + rows)
+    out = tmp_path / "o.csv"
+    streamed = mode.startswith("streamed")
+    args = ["plan", "--batch", "-" if streamed else str(src), "-q", "-j", "2"]
+    args += ["--json"] if mode == "verdicts" else ["--rate", "1000", "-o", str(out)]
+    proc = subprocess.Popen(_cli(*args), stdin=subprocess.PIPE if streamed else subprocess.DEVNULL,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, cwd=tmp_path,
+                            start_new_session=True)
+    try:
+        if streamed:
+            proc.stdin.write(HEADER + rows)  # and keep stdin open: still streaming when the signal comes
+            proc.stdin.flush()
+        time.sleep(2.0 if mode == "streamed-idle" else 1.0 if mode != "verdicts" else 0.7)
+        assert proc.poll() is None
+        os.killpg(proc.pid, signal.SIGINT)
+        assert proc.wait(20) == 130
+        err = proc.stderr.read()
+        assert err.strip() == "pickplace: error: interrupted; no output file was changed", err
+        assert not out.exists() and not list(tmp_path.glob(".o.csv.*"))
+        deadline = time.monotonic() + 10
+        while _group(proc.pid):
+            assert time.monotonic() < deadline, f"processes {_group(proc.pid)} of the group outlived it"
+            time.sleep(0.05)
+    finally:
+        try:
+            os.killpg(proc.pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+        proc.wait()
+
+
 @pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full")
 @pytest.mark.parametrize("args, stdin", [
     (["plan", *ADEPT, "-q"], None),
