@@ -24,14 +24,7 @@ def _plan_batch(source, prof, options, height, eta, fail_fast, writer, output, r
     belt = belt or {}
     name = "stdin" if source == "-" else source
     streamed = source == "-" or _is_fifo(source)  # a pipe: answer each row as it is read
-    warmer = None
-    if keep_warm:
-        if not streamed:
-            _usage(f"--keep-warm only applies to a streamed batch (- or a named pipe); {source} is a file, read whole")
-        from ..pipelines.warm import Warmer
-
-        csv_out = output is not None and writer.csv_dialect is not None
-        warmer = Warmer(prof, options, writer.csv_dialect if csv_out else None, keep_warm)
+    warmer = _warmer(keep_warm, source, streamed, prof, options, writer, output)
     with _batch_input(source, name, warmer) as (items, info):
         if info.get("schedule"):
             if warmer is not None:
@@ -142,6 +135,22 @@ def _write_batch_file(planned, writer, output, dwell: float) -> None:
         sys.stderr.write("pickplace: no row could be written\n")
 
 
+def _warmer(keep_warm: float, source: str, streamed: bool, prof, options, writer, output):
+    """``--keep-warm`` [s]: the stream's :class:`~pickplace_cli.pipelines.warm.Warmer`, or None when off; usage
+    error for a batch that is not a pipe."""
+    import os
+
+    if not keep_warm:
+        return None
+    if not streamed and os.path.exists(source):  # (a missing file: the read says so, exit 1)
+        _usage(f"--keep-warm only applies to a streamed batch (- or a named pipe); {source} is not a pipe: it "
+               "is read whole")
+    from ..pipelines.warm import Warmer
+
+    csv_out = output is not None and writer.csv_dialect is not None
+    return Warmer(prof, options, writer.csv_dialect if csv_out else None, keep_warm)
+
+
 @contextlib.contextmanager
 def _batch_input(source: str, name: str, warmer=None):
     """The batch's rows (:func:`~pickplace_cli.pipelines.batch.iter_batch`, lazily) and its header ``info`` (plain batch or
@@ -155,10 +164,14 @@ def _batch_input(source: str, name: str, warmer=None):
 
     with contextlib.ExitStack() as stack:
         fd = None
+        encoding = "utf-8"
+        if source == "-" and sys.stdin is None:  # started with stdin closed (`<&-`)
+            raise TaskError("batch = -: standard input is closed; give the rows on stdin or a file")
         if warmer is not None:
             if source == "-":
                 try:
                     fd = sys.stdin.fileno()
+                    encoding = sys.stdin.encoding or "utf-8"  # as the CLI's own stdin (the locale, PYTHONIOENCODING)
                 except (AttributeError, ValueError, OSError):  # pragma: no cover - a test runner's stand-in: no fd
                     fd = None
             else:
@@ -172,11 +185,12 @@ def _batch_input(source: str, name: str, warmer=None):
         if fd is not None:
             from ..pipelines.warm import WarmLines
 
-            fh = WarmLines(fd, warmer.interval, warmer)
+            fh = WarmLines(fd, warmer.interval, warmer, encoding)
         elif source == "-":
             try:  # undecodable bytes kept as surrogates, so iter_batch names their line (strict decoding fails on
-                # the whole chunk read, before the rows above the bad line are answered)
-                sys.stdin.reconfigure(errors="surrogateescape")
+                # the whole chunk read, before the rows above the bad line are answered); lines end at \n, \r\n or a
+                # lone \r, as in a file (Python's stdin splits at \n only on POSIX)
+                sys.stdin.reconfigure(errors="surrogateescape", newline="")
             except (AttributeError, ValueError, OSError):  # pragma: no cover - a test runner's stand-in
                 pass
             fh = sys.stdin

@@ -175,7 +175,11 @@ def _without_unit(name: str, source: str, line: int) -> str:
 
 
 def _header(text: str, sep: str, source: str, line: int) -> list[str]:
-    header = [_without_unit(h.strip(), source, line) for h in next(csv.reader([text], delimiter=sep))]
+    try:
+        names = next(csv.reader([text], delimiter=sep))
+    except csv.Error as exc:  # (a guard: see _row)
+        raise TaskError(f"{source}:{line}: the header is not a CSV row: {exc}") from None
+    header = [_without_unit(h.strip(), source, line) for h in names]
     schedule = "t_detect" in header
     required, optional = (SCHEDULE_REQUIRED, SCHEDULE_OPTIONAL) if schedule else (REQUIRED, OPTIONAL)
     unknown = [h for h in header if h not in required + optional]
@@ -212,8 +216,11 @@ def _header(text: str, sep: str, source: str, line: int) -> list[str]:
 
 def _row(number: int, line: int, text: str, header: list[str], sep: str, source: str,
          required: tuple = REQUIRED) -> BatchRow | RowResult:
-    cells = [c.strip() for c in next(csv.reader([text], delimiter=sep))]
     try:
+        try:
+            cells = [c.strip() for c in next(csv.reader([text], delimiter=sep))]
+        except csv.Error as exc:  # (a line is split at \r and \n before it gets here; this is a guard)
+            raise TaskError(f"not a CSV row: {exc}") from None
         if len(cells) != len(header):
             raise TaskError(f"has {len(cells)} cells, the header has {len(header)}")
         values: dict[str, Any] = {}
@@ -382,13 +389,18 @@ def plan_rows_parallel(
     )
 
 
+def _ignore_sigint() -> None:  # pragma: no cover - runs in the worker processes
+    """Pool workers leave Ctrl-C (SIGINT to the whole process group) to the parent, which stops in order."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
 def run_chunks_in_order(fn, args: list, workers: int, fail_fast: bool) -> Iterator[RowResult]:
     """``fn(a)`` → list of RowResult for every ``a`` of ``args`` on a process pool of ``workers``; yields the
     results in the order of ``args`` (and within each list), stops after the first failing row when
     ``fail_fast`` and cancels the chunks not started yet."""
     from concurrent.futures import ProcessPoolExecutor
-
-    from ..lookup.bspline_build import _ignore_sigint
 
     # the workers leave Ctrl-C (SIGINT to the terminal's whole process group) to this process: it cancels the chunks
     # not started and waits for the running ones (one chunk: 25 plans, or 500 verdicts) without a traceback from each

@@ -61,7 +61,7 @@ def plan_stream(
     if workers > 1:
         from concurrent.futures import ProcessPoolExecutor
 
-        from ..lookup.bspline_build import _ignore_sigint
+        from .batch import _ignore_sigint
 
         pool = ProcessPoolExecutor(max_workers=workers, initializer=_ignore_sigint)  # Ctrl-C: this process's
         # fork every worker now, before the reader thread exists: a worker forked while that thread is blocked in

@@ -1,4 +1,4 @@
-"""``plan --batch - --keep-warm MS``: a streamed batch that keeps the planner's caches warm while it waits.
+"""``plan --batch - --keep-warm SECONDS``: a streamed batch that keeps the planner's caches warm while it waits.
 
 A row that arrives after a pause of 10 ms or more is planned on a cold CPU: on a 2-core VM, one plan of the Adept
 cycle at 1 kHz takes ~0.75 ms back to back and ~1.2–1.6 ms after a 10 ms pause (the interpreter's and numpy's
@@ -14,6 +14,7 @@ polled between the plan's stages (:func:`~pickplace_cli.planner.plan`'s ``interr
 
 from __future__ import annotations
 
+import codecs
 import os
 import select
 from typing import Callable
@@ -23,13 +24,14 @@ _CHUNK = 1 << 16
 
 
 class WarmLines:
-    """``readline(limit)`` over the file descriptor ``fd`` (UTF-8, undecodable bytes kept as surrogates, as the
-    CLI's own stdin), a line being ended by ``\\n``, ``\\r\\n`` or ``\\r``. While no complete line is buffered it
+    """``readline(limit)`` over the file descriptor ``fd`` (``encoding``, undecodable bytes kept as surrogates, as
+    the CLI's own stdin), a line being ended by ``\\n``, ``\\r\\n`` or ``\\r``. While no complete line is buffered it
     waits on ``fd`` at most ``interval`` seconds at a time and, each time that passes with nothing read, calls
     ``idle(ready)`` (``ready()``: True once a line can be read without waiting)."""
 
-    def __init__(self, fd: int, interval: float, idle: Callable[[Callable[[], bool]], None]) -> None:
-        self.fd, self.interval, self.idle = fd, interval, idle
+    def __init__(self, fd: int, interval: float, idle: Callable[[Callable[[], bool]], None],
+                 encoding: str = "utf-8") -> None:
+        self.fd, self.interval, self.idle, self.encoding = fd, interval, idle, encoding
         self._buf = b""
         self._eof = False
 
@@ -55,14 +57,16 @@ class WarmLines:
         while True:
             end = self._line_end()
             if 0 <= limit < (end if end >= 0 else len(self._buf)):  # maybe more than ``limit`` characters
-                head = self._buf[: end if end >= 0 else len(self._buf)].decode("utf-8", "surrogateescape")
+                # (a character whose bytes have not all come yet is not counted, unless the input has ended)
+                decoder = codecs.getincrementaldecoder(self.encoding)("surrogateescape")
+                head = decoder.decode(self._buf[: end if end >= 0 else len(self._buf)], final=end >= 0 or self._eof)
                 if len(head) > limit or (end < 0 and len(head) == limit):
-                    end = len(head[:limit].encode("utf-8", "surrogateescape"))
+                    end = len(head[:limit].encode(self.encoding, "surrogateescape"))
             if end < 0 and self._eof:
                 end = len(self._buf)
             if end >= 0:
                 line, self._buf = self._buf[:end], self._buf[end:]
-                return line.decode("utf-8", "surrogateescape")
+                return line.decode(self.encoding, "surrogateescape")
             r, _, _ = select.select([self.fd], [], [], self.interval)
             if not r:
                 self.idle(self.ready)
@@ -80,14 +84,25 @@ class Warmer:
     line is ready; results are discarded."""
 
     def __init__(self, profile, options, csv_dialect: str | None, interval: float) -> None:
-        self.profile, self.options, self.csv_dialect, self.interval = profile, options, csv_dialect, interval
+        from dataclasses import replace
+
+        self.profile, self.csv_dialect, self.interval = profile, csv_dialect, interval
+        # the warm-up plans with --time auto and no shape search: --time fit/optimal and --optimize shape search for
+        # 50 ms to 1 s per plan, which a warm-up cannot stop midway (a row would wait for it) and where a cold cache
+        # is under 1 % of the time; the path, samples and limit check they share are still warmed
+        if options.time in ("fit", "optimal") or options.shape or options.fit:
+            options = replace(options, time="auto", shape=False, fit=False)
+        self.options = options
         self.task = None
         self.warm_ups = 0  # started
         self.interrupted = 0  # of them, stopped between two stages of the plan by a line that came
 
     def remember(self, plan) -> None:
-        """The move to warm up with: the last one planned (a Plan)."""
-        self.task = getattr(plan, "task", None)
+        """The move to warm up with: the last one planned (a Plan) from rest to rest (a belt row's move, with a
+        moving end, is planned by the rendezvous, not by the stream's options: the previous move is kept)."""
+        task = getattr(plan, "task", None)
+        if task is not None and not (task.v_from.any() or task.v_to.any()):
+            self.task = task
 
     def __call__(self, ready: Callable[[], bool]) -> None:
         if self.task is None or ready():

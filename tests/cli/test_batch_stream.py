@@ -283,7 +283,7 @@ def test_keep_warm_on_a_named_pipe(tmp_path):
 
 @pytest.mark.parametrize("args, code, words", [
     (["--from", "0,0,-0.8", "--to", "0.1,0,-0.8", "--keep-warm", "0.005"], 2, "only applies to a streamed --batch"),
-    (["--batch", "FILE", "--keep-warm", "0.005"], 2, "is a file, read whole"),
+    (["--batch", "FILE", "--keep-warm", "0.005"], 2, "is not a pipe: it is read whole"),
     (["--batch", "-", "--keep-warm", "0.005", "-j", "2"], 2, "give -j 1 (not -j 2)"),
     (["--batch", "-", "--keep-warm", "0.0001"], 1, "keep_warm = 0.0001 s: must be 0 (off) or in 0.001 ... 10 s"),
     (["--batch", "-", "--keep-warm", "nan"], 1, "keep_warm = nan s"),
@@ -307,3 +307,37 @@ def test_keep_warm_refuses_a_belt_schedule():
     r = subprocess.run([sys.executable, "-m", "pickplace_cli", "plan", "--batch", "-", "--keep-warm", "0.005"],
                        input=text, capture_output=True, text=True, timeout=TIMEOUT)
     assert r.returncode == 2 and "does not apply to a belt schedule" in r.stderr and "Traceback" not in r.stderr
+
+
+@pytest.mark.parametrize("keep_warm", [[], ["--keep-warm", "0.005"]])
+def test_lone_cr_line_ends_on_stdin(keep_warm):
+    """Lines ended by a lone \\r (old Mac files) on stdin, as in a file: each row answered (Python's stdin splits at
+    \\n only: this was a csv traceback)."""
+    text = HEADER.replace("\n", "\r") + ROW.replace("\n", "\r") + ROW2
+    r = subprocess.run([sys.executable, "-m", "pickplace_cli", "plan", "--batch", "-", "--json", "-q", *keep_warm],
+                       input=text.encode(), capture_output=True, timeout=TIMEOUT)
+    assert r.returncode == 0, r.stderr
+    assert [json.loads(ln)["row"] for ln in r.stdout.splitlines()] == [1, 2]
+
+
+def test_closed_stdin_is_one_line():
+    r = subprocess.run([sys.executable, "-m", "pickplace_cli", "plan", "--batch", "-", "--json"],
+                       stdin=subprocess.DEVNULL, capture_output=True, text=True, timeout=TIMEOUT,
+                       preexec_fn=lambda: os.close(0))
+    assert r.returncode == 1 and "Traceback" not in r.stderr
+    assert r.stderr.strip() == "pickplace: error: batch = -: standard input is closed; give the rows on stdin or a file"
+
+
+def test_keep_warm_with_a_missing_batch_file_says_it_is_missing(tmp_path):
+    r = subprocess.run([sys.executable, "-m", "pickplace_cli", "plan", "--batch", str(tmp_path / "no.csv"),
+                        "--keep-warm", "0.01"], capture_output=True, text=True, timeout=TIMEOUT)
+    assert r.returncode == 1 and "cannot read it: No such file or directory" in r.stderr
+
+
+def test_keep_warm_reads_stdin_in_its_encoding():
+    """PYTHONIOENCODING=latin-1: the same answers with and without --keep-warm (a header comment in latin-1)."""
+    text = ("# pièce\n" + HEADER + ROW).encode("latin-1")
+    env = dict(os.environ, PYTHONIOENCODING="latin-1")
+    outs = [subprocess.run([sys.executable, "-m", "pickplace_cli", "plan", "--batch", "-", "--json", "-q", *kw],
+                           input=text, capture_output=True, timeout=TIMEOUT, env=env) for kw in ([], ["--keep-warm", "0.005"])]
+    assert outs[0].returncode == outs[1].returncode == 0 and outs[0].stdout == outs[1].stdout

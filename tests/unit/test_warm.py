@@ -6,6 +6,7 @@ import os
 import threading
 import time
 
+import numpy as np
 import pytest
 
 from pickplace_cli.model.profile import load_profile
@@ -162,3 +163,51 @@ def test_warmer_stops_when_a_line_comes_mid_plan():
     answers = iter([False, False, True])  # at the start, after the path: nothing; after the samples: a line
     warmer(lambda: next(answers, True))
     assert warmer.warm_ups == 1 and warmer.interrupted == 1
+
+
+def test_a_character_cut_between_two_reads_is_not_counted_twice():
+    """The limit counts characters: the bytes of a character not all read yet are not counted as surrogates (a
+    line of exactly ``limit`` characters ending in a 4-byte character, its bytes split between two writes)."""
+    r, w = os.pipe()
+    reader = WarmLines(r, 0.005, lambda ready: None)
+    emoji = "\U0001F600".encode()
+
+    def later():
+        time.sleep(0.05)
+        os.write(w, emoji[2:] + b"\n")
+        os.close(w)
+
+    os.write(w, b"abcd" + emoji[:2])
+    t = threading.Thread(target=later)
+    t.start()
+    try:
+        assert reader.readline(5) == "abcd\U0001F600"
+        assert reader.readline(5) == "\n"
+        assert reader.readline(5) == ""
+    finally:
+        t.join()
+        os.close(r)
+
+
+def test_the_reader_decodes_with_the_encoding_given():
+    r, _ = _pipe_with("é,ü\n".encode("latin-1"))
+    try:
+        assert WarmLines(r, 0.01, lambda ready: None, "latin-1").readline() == "é,ü\n"
+    finally:
+        os.close(r)
+
+
+def test_warmer_plans_slow_modes_with_time_auto_and_skips_belt_moves():
+    """--time fit/optimal and --optimize shape: the warm-up plans with --time auto, no shape search (those searches
+    take 50 ms to 1 s and cannot stop midway); a plan with a moving end (a belt row) is not remembered."""
+    prof = load_profile(None)
+    for opts in (PlanOptions(time="optimal"), PlanOptions(time="fit", fit=True), PlanOptions(shape=True)):
+        w = Warmer(prof, opts, None, 0.005)
+        assert w.options.time == "auto" and not w.options.shape and not w.options.fit
+    w = Warmer(prof, PlanOptions(time=0.3, rate=500.0, fit=False), None, 0.005)
+    assert w.options.time == 0.3 and w.options.rate == 500.0  # a cheap mode is warmed as it is
+    rest = plan(Task([-0.1525, 0, -0.8], [0.1525, 0, -0.8], 0.025, 0.5), prof, PlanOptions())
+    w.remember(rest)
+    moving = Task([-0.1525, 0, -0.8], [0.1525, 0, -0.8], 0.025, 0.5, v_to=np.array([0.2, 0.0, 0.0]))
+    w.remember(type("P", (), {"task": moving})())
+    assert w.task is rest.task
