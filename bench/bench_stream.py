@@ -1,6 +1,6 @@
 """``plan --batch -`` as a pipeline stage (issue 16, part 2): latency per row and throughput.
 
-    python bench/bench_stream.py                      # ~6 min on 2 cores (~8 min with --old)
+    python bench/bench_stream.py                      # ~7 min on 2 cores (~9 min with --old)
     python bench/bench_stream.py --old /tmp/oldclone  # also another checkout, side by side
 
 Latency: one `pickplace plan --batch -` process; rows of the Adept cycle on the default Delta are written one

@@ -137,9 +137,9 @@ def plan(
     keep_warm: float = typer.Option(
         0.0, "--keep-warm", metavar="SECONDS",
         help="With a streamed --batch (- or a named pipe): while no row is waiting, plan the last move again every "
-        "SECONDS s (nothing written) so the CPU's caches stay warm for the next row: ~0.3-0.6 ms less latency after "
-        "a pause, for CPU time while idle (~43 % of a core at 0.002, ~25 % at 0.005, ~10 % at 0.02). 0 = off; "
-        "0.001 ... 10 s. Rows are then planned one at a time in this process (-j 1).",
+        "SECONDS s (nothing written) so the CPU's caches stay warm for the next row: 0.5-0.9 ms less latency for "
+        "rows 100 ms apart, for CPU time while idle (~40 % of a core at 0.002, ~25 % at 0.005, ~10 % at 0.02). "
+        "0 = off; 0.001 ... 10 s. Rows are then planned one at a time in this process (-j 1).",
     ),
     round_trip: bool = typer.Option(
         False, "--round-trip", help="Write there, dwell, back, dwell (the profile's dwell in s) as one trajectory."
