@@ -120,10 +120,11 @@ def test_bad_input_is_one_line_exit_1(payload, words):
     assert len([ln for ln in err.splitlines() if ln.startswith("pickplace: error:")]) == 1
 
 
-def test_a_named_pipe_streams_too(tmp_path):
+@pytest.mark.parametrize("keep_warm", [[], ["--keep-warm", "0.005"]])
+def test_a_named_pipe_streams_too(tmp_path, keep_warm):
     fifo = tmp_path / "moves.fifo"
     os.mkfifo(fifo)
-    proc = subprocess.Popen([sys.executable, "-m", "pickplace_cli", "plan", "--batch", str(fifo), "--json"],
+    proc = subprocess.Popen([sys.executable, "-m", "pickplace_cli", "plan", "--batch", str(fifo), "--json", *keep_warm],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         with open(fifo, "w") as w:
@@ -258,25 +259,6 @@ def test_keep_warm_answers_the_same_bytes_row_by_row(tmp_path):
         out += proc.stdout.read().splitlines()
         assert out == expected
         assert "row 3 (stdin:4)" in proc.stderr.read().decode()
-    finally:
-        proc.kill()
-
-
-def test_keep_warm_on_a_named_pipe(tmp_path):
-    fifo = tmp_path / "moves"
-    os.mkfifo(fifo)
-    proc = subprocess.Popen([sys.executable, "-m", "pickplace_cli", "plan", "--batch", str(fifo), "--json",
-                             "--keep-warm", "0.005"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    try:
-        with open(fifo, "w") as w:
-            w.write(HEADER + ROW)
-            w.flush()
-            first = json.loads(_readline(proc.stdout))
-            assert first["row"] == 1 and proc.poll() is None
-            time.sleep(0.05)
-            w.write(ROW2)
-        assert proc.wait(TIMEOUT) == 0
-        assert json.loads(proc.stdout.read())["row"] == 2
     finally:
         proc.kill()
 

@@ -105,30 +105,45 @@ def test_sigterm_to_the_whole_process_group_never_hangs(tmp_path, streamed):
     for attempt, delay in enumerate((0.6, 1.2, 2.0)):
         out = tmp_path / f"o{attempt}.csv"
         args = ["plan", "--batch", "-" if streamed else str(src), "-q", "-j", "2", "--rate", "1000", "-o", str(out)]
-        proc = subprocess.Popen(_cli(*args), stdin=subprocess.PIPE if streamed else subprocess.DEVNULL,
-                                stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, cwd=tmp_path,
-                                start_new_session=True)
+        proc = _start_group(args, HEADER + rows if streamed else None, tmp_path, delay)
+        _signal_the_group(proc, signal.SIGTERM, 143, "pickplace: error: terminated (SIGTERM); no output file was changed",
+                          out)
+
+
+def _start_group(args: list[str], stdin: str | None, cwd, delay: float) -> subprocess.Popen:
+    """The CLI with ``args`` in a new process group, ``stdin`` written to it (and left open: still streaming when
+    a signal comes; None: no stdin), after ``delay`` s."""
+    proc = subprocess.Popen(_cli(*args), stdin=subprocess.PIPE if stdin is not None else subprocess.DEVNULL,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, cwd=cwd,
+                            start_new_session=True)
+    if stdin is not None:
+        proc.stdin.write(stdin)
+        proc.stdin.flush()
+    time.sleep(delay)
+    return proc
+
+
+def _signal_the_group(proc, sig, code: int, line: str, out) -> None:
+    """Send ``sig`` to the whole process group of ``proc`` (still running): exit ``code`` within 20 s, ``line`` all
+    of stderr, neither ``out`` nor a temporary file of it, no process of the group left within 10 s. The group is
+    killed in any case."""
+    try:
+        assert proc.poll() is None
+        os.killpg(proc.pid, sig)
+        assert proc.wait(20) == code
+        err = proc.stderr.read()
+        assert err.strip() == line, err
+        assert not out.exists() and not list(out.parent.glob(f".{out.name}.*"))
+        deadline = time.monotonic() + 10
+        while _group(proc.pid):
+            assert time.monotonic() < deadline, f"processes {_group(proc.pid)} of the group outlived it"
+            time.sleep(0.05)
+    finally:
         try:
-            if streamed:
-                proc.stdin.write(HEADER + rows)  # and keep stdin open: still streaming when the signal comes
-                proc.stdin.flush()
-            time.sleep(delay)
-            assert proc.poll() is None
-            os.killpg(proc.pid, signal.SIGTERM)
-            assert proc.wait(20) == 143
-            err = proc.stderr.read()
-            assert err.strip() == "pickplace: error: terminated (SIGTERM); no output file was changed", err
-            assert not out.exists() and not list(tmp_path.glob(f".o{attempt}.csv.*"))
-            deadline = time.monotonic() + 10
-            while _group(proc.pid):
-                assert time.monotonic() < deadline, f"processes {_group(proc.pid)} of the group outlived it"
-                time.sleep(0.05)
-        finally:
-            try:
-                os.killpg(proc.pid, signal.SIGKILL)
-            except ProcessLookupError:
-                pass
-            proc.wait()
+            os.killpg(proc.pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+        proc.wait()
 
 
 @pytest.mark.skipif(not os.path.isdir("/proc"), reason="reads the process table from /proc")
@@ -145,30 +160,9 @@ def test_ctrl_c_to_the_whole_process_group_is_one_line(tmp_path, mode):
     streamed = mode.startswith("streamed")
     args = ["plan", "--batch", "-" if streamed else str(src), "-q", "-j", "2"]
     args += ["--json"] if mode == "verdicts" else ["--rate", "1000", "-o", str(out)]
-    proc = subprocess.Popen(_cli(*args), stdin=subprocess.PIPE if streamed else subprocess.DEVNULL,
-                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, cwd=tmp_path,
-                            start_new_session=True)
-    try:
-        if streamed:
-            proc.stdin.write(HEADER + rows)  # and keep stdin open: still streaming when the signal comes
-            proc.stdin.flush()
-        time.sleep(2.0 if mode == "streamed-idle" else 1.0 if mode != "verdicts" else 0.7)
-        assert proc.poll() is None
-        os.killpg(proc.pid, signal.SIGINT)
-        assert proc.wait(20) == 130
-        err = proc.stderr.read()
-        assert err.strip() == "pickplace: error: interrupted; no output file was changed", err
-        assert not out.exists() and not list(tmp_path.glob(".o.csv.*"))
-        deadline = time.monotonic() + 10
-        while _group(proc.pid):
-            assert time.monotonic() < deadline, f"processes {_group(proc.pid)} of the group outlived it"
-            time.sleep(0.05)
-    finally:
-        try:
-            os.killpg(proc.pid, signal.SIGKILL)
-        except ProcessLookupError:
-            pass
-        proc.wait()
+    proc = _start_group(args, HEADER + rows if streamed else None, tmp_path,
+                        2.0 if mode == "streamed-idle" else 1.0 if mode != "verdicts" else 0.7)
+    _signal_the_group(proc, signal.SIGINT, 130, "pickplace: error: interrupted; no output file was changed", out)
 
 
 @pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full")
