@@ -2,9 +2,9 @@
 
 A row that arrives after a pause of 10 ms or more is planned on a cold CPU: on a 2-core VM, one plan of the Adept
 cycle at 1 kHz takes ~0.75 ms back to back and ~1.2–1.6 ms after a 10 ms pause (the interpreter's and numpy's
-code and data were evicted, by the host's other work while this process slept; busy-waiting does not keep them,
-re-running the same code does). :class:`WarmLines` reads the batch's lines from a file descriptor and, each time
-``interval`` seconds pass with no complete line, calls ``idle(ready)``; :class:`Warmer` is that ``idle``: it plans
+code and data were evicted, by the host's other work while this process slept; busy-waiting keeps only part of
+them, 1.0–1.1 ms; re-running the same code keeps them). :class:`WarmLines` reads the batch's lines from a file
+descriptor and, each time ``interval`` seconds pass with no complete line, calls ``idle(ready)``; :class:`Warmer` is that ``idle``: it plans
 the last row's move again (and formats its CSV text) and throws the result away. The cost is CPU time while the
 stream is idle, about one plan per ``interval`` (measured in ``bench/bench_stream.py --keep-warm``); nothing is
 written and no state is changed. A row that arrives during a warm-up waits for the stage running: ``ready`` is
