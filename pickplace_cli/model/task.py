@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from functools import cached_property
+from math import isfinite, sqrt
 
 import numpy as np
 
@@ -11,6 +12,13 @@ from .errors import TaskError
 
 
 def _vec3(name: str, value) -> np.ndarray:
+    # a streamed row's three Python floats without numpy's per-call costs (~0.1 ms per Task after an idle
+    # pause, the cold CPU of issue 16); anything else, and every error, by the general path below
+    if type(value) in (list, tuple) and len(value) == 3:
+        x, y, z = value
+        if type(x) is float and type(y) is float and type(z) is float and isfinite(x) and isfinite(y) \
+                and isfinite(z):
+            return np.array((x, y, z), dtype=float)
     arr = np.asarray(value, dtype=float).reshape(-1)
     if arr.shape != (3,):
         raise TaskError(f"{name} = {value!r}: needs three coordinates X,Y,Z in m")
@@ -43,14 +51,15 @@ class Task:
         object.__setattr__(self, "v_from", _vec3("v_from", self.v_from))
         object.__setattr__(self, "v_to", _vec3("v_to", self.v_to))
         h = float(self.height)
-        if not (np.isfinite(h) and h > 0):
+        if not (isfinite(h) and h > 0):
             raise TaskError(f"height = {self.height!r}: must be a finite number of metres > 0")
         e = float(self.eta)
-        if not (np.isfinite(e) and 0 < e < 1):
+        if not (isfinite(e) and 0 < e < 1):
             raise TaskError(f"eta = {self.eta!r}: the lift-off/set-down ratio η must lie strictly between 0 and 1")
         object.__setattr__(self, "height", h)
         object.__setattr__(self, "eta", e)
-        if np.linalg.norm(self.p_to - self.p_from) < 1e-9:
+        dx, dy, dz = (self.p_to - self.p_from).tolist()
+        if sqrt(dx * dx + dy * dy + dz * dz) < 1e-9:  # np.linalg.norm's sum, in Python floats
             raise TaskError(
                 f"from = to = {','.join(f'{c:g}' for c in self.p_from)}: the end points must differ (by more than 1 nm)"
             )

@@ -49,3 +49,30 @@ def test_invalid_tasks(kw, match):
 def test_vertical_move_has_a_frame():
     t = Task([0, 0, -0.8], [0, 0, -0.7], 0.05)
     assert t.b == 0 and t.lam == 0 and t.gamma == 0
+
+
+@pytest.mark.parametrize("p_from", [[0.1, -0.2, -0.8], (0.1, -0.2, -0.8), np.array([0.1, -0.2, -0.8]), [0, 0, -1]])
+def test_the_float_fast_path_builds_the_same_task_as_numpy(p_from):
+    """A streamed row gives three Python floats (the fast path without numpy calls); arrays, tuples and ints take
+    the general path: the same arrays, the same frame, bitwise."""
+    fast = Task([float(c) for c in p_from], [0.3, 0.1, -0.75], 0.03, 0.4, v_from=[0.0, 0.0, 0.0], v_to=[0.5, 0.0, 0.0])
+    slow = Task(np.asarray(p_from, float), np.array([0.3, 0.1, -0.75]), 0.03, 0.4,
+                v_from=np.zeros(3), v_to=np.array([0.5, 0.0, 0.0]))
+    for name in ("p_from", "p_to", "v_from", "v_to"):
+        a, b = getattr(fast, name), getattr(slow, name)
+        assert a.dtype == b.dtype == np.float64 and a.shape == b.shape == (3,)
+        assert a.tobytes() == b.tobytes()
+    assert fast.via_points().tobytes() == slow.via_points().tobytes()
+    assert (fast.b, fast.gamma, fast.lam) == (slow.b, slow.gamma, slow.lam)
+
+
+@pytest.mark.parametrize("bad", [[0.0, float("nan"), -0.8], [float("inf"), 0.0, -0.8], [0.0, -float("inf"), 0.0]])
+def test_non_finite_floats_leave_the_fast_path_with_the_same_error(bad):
+    with pytest.raises(TaskError, match=r"^from = .*every coordinate must be a finite number \(m\)$"):
+        Task(bad, [0.3, 0.0, -0.8], 0.03)
+
+
+def test_ends_closer_than_a_nanometre_are_refused_by_either_path():
+    with pytest.raises(TaskError, match="must differ"):
+        Task([0.1, 0.2, -0.8], [0.1, 0.2 + 5e-10, -0.8], 0.03)
+    Task([0.1, 0.2, -0.8], [0.1, 0.2 + 2e-9, -0.8], 0.03)  # 2 nm apart: a move
