@@ -386,7 +386,7 @@ def _stream_batch(items, name, prof, options, height, eta, fail_fast, writer, ou
                     sys.stderr.flush()
                 if json_summary:
                     _emit_row_json(res)
-                if warmer is not None and res.plan is not None:
+                if warmer is not None:
                     warmer.remember(res.plan)
                 if res.plan is not None and report is not None:
                     reports.append((res.row, ReportRecord.of(res.plan)))

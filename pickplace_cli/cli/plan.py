@@ -139,7 +139,8 @@ def plan(
         help="With a streamed --batch (- or a named pipe): while no row is waiting, plan the last move again every "
         "SECONDS s (nothing written) so the CPU's caches stay warm for the next row: 0.5-0.9 ms less latency for "
         "rows 100 ms apart, for CPU time while idle (~40 % of a core at 0.002, ~25 % at 0.005, ~10 % at 0.02). "
-        "0 = off; 0.001 ... 10 s. Rows are then planned one at a time in this process (-j 1).",
+        "0 = off; 0.001 ... 10 s. Warming stops 60 s after the last row, until the next. Rows are then planned "
+        "one at a time in this process (-j 1).",
     ),
     round_trip: bool = typer.Option(
         False, "--round-trip", help="Write there, dwell, back, dwell (the profile's dwell in s) as one trajectory."

@@ -9,7 +9,9 @@ the last row's move again (and formats its CSV text) and throws the result away.
 stream is idle, about one plan per ``interval`` (measured in ``bench/bench_stream.py --keep-warm``); nothing is
 written and no state is changed. A row that arrives during a warm-up waits for the stage running: ``ready`` is
 polled between the plan's stages (:func:`~pickplace_cli.planner.plan`'s ``interrupt``: path, samples, limit check;
-~0.3 ms each) and before the CSV text (~0.4 ms).
+~0.3 ms each) and before the CSV text (~0.4 ms). The warming stops :data:`WARM_IDLE_LIMIT` seconds after the last
+row (a line that has stopped costs no CPU overnight) and starts again with the next row; before the first row there
+is nothing to warm and the reader just waits.
 """
 
 from __future__ import annotations
@@ -17,17 +19,22 @@ from __future__ import annotations
 import codecs
 import os
 import select
+import time
 from typing import Callable
 
 #: bytes asked of one read
 _CHUNK = 1 << 16
+#: seconds after the last row answered when the warming stops until the next row (the first row after a longer
+#: pause is planned cold, ~0.5-1 ms slower): a picking line sends rows every 0.3-3 s while it runs
+WARM_IDLE_LIMIT = 60.0
 
 
 class WarmLines:
     """``readline(limit)`` over the file descriptor ``fd`` (``encoding``, undecodable bytes kept as surrogates, as
     the CLI's own stdin), a line being ended by ``\\n``, ``\\r\\n`` or ``\\r``. While no complete line is buffered it
     waits on ``fd`` at most ``interval`` seconds at a time and, each time that passes with nothing read, calls
-    ``idle(ready)`` (``ready()``: True once a line can be read without waiting)."""
+    ``idle(ready)`` (``ready()``: True once a line can be read without waiting); once ``idle`` returns False it is
+    not called again before the next line, and the reader waits without a timeout."""
 
     def __init__(self, fd: int, interval: float, idle: Callable[[Callable[[], bool]], None],
                  encoding: str = "utf-8") -> None:
@@ -54,6 +61,7 @@ class WarmLines:
     def readline(self, limit: int = -1) -> str:
         """The next line with its end (``""`` at the end of the input); at most ``limit`` characters when a line
         is longer (as ``TextIOWrapper.readline``)."""
+        dormant = False  # idle said "not before the next line"
         while True:
             end = self._line_end()
             if 0 <= limit < (end if end >= 0 else len(self._buf)):  # maybe more than ``limit`` characters
@@ -67,9 +75,9 @@ class WarmLines:
             if end >= 0:
                 line, self._buf = self._buf[:end], self._buf[end:]
                 return line.decode(self.encoding, "surrogateescape")
-            r, _, _ = select.select([self.fd], [], [], self.interval)
+            r, _, _ = select.select([self.fd], [], [], None if dormant else self.interval)
             if not r:
-                self.idle(self.ready)
+                dormant = self.idle(self.ready) is False
                 continue
             chunk = os.read(self.fd, _CHUNK)
             if chunk:
@@ -81,9 +89,11 @@ class WarmLines:
 class Warmer:
     """The ``idle`` of :class:`WarmLines` (every ``interval`` s [s] of waiting): plans the last move answered again
     (:meth:`remember`), then formats its CSV text when the stream writes CSV, stopping between two stages once a
-    line is ready; results are discarded."""
+    line is ready; results are discarded. Returns False (no more calls before the next line) before the first move
+    and once ``idle_limit`` seconds [s] have passed since the last one."""
 
-    def __init__(self, profile, options, csv_dialect: str | None, interval: float) -> None:
+    def __init__(self, profile, options, csv_dialect: str | None, interval: float,
+                 idle_limit: float = WARM_IDLE_LIMIT, clock: Callable[[], float] = time.monotonic) -> None:
         from dataclasses import replace
 
         self.profile, self.csv_dialect, self.interval = profile, csv_dialect, interval
@@ -93,20 +103,28 @@ class Warmer:
         if options.time in ("fit", "optimal") or options.shape or options.fit:
             options = replace(options, time="auto", shape=False, fit=False)
         self.options = options
+        self.idle_limit, self.clock = idle_limit, clock
         self.task = None
+        self.last_row = clock()  # when the last move was remembered
         self.warm_ups = 0  # started
         self.interrupted = 0  # of them, stopped between two stages of the plan by a line that came
 
     def remember(self, plan) -> None:
-        """The move to warm up with: the last one planned (a Plan) from rest to rest (a belt row's move, with a
-        moving end, is planned by the rendezvous, not by the stream's options: the previous move is kept)."""
+        """A row was answered (``plan``: its Plan, or None for a row that failed): the idle time starts again, and
+        the move to warm up with is the last one planned from rest to rest (a belt row's move, with a moving end,
+        is planned by the rendezvous, not by the stream's options: the previous move is kept)."""
+        self.last_row = self.clock()
         task = getattr(plan, "task", None)
         if task is not None and not (task.v_from.any() or task.v_to.any()):
             self.task = task
 
-    def __call__(self, ready: Callable[[], bool]) -> None:
-        if self.task is None or ready():
-            return
+    def __call__(self, ready: Callable[[], bool]) -> bool:
+        """One warm-up, unless a line is ready; False when there is nothing to warm or the stream has been idle
+        for ``idle_limit`` s (the reader then waits for the next line without calling again)."""
+        if self.task is None or self.clock() - self.last_row > self.idle_limit:
+            return False
+        if ready():
+            return True
         from ..model.errors import PickplaceError
         from ..planner import PlanInterrupted, plan
 
@@ -121,3 +139,4 @@ class Warmer:
             self.interrupted += 1
         except PickplaceError:  # the move re-planned with the stream's options (not the row's time): any outcome
             pass
+        return True

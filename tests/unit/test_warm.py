@@ -211,3 +211,54 @@ def test_warmer_plans_slow_modes_with_time_auto_and_skips_belt_moves():
     moving = Task([-0.1525, 0, -0.8], [0.1525, 0, -0.8], 0.025, 0.5, v_to=np.array([0.2, 0.0, 0.0]))
     w.remember(type("P", (), {"task": moving})())
     assert w.task is rest.task
+
+
+def test_warmer_stops_after_the_idle_limit_and_starts_again_with_the_next_row():
+    """Nothing to warm before the first row; warm-ups while rows keep coming; none once ``idle_limit`` s have passed
+    since the last row answered (failed rows count), until the next row (a fake clock)."""
+    now = [100.0]
+    prof = load_profile(None)
+    warmer = Warmer(prof, PlanOptions(rate=1000.0), None, 0.005, idle_limit=60.0, clock=lambda: now[0])
+    assert warmer(lambda: False) is False and warmer.warm_ups == 0  # no move yet: the reader may wait
+    task = Task([-0.1525, 0, -0.8], [0.1525, 0, -0.8], 0.025, 0.5)
+    warmer.remember(plan(task, prof, PlanOptions(rate=1000.0)))
+    now[0] += 59.0
+    assert warmer(lambda: False) is True and warmer.warm_ups == 1
+    assert warmer(lambda: True) is True and warmer.warm_ups == 1  # a row waits: no warm-up, keep polling
+    now[0] += 1.5  # 60.5 s since the last row
+    assert warmer(lambda: False) is False and warmer.warm_ups == 1
+    warmer.remember(None)  # a row that failed: a row all the same
+    assert warmer(lambda: False) is True and warmer.warm_ups == 2
+    assert warmer.task is task  # the move warmed is still the last one planned
+
+
+def test_the_reader_stops_calling_idle_once_it_says_false_until_the_next_line():
+    """idle → False: the reader blocks on the pipe without a timeout (no calls, no CPU) until a line comes; the
+    next readline polls again."""
+    r, w = os.pipe()
+    calls: list[float] = []
+
+    def idle(ready):
+        calls.append(time.perf_counter())
+        return len(calls) < 3  # the third call says: not before the next line
+
+    reader = WarmLines(r, 0.002, idle)
+
+    def later(data: bytes, after: float):
+        time.sleep(after)
+        os.write(w, data)
+
+    try:
+        t = threading.Thread(target=later, args=(b"x\n", 0.15))
+        t.start()
+        assert reader.readline() == "x\n"
+        t.join()
+        assert len(calls) == 3  # 75 intervals of 2 ms passed: only 3 calls
+        t = threading.Thread(target=later, args=(b"y\n", 0.05))
+        t.start()
+        assert reader.readline() == "y\n"
+        t.join()
+        assert len(calls) >= 4  # polling again for the next line (idle now always says False: one call)
+    finally:
+        os.close(w)
+        os.close(r)
