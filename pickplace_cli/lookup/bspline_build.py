@@ -20,6 +20,7 @@ import numpy as np
 from ..model.errors import TableError
 from .bspline_optimum import _coarse_for, _optimise_chunk, ALGORITHM_VERSION, optimise_lambda, TableRow, TableSettings
 from .bspline_table import COLUMNS, Table
+from .executors import ignore_sigint
 
 if TYPE_CHECKING:  # pragma: no cover
     from concurrent.futures import Executor
@@ -154,13 +155,6 @@ def _chunks(lams: Sequence[float], n_tasks: int) -> list[tuple[float, ...]]:
     return [tuple(lams[i::n_tasks]) for i in range(n_tasks) if lams[i::n_tasks]]
 
 
-def _ignore_sigint() -> None:  # pragma: no cover - runs in the worker processes
-    """Pool workers leave Ctrl-C to the parent, which checkpoints and shuts the pool down."""
-    import signal
-
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-
-
 def run_build(
     lams: Sequence[float],
     settings: TableSettings = TableSettings(),
@@ -210,7 +204,7 @@ def run_build(
             if executor is None:
                 from concurrent.futures import ProcessPoolExecutor
 
-                executor = pool = ProcessPoolExecutor(max_workers=workers, initializer=_ignore_sigint)
+                executor = pool = ProcessPoolExecutor(max_workers=workers, initializer=ignore_sigint)
             futures = [executor.submit(_optimise_chunk, chunk, settings) for chunk in chunks]
             for fut in as_completed(futures):
                 rows = fut.result()

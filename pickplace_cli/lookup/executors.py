@@ -22,6 +22,15 @@ if TYPE_CHECKING:  # pragma: no cover
 CONNECT_TIMEOUT = 10.0
 
 
+def ignore_sigint() -> None:  # pragma: no cover - runs in the worker processes
+    """The initializer of every local process pool (table builds, ``-j N`` batches and streams): workers leave
+    Ctrl-C (SIGINT to the whole process group) to the parent, which checkpoints or stops in order and prints its
+    one line."""
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
 @contextmanager
 def dask_executor(address: str, timeout: float = CONNECT_TIMEOUT) -> Iterator[tuple["Executor", int]]:
     """Connect to the Dask scheduler at ``address`` (e.g. ``tcp://10.0.0.5:8786``) and yield

@@ -28,7 +28,8 @@ from typing import TYPE_CHECKING, Callable, Sequence
 import numpy as np
 
 from ..model.errors import TableError
-from .bspline_build import BuildReport, _drop_cut_line, _ignore_sigint, step_grid
+from .bspline_build import BuildReport, _drop_cut_line, step_grid
+from .executors import ignore_sigint
 from .bspline_optimum import ALGORITHM_VERSION, TableRow, TableSettings, _optimise_chunk
 from .bspline_table import COLUMNS, read_numeric_table, read_table_file, write_meta
 
@@ -387,7 +388,7 @@ def run_build_2d(
             from concurrent.futures import ProcessPoolExecutor, as_completed
 
             if executor is None:
-                executor = pool = ProcessPoolExecutor(max_workers=workers, initializer=_ignore_sigint)
+                executor = pool = ProcessPoolExecutor(max_workers=workers, initializer=ignore_sigint)
             futures = [executor.submit(_optimise_chunk_2d, e, chunk, settings) for e, chunk in tasks]
             for fut in as_completed(futures):
                 finish(*fut.result())

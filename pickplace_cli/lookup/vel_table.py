@@ -330,9 +330,9 @@ def build_vel_table(
     if workers > 1:
         from concurrent.futures import ProcessPoolExecutor, as_completed
 
-        from .bspline_build import _ignore_sigint
+        from .executors import ignore_sigint
 
-        with ProcessPoolExecutor(max_workers=workers, initializer=_ignore_sigint) as pool:  # Ctrl-C: the parent's
+        with ProcessPoolExecutor(max_workers=workers, initializer=ignore_sigint) as pool:  # Ctrl-C: the parent's
             futures = [pool.submit(_solve_chunk, c) for c in chunks]
             try:
                 for fut in as_completed(futures):
