@@ -380,7 +380,7 @@ def decide(rows: list[BatchRow], profile, options, height: float | None = None, 
                 continue
             try:
                 t = traj.sample_times(rate)
-            except ValueError:
+            except (PickplaceError, ValueError):  # e.g. too many samples (a time in ms): plan() says so, for the row
                 continue
             stand_in = SimpleNamespace(
                 task=task, method=path.method, parameters=path.parameters, duration=duration, cartesian=traj, t=t,

@@ -78,6 +78,26 @@ def test_mixed_batch_identical_with_and_without_the_engine(monkeypatch, extra):
         assert [d["exit_code"] for d in docs] == [0, 0, 1, 3, 1, 4, 0, 0]
 
 
+@pytest.mark.parametrize("jobs", ["1", "2"])
+def test_a_row_with_too_many_samples_fails_alone_with_the_engine(monkeypatch, tmp_path, jobs):
+    """A time of 1500 s (a column in ms by mistake) has 1.5e6 samples at 1 kHz, over the cap: the engine raised the
+    row's TaskError out of the whole batch (nothing on stdout, one line without a row number, exit 1). Now only
+    that row fails, with its row number, and the others are answered, as without the engine."""
+    from functools import partial
+
+    monkeypatch.setattr(verdicts, "verdict_rows_parallel", partial(verdicts.verdict_rows_parallel, chunk=2))
+    src = tmp_path / "ms.csv"
+    src.write_text("from_x,from_y,from_z,to_x,to_y,to_z,time\n-0.1525,0,-0.8,0.1525,0,-0.8,0.3\n"
+                   "-0.1525,0,-0.8,0.1525,0,-0.8,1500\n0.1,0.1,-0.8,-0.1,-0.1,-0.8,0.4\n")
+    seen = spy(monkeypatch)
+    on, off = both(["plan", "--batch", str(src), "--json", "-j", jobs], None, monkeypatch)
+    assert seen  # the engine ran
+    assert on.stdout == off.stdout and on.stderr == off.stderr and on.exit_code == off.exit_code == 1
+    docs = [json.loads(x) for x in on.stdout.splitlines()]
+    assert [(d["row"], d["exit_code"]) for d in docs] == [(1, 0), (2, 1), (3, 0)]
+    assert "row 2 (" in on.stderr and "at most 1,000,000 per move" in on.stderr
+
+
 def test_random_batch_identical_on_two_workers(monkeypatch, tmp_path):
     from functools import partial
 
