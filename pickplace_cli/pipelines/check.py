@@ -106,6 +106,9 @@ def read_moves(text: str, source: str, joint_names: tuple[str, ...]) -> list[Sam
         raise TaskError(
             f"{source}:{head_line}: header lacks column(s) {', '.join(missing)} (need {', '.join(need)}; found {', '.join(header)})"
         )
+    if len(rows) < 2:
+        raise TaskError(f"{source}:{head_line}: a header and no samples (need rows of {', '.join(need)} after it; "
+                        f"a move needs at least {MIN_SAMPLES})")
     cols = need + (["move"] if "move" in header else [])
     idx = [header.index(c) for c in cols]
     data = np.empty((len(rows) - 1, len(cols)))

@@ -112,6 +112,18 @@ def test_check_not_a_number_names_column_row_and_value(tmp_path):
     assert r.stderr.strip() == f"pickplace: error: {bad}:5: q2 = 'x1': not a number (column 3, 'q2')"
 
 
+@pytest.mark.parametrize("text", ["t,q1,q2,q3\n", "t,q1,q2,q3\n\n# only a comment\n", "move,t,q1,q2,q3\n"])
+def test_check_a_header_without_samples_is_one_line(tmp_path, text):
+    """A header and no sample rows ended in an IndexError traceback (review, session 16)."""
+    f = tmp_path / "empty.csv"
+    f.write_text(text)
+    for args, name, inp in (((str(f),), str(f), None), (("-",), "<stdin>", text)):
+        r = runner.invoke(app, ["check", *args], input=inp)
+        assert r.exit_code == 1 and isinstance(r.exception, SystemExit), r.exception  # not an IndexError
+        assert r.stderr.strip() == (f"pickplace: error: {name}:1: a header and no samples (need rows of t, q1, q2, "
+                                    "q3 after it; a move needs at least 6)")
+
+
 def test_check_help_names_the_argument():
     r = run("check", "--help")
     assert r.exit_code == 0 and "{TRAJECTORY}" in r.stdout and "{trajectory}" not in r.stdout
