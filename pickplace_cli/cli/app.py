@@ -80,6 +80,23 @@ def _err(message: str) -> None:
     sys.stderr.write(f"pickplace: error: {message}\n")
 
 
+def _one_warning(state: dict):
+    """``warnings.showwarning`` for a command: the first warning as one line (numpy's RuntimeWarnings of a
+    degenerate move, e.g. a division by zero, printed Python's way take two lines each, with a source line, and
+    come by the dozen); the others are counted, not printed. The numbers they concern are still checked: a NaN
+    duration is an error, a NaN peak a failed limit."""
+
+    def show(message, category, filename, lineno, file=None, line=None):  # noqa: ARG001 - the signature
+        import os
+
+        state["n"] = state.get("n", 0) + 1
+        if state["n"] == 1:
+            sys.stderr.write(f"pickplace: warning: {category.__name__}: {message} "
+                             f"({os.path.basename(filename)}:{lineno}); further warnings not shown\n")
+
+    return show
+
+
 def _on_sigterm(signum, frame) -> None:  # noqa: ARG001 - signal handler signature
     """SIGTERM (``kill``, ``timeout``, ``docker stop``, systemd; to the process or its whole group): stop at once, in
     the handler, whatever the main thread is doing — remove the temporary ``-o`` files being written
@@ -129,12 +146,19 @@ def _handle_errors(fn: Callable) -> Callable:
 
         from ..model.errors import PickplaceError
 
+        from ..export import PROMISED
+
         _JSON_ERRORS[0] = False
         _TERM_NOTES.clear()
+        PROMISED.clear()
+        import warnings
+
         previous = None
         if threading.current_thread() is threading.main_thread():
             _MAIN_PID[0] = os.getpid()
             previous = signal.signal(signal.SIGTERM, _on_sigterm)
+        shown = warnings.showwarning
+        warnings.showwarning = _one_warning({})
         try:
             return fn(*args, **kwargs)
         except PickplaceError as exc:
@@ -148,11 +172,16 @@ def _handle_errors(fn: Callable) -> Callable:
             _err("interrupted; no output file was changed")
             raise typer.Exit(130) from None
         except BrokenPipeError:
-            # the reader went away (e.g. `| head`): not an error of ours
+            # the reader went away (e.g. `| head`): not an error of ours, unless a file the command was to write
+            # (-o, --report) is left unwritten: a script that checks $? must not take it for written
+            unwritten = sorted(PROMISED)
             try:
                 sys.stdout = None  # type: ignore[assignment]
+                if unwritten:
+                    _err(f"{', '.join(unwritten)}: not written: standard output was closed by its reader (broken "
+                         "pipe) before the command finished")
             finally:
-                raise typer.Exit(0) from None
+                raise typer.Exit(1 if unwritten else 0) from None
         except OSError as exc:  # an I/O failure no layer above named (the writers name their output themselves)
             _err(f"{exc.filename}: {exc.strerror or exc}" if exc.filename else f"I/O error: {exc.strerror or exc}")
             try:
@@ -161,6 +190,7 @@ def _handle_errors(fn: Callable) -> Callable:
                 sys.stdout = None  # type: ignore[assignment]  # a broken stdout: not flushed again at exit
             raise typer.Exit(1) from None
         finally:
+            warnings.showwarning = shown
             if previous is not None:
                 signal.signal(signal.SIGTERM, previous)
 

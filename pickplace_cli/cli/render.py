@@ -113,11 +113,13 @@ def _check_output_paths(output: Optional[str], report: Optional[str]) -> None:
     import os
 
     from ..model.errors import ExportError
-    from ..export import check_writable
+    from ..export import check_writable, promise
 
     check_writable(output)
+    promise(output)
     if report is not None:
         check_writable(report)
+        promise(report)
         if report == "-" and output == "-":
             raise ExportError("report = -: stdout already carries the trajectory; give --report a file or -o a file")
         if output is not None and report != "-" and output != "-" and os.path.abspath(report) == os.path.abspath(output):

@@ -28,6 +28,15 @@ FLOAT_FORMAT = "%.12g"
 #: the temporary files being written by :func:`atomic_output` (removed by :func:`remove_pending` when SIGTERM
 #: stops the process at once, without unwinding)
 PENDING: set[str] = set()
+#: the output files a command said it will write (:func:`promise`) and has not finished yet: when standard output's
+#: reader goes away (broken pipe) before they are written, the command says so and exits 1 instead of 0
+PROMISED: set[str] = set()
+
+
+def promise(path: str | Path | None) -> None:
+    """Note that the command will write ``path`` (None and ``-``, standard output, are not files)."""
+    if path is not None and str(path) != "-":
+        PROMISED.add(str(path))
 
 
 def remove_pending() -> int:
@@ -90,6 +99,7 @@ def atomic_output(path: str | Path | None, binary: bool = False) -> Iterator[IO]
             with fh:
                 yield fh
                 fh.flush()
+            PROMISED.discard(str(path))
         except BrokenPipeError:  # the reader of a pipe went away: the CLI's own handling (exit 0)
             raise
         except OSError as exc:  # e.g. /dev/full: no space left
@@ -109,6 +119,7 @@ def atomic_output(path: str | Path | None, binary: bool = False) -> Iterator[IO]
         os.chmod(tmp, _mode_for(target))
         os.replace(tmp, target)
         PENDING.discard(tmp)
+        PROMISED.discard(str(path))
     except BaseException as exc:
         try:
             os.unlink(tmp)

@@ -11,19 +11,31 @@ import numpy as np
 from .errors import TaskError
 
 
-def _vec3(name: str, value) -> np.ndarray:
+#: the largest coordinate or clearance accepted [m], and end speed [m/s]: far beyond any workcell, and small enough
+#: that no power of a move's numbers up to the limit check's (a jerk squared, ~1e42 at 1 µs) overflows a double
+MAX_METRES = 1e3
+MAX_SPEED = 1e3
+#: the smallest clearance accepted [m] (below it some methods divide by zero; the default method refuses λ = b/h
+#: beyond 1e5 long before)
+MIN_HEIGHT = 1e-6
+
+
+def _vec3(name: str, value, limit: float = MAX_METRES, unit: str = "m") -> np.ndarray:
     # a streamed row's three Python floats without numpy's per-call costs (~0.1 ms per Task after an idle
     # pause, the cold CPU of issue 16); anything else, and every error, by the general path below
     if type(value) in (list, tuple) and len(value) == 3:
         x, y, z = value
-        if type(x) is float and type(y) is float and type(z) is float and isfinite(x) and isfinite(y) \
-                and isfinite(z):
+        if type(x) is float and type(y) is float and type(z) is float and -limit <= x <= limit \
+                and -limit <= y <= limit and -limit <= z <= limit:
             return np.array((x, y, z), dtype=float)
     arr = np.asarray(value, dtype=float).reshape(-1)
     if arr.shape != (3,):
-        raise TaskError(f"{name} = {value!r}: needs three coordinates X,Y,Z in m")
+        raise TaskError(f"{name} = {value!r}: needs three coordinates X,Y,Z in {unit}")
     if not np.all(np.isfinite(arr)):
-        raise TaskError(f"{name} = {','.join(map(str, arr))}: every coordinate must be a finite number (m)")
+        raise TaskError(f"{name} = {','.join(map(str, arr))}: every coordinate must be a finite number ({unit})")
+    if not np.all(np.abs(arr) <= limit):
+        raise TaskError(f"{name} = {','.join(f'{c:g}' for c in arr)}: every coordinate must lie within "
+                        f"±{limit:g} {unit} (SI units)")
     return arr
 
 
@@ -48,11 +60,15 @@ class Task:
     def __post_init__(self) -> None:
         object.__setattr__(self, "p_from", _vec3("from", self.p_from))
         object.__setattr__(self, "p_to", _vec3("to", self.p_to))
-        object.__setattr__(self, "v_from", _vec3("v_from", self.v_from))
-        object.__setattr__(self, "v_to", _vec3("v_to", self.v_to))
+        object.__setattr__(self, "v_from", _vec3("v_from", self.v_from, MAX_SPEED, "m/s"))
+        object.__setattr__(self, "v_to", _vec3("v_to", self.v_to, MAX_SPEED, "m/s"))
         h = float(self.height)
         if not (isfinite(h) and h > 0):
             raise TaskError(f"height = {self.height!r}: must be a finite number of metres > 0")
+        if h > MAX_METRES:
+            raise TaskError(f"height = {self.height!r} m: must be at most {MAX_METRES:g} m (SI units)")
+        if h < MIN_HEIGHT:
+            raise TaskError(f"height = {self.height!r} m: must be at least {MIN_HEIGHT:g} m (1 µm; SI units)")
         e = float(self.eta)
         if not (isfinite(e) and 0 < e < 1):
             raise TaskError(f"eta = {self.eta!r}: the lift-off/set-down ratio η must lie strictly between 0 and 1")

@@ -69,10 +69,16 @@ class Part:
     name: str = "part"
 
     def __post_init__(self) -> None:
-        for label, unit, value in (("to", "m", self.position), ("to-belt", "m/s", self.velocity)):
+        from ..model.task import MAX_METRES, MAX_SPEED
+
+        for label, unit, value, limit in (("to", "m", self.position, MAX_METRES),
+                                          ("to-belt", "m/s", self.velocity, MAX_SPEED)):
             arr = np.asarray(value, float).reshape(-1)
             if arr.shape != (3,) or not np.all(np.isfinite(arr)):
                 raise TaskError(f"{label} = {value!r}: give three finite components X,Y,Z in {unit}")
+            if not np.all(np.abs(arr) <= limit):
+                raise TaskError(f"{label} = {','.join(f'{c:g}' for c in arr)}: every component must lie within "
+                                f"±{limit:g} {unit} (SI units)")
             object.__setattr__(self, "position" if label == "to" else "velocity", arr)
         lat = float(self.latency)
         if not (math.isfinite(lat) and lat >= 0):

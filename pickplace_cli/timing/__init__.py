@@ -64,6 +64,11 @@ def auto_duration(path: CartesianPath, capacity: Capacity) -> tuple[float, float
     return tv, ta, tj, binding
 
 
+#: the shortest duration accepted [s] (with moves up to :data:`~pickplace_cli.model.task.MAX_METRES`, the limit
+#: check's numbers stay finite)
+MIN_SECONDS = 1e-6
+
+
 def parse_time(spec: str | float) -> str | float:
     """``auto`` | ``fit`` | seconds (> 0, finite) → the spec; TaskError naming the rule otherwise."""
     if isinstance(spec, str):
@@ -78,6 +83,9 @@ def parse_time(spec: str | float) -> str | float:
         value = float(spec)
     if not (math.isfinite(value) and value > 0):
         raise TaskError(f"time = {spec!r}: a duration must be a finite number of seconds > 0")
+    if value < MIN_SECONDS:
+        raise TaskError(f"time = {spec!r}: a duration must be at least {MIN_SECONDS:g} s (no robot moves faster; "
+                        "shorter ones overflow the limit check's numbers)")
     return value
 
 
@@ -92,6 +100,12 @@ def choose_duration(
     spec = parse_time(spec)
     tv, ta, tj, binding = auto_duration(path, capacity)
     t_auto = max(tv, ta, tj or 0.0)
+    if not math.isfinite(t_auto):  # a degenerate path (λ = b/h far outside what the method's closed forms handle)
+        lam = path.parameters.get("lambda") if isinstance(path.parameters, dict) else None
+        where = f" (λ = b/h = {lam:.3g})" if isinstance(lam, float) else ""
+        raise TaskError(f"method {path.method}: this move's path{where} has no finite peak speed or acceleration, so "
+                        "no duration can be chosen; the move is too flat or too tall for this method: change the "
+                        "height, or use the default method bspline")
     t_fit = fit_binding = None
     if model is not None:
         t_fit, fit_binding = fit_duration(model, dwell, start=t_auto, check=check)

@@ -111,7 +111,32 @@ BAD = [
     ([*ADEPT, "--k1", "1e-300", "--k2", "0.1"], "k1 = 1e-300: time-ratio factors must lie in [0.0001, 0.9999]"),
     # inside the k range, but the knot spans are so short that the duration (~2e5 s) needs 1.8e8 samples
     ([*ADEPT, "--k1", "1e-4", "--k2", "0.5"], "at most 1,000,000 per move"),
+    # absurd scales (review, session 16: NaN durations, overflow warnings and tracebacks before these bounds)
+    (["--from", "-0.1525,0,-0.8", "--to", "0.1525,0,1e200"], "to = 0.1525,0,1e+200: every coordinate must lie within ±1000 m"),
+    (["--from", "1e200,0,-0.8", "--to", "0,0,-0.8"], "from = 1e+200,0,-0.8: every coordinate must lie within ±1000 m"),
+    (["--from", "1e200,0,-0.8", "--to", "0,0,-0.8", "-p", "scara-600"], "every coordinate must lie within ±1000 m"),
+    ([*ADEPT, "--height", "1e200", "--k1", "0.3", "--k2", "0.1"], "height = 1e+200 m: must be at most 1000 m"),
+    ([*ADEPT, "--height", "1e170", "-m", "ph"], "height = 1e+170 m: must be at most 1000 m"),
+    ([*ADEPT, "--time", "1e-100"], "time = '1e-100': a duration must be at least 1e-06 s"),
+    ([*ADEPT, "--time", "1e-100", "--json"], "time = '1e-100': a duration must be at least 1e-06 s"),
+    (["--from", "-0.1525,0,-0.8", "--to", "0.1525,0,-0.8", "-m", "bspline-vel", "--v-from", "1e200,0,0"],
+     "v_from = 1e+200,0,0: every coordinate must lie within ±1000 m/s"),
 ]
+
+
+def test_numerical_warnings_are_one_line():
+    """numpy's RuntimeWarnings of a degenerate move (two lines each, Python's way, by the dozen: review, session 16)
+    are one line: the first, the others counted; with the error that follows, two lines in all."""
+    r = run("plan", *ADEPT, "-m", "lame", "--height", "1e-6", "-q", "-o", "/dev/null")
+    assert r.exit_code == 0
+    (line,) = r.stderr.splitlines()
+    assert line.startswith("pickplace: warning: RuntimeWarning: invalid value encountered in power (lame.py:")
+    assert line.endswith("); further warnings not shown")
+    r = run("plan", "--from", "-0.1525,0,-0.8", "--to", "-0.1525,1e-9,-0.8", "--height", "1000", "-m", "ph", "-q")
+    assert r.exit_code == 1
+    lines = r.stderr.splitlines()
+    assert len(lines) == 2 and lines[0].startswith("pickplace: warning: RuntimeWarning: ")
+    assert lines[1].startswith("pickplace: error: method ph: this move's path has no finite peak speed")
 
 
 @pytest.mark.parametrize("args,msg", BAD)

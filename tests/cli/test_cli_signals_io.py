@@ -196,3 +196,33 @@ def test_json_with_report_file_and_no_output(tmp_path, batch):
     doc = json.loads(rep.read_text())
     limits = doc["moves"][0]["limits"] if batch else doc["limits"]
     assert limits["ok"] is True
+
+
+@pytest.mark.parametrize("args, stdin, unwritten, written", [
+    (["plan", *ADEPT, "--round-trip", "-q", "--report", "-", "-o", "traj.csv"], None, ["traj.csv"], []),
+    (["plan", "--batch", "-", "--json", "-q", "-o", "traj.csv"], HEADER + ROW + ROW, ["traj.csv"], []),
+    # the files are written before the JSON summary goes to stdout: they are there, exit 0
+    (["plan", *ADEPT, "--json", "-o", "traj.csv", "--report", "rep.json"], None, [], ["rep.json", "traj.csv"]),
+    (["plan", *ADEPT, "-q"], None, [], []),
+    (["plan", "--batch", "-", "--json", "-q"], HEADER + ROW, [], []),
+])
+def test_a_reader_that_goes_away_is_exit_0_unless_a_file_is_left_unwritten(tmp_path, args, stdin, unwritten, written):
+    """stdout's reader gone (`| head`, here a pipe whose read end is closed before the command writes): exit 0 as
+    before when every file asked for was written (or stdout was the only output); when an -o or --report file was
+    still to be written (it is not: the command stops at the broken pipe) one line naming it and exit 1 (review,
+    session 16: exit 0 without the file)."""
+    r, w = os.pipe()
+    os.close(r)
+    try:
+        p = subprocess.run(_cli(*args), input=stdin, stdout=w, stderr=subprocess.PIPE, text=True, timeout=TIMEOUT,
+                           cwd=tmp_path)
+    finally:
+        os.close(w)
+    assert "Traceback" not in p.stderr
+    assert sorted(os.listdir(tmp_path)) == written  # no temporary file left
+    if not unwritten:
+        assert p.returncode == 0 and "pickplace: error" not in p.stderr
+        return
+    assert p.returncode == 1
+    assert p.stderr.splitlines() == [f"pickplace: error: {', '.join(unwritten)}: not written: standard output was "
+                                     "closed by its reader (broken pipe) before the command finished"]

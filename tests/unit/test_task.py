@@ -37,6 +37,12 @@ def test_unequal_heights_measure_clearance_from_higher_end():
         ({"eta": 1.0}, "eta"),
         ({"p_from": [0, float("nan"), 0]}, "finite"),
         ({"p_from": [0, 0]}, "three coordinates"),
+        # scales no workcell has (they overflowed or divided by zero further on; review, session 16)
+        ({"p_from": [0.0, 0.0, 1000.5]}, r"from = 0,0,1000.5: every coordinate must lie within ±1000 m"),
+        ({"p_to": np.array([-1e200, 0, 0])}, r"to = -1e\+200,0,0: every coordinate must lie within ±1000 m"),
+        ({"v_to": [0.0, 2e3, 0.0]}, r"v_to = 0,2000,0: every coordinate must lie within ±1000 m/s"),
+        ({"height": 1e3 + 1}, r"height = 1001.0 m: must be at most 1000 m"),
+        ({"height": 1e-300}, r"height = 1e-300 m: must be at least 1e-06 m"),
     ],
 )
 def test_invalid_tasks(kw, match):
@@ -76,3 +82,8 @@ def test_ends_closer_than_a_nanometre_are_refused_by_either_path():
     with pytest.raises(TaskError, match="must differ"):
         Task([0.1, 0.2, -0.8], [0.1, 0.2 + 5e-10, -0.8], 0.03)
     Task([0.1, 0.2, -0.8], [0.1, 0.2 + 2e-9, -0.8], 0.03)  # 2 nm apart: a move
+
+
+def test_the_scale_bounds_are_inclusive():
+    Task([-1000.0, 0.0, 1000.0], [1000.0, 0.0, -1000.0], 1000.0, v_from=[1000.0, -1000.0, 0.0])
+    Task([0.0, 0.0, -0.8], [0.3, 0.0, -0.8], 1e-6)
