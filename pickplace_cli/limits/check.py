@@ -225,7 +225,7 @@ def _range_row(spec: tuple, vmax: float, vmin: float, tmax: float, tmin: float) 
     mid, half = (lo + hi) / 2, (hi - lo) / 2
     u_hi, u_lo = (vmax - mid) / half, (mid - vmin) / half
     ok = vmax <= hi + 1e-12 and vmin >= lo - 1e-12
-    if u_hi >= u_lo:
+    if u_hi >= u_lo or u_hi != u_hi:  # (a NaN side is the side shown: it fails)
         return LimitRow(joint, base, unit, vmax, hi, u_hi, tmax, ok, kind, "upper")
     return LimitRow(joint, base, unit, vmin, lo, u_lo, tmin, ok, kind, "lower")
 

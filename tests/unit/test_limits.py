@@ -359,3 +359,29 @@ def test_unreachable_mid_move_names_the_earliest_time():
     ok = motion_model_static(prof)[0].reachable(path(grid, 0))
     assert not ok.all() and ok[0]
     assert said == pytest.approx(grid[np.argmax(~ok)] * T, abs=5e-7)  # printed with 6 digits
+
+
+@pytest.mark.parametrize("column", [0, 3, -1])
+def test_a_nan_anywhere_on_the_grid_fails_its_limit(monkeypatch, column):
+    """A value that is not finite (a degenerate path, a bug) must never pass for "within the limit": one NaN at one
+    grid point of one checked quantity makes that row fail (NaN compares as not ≤ / ≥ its bound)."""
+    from pickplace_cli.limits.check import check_limits
+    from pickplace_cli.paths import plan_path
+
+    prof = profile_from(raw("delta-su2018"))
+    model = motion_model(plan_path(ADEPT, "bspline"), prof)
+    clean = check_limits(model, 0.2)
+    assert clean.ok
+    real = type(model).columns
+
+    def poisoned(self, parts, T):
+        meta, data = real(self, parts, T)
+        data = data.copy()
+        data[len(data) // 3, column] = np.nan
+        return meta, data
+
+    monkeypatch.setattr(type(model), "columns", poisoned)
+    report = check_limits(model, 0.2)
+    assert not report.ok
+    bad = [r for r in report.rows if not r.ok]
+    assert len(bad) == 1 and np.isnan(bad[0].peak)
