@@ -97,7 +97,6 @@ def _plan_batch(source, prof, options, height, eta, fail_fast, writer, output, r
         if stop is not None:
             ordered = [r for r in ordered if r.row <= stop]
     codes = [r.code for r in ordered]
-    worst = max(codes, default=0)
     planned = [r for r in ordered if r.plan is not None and (r.code == 0 or report_only)]
     if json_summary:
         for r in ordered:
@@ -108,8 +107,16 @@ def _plan_batch(source, prof, options, height, eta, fail_fast, writer, output, r
         _batch_line(codes, next((r.row for r in ordered if r.code), None), len(planned) if output is not None else None)
     if output is not None:
         _write_batch_file(planned, writer, output, prof.planning.dwell)
-    if worst and not (report_only and all(c == 3 for c in codes if c)):
-        raise typer.Exit(worst)
+    code = _batch_exit([(r.code, r.plan is not None) for r in ordered], report_only)
+    if code:
+        raise typer.Exit(code)
+
+
+def _batch_exit(rows: list[tuple[int, bool]], report_only: bool) -> int:
+    """A batch's exit code from its rows' (code, planned): the highest code; with ``--report-only`` the rows that
+    were planned and only broke a limit of the report (3, or 4 for a joint position range or the workcell box:
+    their trajectories are written) do not count, as for a single plan; an invalid or unreachable row still does."""
+    return max((c for c, planned in rows if c and not (report_only and planned)), default=0)
 
 
 def _write_batch_file(planned, writer, output, dwell: float) -> None:
@@ -363,6 +370,7 @@ def _stream_batch(items, name, prof, options, height, eta, fail_fast, writer, ou
     kept: list = []  # MCAP / JSON trajectories: the rows to write when the input ends
     reports: list = []
     codes: list[int] = []
+    planned_rows: list[bool] = []
     first_failed = None
     n_written = 0
     try:
@@ -379,6 +387,7 @@ def _stream_batch(items, name, prof, options, height, eta, fail_fast, writer, ou
                                   format_failed=report_only, verdicts=engine)
             for res in results:
                 codes.append(res.code)
+                planned_rows.append(res.plan is not None)
                 if res.code and first_failed is None:
                     first_failed = res.row
                 if res.error is not None:
@@ -414,10 +423,10 @@ def _stream_batch(items, name, prof, options, height, eta, fail_fast, writer, ou
         writer(samples, output)
     if report is not None:
         _write_report([r for _, r in reports], report, rows=[n for n, _ in reports])
-    worst = max(codes, default=0)
     if not quiet:
         _batch_line(codes, first_failed, n_written if output is not None else None)
     if output is not None and n_written == 0:
         sys.stderr.write("pickplace: no row could be written\n")
-    if worst and not (report_only and all(c == 3 for c in codes if c)):
-        raise typer.Exit(worst)
+    code = _batch_exit(list(zip(codes, planned_rows)), report_only)
+    if code:
+        raise typer.Exit(code)

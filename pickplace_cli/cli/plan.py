@@ -167,8 +167,9 @@ def plan(
     report_only: bool = typer.Option(
         False,
         "--report-only",
-        help="Write the trajectory and exit 0 even when a limit is exceeded (the report still says so). "
-        "Without it, a move that breaks a limit is not written.",
+        help="Write the trajectory and exit 0 even when a limit of the report is exceeded (exit 3, or 4 for a joint "
+        "position range or the workcell box; the report still says so), in a batch too. Without it, a move that "
+        "breaks a limit is not written. An unreachable or invalid move still fails.",
     ),
     json_summary: bool = typer.Option(
         False, "--json", help="Print a JSON summary (durations in s, cycle time, picks/min, verdict) on stdout "
@@ -191,8 +192,9 @@ def plan(
 
     CSV columns: t[s], x y z [m], vx… [m/s], ax… [m/s^2], jx… [m/s^3], then per joint q<i>, qd<i>, qdd<i>,
     then torque<i> (joint side, N*m or N), motor_speed<i> [rad/s], motor_torque<i> [N*m]; a batch or round
-    trip adds a leading move column. Exit 3 when a limit is exceeded, 4 when a point is unreachable or
-    outside the workcell, 1 for invalid input; a batch exits with the highest code of its rows.
+    trip adds a leading move column. Exit 3 when a limit is exceeded, 4 when a point is unreachable, a joint leaves
+    its position range or the tool leaves the workcell box, 1 for invalid input; a batch exits with the highest
+    code of its rows (with --report-only, of the rows that are not written).
     """
     from types import SimpleNamespace
 
