@@ -231,8 +231,10 @@ def _parse_point(name: str, text: str, unit: str = "m"):
     if len(parts) != 3 or not all(parts):
         example = "-0.1525,0,-0.8" if unit == "m" else "0,0.2,0"
         raise TaskError(f"{name} = {text!r}: give three {what} X,Y,Z in {words}, e.g. {example}")
+    from ..pipelines.batch import plain_float
+
     try:
-        values = [float(p) for p in parts]
+        values = [plain_float(p) for p in parts]
     except ValueError:
         raise TaskError(f"{name} = {text!r}: every {what[:-1]} must be a number in {words}") from None
     import math

@@ -214,6 +214,15 @@ def _header(text: str, sep: str, source: str, line: int) -> list[str]:
     return header
 
 
+def plain_float(text: str) -> float:
+    """``float(text)`` for a number written the plain way: ASCII digits, sign, point, exponent (and nan/inf, which
+    the callers refuse by name). ValueError for what ``float`` also takes but a typo or a locale makes: digit
+    group underscores (``0.15_25``), other scripts' digits, full-width characters."""
+    if "_" in text or not text.isascii():
+        raise ValueError(text)
+    return float(text)
+
+
 def _row(number: int, line: int, text: str, header: list[str], sep: str, source: str,
          required: tuple = REQUIRED) -> BatchRow | RowResult:
     try:
@@ -237,9 +246,11 @@ def _row(number: int, line: int, text: str, header: list[str], sep: str, source:
                 values[name] = cell
                 continue
             try:
-                x = float(cell)
+                x = plain_float(cell)
             except ValueError:
                 hint = " (the decimal mark is '.')" if "," in cell and sep != "," else ""
+                if "_" in cell or not cell.isascii():
+                    hint += " (plain ASCII digits: no '_' separators, no other scripts' or full-width digits)"
                 if name == "time":
                     hint += "; give seconds, or auto, fit or optimal"
                 raise TaskError(f"{name} = {cell!r}: not a number{hint}") from None

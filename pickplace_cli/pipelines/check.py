@@ -78,8 +78,10 @@ class MoveCheck:
 
 def _number(cell: str, name: str, source: str, line: int, column: str) -> float:
     """The number in one cell; TaskError naming file:line, the column and the cell's text."""
+    from .batch import plain_float
+
     try:
-        x = float(cell)
+        x = plain_float(cell.strip())
     except ValueError:
         raise TaskError(f"{source}:{line}: {name} = {cell.strip()!r}: not a number (column {column})") from None
     if not np.isfinite(x):

@@ -106,6 +106,7 @@ BAD = [
     ([*ADEPT, "--k1", "0.3"], "give both"),
     ([*ADEPT, "--k1", "1.3", "--k2", "0.1"], "k1 = 1.3"),
     (["--from", "1,2", "--to", "0.1,0,-0.8"], "three coordinates"),
+    (["--from", "-0.15_25,0,-0.8", "--to", "0.1,0,-0.8"], "from = '-0.15_25,0,-0.8': every coordinate must be a number"),
     ([*ADEPT, "--height", "1e-6"], "lambda = b/h = 3.05e+05: outside [0.001, 100000]"),
     ([*ADEPT, "--rate", "1e9"], "rate = 1000000000.0 Hz: the output rate must lie in (0, 1e6] Hz"),
     ([*ADEPT, "--k1", "1e-300", "--k2", "0.1"], "k1 = 1e-300: time-ratio factors must lie in [0.0001, 0.9999]"),

@@ -124,6 +124,14 @@ def test_check_a_header_without_samples_is_one_line(tmp_path, text):
                                     "q3 after it; a move needs at least 6)")
 
 
+def test_check_a_number_with_underscores_is_not_a_number(tmp_path):
+    bad = tmp_path / "bad.csv"
+    bad.write_text("t,q1,q2,q3\n" + "".join(f"{i * 0.01},0.3,{'0.3_1' if i == 3 else 0.3},0.3\n" for i in range(8)))
+    r = run("check", str(bad))
+    assert r.exit_code == 1
+    assert r.stderr.strip() == f"pickplace: error: {bad}:5: q2 = '0.3_1': not a number (column 3, 'q2')"
+
+
 def test_check_help_names_the_argument():
     r = run("check", "--help")
     assert r.exit_code == 0 and "{TRAJECTORY}" in r.stdout and "{trajectory}" not in r.stdout

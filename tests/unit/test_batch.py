@@ -165,3 +165,10 @@ def test_a_row_without_quotes_is_split_as_the_csv_module_splits_it(monkeypatch):
             assert getattr(res, "values", None) == getattr(ref, "values", None), text
             assert getattr(res, "error", None) == getattr(ref, "error", None), text
     assert sum(isinstance(r, B.BatchRow) for rs in got.values() for _, r in rs) > 50  # good rows too (75 with this seed)
+
+
+@pytest.mark.parametrize("cell", ["-0.15_25", "0.\u0661525", "\uff10.1525", "1_000"])
+def test_a_number_float_takes_but_a_typo_or_a_locale_makes_is_refused(cell):
+    """float() reads '0.15_25' as 0.1525 and other scripts' digits as digits: a cell must be plain ASCII (review)."""
+    rows, bad = read_batch_text(f"from_x,from_y,from_z,to_x,to_y,to_z\n{cell},0,-0.8,0.1525,0,-0.8\n")
+    assert not rows and f"from_x = {cell!r}: not a number (plain ASCII digits" in bad[0].error
