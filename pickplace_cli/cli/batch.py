@@ -25,7 +25,7 @@ def _plan_batch(source, prof, options, height, eta, fail_fast, writer, output, r
     name = "stdin" if source == "-" else source
     streamed = source == "-" or _is_fifo(source)  # a pipe: answer each row as it is read
     warmer = _warmer(keep_warm, source, streamed, prof, options, writer, output)
-    with _batch_input(source, name, warmer) as (items, info):
+    with _batch_input(source, name, warmer, streamed) as (items, info):
         if info.get("schedule"):
             if warmer is not None:
                 _usage("--keep-warm does not apply to a belt schedule (a batch with a t_detect column)")
@@ -159,11 +159,13 @@ def _warmer(keep_warm: float, source: str, streamed: bool, prof, options, writer
 
 
 @contextlib.contextmanager
-def _batch_input(source: str, name: str, warmer=None):
+def _batch_input(source: str, name: str, warmer=None, streamed: bool = False):
     """The batch's rows (:func:`~pickplace_cli.pipelines.batch.iter_batch`, lazily) and its header ``info`` (plain batch or
-    belt schedule), the header already read; the file (or stdin) stays open inside the ``with``. With a
-    ``warmer`` (``--keep-warm``) the lines are read by :class:`~pickplace_cli.pipelines.warm.WarmLines`, which
-    calls it while it waits."""
+    belt schedule), the header already read; the file (or stdin) stays open inside the ``with``. A stream (stdin,
+    a named pipe: ``streamed``) is read by :class:`~pickplace_cli.pipelines.warm.WarmLines` from its file
+    descriptor, so that a line ended by a lone ``\\r`` is answered at once (a text stream holds it back until the
+    next byte shows whether ``\\n`` follows); with a ``warmer`` (``--keep-warm``) WarmLines calls it while it
+    waits."""
     import itertools
 
     from ..pipelines.batch import iter_batch
@@ -174,7 +176,7 @@ def _batch_input(source: str, name: str, warmer=None):
         encoding = "utf-8"
         if source == "-" and sys.stdin is None:  # started with stdin closed (`<&-`)
             raise TaskError("batch = -: standard input is closed; give the rows on stdin or a file")
-        if warmer is not None:
+        if warmer is not None or streamed:
             if source == "-":
                 try:
                     fd = sys.stdin.fileno()
@@ -192,7 +194,7 @@ def _batch_input(source: str, name: str, warmer=None):
         if fd is not None:
             from ..pipelines.warm import WarmLines
 
-            fh = WarmLines(fd, warmer.interval, warmer, encoding)
+            fh = WarmLines(fd, warmer.interval, warmer, encoding) if warmer is not None else WarmLines(fd, None, None, encoding)
         elif source == "-":
             try:  # undecodable bytes kept as surrogates, so iter_batch names their line (strict decoding fails on
                 # the whole chunk read, before the rows above the bad line are answered); lines end at \n, \r\n or a

@@ -31,16 +31,21 @@ WARM_IDLE_LIMIT = 60.0
 
 class WarmLines:
     """``readline(limit)`` over the file descriptor ``fd`` (``encoding``, undecodable bytes kept as surrogates, as
-    the CLI's own stdin), a line being ended by ``\\n``, ``\\r\\n`` or ``\\r``. While no complete line is buffered it
-    waits on ``fd`` at most ``interval`` seconds at a time and, each time that passes with nothing read, calls
-    ``idle(ready)`` (``ready()``: True once a line can be read without waiting); once ``idle`` returns False it is
-    not called again before the next line, and the reader waits without a timeout."""
+    the CLI's own stdin), a line being ended by ``\\n``, ``\\r\\n`` or ``\\r``: a line that ends in ``\\r`` is returned
+    at once (a serial device's CR-terminated messages are answered as they come), and a ``\\n`` that then follows
+    is taken as the rest of that ``\\r\\n``. While no complete line is buffered it waits on ``fd``; with ``idle``, at
+    most ``interval`` seconds at a time and, each time that passes with nothing read, it calls ``idle(ready)``
+    (``ready()``: True once a line can be read without waiting); once ``idle`` returns False it is not called again
+    before the next line, and the reader waits without a timeout. Without ``idle`` (a stream without
+    ``--keep-warm``) it just waits."""
 
-    def __init__(self, fd: int, interval: float, idle: Callable[[Callable[[], bool]], None],
-                 encoding: str = "utf-8") -> None:
+    def __init__(self, fd: int, interval: float | None = None,
+                 idle: Callable[[Callable[[], bool]], bool | None] | None = None, encoding: str = "utf-8") -> None:
         self.fd, self.interval, self.idle, self.encoding = fd, interval, idle, encoding
         self._buf = b""
+        self._pos = 0  # the unread bytes are _buf[_pos:] (lines are taken by moving _pos: no copy per line)
         self._eof = False
+        self._after_cr = False  # the last line ended in a \r that was the last byte read: a \n next belongs to it
 
     def ready(self) -> bool:
         """True when a line (or the end of the input) can be read now."""
@@ -51,37 +56,44 @@ class WarmLines:
 
     def _line_end(self) -> int:
         """Index just past the first complete line's end in the buffer, or -1."""
-        buf = self._buf
-        n = buf.find(b"\n")
-        r = buf.find(b"\r", 0, n if n >= 0 else len(buf))
-        if r >= 0 and r + 1 < len(buf):  # a lone \r ends a line; \r\n is one end (wait for the byte after a last \r)
+        buf, pos = self._buf, self._pos
+        n = buf.find(b"\n", pos)
+        r = buf.find(b"\r", pos, n if n >= 0 else len(buf))
+        if r >= 0:  # a lone \r ends a line, \r\n is one end
             return r + 2 if buf[r + 1 : r + 2] == b"\n" else r + 1
         return n + 1 if n >= 0 else -1
 
     def readline(self, limit: int = -1) -> str:
         """The next line with its end (``""`` at the end of the input); at most ``limit`` characters when a line
         is longer (as ``TextIOWrapper.readline``)."""
-        dormant = False  # idle said "not before the next line"
+        dormant = self.idle is None  # no idle, or idle said "not before the next line"
         while True:
             end = self._line_end()
-            if 0 <= limit < (end if end >= 0 else len(self._buf)):  # maybe more than ``limit`` characters
+            pos, size = self._pos, len(self._buf)
+            if 0 <= limit < (end if end >= 0 else size) - pos:  # maybe more than ``limit`` characters
                 # (a character whose bytes have not all come yet is not counted, unless the input has ended)
                 decoder = codecs.getincrementaldecoder(self.encoding)("surrogateescape")
-                head = decoder.decode(self._buf[: end if end >= 0 else len(self._buf)], final=end >= 0 or self._eof)
+                head = decoder.decode(self._buf[pos : end if end >= 0 else size], final=end >= 0 or self._eof)
                 if len(head) > limit or (end < 0 and len(head) == limit):
-                    end = len(head[:limit].encode(self.encoding, "surrogateescape"))
+                    end = pos + len(head[:limit].encode(self.encoding, "surrogateescape"))
             if end < 0 and self._eof:
-                end = len(self._buf)
+                end = size
             if end >= 0:
-                line, self._buf = self._buf[:end], self._buf[end:]
+                line = self._buf[pos:end]
+                self._pos = end
+                self._after_cr = end == size and line.endswith(b"\r")
                 return line.decode(self.encoding, "surrogateescape")
             r, _, _ = select.select([self.fd], [], [], None if dormant else self.interval)
             if not r:
-                dormant = self.idle(self.ready) is False
+                dormant = self.idle(self.ready) is False  # type: ignore[misc]
                 continue
             chunk = os.read(self.fd, _CHUNK)
             if chunk:
-                self._buf += chunk
+                if self._after_cr and chunk[:1] == b"\n":  # the \n of a \r\n whose \r ended the last line
+                    chunk = chunk[1:]
+                self._after_cr = False
+                self._buf = self._buf[self._pos :] + chunk
+                self._pos = 0
             else:
                 self._eof = True
 

@@ -302,6 +302,28 @@ def test_lone_cr_line_ends_on_stdin(keep_warm):
     assert [json.loads(ln)["row"] for ln in r.stdout.splitlines()] == [1, 2]
 
 
+@pytest.mark.parametrize("keep_warm", [[], ["--keep-warm", "0.005"]])
+@pytest.mark.parametrize("end", ["\r", "\r\n"])
+def test_a_row_ended_by_cr_is_answered_before_the_next_byte(keep_warm, end):
+    """A serial device's CR-terminated rows: each answered before anything more is written (a text stream held a
+    last \\r back until the next byte showed whether \\n followed: one row late; review, session 16). With \\r\\n
+    written as \\r, a pause, then \\n, the \\n is the rest of that line end, not a row."""
+    proc = _start("--json", "-q", *keep_warm)
+    try:
+        proc.stdin.write(HEADER.replace("\n", "\r") + ROW.replace("\n", "\r"))
+        proc.stdin.flush()
+        assert json.loads(_readline(proc.stdout))["row"] == 1
+        proc.stdin.write(end[1:] + ROW2.replace("\n", "\r"))
+        proc.stdin.flush()
+        assert json.loads(_readline(proc.stdout))["row"] == 2
+        proc.stdin.write("\n")  # the \n of a \r\n: nothing to answer
+        proc.stdin.close()
+        assert proc.wait(TIMEOUT) == 0
+        assert proc.stdout.read() == "" and proc.stderr.read() == ""
+    finally:
+        proc.kill()
+
+
 def test_closed_stdin_is_one_line():
     r = subprocess.run([sys.executable, "-m", "pickplace_cli", "plan", "--batch", "-", "--json"],
                        stdin=subprocess.DEVNULL, capture_output=True, text=True, timeout=TIMEOUT,

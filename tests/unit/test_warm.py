@@ -262,3 +262,25 @@ def test_the_reader_stops_calling_idle_once_it_says_false_until_the_next_line():
     finally:
         os.close(w)
         os.close(r)
+
+
+def test_a_lone_cr_ends_a_line_at_once_and_a_following_lf_belongs_to_it():
+    """Without idle (a stream without --keep-warm) the reader just waits; "a\\r" is a line as soon as it is read,
+    and a "\\n" read later is the rest of that "\\r\\n" (no empty line); "\\r\\n" in one read is one line end."""
+    r, w = os.pipe()
+    reader = WarmLines(r)
+    try:
+        os.write(w, b"a\r")
+        assert reader.readline() == "a\r"
+        os.write(w, b"\nb\r\nc\rd\n")
+        assert [reader.readline() for _ in range(3)] == ["b\r\n", "c\r", "d\n"]
+        os.write(w, b"e\r")
+        assert reader.readline() == "e\r"
+        os.write(w, b"\n")
+        os.close(w)
+        w = -1
+        assert reader.readline() == ""  # the \n of e's \r\n, then the end
+    finally:
+        if w >= 0:
+            os.close(w)
+        os.close(r)
