@@ -12,6 +12,23 @@ import typer
 from .. import __version__
 
 
+def _usage_error_line(self, file=None) -> None:  # noqa: ARG001 - click's signature
+    """click's usage errors (an unknown option, a bad value of a typed option, a missing one: exit 2) as one line,
+    like every other error: ``pickplace: error: MESSAGE (see COMMAND --help)``, instead of click's four."""
+    hint = f" (see {self.ctx.command_path} --help)" if getattr(self, "ctx", None) is not None else ""
+    typer.echo(f"pickplace: error: {self.format_message()}{hint}", err=True)
+
+
+def _one_line_usage_errors() -> None:
+    """Install :func:`_usage_error_line` on the UsageError class typer raises (recent typers carry their own copy
+    of click: found through typer.BadParameter's bases, not by a module name)."""
+    for cls in typer.BadParameter.__mro__:
+        if cls.__name__ == "UsageError":
+            cls.show = _usage_error_line  # type: ignore[method-assign]
+
+
+_one_line_usage_errors()
+
 app = typer.Typer(
     name="pickplace",
     help=(

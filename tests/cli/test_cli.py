@@ -260,3 +260,25 @@ def test_json_exit_code_is_the_process_exit_code():
     r = run("plan", *ADEPT, "--time", "0.1", "--json", "-q", "--report-only")
     doc = json.loads(r.stdout)
     assert r.exit_code == 0 and doc["exit_code"] == 0 and doc["limits_ok"] is False
+
+
+@pytest.mark.parametrize("args, words", [
+    (["plan", "--bogus"], "No such option: --bogus"),
+    (["plan", *ADEPT, "--height", "abc"], "Invalid value for '--height'"),
+    (["plan", *ADEPT, "--law-coefficients", "5"], "--law-coefficients = '5': must be auto or a whole number in 8 ... 80"),
+    (["bogus"], "No such command 'bogus'"),
+    (["plan", "--from"], "Option '--from' requires an argument"),
+])
+def test_usage_errors_are_one_line_exit_2(args, words):
+    """click's usage errors were four lines (Usage, Try, blank, Error); one line now, like every other error."""
+    import subprocess
+    import sys
+
+    r = run(*args)
+    assert r.exit_code == 2
+    (line,) = r.stderr.splitlines()
+    assert line.startswith("pickplace: error: ") and words in line
+    p = subprocess.run([sys.executable, "-m", "pickplace_cli", *args], capture_output=True, text=True, timeout=60)
+    assert p.returncode == 2 and p.stdout == ""
+    (line,) = p.stderr.splitlines()
+    assert line.startswith("pickplace: error: ") and words in line
