@@ -497,7 +497,12 @@ def fit_workspace(
         P = path(grid, 0)
         inside = ws.inside(P)
         if not inside.all():
-            i = int(np.argmin(inside))
+            i = int(np.argmin(inside))  # the first point out, and the constraint it breaks most
+            g = ws.slacks(P)
+            k = int(np.argmin(g[i]))
+            if np.isfinite(g[i, k]):  # that constraint where the path breaks it most (the first point out barely
+                i = int(np.argmin(g[:, k]))  # does: its excess understated the violation)
+                return path, f"worst at τ = {grid[i]:.4f}, {_fmt(P[i])}: {ws.names[k]} (violated by {-g[i, k]:.4g})"
             return path, f"τ = {grid[i]:.4f} at {_fmt(P[i])}: {ws.violation(P[i])}"
         # the exact check of plan (reach rows refined on the continuous path)
         model: MotionModel = motion_model(path, profile)

@@ -129,6 +129,9 @@ def test_lowering_h_until_the_path_is_inside(delta):
     assert fit.task.height == pytest.approx(0.1 - fit.steps * 0.001, abs=1e-12)
     assert 0.045 <= fit.task.height <= 0.05
     assert "workcell z max" in fit.violation and "height lowered from 0.1 m" in fit.changes()[0]
+    # the worst point of the requested path (its top, 0.1 - 0.05 = 0.05 m above the box; review, session 16: the
+    # first point out, violated by ~0, was named)
+    assert "worst at τ = 0.5000" in fit.violation and fit.violation.endswith("(violated by 0.05)")
 
     def reach_ok(h):
         path = plan_path(Task(task.p_from, task.p_to, h), "bspline")
