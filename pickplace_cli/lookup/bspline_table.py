@@ -259,7 +259,9 @@ def read_table_file(path: Path, parse: Callable[[str, str], object], source: str
         if len(raw) > TABLE_MAX_BYTES:  # a device or a pipe that keeps growing
             raise TableError(f"table {path}: more than {TABLE_MAX_BYTES} bytes; is this the right file?")
         if b"\0" in raw:
-            raise TableError(f"table {path}: a binary file (NUL bytes), not a CSV table")
+            from ..pipelines.batch import utf16_hint
+
+            raise TableError(f"table {path}: a binary file (NUL bytes), not a CSV table{utf16_hint(raw)}")
         text = raw.decode("utf-8")
     except FileNotFoundError:
         raise TableError(f"table {path}: no such file (build one with `{build_hint} -o {path}`)") from None

@@ -119,7 +119,7 @@ def iter_batch(stream: IO[str], source: str = "batch", info: dict | None = None)
             raise TaskError(f"{source}:{line}: a line of more than {BATCH_MAX_LINE} characters; a batch row is one "
                             "move (a binary file, or no line breaks?)")
         if "\0" in text:
-            raise TaskError(f"{source}:{line}: a binary file (NUL bytes), not a CSV batch")
+            raise TaskError(f"{source}:{line}: a binary file (NUL bytes), not a CSV batch{utf16_hint(text)}")
         if not text.isascii():
             try:  # bytes the reader kept as surrogates (errors="surrogateescape"): this line is not UTF-8
                 text.encode("utf-8")
@@ -212,6 +212,19 @@ def _header(text: str, sep: str, source: str, line: int) -> list[str]:
     if dup:
         raise TaskError(f"{source}:{line}: column {dup[0]!r} appears twice")
     return header
+
+
+def utf16_hint(head: bytes | str, csv: bool = True) -> str:
+    """" (UTF-16 …? save it as UTF-8)" when the start of a file that has NUL bytes looks like UTF-16 text (a byte-order
+    mark, or every other byte NUL), else "" (a str: a line read with surrogateescape, turned back into its bytes)."""
+    if isinstance(head, str):
+        head = head.encode("utf-8", "surrogateescape")
+    head = head[:64]
+    bom = head.startswith((b"\xff\xfe", b"\xfe\xff"))
+    halves = len(head) >= 4 and (head[1::2].count(0) * 2 >= len(head) - 1 or head[0::2].count(0) * 2 >= len(head) - 1)
+    if not (bom or halves):
+        return ""
+    return " (UTF-16 text, e.g. Excel's \"Unicode Text\"? save it as \"CSV UTF-8\")" if csv else " (UTF-16 text? save it as UTF-8)"
 
 
 def plain_float(text: str) -> float:

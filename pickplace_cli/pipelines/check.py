@@ -274,7 +274,9 @@ def check_file(path: str | Path, profile: Profile, smoothing: float = 0.0) -> li
         raise TaskError(f"{source}: larger than {CHECK_MAX_BYTES} bytes ({CHECK_MAX_BYTES >> 20} MiB), the most check "
                         "reads at once; split the file by move (e.g. one file per move column value)")
     if b"\0" in raw:
-        raise TaskError(f"{source}: a binary file (NUL bytes), not a CSV trajectory")
+        from .batch import utf16_hint
+
+        raise TaskError(f"{source}: a binary file (NUL bytes), not a CSV trajectory{utf16_hint(raw)}")
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError:

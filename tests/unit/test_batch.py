@@ -172,3 +172,18 @@ def test_a_number_float_takes_but_a_typo_or_a_locale_makes_is_refused(cell):
     """float() reads '0.15_25' as 0.1525 and other scripts' digits as digits: a cell must be plain ASCII (review)."""
     rows, bad = read_batch_text(f"from_x,from_y,from_z,to_x,to_y,to_z\n{cell},0,-0.8,0.1525,0,-0.8\n")
     assert not rows and f"from_x = {cell!r}: not a number (plain ASCII digits" in bad[0].error
+
+
+def test_a_utf16_batch_is_named_as_such(tmp_path):
+    """Excel's "Unicode Text" (UTF-16 with a BOM) and BOM-less UTF-16: the NUL-bytes error says what it likely is."""
+    from pickplace_cli.pipelines.batch import iter_batch, utf16_hint
+
+    text = "from_x,from_y,from_z,to_x,to_y,to_z\r\n-0.1525,0,-0.8,0.1525,0,-0.8\r\n"
+    for enc in ("utf-16", "utf-16-le", "utf-16-be"):
+        f = tmp_path / f"{enc}.csv"
+        f.write_bytes(text.encode(enc))
+        with open(f, encoding="utf-8-sig", newline="", errors="surrogateescape") as fh:
+            with pytest.raises(TaskError, match=r":1: a binary file \(NUL bytes\), not a CSV batch \(UTF-16 text"):
+                list(iter_batch(fh, str(f)))
+    assert utf16_hint(b"\x89PNG\r\n\x1a\n\0\0\0\rIHDR") == ""  # a binary file is not called UTF-16
+    assert utf16_hint("a\0b\0".encode(), csv=False) == " (UTF-16 text? save it as UTF-8)"
