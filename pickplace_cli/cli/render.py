@@ -182,7 +182,11 @@ def _print_verdict(report, quiet: bool, with_cycle: bool = True) -> None:
         cycle = f"move {report.duration:.4f} s"
     if report.ok:
         if not quiet:
-            sys.stderr.write(f"verdict: all limits hold; {cycle}\n")
+            # a profile whose limits are all positions and the workcell (no joint speed, torque …): nothing that
+            # the duration changes was checked, however short it is; say so instead of a bare "all limits hold"
+            untimed = report.rows and all(r.kind == "reach" for r in report.rows)
+            scope = " (positions and workcell only: this profile sets no limit that depends on the duration)" if untimed else ""
+            sys.stderr.write(f"verdict: all limits hold{scope}; {cycle}\n")
         return
     from ..pipelines.batch import violation_text  # the same words as a batch row's limit lines
 

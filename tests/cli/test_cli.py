@@ -282,3 +282,14 @@ def test_usage_errors_are_one_line_exit_2(args, words):
     assert p.returncode == 2 and p.stdout == ""
     (line,) = p.stderr.splitlines()
     assert line.startswith("pickplace: error: ") and words in line
+
+
+def test_a_verdict_says_when_nothing_timed_was_checked():
+    """The gantry profile has position and workcell limits only: at 1 ms (|v| ~ 900 m/s) "all limits hold" is true
+    but says nothing of speed; the verdict names its scope (review, session 16). A Delta's verdict is unchanged."""
+    r = run("plan", "-p", "gantry", "--from", "0.1,0.1,-0.1", "--to", "0.4,0.3,-0.1", "--time", "0.001", "-o", "-")
+    assert r.exit_code == 0
+    assert ("verdict: all limits hold (positions and workcell only: this profile sets no limit that depends on the "
+            "duration); cycle") in r.stderr
+    r = run("plan", *ADEPT, "-o", "-")
+    assert "verdict: all limits hold; cycle" in r.stderr
