@@ -118,16 +118,18 @@ def _first_unreachable(exc: UnreachableError, model: MotionModel, grid, order, T
     return reach_error(exc, grid, T)  # pragma: no cover - the same points, sorted, fail the same way
 
 
-def check_ends_reachable(task: Task, profile: Profile) -> None:
-    """UnreachableError (exit 4) naming the end point outside the robot's workspace, if one is."""
+def check_ends_reachable(task: Task, profile: Profile, T: float | None = None) -> None:
+    """UnreachableError (exit 4) naming the end point outside the robot's workspace, if one is (with ``T`` [s], the
+    duration, also when: t = 0 or t = T)."""
     robot = motion_model_static(profile)[0]
-    for name, p in (("from", task.p_from), ("to", task.p_to)):
+    for name, p, t in (("from", task.p_from, 0.0), ("to", task.p_to, T)):
         try:
             robot.inverse_kinematics(p[None])
         except UnreachableError as exc:
             xyz = ",".join(f"{c:g}" for c in p)
             why = str(exc).replace("sample 0 at ", "").replace(" (sample 0)", "")  # the robot's message names its sample; here it is the point
-            raise UnreachableError(f"{name} = {xyz} m: outside the workspace of profile {profile.name} ({why})") from None
+            when = "" if T is None else f" at t = {t:.6g} s"
+            raise UnreachableError(f"{name} = {xyz} m: outside the workspace of profile {profile.name} ({why}){when}") from None
 
 
 def _optimised_shape(task: Task, profile: Profile, options: PlanOptions) -> tuple[Task, PlanOptions, dict]:
@@ -199,7 +201,11 @@ def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions(), *,
     stop()
     model = motion_model(path, profile)
     # reachability first, on the output samples of the auto (or given) duration, so an error names a time
-    samples = _sample(model, path, first.seconds, rate)
+    try:
+        samples = _sample(model, path, first.seconds, rate)
+    except UnreachableError:  # an end point itself out of reach is the clearer message (only on this error path)
+        check_ends_reachable(task, profile, first.seconds)
+        raise
     stop()
     final = _FinalCheck(rate, profile.planning.dwell)
     duration, path, model, notes = _duration_stage(task, profile, options, path, factory, model, first, final)

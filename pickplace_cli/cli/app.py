@@ -248,7 +248,7 @@ def _parse_point(name: str, text: str, unit: str = "m"):
     if len(parts) != 3 or not all(parts):
         example = "-0.1525,0,-0.8" if unit == "m" else "0,0.2,0"
         raise TaskError(f"{name} = {text!r}: give three {what} X,Y,Z in {words}, e.g. {example}")
-    from ..pipelines.batch import plain_float
+    from ..model.text import plain_float
 
     try:
         values = [plain_float(p) for p in parts]

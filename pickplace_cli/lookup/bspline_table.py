@@ -259,7 +259,7 @@ def read_table_file(path: Path, parse: Callable[[str, str], object], source: str
         if len(raw) > TABLE_MAX_BYTES:  # a device or a pipe that keeps growing
             raise TableError(f"table {path}: more than {TABLE_MAX_BYTES} bytes; is this the right file?")
         if b"\0" in raw:
-            from ..pipelines.batch import utf16_hint
+            from ..model.text import utf16_hint
 
             raise TableError(f"table {path}: a binary file (NUL bytes), not a CSV table{utf16_hint(raw)}")
         text = raw.decode("utf-8")

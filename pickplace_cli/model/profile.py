@@ -611,7 +611,7 @@ def load_profile(name_or_path: str | Path | None = None) -> Profile:
             raise ProfileError(f"{path}: larger than {PROFILE_MAX_BYTES} bytes (1 MiB); a profile is a few kB: is "
                                "this the right file?")
         if b"\0" in raw:
-            from ..pipelines.batch import utf16_hint
+            from .text import utf16_hint
 
             raise ProfileError(f"{path}: a binary file (NUL bytes), not a YAML profile{utf16_hint(raw, csv=False)}")
         text = raw.decode("utf-8")

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 from typing import IO, Any, Iterator
 
 from ..model.errors import PickplaceError, TaskError
+from ..model.text import plain_float, utf16_hint
 
 REQUIRED = ("from_x", "from_y", "from_z", "to_x", "to_y", "to_z")
 #: a belt row of a plain batch (no ``t_detect``): the part was at ``to`` [m] when detected and moves at
@@ -212,28 +213,6 @@ def _header(text: str, sep: str, source: str, line: int) -> list[str]:
     if dup:
         raise TaskError(f"{source}:{line}: column {dup[0]!r} appears twice")
     return header
-
-
-def utf16_hint(head: bytes | str, csv: bool = True) -> str:
-    """" (UTF-16 …? save it as UTF-8)" when the start of a file that has NUL bytes looks like UTF-16 text (a byte-order
-    mark, or every other byte NUL), else "" (a str: a line read with surrogateescape, turned back into its bytes)."""
-    if isinstance(head, str):
-        head = head.encode("utf-8", "surrogateescape")
-    head = head[:64]
-    bom = head.startswith((b"\xff\xfe", b"\xfe\xff"))
-    halves = len(head) >= 4 and (head[1::2].count(0) * 2 >= len(head) - 1 or head[0::2].count(0) * 2 >= len(head) - 1)
-    if not (bom or halves):
-        return ""
-    return " (UTF-16 text, e.g. Excel's \"Unicode Text\"? save it as \"CSV UTF-8\")" if csv else " (UTF-16 text? save it as UTF-8)"
-
-
-def plain_float(text: str) -> float:
-    """``float(text)`` for a number written the plain way: ASCII digits, sign, point, exponent (and nan/inf, which
-    the callers refuse by name). ValueError for what ``float`` also takes but a typo or a locale makes: digit
-    group underscores (``0.15_25``), other scripts' digits, full-width characters."""
-    if "_" in text or not text.isascii():
-        raise ValueError(text)
-    return float(text)
 
 
 def _row(number: int, line: int, text: str, header: list[str], sep: str, source: str,

@@ -78,7 +78,7 @@ class MoveCheck:
 
 def _number(cell: str, name: str, source: str, line: int, column: str) -> float:
     """The number in one cell; TaskError naming file:line, the column and the cell's text."""
-    from .batch import plain_float
+    from ..model.text import plain_float
 
     try:
         x = plain_float(cell.strip())
@@ -274,7 +274,7 @@ def check_file(path: str | Path, profile: Profile, smoothing: float = 0.0) -> li
         raise TaskError(f"{source}: larger than {CHECK_MAX_BYTES} bytes ({CHECK_MAX_BYTES >> 20} MiB), the most check "
                         "reads at once; split the file by move (e.g. one file per move column value)")
     if b"\0" in raw:
-        from .batch import utf16_hint
+        from ..model.text import utf16_hint
 
         raise TaskError(f"{source}: a binary file (NUL bytes), not a CSV trajectory{utf16_hint(raw)}")
     try:

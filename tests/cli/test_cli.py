@@ -197,11 +197,14 @@ def test_unreachable_exit_4():
 
 def test_unreachable_end_point_is_exit_4_not_a_table_range():
     """A move the table does not cover because an end point is out of reach: its (k1, k2) are solved on
-    demand (issue 16), and the first unreachable sample is named (exit 4, one line) — never the table's λ
-    range, which would send the user to change --height. A λ no optimum covers still names the end first."""
+    demand (issue 16), and the end point is named (exit 4, one line; since session 16 the end itself, not the first
+    sample the path loses on the way to it) — never the table's λ range, which would send the user to change
+    --height. A λ no optimum covers names the end too."""
     r = run("plan", "--from", "-0.1525,0,-0.8", "--to", "2,0,-0.8")
     assert r.exit_code == 4
-    assert r.stderr.strip().startswith("pickplace: error: Delta: sample") and "is unreachable" in r.stderr
+    assert r.stderr.strip().startswith("pickplace: error: to = 2,0,-0.8 m: outside the workspace of profile "
+                                       "delta-su2018 (Delta: p = (2, 0, -0.8) m is unreachable")
+    assert " at t = " in r.stderr
     assert len(r.stderr.strip().splitlines()) == 1
     r = run("plan", "--from", "-0.1525,0,-0.8", "--to", "2,0,-0.8", "--height", "1e-6")
     assert r.exit_code == 4

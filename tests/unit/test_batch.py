@@ -176,7 +176,8 @@ def test_a_number_float_takes_but_a_typo_or_a_locale_makes_is_refused(cell):
 
 def test_a_utf16_batch_is_named_as_such(tmp_path):
     """Excel's "Unicode Text" (UTF-16 with a BOM) and BOM-less UTF-16: the NUL-bytes error says what it likely is."""
-    from pickplace_cli.pipelines.batch import iter_batch, utf16_hint
+    from pickplace_cli.model.text import utf16_hint
+    from pickplace_cli.pipelines.batch import iter_batch
 
     text = "from_x,from_y,from_z,to_x,to_y,to_z\r\n-0.1525,0,-0.8,0.1525,0,-0.8\r\n"
     for enc in ("utf-16", "utf-16-le", "utf-16-be"):
