@@ -15,7 +15,8 @@ from .. import __version__
 def _usage_error_line(self, file=None) -> None:  # noqa: ARG001 - click's signature
     """click's usage errors (an unknown option, a bad value of a typed option, a missing one: exit 2) as one line,
     like every other error: ``pickplace: error: MESSAGE (see COMMAND --help)``, instead of click's four."""
-    hint = f" (see {self.ctx.command_path} --help)" if getattr(self, "ctx", None) is not None else ""
+    ctx = getattr(self, "ctx", None)
+    hint = f" (see {ctx.command_path if ctx is not None else 'pickplace'} --help)"
     typer.echo(f"pickplace: error: {self.format_message()}{hint}", err=True)
 
 
@@ -166,6 +167,7 @@ def _handle_errors(fn: Callable) -> Callable:
         from ..export import PROMISED
 
         _JSON_ERRORS[0] = False
+        _EXIT_SO_FAR[0] = 0
         _TERM_NOTES.clear()
         PROMISED.clear()
         import warnings
@@ -190,7 +192,8 @@ def _handle_errors(fn: Callable) -> Callable:
             raise typer.Exit(130) from None
         except BrokenPipeError:
             # the reader went away (e.g. `| head`): not an error of ours, unless a file the command was to write
-            # (-o, --report) is left unwritten: a script that checks $? must not take it for written
+            # (-o, --report) is left unwritten: a script that checks $? must not take it for written; and the
+            # verdict decided so far (a limit exceeded: 3) is still the exit code
             unwritten = sorted(PROMISED)
             try:
                 sys.stdout = None  # type: ignore[assignment]
@@ -198,7 +201,7 @@ def _handle_errors(fn: Callable) -> Callable:
                     _err(f"{', '.join(unwritten)}: not written: standard output was closed by its reader (broken "
                          "pipe) before the command finished")
             finally:
-                raise typer.Exit(1 if unwritten else 0) from None
+                raise typer.Exit(max(_EXIT_SO_FAR[0], 1 if unwritten else 0)) from None
         except OSError as exc:  # an I/O failure no layer above named (the writers name their output themselves)
             _err(f"{exc.filename}: {exc.strerror or exc}" if exc.filename else f"I/O error: {exc.strerror or exc}")
             try:
@@ -212,6 +215,16 @@ def _handle_errors(fn: Callable) -> Callable:
                 signal.signal(signal.SIGTERM, previous)
 
     return wrapper
+
+
+#: the exit code a command has decided so far (a move's verdict, a batch's rows): when stdout's reader goes away
+#: (broken pipe) the command still exits with it, so a limit that is exceeded is never reported as exit 0
+_EXIT_SO_FAR = [0]
+
+
+def note_exit(code: int) -> None:
+    """Record that the command will exit with at least ``code`` (see ``_EXIT_SO_FAR``)."""
+    _EXIT_SO_FAR[0] = max(_EXIT_SO_FAR[0], code)
 
 
 #: set by `plan --json` (one move or a round trip) once its options are read: an error after that also

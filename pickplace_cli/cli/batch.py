@@ -8,7 +8,7 @@ from typing import Optional
 
 import typer
 
-from .app import _usage
+from .app import _usage, note_exit
 from .render import _batch_line, _emit_json, _emit_row_json, _write_report
 
 
@@ -98,6 +98,8 @@ def _plan_batch(source, prof, options, height, eta, fail_fast, writer, output, r
             ordered = [r for r in ordered if r.row <= stop]
     codes = [r.code for r in ordered]
     planned = [r for r in ordered if r.plan is not None and (r.code == 0 or report_only)]
+    code = _batch_exit([(r.code, r.plan is not None) for r in ordered], report_only, fail_fast)
+    note_exit(code)  # should stdout's reader go away while the rows are written
     if json_summary:
         for r in ordered:
             _emit_row_json(r)
@@ -107,15 +109,18 @@ def _plan_batch(source, prof, options, height, eta, fail_fast, writer, output, r
         _batch_line(codes, next((r.row for r in ordered if r.code), None), len(planned) if output is not None else None)
     if output is not None:
         _write_batch_file(planned, writer, output, prof.planning.dwell)
-    code = _batch_exit([(r.code, r.plan is not None) for r in ordered], report_only)
     if code:
         raise typer.Exit(code)
 
 
-def _batch_exit(rows: list[tuple[int, bool]], report_only: bool) -> int:
+def _batch_exit(rows: list[tuple[int, bool]], report_only: bool, fail_fast: bool = False) -> int:
     """A batch's exit code from its rows' (code, planned): the highest code; with ``--report-only`` the rows that
     were planned and only broke a limit of the report (3, or 4 for a joint position range or the workcell box:
-    their trajectories are written) do not count, as for a single plan; an invalid or unreachable row still does."""
+    their trajectories are written) do not count, as for a single plan; an invalid or unreachable row still does.
+    With ``--fail-fast`` a batch that stopped at a row exits with that row's code (the rows after it were not
+    planned), ``--report-only`` or not."""
+    if fail_fast and rows and rows[-1][0]:
+        return rows[-1][0]
     return max((c for c, planned in rows if c and not (report_only and planned)), default=0)
 
 
@@ -390,6 +395,7 @@ def _stream_batch(items, name, prof, options, height, eta, fail_fast, writer, ou
             for res in results:
                 codes.append(res.code)
                 planned_rows.append(res.plan is not None)
+                note_exit(_batch_exit([(res.code, res.plan is not None)], report_only, fail_fast))
                 if res.code and first_failed is None:
                     first_failed = res.row
                 if res.error is not None:
@@ -429,6 +435,6 @@ def _stream_batch(items, name, prof, options, height, eta, fail_fast, writer, ou
         _batch_line(codes, first_failed, n_written if output is not None else None)
     if output is not None and n_written == 0:
         sys.stderr.write("pickplace: no row could be written\n")
-    code = _batch_exit(list(zip(codes, planned_rows)), report_only)
+    code = _batch_exit(list(zip(codes, planned_rows)), report_only, fail_fast)
     if code:
         raise typer.Exit(code)

@@ -14,6 +14,7 @@ from .app import (
     _JSON_ERRORS,
     _parse_point,
     _usage,
+    note_exit,
     app,
     Compression,
     CsvDialectName,
@@ -168,8 +169,9 @@ def plan(
         False,
         "--report-only",
         help="Write the trajectory and exit 0 even when a limit of the report is exceeded (exit 3, or 4 for a joint "
-        "position range or the workcell box; the report still says so), in a batch too. Without it, a move that "
-        "breaks a limit is not written. An unreachable or invalid move still fails.",
+        "position range, the singularity margin or the workcell box; the report still says so), in a plain batch "
+        "too (a belt schedule forgives exit 3 only). Without it, a move that breaks a limit is not written. An "
+        "unreachable or invalid move still fails, and --fail-fast still exits with the row it stopped at.",
     ),
     json_summary: bool = typer.Option(
         False, "--json", help="Print a JSON summary (durations in s, cycle time, picks/min, verdict) on stdout "
@@ -243,6 +245,7 @@ def plan(
 
         legs.append(_run_plan(Task(task.p_to, task.p_from, task.height, task.eta), prof, options))
     code, cycle = _render_legs(a, prof, legs, rendezvous, track)
+    note_exit(0 if report_only else code)  # the verdict, should stdout's reader go away before the end
     _write_plan_outputs(a, prof, writer, legs, track, code)
     if json_summary:
         _emit_json(_plan_json(legs, cycle, code, report_only, workspace_fit, rendezvous, track))
@@ -465,6 +468,9 @@ def _write_plan_outputs(a, prof, writer, legs: list, track, code: int) -> None:
     if a.report is not None:
         _write_report(legs + ([track] if track is not None else []), a.report)
     if a.output is None or not (code == 0 or a.report_only):
+        from ..export import unpromise
+
+        unpromise(a.output)  # not written on purpose: a broken stdout later must not call it lost
         return
     if a.round_trip:
         from ..pipelines.timeline import round_trip as make_round_trip

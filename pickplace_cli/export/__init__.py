@@ -34,9 +34,21 @@ PROMISED: set[str] = set()
 
 
 def promise(path: str | Path | None) -> None:
-    """Note that the command will write ``path`` (None and ``-``, standard output, are not files)."""
-    if path is not None and str(path) != "-":
+    """Note that the command will write ``path``: a file written through a temporary file (not None or ``-``,
+    standard output, nor a device, named pipe or /dev, /proc path, written in place: /dev/stdout, /dev/null)."""
+    if path is None or str(path) == "-":
+        return
+    try:
+        in_place = _output_target(path)[1]
+    except ExportError:
+        return
+    if not in_place:
         PROMISED.add(str(path))
+
+
+def unpromise(path: str | Path | None) -> None:
+    """The command decided not to write ``path`` (e.g. a limit is exceeded without --report-only)."""
+    PROMISED.discard(str(path))
 
 
 def remove_pending() -> int:

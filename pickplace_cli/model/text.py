@@ -19,7 +19,13 @@ def utf16_hint(head: bytes | str, csv: bool = True) -> str:
         head = head.encode("utf-8", "surrogateescape")
     head = head[:64]
     bom = head.startswith((b"\xff\xfe", b"\xfe\xff"))
-    halves = len(head) >= 4 and (head[1::2].count(0) * 2 >= len(head) - 1 or head[0::2].count(0) * 2 >= len(head) - 1)
-    if not (bom or halves):
+    if bom:
+        head = head[2:]
+    halves = False
+    if len(head) >= 4:  # ASCII text in UTF-16: one byte of each pair NUL, the other printable (not all zeros)
+        for zeros, text in ((head[1::2], head[0::2]), (head[0::2], head[1::2])):
+            if not zeros.strip(b"\0") and text and all(b in (9, 10, 13) or 32 <= b < 127 for b in text):
+                halves = True
+    if not halves:
         return ""
     return " (UTF-16 text, e.g. Excel's \"Unicode Text\"? save it as \"CSV UTF-8\")" if csv else " (UTF-16 text? save it as UTF-8)"

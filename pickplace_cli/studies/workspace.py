@@ -501,7 +501,8 @@ def fit_workspace(
             g = ws.slacks(P)
             k = int(np.argmin(g[i]))
             if np.isfinite(g[i, k]):  # that constraint where the path breaks it most (the first point out barely
-                i = int(np.argmin(g[:, k]))  # does: its excess understated the violation)
+                # does: its excess understated the violation), among the points where it is defined (reachable)
+                i = int(np.argmin(np.where(np.isfinite(g[:, k]), g[:, k], np.inf)))
                 return path, f"worst at τ = {grid[i]:.4f}, {_fmt(P[i])}: {ws.names[k]} (violated by {-g[i, k]:.4g})"
             return path, f"τ = {grid[i]:.4f} at {_fmt(P[i])}: {ws.violation(P[i])}"
         # the exact check of plan (reach rows refined on the continuous path)

@@ -270,7 +270,7 @@ def test_json_exit_code_is_the_process_exit_code():
     (["plan", *ADEPT, "--height", "abc"], "Invalid value for '--height'"),
     (["plan", *ADEPT, "--law-coefficients", "5"], "--law-coefficients = '5': must be auto or a whole number in 8 ... 80"),
     (["bogus"], "No such command 'bogus'"),
-    (["plan", "--from"], "Option '--from' requires an argument"),
+    (["plan", "--from"], "Option '--from' requires an argument. (see pickplace --help)"),
 ])
 def test_usage_errors_are_one_line_exit_2(args, words):
     """click's usage errors were four lines (Usage, Try, blank, Error); one line now, like every other error."""

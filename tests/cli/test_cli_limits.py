@@ -280,3 +280,21 @@ def test_issue19_superposition_torque_rate_does_not_depend_on_the_rate(tmp_path)
         rows = {x["joint"]: x for x in json.loads(rep.read_text())["limits"]["rows"]
                 if x["quantity"] == "motor torque rate"}
         assert rows["q2"]["peak"] == pytest.approx(27.16, abs=0.01), rate
+
+
+def test_fit_workspace_names_a_finite_worst_point(tmp_path):
+    """Without a workcell box, the requested height breaks q3's range where parts of the path are out of reach:
+    the worst point is taken among the points where the constraint is defined (review, session 16: 'violated by
+    inf' at an unreachable point)."""
+    from pickplace_cli.model.profile import resolve_profile_path
+
+    lines = resolve_profile_path("delta-su2018").read_text().splitlines(keepends=True)
+    i = next(k for k, ln in enumerate(lines) if ln.startswith("workcell:"))
+    j = next((k for k in range(i + 1, len(lines)) if lines[k][:1] not in (" ", "\t", "")), len(lines))
+    prof = tmp_path / "nobox.yaml"
+    prof.write_text("".join(lines[:i] + lines[j:]))
+    r = run("plan", "-p", str(prof), "--from", "-0.1525,0,-0.8", "--to", "0.1525,0,-0.8", "--height", "0.4",
+            "--fit-workspace", "-o", str(tmp_path / "o.csv"))
+    assert "violated by inf" not in r.stderr and "Traceback" not in r.stderr
+    assert r.exit_code == 0 and "at the requested height: worst at τ = " in r.stderr, r.stderr
+    assert "q3 position min -0.698132 rad (violated by " in r.stderr

@@ -119,6 +119,12 @@ def test_report_only_exit_code_of_a_workcell_row_is_the_single_plans(tmp_path, s
         assert "row 1" in r.stderr and "workcell z" in r.stderr
         _, data = parse(out.read_text())
         assert sorted(set(data[:, 0].astype(int))) == [1]
+    # --fail-fast stops at that row: the rows after it are not planned, and the exit code is that row's
+    f.write_text("from_x,from_y,from_z,to_x,to_y,to_z,height\n" + row + "-0.1525,0,-0.8,0.1525,0,-0.8,\n")
+    args = {"file": [str(f)], "stdin": ["-"], "-j2": [str(f), "-j", "2"]}[source]
+    r = run("plan", "--batch", *args, "-q", "--report-only", "--fail-fast", "-o", str(out),
+            input=f.read_text() if source == "stdin" else None)
+    assert r.exit_code == 4, r.stderr
 
 
 @pytest.mark.parametrize(

@@ -226,3 +226,24 @@ def test_a_reader_that_goes_away_is_exit_0_unless_a_file_is_left_unwritten(tmp_p
     assert p.returncode == 1
     assert p.stderr.splitlines() == [f"pickplace: error: {', '.join(unwritten)}: not written: standard output was "
                                      "closed by its reader (broken pipe) before the command finished"]
+
+
+@pytest.mark.parametrize("args, code", [
+    (["plan", *ADEPT, "-q", "-o", "/dev/stdout"], 0),  # written in place: nothing left pending
+    (["plan", *ADEPT, "--round-trip", "-q", "--report", "-", "-o", "/dev/null"], 0),
+    (["plan", *ADEPT, "--time", "0.05", "--json", "-q", "-o", "x.csv"], 3),  # not written on purpose; verdict kept
+    (["plan", *ADEPT, "--time", "0.05", "-q"], 3),
+])
+def test_a_reader_that_goes_away_keeps_the_verdict_and_ignores_devices(tmp_path, args, code):
+    """Review of session 16's broken-pipe rule: a device or /dev path is written in place (never 'not written'); a
+    file the command decided not to write (a limit exceeded) is not called lost; and the move's verdict (3) is the
+    exit code even though stdout's reader went away (it used to be 0)."""
+    r, w = os.pipe()
+    os.close(r)
+    try:
+        p = subprocess.run(_cli(*args), stdout=w, stderr=subprocess.PIPE, text=True, timeout=TIMEOUT, cwd=tmp_path)
+    finally:
+        os.close(w)
+    assert p.returncode == code, p.stderr
+    assert "Traceback" not in p.stderr and "not written: standard output" not in p.stderr
+    assert os.listdir(tmp_path) == []

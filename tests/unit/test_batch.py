@@ -187,4 +187,8 @@ def test_a_utf16_batch_is_named_as_such(tmp_path):
             with pytest.raises(TaskError, match=r":1: a binary file \(NUL bytes\), not a CSV batch \(UTF-16 text"):
                 list(iter_batch(fh, str(f)))
     assert utf16_hint(b"\x89PNG\r\n\x1a\n\0\0\0\rIHDR") == ""  # a binary file is not called UTF-16
+    assert utf16_hint(bytes(200)) == "" and utf16_hint(b"\xff\xfe" + bytes(20)) == ""  # nor zeros (review)
+    import numpy as np
+
+    assert utf16_hint(np.arange(40, dtype=np.int32).tobytes()) == ""
     assert utf16_hint("a\0b\0".encode(), csv=False) == " (UTF-16 text? save it as UTF-8)"
