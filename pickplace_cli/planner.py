@@ -12,12 +12,12 @@ from typing import Any, Callable
 import numpy as np
 
 from .model.errors import TableError, UnreachableError
-from .limits.check import check_limits, reach_error
+from .limits.check import capacity_rows, check_limits, reach_error
 from .limits.grid import check_grid_order
 from .limits.motion import MotionModel
 from .limits.report import LimitReport
 from .paths import Method, depends_on_duration, path_factory, plan_path
-from .model.profile import Profile
+from .model.profile import Profile, limit_specs, with_limit_use
 from .robots import build_robot
 from .model.task import Task
 from .timing import Duration, choose_duration, choose_duration_for
@@ -30,7 +30,7 @@ class PlanOptions:
 
     method: Method | str = Method.bspline
     method_params: dict[str, Any] = field(default_factory=dict)
-    time: str | float = "auto"
+    time: str | float = "limits"  # limits | auto | fit | optimal | seconds (pickplace_cli.timing.parse_time)
     rate: float | None = None  # Hz; None → profile.planning.rate
     fit: bool = True  # also compute the fitted duration (reported next to auto); for a method whose path
     # depends on the duration (bspline-vel) only with time="fit": each trial duration re-plans the path
@@ -39,6 +39,14 @@ class PlanOptions:
     hold_capacity: bool = False  # fit/optimal also hold the profile's Cartesian capacity (|v|, |a|, |j|)
     law_coefficients: int | None = None  # optimal: coefficients of the time law's cubic B-spline (None: auto, 20
     # refined to 40 when the law is far from uniform; more: finer, slower)
+    limit_use: float | None = None  # fraction (0, 1] of every timed limit's rating to plan to; None: the profile's
+    # planning.limit_use
+
+
+def holds_capacity(options: PlanOptions) -> bool:
+    """Whether the duration rule holds the profile's Cartesian capacity (its rows then join the limit report):
+    every rule but fit and optimal without ``hold_capacity`` (those hold the joint and motor limits alone)."""
+    return options.hold_capacity or options.time not in ("fit", "optimal")
 
 
 @dataclass(frozen=True)
@@ -96,7 +104,7 @@ def motion_model_static(profile: Profile) -> tuple:
     if hit is None or hit[0] is not profile:
         robot = build_robot(profile.robot)
         margin = getattr(profile.robot, "singularity_margin", None)
-        hit = (profile, robot, profile.robot.joint_specs(), margin, profile.workcell.box, {})
+        hit = (profile, robot, limit_specs(profile), margin, profile.workcell.box, {})
         if len(_STATIC) > 32:
             _STATIC.clear()
         _STATIC[id(profile)] = hit
@@ -142,9 +150,10 @@ def _optimised_shape(task: Task, profile: Profile, options: PlanOptions) -> tupl
     if Method(options.method) is not Method.bspline:
         raise UsageError(f"--optimize shape: method {Method(options.method).value} has no shape parameters to choose; "
                          "it chooses k1, k2, η of --method bspline")
-    if options.time not in ("fit", "optimal"):
-        raise UsageError(f"--optimize shape minimises the fitted duration: use it with time fit or optimal "
+    if options.time not in ("fit", "optimal", "limits"):
+        raise UsageError(f"--optimize shape minimises the fitted duration: use it with time limits, fit or optimal "
                          f"(not {options.time})")
+    hold = options.hold_capacity or options.time == "limits"
     given = {k for k, v in options.method_params.items() if v is not None and k in ("k1", "k2")}
     if given:
         raise UsageError(f"--optimize shape chooses k1, k2 itself: drop --{'/--'.join(sorted(given))}")
@@ -161,10 +170,10 @@ def _optimised_shape(task: Task, profile: Profile, options: PlanOptions) -> tupl
     if ref is not None:
         table_shape = (float(ref.parameters["k1"]), float(ref.parameters["k2"]), float(task.eta))
         # the table shape's fit; a profile with no duration-dependent limit is the same error as --time fit's
-        t_table = choose_duration(ref, profile.capacity, "fit", model=model_of(ref), dwell=profile.planning.dwell,
-                                  hold_capacity=options.hold_capacity).seconds
+        t_table = choose_duration(ref, profile.capacity, "limits" if options.time == "limits" else "fit",
+                                  model=model_of(ref), dwell=profile.planning.dwell, hold_capacity=hold).seconds
     found = optimise_shape(task, profile, model_of, eta_fixed=task.eta if options.hold_eta else None,
-                           table_shape=table_shape, capacity=profile.capacity if options.hold_capacity else None)
+                           table_shape=table_shape, capacity=profile.capacity if hold else None)
     shaped = Task(task.p_from, task.p_to, task.height, found.eta, task.v_from, task.v_to)
     info = {"k1": found.k1, "k2": found.k2, "eta": found.eta, "screened_fit_s": found.t_screen,
             "shapes_screened": found.evaluations, "note": found.note,
@@ -192,6 +201,13 @@ def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions(), *,
         if interrupt is not None and interrupt():
             raise PlanInterrupted
 
+    if isinstance(options.time, str):  # a rule's name in any case and spacing (TaskError for a bad one)
+        from .timing import parse_time
+
+        options = replace(options, time=parse_time(options.time))
+    use = profile.planning.limit_use if options.limit_use is None else options.limit_use
+    profile = with_limit_use(profile, use)  # every timed limit at use × its rating (the same profile at 1)
+
     _refuse_moving_ends(task, options)
     rate = options.rate if options.rate is not None else profile.planning.rate
     shape = None
@@ -208,7 +224,8 @@ def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions(), *,
         raise
     stop()
     final = _FinalCheck(rate, profile.planning.dwell)
-    duration, path, model, notes = _duration_stage(task, profile, options, path, factory, model, first, final)
+    duration, path, model, notes = _duration_stage(task, profile, options, path, factory, model, first, final,
+                                                   samples.parts)
     done = final.at(path, duration.seconds)
     if done is not None:  # the search's last exact check was this one: same path, duration, grid and dwell
         samples, report = done
@@ -218,7 +235,9 @@ def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions(), *,
             samples = _sample(model, path, duration.seconds, rate)
         stop()
         report = check_limits(model, duration.seconds, parts=samples.parts, dwell=profile.planning.dwell, notes=notes)
-    return _assemble(task, profile, path, duration, model, samples, report)
+    if holds_capacity(options):
+        report = report.with_rows(capacity_rows(path, duration.seconds, profile.capacity))
+    return _assemble(task, profile, path, duration, model, samples, report.rated(profile.limit_use))
 
 
 class _FinalCheck:
@@ -257,7 +276,7 @@ def _path_stage(task: Task, profile: Profile, options: PlanOptions, shape: dict 
     """The path, its factory T → path when the path is planned for a duration (else None), and the first
     duration (auto or given; ``fit``/``optimal`` start from auto). A move the table does not cover is often one
     the robot cannot make at all: that is said first (exit 4)."""
-    first_spec = "auto" if options.time in ("fit", "optimal") else options.time
+    first_spec = "auto" if options.time in ("fit", "optimal", "limits") else options.time
     try:
         if depends_on_duration(options.method):  # the path is planned for a duration (e.g. conveyor tracking)
             _refuse_retiming(options)
@@ -289,7 +308,7 @@ def _refuse_retiming(options: PlanOptions) -> None:
 
 
 def _duration_stage(task: Task, profile: Profile, options: PlanOptions, path, factory, model: MotionModel,
-                    first: Duration, check=None) -> tuple[Duration, Any, MotionModel, tuple[str, ...]]:
+                    first: Duration, check=None, parts=None) -> tuple[Duration, Any, MotionModel, tuple[str, ...]]:
     """(duration, path, model, notes) for ``options.time``: the first duration as it is, the fit (the smallest
     T at which every limit holds), or the time-optimal law (which composes a new path). The searches reach the
     limit stage only through ``model_of`` (path → MotionModel) and ``check`` (the plan's final check, for the
@@ -299,8 +318,8 @@ def _duration_stage(task: Task, profile: Profile, options: PlanOptions, path, fa
     def model_of(p):
         return motion_model(p, profile)
 
-    if factory is not None and options.time == "fit":
-        duration, path = choose_duration_for(factory, profile.capacity, "fit", model_of=model_of, dwell=dwell,
+    if factory is not None and options.time in ("fit", "limits"):
+        duration, path = choose_duration_for(factory, profile.capacity, options.time, model_of=model_of, dwell=dwell,
                                              start=first.seconds)
         return duration, path, model_of(path), ()
     if options.time == "optimal":
@@ -312,6 +331,9 @@ def _duration_stage(task: Task, profile: Profile, options: PlanOptions, path, fa
         if law_path is not model.path:  # the composed path: evaluated anew
             model = model_of(law_path)
         return duration, law_path, model, (law_note,)
+    if factory is None and options.time == "limits":  # the fit screens the first samples' model (same path)
+        return choose_duration(path, profile.capacity, "limits", model=model, dwell=dwell, check=check,
+                               parts=parts if parts is not None and model.path is path else None), path, model, ()
     if factory is None and (options.fit or options.time == "fit"):
         return choose_duration(path, profile.capacity, options.time, model=model, dwell=dwell,
                                hold_capacity=options.hold_capacity, check=check), path, model, ()

@@ -75,7 +75,7 @@ def _plan_batch(source, prof, options, height, eta, fail_fast, writer, output, r
             outcomes = verdict_rows_parallel(rows, prof, options, height, eta, fail_fast, name, workers=n_workers)
         else:
             outcomes = plan_rows_parallel(rows, prof, options, height, eta, fail_fast, name, workers=n_workers,
-                                          csv_dialect=csv_dialect, format_failed=report_only)
+                                          csv_dialect=csv_dialect, format_failed=report_only)  # (codes 3 only)
         for res in outcomes:
             flush(res.row)
             results[res.row] = res
@@ -97,7 +97,7 @@ def _plan_batch(source, prof, options, height, eta, fail_fast, writer, output, r
         if stop is not None:
             ordered = [r for r in ordered if r.row <= stop]
     codes = [r.code for r in ordered]
-    planned = [r for r in ordered if r.plan is not None and (r.code == 0 or report_only)]
+    planned = [r for r in ordered if r.plan is not None and (r.code == 0 or (report_only and r.code == 3))]
     code = _batch_exit([(r.code, r.plan is not None) for r in ordered], report_only, fail_fast)
     note_exit(code)  # should stdout's reader go away while the rows are written
     if json_summary:
@@ -114,14 +114,14 @@ def _plan_batch(source, prof, options, height, eta, fail_fast, writer, output, r
 
 
 def _batch_exit(rows: list[tuple[int, bool]], report_only: bool, fail_fast: bool = False) -> int:
-    """A batch's exit code from its rows' (code, planned): the highest code; with ``--report-only`` the rows that
-    were planned and only broke a limit of the report (3, or 4 for a joint position range or the workcell box:
-    their trajectories are written) do not count, as for a single plan; an invalid or unreachable row still does.
-    With ``--fail-fast`` a batch that stopped at a row exits with that row's code (the rows after it were not
-    planned), ``--report-only`` or not."""
+    """A batch's exit code from its rows' (code, planned): the highest code; with ``--write-anyway``
+    (``report_only``) the rows that were planned and only broke a timed limit (3: their trajectories are written)
+    do not count, as for a single plan; a row past a joint range or the workcell box (4), an invalid or an
+    unreachable row still does. With ``--fail-fast`` a batch that stopped at a row exits with that row's code (the
+    rows after it were not planned), ``--write-anyway`` or not."""
     if fail_fast and rows and rows[-1][0]:
         return rows[-1][0]
-    return max((c for c, planned in rows if c and not (report_only and planned)), default=0)
+    return max((c for c, planned in rows if c and not (report_only and planned and c == 3)), default=0)
 
 
 def _write_batch_file(planned, writer, output, dwell: float) -> None:
@@ -407,7 +407,7 @@ def _stream_batch(items, name, prof, options, height, eta, fail_fast, writer, ou
                     warmer.remember(res.plan)
                 if res.plan is not None and report is not None:
                     reports.append((res.row, ReportRecord.of(res.plan)))
-                if res.plan is not None and output is not None and (res.code == 0 or report_only):
+                if res.plan is not None and output is not None and (res.code == 0 or (report_only and res.code == 3)):
                     n_written += 1
                     if out is not None:
                         if n_written == 1:

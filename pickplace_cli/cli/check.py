@@ -20,8 +20,20 @@ def check(
         "output); '-' = stdin.",
     ),
     profile: Optional[str] = typer.Option(None, "--profile", "-p", help="Profile YAML file or shipped name. [default: delta-su2018]"),
-    smoothing: float = typer.Option(
-        0.0, "--smoothing", help="Smoothing factor per sample, in m² (0 = interpolate exactly; > 0 for noisy measured data)."
+    smoothing: str = typer.Option(
+        "0", "--smoothing", metavar="M2|auto",
+        help="Smoothing factor per sample, in m² of the tool position (0 = interpolate exactly, for planned "
+        "trajectories; for measured, noisy data 'auto' takes the square of the noise level estimated from the "
+        "samples). Smoothing lowers the peaks of rates: each peak's accuracy then includes the gap to the "
+        "unsmoothed data's, and a rate peak the data cannot pin down is reported as not resolved.",
+    ),
+    limit_use: Optional[float] = typer.Option(
+        None, "--limit-use", metavar="FRACTION", help="Hold every timed limit to this fraction of its rating, in "
+        "(0, 1] (as plan --limit-use). [default: profile planning.limit_use, else 1]",
+    ),
+    strict: bool = typer.Option(
+        False, "--strict", help="Exit 3 also when a peak is not resolved by the samples (its accuracy is worse than "
+        "1 % of the limit and it may be beyond it), not only when the data shows a limit exceeded.",
     ),
     report: Optional[str] = typer.Option(None, "--report", help="Also write the limit report as JSON to this file."),
     report_only: bool = typer.Option(False, "--report-only", help="Exit 0 even when a limit is exceeded."),
@@ -30,8 +42,11 @@ def check(
     """Check an existing joint trajectory against a profile's limits (exit 3 if a limit is exceeded).
 
     Joint positions go through forward kinematics; a quintic spline of the tool positions gives the
-    derivatives (the report says so), then the same dynamics and limit check as `plan`. Joint positions
-    are checked as given (q1 = 5 rad is 5 rad, not wrapped).
+    derivatives (split at the jerk steps found in the data, each side checked: the report says so), then the
+    same dynamics and limit check as `plan`. Joint positions are checked as given (q1 = 5 rad is 5 rad, not
+    wrapped). Every duration-dependent peak is estimated twice, from all samples and from every other one: the
+    difference is its accuracy (the "± %" column); a limit counts as exceeded when the peak less its accuracy is
+    beyond it, so a trajectory `plan` wrote as within its limits passes, and one 1 % faster fails.
 
     A file with a `move` column (`plan --batch` or `--round-trip` output) is checked move by move: each
     move gets its own limit table and verdict, and the exit code is the worst of them. Samples at the end
@@ -44,10 +59,20 @@ def check(
     from ..export import atomic_output
     from ..model.profile import load_profile
 
-    if not (smoothing >= 0 and smoothing < float("inf")):
-        raise TaskError(f"smoothing = {smoothing!r}: must be a finite number >= 0")
+    smooth: float | str = smoothing.strip().lower()
+    if smooth != "auto":
+        try:
+            smooth = float(smooth)
+        except ValueError:
+            raise TaskError(f"smoothing = {smoothing!r}: give a number of m² per sample >= 0, or auto") from None
+        if not (smooth >= 0 and smooth < float("inf")):
+            raise TaskError(f"smoothing = {smoothing!r}: must be a finite number >= 0 (m² per sample), or auto")
+    if limit_use is not None:
+        from ..model.profile import check_limit_use
+
+        check_limit_use(limit_use)
     prof = load_profile(profile)
-    checks = check_file(trajectory, prof, smoothing)
+    checks = check_file(trajectory, prof, smooth, limit_use)
     several = len(checks) > 1 or checks[0].move is not None
     if report is not None:
         with atomic_output(report) as stream:
@@ -69,6 +94,8 @@ def check(
             _print_limit_table(rep)
         _print_verdict(rep, quiet, with_cycle=not several)
     code = max(c.report.exit_code() for c in checks)
+    if strict and not code and any(c.report.unresolved for c in checks):
+        code = 3
     if several and not quiet:
         bad = sum(not c.report.ok for c in checks)
         sys.stderr.write(

@@ -85,13 +85,20 @@ def plan(
         "[default: the paper's values]",
     ),
     time: str = typer.Option(
-        "auto",
+        "limits",
         "--time",
         "-t",
-        help="Duration of the move in s, or 'auto' (from the profile's Cartesian capacity, Li 2018 Eq. 26), "
-        "or 'fit' (the smallest duration at which every joint and motor limit holds, path scaled uniformly in time), "
+        help="Duration of the move in s, or a rule: 'limits' (the shortest duration at which every limit of the "
+        "profile holds: joint and motor limits, RMS torque and the Cartesian capacity), 'auto' (the Cartesian "
+        "capacity alone, Li 2018 Eq. 26), 'fit' (the joint and motor limits alone, path scaled uniformly in time), "
         "or 'optimal' (the same path with a non-uniform, jerk-bounded time law that minimises the duration under the "
-        "same joint and motor limits, RMS included; ~0.05-1 s more; not for bspline-vel).",
+        "same joint and motor limits, RMS included; ~0.05-1 s more; not for bspline-vel). Names in any case.",
+    ),
+    limit_use: Optional[float] = typer.Option(
+        None, "--limit-use", metavar="FRACTION", help="Headroom: plan and check every timed limit (joint speed, "
+        "acceleration, jerk, motor speed, torque, torque rate, RMS torque, Cartesian capacity) to at most this "
+        "fraction of its rating, in (0, 1], e.g. 0.9 keeps 10 % in reserve. The limit table shows use against the "
+        "rating and this target. [default: profile planning.limit_use, else 1]",
     ),
     optimize: OptimizeWhat = typer.Option(
         OptimizeWhat.none, "--optimize", help="'shape' (--method bspline): also choose the path's k1, k2 and η "
@@ -165,14 +172,16 @@ def plan(
         None, "--output", "-o", help="Output file ('-' = stdout, the default without --json). Written atomically."
     ),
     report: Optional[str] = typer.Option(None, "--report", help="Also write the limit report as JSON to this file."),
-    report_only: bool = typer.Option(
+    write_anyway: bool = typer.Option(
         False,
-        "--report-only",
-        help="Write the trajectory and exit 0 even when a limit of the report is exceeded (exit 3, or 4 for a joint "
-        "position range, the singularity margin or the workcell box; the report still says so), in a plain batch "
-        "too (a belt schedule forgives exit 3 only). Without it, a move that breaks a limit is not written. An "
-        "unreachable or invalid move still fails, and --fail-fast still exits with the row it stopped at.",
+        "--write-anyway",
+        help="Write the trajectory and exit 0 even when a timed limit is exceeded (exit 3: a speed, torque, torque "
+        "rate, RMS torque or the Cartesian capacity; the report still says so), also for the rows of a batch. "
+        "Never for a position: a move past a joint's range, the singularity margin or the workcell box (exit 4) is "
+        "not written, nor is an unreachable or invalid one; --fail-fast still exits with the row it stopped at.",
     ),
+    report_only: bool = typer.Option(False, "--report-only", hidden=True,
+                                     help="Deprecated name of --write-anyway (warns once)."),
     json_summary: bool = typer.Option(
         False, "--json", help="Print a JSON summary (durations in s, cycle time, picks/min, verdict) on stdout "
         "instead of the trajectory (one line per row with --batch); the trajectory then goes only to -o FILE.",
@@ -203,6 +212,10 @@ def plan(
     from ..model.profile import load_profile
     from ..planner import PlanOptions
 
+    if report_only:
+        sys.stderr.write("pickplace: warning: --report-only is deprecated: it is --write-anyway, which writes a move "
+                         "that exceeds a timed limit (exit 3) but never one past a joint range or the workcell (exit 4)\n")
+        write_anyway = report_only = True
     a = SimpleNamespace(**{k: v for k, v in locals().items() if k not in ("SimpleNamespace", "load_profile",
                                                                          "PlanOptions")})
     _JSON_ERRORS[0] = json_summary and batch is None  # a batch prints its own line per row
@@ -219,10 +232,10 @@ def plan(
     params = _method_params(a)
     writer = _writer(fmt, csv_dialect, mcap_flavor, compression, _columns(columns, prof))
     _check_shape_usage(a)
-    options = PlanOptions(method=a.method.value, method_params=params, time=time, rate=rate,
-                          fit=time == "fit" or show_fit, shape=a.optimize == OptimizeWhat.shape,
+    options = PlanOptions(method=a.method.value, method_params=params, time=a.time, rate=rate,
+                          fit=a.time == "fit" or show_fit, shape=a.optimize == OptimizeWhat.shape,
                           hold_eta=eta is not None, hold_capacity=hold_capacity,
-                          law_coefficients=_law_coefficients(law_coefficients))
+                          law_coefficients=_law_coefficients(law_coefficients), limit_use=limit_use)
     if batch is not None:
         if workers < 0:
             from ..model.errors import TaskError
@@ -230,13 +243,13 @@ def plan(
             raise TaskError(f"workers = {workers}: must be 0 (automatic) or a positive number of processes")
         source = ctx.get_parameter_source("method")
         belt = {"latency": latency, "method_given": source is not None and source.name != "DEFAULT"}
-        _plan_batch(batch, prof, options, height, eta, fail_fast, writer, a.output, report, report_only, json_summary,
+        _plan_batch(batch, prof, options, height, eta, fail_fast, writer, a.output, report, write_anyway, json_summary,
                     quiet, workers, belt, keep_warm)
         return
     task, workspace_fit, vel_from = _single_task(a, prof, params)
     rendezvous = track = None
     if to_belt is not None:
-        legs, rendezvous, track = _plan_to_belt(task.p_from, task.p_to, to_belt, latency, prof, time, task.height,
+        legs, rendezvous, track = _plan_to_belt(task.p_from, task.p_to, to_belt, latency, prof, a.time, task.height,
                                                 task.eta, vel_from, params, rate)
     else:
         legs = [_run_plan(task, prof, options)]
@@ -245,21 +258,30 @@ def plan(
 
         legs.append(_run_plan(Task(task.p_to, task.p_from, task.height, task.eta), prof, options))
     code, cycle = _render_legs(a, prof, legs, rendezvous, track)
-    note_exit(0 if report_only else code)  # the verdict, should stdout's reader go away before the end
+    forgiven = write_anyway and code == 3  # a timed limit only: a position past its range is never written
+    note_exit(0 if forgiven else code)  # the verdict, should stdout's reader go away before the end
     _write_plan_outputs(a, prof, writer, legs, track, code)
     if json_summary:
-        _emit_json(_plan_json(legs, cycle, code, report_only, workspace_fit, rendezvous, track))
-    if code and not report_only:
+        _emit_json(_plan_json(legs, cycle, code, forgiven, workspace_fit, rendezvous, track))
+    if code and not forgiven:
         if a.output is not None:
-            sys.stderr.write(
-                "pickplace: trajectory not written (a limit is exceeded); --report-only writes it anyway\n"
-            )
+            from .hints import not_written
+
+            sys.stderr.write(f"pickplace: {not_written(legs + ([track] if track is not None else []), prof, options, code)}\n")
         raise typer.Exit(code)
 
 
 def _check_plan_values(a) -> None:
-    """Values (exit 1): height, rate, k1/k2, η."""
+    """Values (exit 1): the time rule (normalised: any case and spacing), height, rate, k1/k2, η, limit use."""
     from ..model.errors import TaskError
+    from ..model.profile import check_limit_use
+    from ..timing import parse_time
+
+    a.time = parse_time(a.time)
+    if not isinstance(a.time, str):
+        a.time = repr(a.time)  # seconds, as the text the options carry
+    if a.limit_use is not None:
+        check_limit_use(a.limit_use)
 
     _finite("height", a.height)
     _finite("rate", a.rate)
@@ -381,14 +403,14 @@ def _check_shape_usage(a) -> None:
     shape = a.optimize == OptimizeWhat.shape
     if shape and a.method != MethodName.bspline:
         _usage(f"--optimize shape chooses k1, k2, η of --method bspline; method {a.method.value} has no such shape")
-    if shape and a.time not in ("fit", "optimal"):
-        _usage(f"--optimize shape minimises the fitted duration on the robot's limits: use it with --time fit or "
-               f"--time optimal (not --time {a.time})")
+    if shape and a.time not in ("fit", "optimal", "limits"):
+        _usage(f"--optimize shape minimises the fitted duration on the robot's limits: use it with --time limits "
+               f"(the default), fit or optimal (not --time {a.time})")
     if _law_coefficients(a.law_coefficients) is not None and a.time != "optimal":
         _usage(f"--law-coefficients shapes the time law of --time optimal (--time {a.time} scales the path uniformly)")
     if a.hold_capacity and a.time not in ("fit", "optimal"):
         _usage(f"--hold-capacity applies to --time fit or optimal (--time {a.time} "
-               f"{'holds the capacity already' if a.time == 'auto' else 'is given'})")
+               f"{'holds the capacity already' if a.time in ('auto', 'limits') else 'is given'})")
     if shape and (a.k1 is not None or a.k2 is not None):
         _usage("--optimize shape chooses k1 and k2 itself: drop --k1/--k2 (or drop --optimize)")
 
@@ -467,7 +489,7 @@ def _write_plan_outputs(a, prof, writer, legs: list, track, code: int) -> None:
     exceeded unless --report-only."""
     if a.report is not None:
         _write_report(legs + ([track] if track is not None else []), a.report)
-    if a.output is None or not (code == 0 or a.report_only):
+    if a.output is None or not (code == 0 or (a.write_anyway and code == 3)):
         from ..export import unpromise
 
         unpromise(a.output)  # not written on purpose: a broken stdout later must not call it lost
@@ -486,9 +508,9 @@ def _write_plan_outputs(a, prof, writer, legs: list, track, code: int) -> None:
     writer(samples, a.output)
 
 
-def _plan_json(legs: list, cycle: float, code: int, report_only: bool, workspace_fit, rendezvous, track) -> dict:
+def _plan_json(legs: list, cycle: float, code: int, forgiven: bool, workspace_fit, rendezvous, track) -> dict:
     """The --json summary of a one-move plan (a round trip, a rendezvous with its tracking segment)."""
-    doc = _json_summary(legs, cycle, code, exit_code=0 if report_only else code)
+    doc = _json_summary(legs, cycle, code, exit_code=0 if forgiven else code)
     if workspace_fit is not None:
         doc["workspace_fit"] = workspace_fit.as_dict()
     if rendezvous is not None:

@@ -155,25 +155,34 @@ def _print_limit_table(report) -> None:
     from ..limits.report import percent
 
     table = Table(title=None, box=None, pad_edge=False, show_header=True, header_style="bold")
-    for col, just in (("joint", "left"), ("quantity", "left"), ("peak", "right"), ("limit", "right"),
-                      ("use %", "right"), ("t peak [s]", "right"), ("", "left")):
+    headroom = any(r.target < 1.0 for r in report.rows)  # a limit-use fraction: its target column
+    cols = [("joint", "left"), ("quantity", "left"), ("peak", "right"), ("limit", "right"), ("use %", "right")]
+    cols += [("target %", "right")] if headroom else []
+    estimated = any(r.accuracy is not None for r in report.rows)  # peaks estimated from samples (check)
+    cols += [("± %", "right")] if estimated else []
+    for col, just in cols + [("t peak [s]", "right"), ("", "left")]:
         table.add_column(escape(col), justify=just)  # type: ignore[arg-type]  ("[s]" is not rich markup)
     for r in report.rows:
         mark = "ok" if r.ok else "[bold red]EXCEEDED[/]"
         quantity = r.quantity
         if quantity.startswith(("position", "workcell")):  # a [min, max] range: say which side the row is
             quantity += " min" if r.bound == "lower" else " max"
-        table.add_row(
-            r.joint, escape(f"{quantity} [{r.unit}]"), _fmt(r.peak),
-            ("≥ " if r.bound == "lower" else "≤ ") + _fmt(r.limit), percent(r.utilisation),
-            "" if r.t_peak is None else f"{r.t_peak:.4f}", mark,
-        )
+        cells = [r.joint, escape(f"{quantity} [{r.unit}]"), _fmt(r.peak),
+                 ("≥ " if r.bound == "lower" else "≤ ") + _fmt(r.limit), percent(r.utilisation)]
+        cells += [percent(r.target) if r.kind == "limit" else ""] if headroom else []
+        if estimated:
+            cells.append("" if r.accuracy is None else percent(r.accuracy / abs(r.limit)))
+            if r.ok and not r.resolved:
+                mark = "[yellow]unresolved[/]"
+        table.add_row(*cells, "" if r.t_peak is None else f"{r.t_peak:.4f}", mark)
     # a terminal wraps at its width; a pipe or log file gets whole rows (rich would assume 80 columns)
     width = None if sys.stderr.isatty() else 200
     Console(stderr=True, highlight=False, soft_wrap=True, width=width).print(table)
 
 
 def _print_verdict(report, quiet: bool, with_cycle: bool = True) -> None:
+    from ..limits.report import percent
+
     cycle = (
         f"cycle: {report.duration:.4f} s one way, {report.round_trip:.4f} s round trip "
         f"(dwell {report.dwell:g} s), {report.picks_per_minute:.1f} picks/min"
@@ -181,12 +190,21 @@ def _print_verdict(report, quiet: bool, with_cycle: bool = True) -> None:
     if not with_cycle:
         cycle = f"move {report.duration:.4f} s"
     if report.ok:
+        vague = report.unresolved
+        for r in vague:  # a peak the samples cannot pin down: said even with -q (the verdict depends on it)
+            sys.stderr.write(
+                f"pickplace: not resolved: {r.joint} {r.quantity} = {r.peak:.4g} ± {r.accuracy:.2g} {r.unit} "
+                f"({percent(r.utilisation)} % ± {percent(r.accuracy / abs(r.limit))} % of {r.limit:.4g} {r.unit}): the "
+                "samples are too sparse (or too noisy) for this peak; it is not shown exceeded, but not shown within "
+                "the limit either: check a trajectory sampled at a higher rate\n")
         if not quiet:
             # a profile whose limits are all positions and the workcell (no joint speed, torque …): nothing that
             # the duration changes was checked, however short it is; say so instead of a bare "all limits hold"
             untimed = report.rows and all(r.kind == "reach" for r in report.rows)
             scope = " (positions and workcell only: this profile sets no limit that depends on the duration)" if untimed else ""
-            sys.stderr.write(f"verdict: all limits hold{scope}; {cycle}\n")
+            held = ("all limits hold" if not vague else
+                    f"no limit exceeded; {len(vague)} peak(s) not resolved by the samples")
+            sys.stderr.write(f"verdict: {held}{scope}; {cycle}\n")
         return
     from ..pipelines.batch import violation_text  # the same words as a batch row's limit lines
 
@@ -218,6 +236,14 @@ def _print_summary(result) -> None:
         ks += f"\nshape: η = {shape['eta']:.4g} chosen with k1, k2 for this robot's limits (fit, uniform law): {versus}; {shape['note']}"
     bounds = f"v {d.t_velocity:.4f} s, a {d.t_acceleration:.4f} s" + (f", j {d.t_jerk:.4f} s" if d.t_jerk else "")
     fit = f"; fit {d.t_fit:.4f} s" if d.t_fit is not None else ""
+    rule = d.mode
+    if d.mode == "limits":  # the default: say what the capacity costs against the motors alone
+        rule = "limits: every limit of the profile"
+        fit = (f"; fit (joint and motor limits alone) {d.t_fit:.4f} s" if d.t_fit is not None
+               else "; fit: no joint or motor limit depends on the duration")
+    use = result.report.rows and min(r.target for r in result.report.rows)
+    if use and use < 1.0:
+        rule += f", limit use {100 * use:g} %"
     if d.t_optimal is not None and d.t_fit:
         fit += (f"; optimal {d.t_optimal:.4f} s = {d.t_optimal / d.t_fit:.3f} × fit, {d.t_optimal / d.t_auto:.3f} × auto"
                 f" ({60 / (2 * d.t_optimal + 2 * result.report.dwell):.1f} against "
@@ -227,7 +253,7 @@ def _print_summary(result) -> None:
                     "× bound; the rest is torque rate, RMS and smoothness)")
     sys.stderr.write(
         f"{s['profile']} / {s['method']}: b = {s['b_m']:.4g} m, h = {s['height_m']:.4g} m, λ = {s['lambda']:.4g}, η = {s['eta']:g}; {ks}\n"
-        f"duration T = {d.seconds:.4f} s ({d.mode}, binding: {d.binding}); auto {d.t_auto:.4f} s (Eq. 26: {bounds}){fit}; "
+        f"duration T = {d.seconds:.4f} s ({rule}; binding: {d.binding}); auto {d.t_auto:.4f} s (Eq. 26: {bounds}){fit}; "
         f"{s['samples']} samples\n"
         f"peaks |v| = {s['peak_speed_m_s']:.4g} m/s, |a| = {s['peak_acceleration_m_s2']:.4g} m/s², "
         f"|j| = {s['peak_jerk_m_s3']:.4g} m/s³\n"

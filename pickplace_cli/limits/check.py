@@ -237,3 +237,15 @@ def reach_error(exc: UnreachableError, tau: np.ndarray, T: float | None) -> Unre
     s = float(tau[exc.index])
     when = f"t = {s * T:.6g} s" if T else f"τ = {s:.4f} of the move"
     return UnreachableError(f"{exc} at {when}", index=exc.index)
+
+
+def capacity_rows(path, T: float, capacity) -> tuple[LimitRow, ...]:
+    """The Cartesian capacity as limit rows of the tool [Li2018, Eq. (24)–(25)]: |v| ≤ [v], |a| ≤ [a] (and |j| ≤ [j]
+    when the profile sets it), each peak exact from the path's own normalised peaks scaled to T [s] (v̂/T, â/T²,
+    ĵ/T³; a time-law path's peaks are its composed ones). The peak's time is not located (t_peak None)."""
+    v, a, j = path.peaks
+    rows = [("speed", "m/s", v / T, capacity.velocity), ("acceleration", "m/s²", a / T**2, capacity.acceleration)]
+    if capacity.jerk is not None:
+        rows.append(("jerk", "m/s³", j / T**3, capacity.jerk))
+    return tuple(LimitRow("tool", f"capacity {q}", unit, float(peak), float(lim), float(peak) / lim, None,
+                          bool(peak <= lim * (1.0 + 1e-12)), "limit") for q, unit, peak, lim in rows)

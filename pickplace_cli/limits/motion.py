@@ -57,6 +57,16 @@ class Parts:
     singularity: np.ndarray | None = None  # (N,)
     order: np.ndarray | None = None  # the permutation that sorts ``tau`` (None: ``tau`` is sorted)
 
+    def sorted(self) -> "Parts":
+        """These parts with ``tau`` in increasing order (``self`` when it is already)."""
+        if self.order is None:
+            return self
+        o = self.order
+        take = {name: (None if getattr(self, name) is None else getattr(self, name)[o])
+                for name in ("tau", "p", "v1", "a1", "j1", "q", "qd1", "qdd1", "qddd1", "A", "G", "Am", "Gm", "dAm",
+                             "dGm", "singularity")}
+        return Parts(**take)
+
 
 @dataclass
 class MotionModel:

@@ -17,6 +17,10 @@ def percent(utilisation: float) -> str:
     return f"{p:.1f}" if abs(p) < 9999.95 else f"{p:.3g}"
 
 
+#: a peak estimated from samples counts as resolved when its accuracy is within this fraction of the allowed value
+RESOLVED = 0.01
+
+
 @dataclass(slots=True)
 class LimitRow:
     """One checked limit: the peak of a quantity over the move, its limit and where the peak is.
@@ -34,17 +38,34 @@ class LimitRow:
     ok: bool
     kind: str = "limit"  # "limit" (exit 3) or "reach" (exit 4)
     bound: str = "upper"  # "upper": peak ≤ limit; "lower": peak ≥ limit
+    #: the fraction of ``limit`` the peak may use (the profile's limit-use fraction for a timed limit, else 1):
+    #: ok ⇔ utilisation ≤ target
+    target: float = 1.0
+    #: ± how far the peak may be off [unit], when it is estimated from samples (``check``); None: found on the
+    #: continuous motion. ok then means the peak less this is allowed: the data does not show the limit exceeded
+    accuracy: float | None = None
+
+    @property
+    def resolved(self) -> bool:
+        """Whether the samples resolve the peak to ``RESOLVED`` of the allowed value (always, without an accuracy)."""
+        return self.accuracy is None or self.accuracy <= RESOLVED * abs(self.allowed)
+
+    @property
+    def allowed(self) -> float:
+        """The value the peak may reach: ``target`` × ``limit`` (the limit itself without headroom)."""
+        return self.limit * self.target
 
     @property
     def excess(self) -> float:
-        """By how much the limit is exceeded (same unit; ≤ 0 when ok)."""
-        return self.limit - self.peak if self.bound == "lower" else self.peak - self.limit
+        """By how much the allowed value is exceeded (same unit; ≤ 0 when ok)."""
+        return self.allowed - self.peak if self.bound == "lower" else self.peak - self.allowed
 
     def as_dict(self) -> dict[str, Any]:
         return {
             "joint": self.joint, "quantity": self.quantity, "unit": self.unit, "peak": self.peak,
             "limit": self.limit, "utilisation": self.utilisation, "t_peak_s": self.t_peak, "ok": self.ok,
-            "kind": self.kind, "bound": self.bound, "excess": self.excess,
+            "kind": self.kind, "bound": self.bound, "excess": self.excess, "limit_use": self.target,
+            **({} if self.accuracy is None else {"accuracy": self.accuracy, "resolved": self.resolved}),
         }
 
 
@@ -66,6 +87,11 @@ class LimitReport:
         return tuple(r for r in self.rows if not r.ok)
 
     @property
+    def unresolved(self) -> tuple[LimitRow, ...]:
+        """Rows within their limit whose peak the samples do not resolve to ``RESOLVED`` (``check``)."""
+        return tuple(r for r in self.rows if r.ok and not r.resolved)
+
+    @property
     def round_trip(self) -> float:
         return 2.0 * (self.duration + self.dwell)
 
@@ -79,6 +105,25 @@ class LimitReport:
         if not bad:
             return 0
         return 4 if any(r.kind == "reach" for r in bad) else 3
+
+    def rated(self, use: float) -> "LimitReport":
+        """This report, planned and checked against limits scaled by ``use`` (the limit-use fraction), stated
+        against the ratings: every timed row (kind "limit") gets limit = its rating, utilisation = peak / rating
+        and target = ``use`` (its verdict unchanged); positions, the workcell and the singularity margin stay."""
+        if use == 1.0:
+            return self
+        rows = []
+        for r in self.rows:
+            if r.kind == "limit" and r.bound == "upper":
+                rating = r.limit / use
+                r = LimitRow(r.joint, r.quantity, r.unit, r.peak, rating, r.peak / rating, r.t_peak, r.ok, r.kind,
+                             r.bound, use, r.accuracy)
+            rows.append(r)
+        return LimitReport(tuple(rows), self.duration, self.dwell, self.notes)
+
+    def with_rows(self, rows: tuple[LimitRow, ...]) -> "LimitReport":
+        """This report with ``rows`` added after its own."""
+        return LimitReport(self.rows + tuple(rows), self.duration, self.dwell, self.notes)
 
     def as_dict(self) -> dict[str, Any]:
         return {

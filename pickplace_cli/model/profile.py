@@ -9,7 +9,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Annotated, Any, Literal, Union, get_origin
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationError, model_validator
 
 from .errors import ProfileError
 
@@ -241,6 +241,13 @@ class Planning(_Model):
     eta: float = Field(default=0.5, gt=0, lt=1, description="Lift-off/set-down ratio η (dimensionless, 0 < η < 1)")
     rate: float = Field(default=1000.0, gt=0, le=1e6, description="Output sample rate in Hz")
     dwell: float = Field(default=0.1, ge=0, description="Dwell at pick and at place in s (duty cycle: move, dwell, move back, dwell)")
+    limit_use: float = Field(
+        default=1.0, gt=0, le=1, description="Limit-use fraction (headroom), dimensionless in (0, 1]: the default "
+        "duration, fit, optimal and --optimize shape plan every timed limit (joint velocity, acceleration, jerk, "
+        "motor speed, torque, torque rate, RMS torque, Cartesian capacity) to at most this fraction of its rating, "
+        "and the limit check holds every plan to it (e.g. 0.9 keeps 10 % in reserve). Positions and the workcell "
+        "are not scaled.",
+    )
 
 
 class Vibration(_Model):
@@ -265,6 +272,87 @@ class Profile(_Model):
     planning: Planning
     workcell: Workcell = Field(default_factory=Workcell)
     vibration: Vibration | None = Field(default=None, description="Flexible modes for the residual-vibration estimate (optional)")
+    #: the limit-use fraction this profile's timed limits are scaled by (:func:`with_limit_use`; 1: as rated)
+    _limit_use: float = PrivateAttr(default=1.0)
+    _rated: Any = PrivateAttr(default=None)  # the profile as rated, when this one is scaled
+
+    @property
+    def limit_use(self) -> float:
+        """The fraction of every timed limit's rating that this profile's limits are (1.0: as rated)."""
+        return self._limit_use
+
+    @property
+    def rated(self) -> "Profile":
+        """This profile with its limits as rated (itself when it is not scaled)."""
+        return self if self._rated is None else self._rated
+
+
+# --------------------------------------------------------------------------------------------- headroom
+
+
+def check_limit_use(use: float, where: str = "limit-use") -> float:
+    """``use`` as a float in (0, 1]; ProfileError (exit 1) naming ``where``, the value and the rule otherwise."""
+    import math
+
+    try:
+        x = float(use)
+    except (TypeError, ValueError):
+        raise ProfileError(f"{where} = {use!r}: a fraction in (0, 1] (e.g. 0.9 keeps 10 % of every rating in reserve)") from None
+    if not (math.isfinite(x) and 0.0 < x <= 1.0):
+        raise ProfileError(f"{where} = {use!r}: must be a fraction in (0, 1] of every timed limit's rating "
+                           "(e.g. 0.9 keeps 10 % in reserve; 1 plans to the ratings)")
+    return x
+
+
+def with_limit_use(profile: Profile, use: float) -> Profile:
+    """The profile whose timed limits are ``use`` × their ratings: the Cartesian capacity, and through
+    :func:`limit_specs` every joint's velocity, acceleration and jerk and every drive's speed, peak torque, torque
+    rate and rated (RMS) torque. Positions, the workcell and the singularity margin stay. Memoised, so the same
+    (profile, use) is the same object (the planner keeps its models per profile)."""
+    base = profile.rated
+    use = check_limit_use(use)
+    if use == profile.limit_use:
+        return profile
+    if use == 1.0:
+        return base
+    key = (id(base), use)
+    hit = _SCALED.get(key)
+    if hit is not None and hit[0] is base:
+        return hit[1]
+    cap = base.capacity
+    scaled = base.model_copy(update={"capacity": cap.model_copy(update={
+        "velocity": cap.velocity * use, "acceleration": cap.acceleration * use,
+        "jerk": None if cap.jerk is None else cap.jerk * use})})
+    scaled._limit_use = use
+    scaled._rated = base
+    if len(_SCALED) > 64:
+        _SCALED.clear()
+    _SCALED[key] = (base, scaled)
+    return scaled
+
+
+_SCALED: dict = {}
+
+
+def limit_specs(profile: Profile) -> list[JointSpec]:
+    """The profile's joint specs with their timed limits scaled by its limit-use fraction (:func:`with_limit_use`)."""
+    specs = profile.robot.joint_specs()
+    use = profile.limit_use
+    if use == 1.0:
+        return specs
+
+    def times(x):
+        return None if x is None else x * use
+
+    out = []
+    for s in specs:
+        lim = s.limits.model_copy(update={"velocity": times(s.limits.velocity),
+                                          "acceleration": times(s.limits.acceleration), "jerk": times(s.limits.jerk)})
+        drv = None if s.drive is None else s.drive.model_copy(update={
+            "max_speed": times(s.drive.max_speed), "peak_torque": times(s.drive.peak_torque),
+            "torque_rate": times(s.drive.torque_rate), "rated_torque": times(s.drive.rated_torque)})
+        out.append(s.model_copy(update={"limits": lim, "drive": drv}))
+    return out
 
 
 # --------------------------------------------------------------------------------------------- loading

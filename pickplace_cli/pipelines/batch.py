@@ -79,7 +79,13 @@ def violation_text(r) -> str:
     t = 0.0479 s; limit 2 N·m (by 0.584 N·m, 129.2 %)``."""
     from ..limits.report import percent
 
-    when = f" at t = {r.t_peak:.4f} s" if r.t_peak is not None else " over the duty cycle"
+    when = (f" at t = {r.t_peak:.4f} s" if r.t_peak is not None else
+            " (peak of the move)" if r.quantity.startswith("capacity") else " over the duty cycle")
+    if r.target < 1.0:  # headroom: the allowed use of the rating
+        return (
+            f"limit exceeded: {r.joint} {r.quantity} = {r.peak:.4g} {r.unit}{when}; {percent(r.utilisation)} % of the "
+            f"rated {r.limit:.4g} {r.unit}, above the limit use of {percent(r.target)} % (by {abs(r.excess):.4g} {r.unit})"
+        )
     return (
         f"limit exceeded: {r.joint} {r.quantity} = {r.peak:.4g} {r.unit}{when}; "
         f"limit {r.limit:.4g} {r.unit} (by {abs(r.excess):.4g} {r.unit}, {percent(r.utilisation)} %)"
@@ -366,7 +372,7 @@ def _plan_chunk(args) -> list[RowResult]:
     out = []
     for r in plan_rows(rows, profile, options, height, eta, False, source):
         text = None
-        if csv_dialect is not None and r.plan is not None and (r.code == 0 or format_failed):
+        if csv_dialect is not None and r.plan is not None and (r.code == 0 or (format_failed and r.code == 3)):
             from ..export.csv import csv_rows
 
             text = csv_rows(r.plan, csv_dialect, move=r.row)

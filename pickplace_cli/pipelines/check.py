@@ -33,7 +33,7 @@ from ..limits.check import _range_row, check_limits
 from ..limits.grid import check_grid
 from ..limits.motion import MotionModel
 from ..limits.report import LimitReport
-from ..model.profile import Profile
+from ..model.profile import Profile, limit_specs
 from ..robots import build_robot
 from ..model.trajectory import CartesianPath
 
@@ -199,14 +199,14 @@ def _check_branch(s: Samples, robot, pos: np.ndarray, source: str) -> None:
         )
 
 
-def check_samples(s: Samples, profile: Profile, smoothing: float = 0.0, source: str = "<trajectory>") -> LimitReport:
-    """Limit report of one move read by :func:`read_moves` (see the module docstring)."""
-    from scipy.interpolate import UnivariateSpline, make_interp_spline
+def _motion_report(t: np.ndarray, pos: np.ndarray, robot, profile: Profile, smoothing: float, source: str,
+                   notes=None):
+    """The limit report of the tool positions ``pos`` (N, 3) m at ``t`` (N,) s from 0, through a reconstruction of
+    the continuous motion (an interpolating spline split at the jerk steps found in the data,
+    :func:`~pickplace_cli.curves.sampled.reconstruct`, or a smoothing spline), and the words that say how the
+    derivatives were found. ``notes``: a function of those words → the report's notes."""
+    from scipy.interpolate import UnivariateSpline
 
-    robot = build_robot(profile.robot)
-    t = s.t - s.t[0]
-    pos = robot.forward_kinematics(s.q)
-    _check_branch(s, robot, pos, source)
     T = float(t[-1])
     if smoothing > 0:
         splines = [UnivariateSpline(t, pos[:, k], k=5, s=smoothing * len(t)) for k in range(3)]
@@ -215,31 +215,71 @@ def check_samples(s: Samples, profile: Profile, smoothing: float = 0.0, source: 
             return np.column_stack([sp.derivative(order)(x) if order else sp(x) for sp in splines])
 
         how = f"a quintic smoothing spline (s = {smoothing:g}·N) of the tool positions FK(q)"
+        steps = np.zeros(0)
     else:
-        spline = make_interp_spline(t, pos, k=5)
+        from ..curves.sampled import reconstruct
 
-        def ev(x: np.ndarray, order: int) -> np.ndarray:
-            return spline(x, nu=order)
-
+        ev, steps = reconstruct(t, pos)
         how = "a quintic interpolating spline of the tool positions FK(q)"
+        if steps.size:
+            shown = ", ".join(f"{x:.5g}" for x in steps[:6]) + (" …" if steps.size > 6 else "")
+            how += (f", one per stretch between the jerk steps found in the data at t = {shown} s ({steps.size}; both "
+                    "sides checked)")
 
     def evaluate(tau: np.ndarray, order: int) -> np.ndarray:
         return ev(np.clip(tau, 0.0, 1.0) * T, order) * T**order
 
-    # the quintic spline is C⁴ across the samples (its knots): nothing jumps, peaks are fitted across them
-    cpath = CartesianPath(evaluate, "checked", {"source": source}, (0.0, 0.0, 0.0), t / T, jumps=())
+    # the pieces join across the samples to the interpolation error: nothing jumps there, peaks are fitted across
+    # them; at a jerk step found in the data the check takes both one-sided values (never across it)
+    jumps = steps / T
+    cpath = CartesianPath(evaluate, "checked", {"source": source}, (0.0, 0.0, 0.0),
+                          np.sort(np.concatenate([t / T, jumps])), jumps=jumps)
     margin = getattr(profile.robot, "singularity_margin", None)
-    specs = profile.robot.joint_specs()
-    model = MotionModel(cpath, robot, specs, margin, profile.workcell.box)
-    tau = t / T
+    model = MotionModel(cpath, robot, limit_specs(profile), margin, profile.workcell.box)
+    grid = check_grid(t / T, cpath.breakpoints, jumps=jumps)
+    return check_limits(model, T, parts=model.parts(grid), dwell=profile.planning.dwell,
+                        notes=() if notes is None else notes(how)), how
+
+
+def _half(n: int) -> np.ndarray:
+    """Every other sample of n, the last one always kept."""
+    idx = np.arange(0, n, 2)
+    return idx if idx[-1] == n - 1 else np.append(idx, n - 1)
+
+
+def check_samples(s: Samples, profile: Profile, smoothing: float = 0.0, source: str = "<trajectory>") -> LimitReport:
+    """Limit report of one move read by :func:`read_moves` (see the module docstring).
+
+    Every duration-dependent peak is estimated from the samples twice, from all of them and from every other one
+    (the same reconstruction): their difference is the peak's stated accuracy (the error of an estimate that
+    converges with the sample rate is smaller than its change when the rate halves). A row is exceeded only
+    when its peak less that accuracy is beyond the limit (the data shows it exceeded); a peak whose accuracy is
+    worse than 1 % of the limit is reported as not resolved by the samples (``LimitReport.unresolved``)."""
+    robot = build_robot(profile.robot)
+    t = s.t - s.t[0]
+    pos = robot.forward_kinematics(s.q)
+    _check_branch(s, robot, pos, source)
+    T = float(t[-1])
     rest = f"; {s.rest} trailing samples at rest set aside as the dwell" if s.rest else ""
-    notes = (
-        f"{s.where(source)}: {len(t)} samples over {T:.6g} s{rest}; derivatives from {how}; joint positions "
-        "checked as given in the file",
-    )
-    grid = check_grid(tau, tau, jumps=())
-    report = check_limits(model, T, parts=model.parts(grid), dwell=profile.planning.dwell, notes=notes)
+
+    def notes(how: str) -> tuple[str, ...]:
+        return (f"{s.where(source)}: {len(t)} samples over {T:.6g} s{rest}; derivatives from {how}; joint positions "
+                "checked as given in the file",)
+
+    if smoothing == "auto":
+        from ..curves.sampled import noise_level
+
+        smoothing = noise_level(t, pos) ** 2
+    report, _ = _motion_report(t, pos, robot, profile, smoothing, source, notes)
+    others = []
+    half = _half(len(t))
+    if len(half) >= 6:
+        others.append(_motion_report(t[half], pos[half], robot, profile, smoothing, source)[0])
+    if smoothing:  # what the smoothing takes away is as uncertain as the rest: the interpolated data's peaks
+        others.append(_motion_report(t, pos, robot, profile, 0.0, source)[0])
+    report = _with_accuracy(report, others)
     # the position ranges on the file's own values (the model's inverse kinematics wraps revolute joints)
+    specs = limit_specs(profile)
     given = {}
     for j, (name, unit, spec) in enumerate(zip(robot.joint_names, robot.joint_units, specs)):
         if spec.limits.position is not None:
@@ -251,13 +291,42 @@ def check_samples(s: Samples, profile: Profile, smoothing: float = 0.0, source: 
     return replace(report, rows=rows)
 
 
+def _with_accuracy(fine: LimitReport, others: list[LimitReport]) -> LimitReport:
+    """``fine``'s duration-dependent rows with accuracy = the largest |its peak − the same row's peak in ``others``|
+    (other estimates from the same data) and the verdict that the data supports: exceeded only when the peak less
+    its accuracy is beyond the allowed value."""
+    from ..limits.report import LimitRow
+
+    if not others:
+        return fine
+    other = [{(r.joint, r.quantity): r for r in o.rows} for o in others]
+    rows = []
+    for r in fine.rows:
+        cs = [o[(r.joint, r.quantity)] for o in other if (r.joint, r.quantity) in o]
+        if r.kind == "limit" and r.bound == "upper" and cs:
+            acc = max(abs(r.peak - c.peak) for c in cs)
+            ok = r.peak - acc <= r.allowed
+            r = LimitRow(r.joint, r.quantity, r.unit, r.peak, r.limit, r.utilisation, r.t_peak, ok, r.kind, r.bound,
+                         r.target, acc)
+        rows.append(r)
+    return replace(fine, rows=tuple(rows))
+
+
 #: the largest trajectory file ``check`` reads [bytes] (~600,000 rows of a 3-joint trajectory at 1 kHz; its
 #: parse holds a few times this in memory): larger is one line, exit 1, never a swap storm
 CHECK_MAX_BYTES = 64 << 20
 
 
-def check_file(path: str | Path, profile: Profile, smoothing: float = 0.0) -> list[MoveCheck]:
-    """Limit report of every move in CSV file ``path`` (``-`` = stdin) on ``profile`` (module docstring)."""
+def check_file(path: str | Path, profile: Profile, smoothing: float | str = 0.0,
+               limit_use: float | None = None) -> list[MoveCheck]:
+    """Limit report of every move in CSV file ``path`` (``-`` = stdin) on ``profile`` (module docstring).
+    ``smoothing``: m² per sample, or "auto" (the noise level of the data, :func:`~pickplace_cli.curves.sampled.
+    noise_level`, squared); ``limit_use``: the fraction of every timed limit's rating allowed (default: the
+    profile's planning.limit_use)."""
+    from ..model.profile import with_limit_use
+
+    use = profile.planning.limit_use if limit_use is None else limit_use
+    profile = with_limit_use(profile, use)
     import sys
 
     p = Path(path)
@@ -284,7 +353,8 @@ def check_file(path: str | Path, profile: Profile, smoothing: float = 0.0) -> li
     robot = build_robot(profile.robot)
     out = []
     for s in read_moves(text, source, robot.joint_names):
-        out.append(MoveCheck(s.move, int(s.lines[0]), s.last_line, check_samples(s, profile, smoothing, source)))
+        out.append(MoveCheck(s.move, int(s.lines[0]), s.last_line,
+                             check_samples(s, profile, smoothing, source).rated(profile.limit_use)))
     return out
 
 

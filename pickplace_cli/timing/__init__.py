@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+import numpy as np
 
 from ..model.errors import TaskError
 from ..model.profile import Capacity
@@ -69,16 +70,26 @@ def auto_duration(path: CartesianPath, capacity: Capacity) -> tuple[float, float
 MIN_SECONDS = 1e-6
 
 
+#: the duration rules by name (``--time``); a number is a duration in seconds
+TIME_RULES = ("limits", "auto", "fit", "optimal")
+
+
 def parse_time(spec: str | float) -> str | float:
-    """``auto`` | ``fit`` | seconds (> 0, finite) → the spec; TaskError naming the rule otherwise."""
+    """``limits`` | ``auto`` | ``fit`` | ``optimal`` (any case, surrounding spaces ignored) | seconds (> 0, finite) →
+    the spec; TaskError naming the rule otherwise (with the nearest rule name for a near miss)."""
     if isinstance(spec, str):
         s = spec.strip().lower()
-        if s in ("auto", "fit", "optimal"):
+        if s in TIME_RULES:
             return s
         try:
             value = float(s)
         except ValueError:
-            raise TaskError(f"time = {spec!r}: give 'auto', 'fit', 'optimal' or a duration in seconds (e.g. 0.25)") from None
+            import difflib
+
+            near = difflib.get_close_matches(s, TIME_RULES, n=1, cutoff=0.6)
+            hint = f"did you mean '{near[0]}'? " if near else ""
+            raise TaskError(f"time = {spec!r}: {hint}give 'limits', 'auto', 'fit', 'optimal' or a duration in seconds "
+                            "(e.g. 0.25)") from None
     else:
         value = float(spec)
     if not (math.isfinite(value) and value > 0):
@@ -91,7 +102,7 @@ def parse_time(spec: str | float) -> str | float:
 
 def choose_duration(
     path: CartesianPath, capacity: Capacity, spec: str | float = "auto", model=None, dwell: float = 0.0,
-    hold_capacity: bool = False, check=None,
+    hold_capacity: bool = False, check=None, parts=None,
 ) -> Duration:
     """Duration of the move: explicit seconds, ``auto`` (Eq. 26), or ``fit`` (needs ``model``, a
     :class:`~pickplace_cli.limits.motion.MotionModel`): the smallest T at which every limit holds.
@@ -106,6 +117,10 @@ def choose_duration(
         raise TaskError(f"method {path.method}: this move's path{where} has no finite peak speed or acceleration, so "
                         "no duration can be chosen; the move is too flat or too tall for this method: change the "
                         "height, or use the default method bspline")
+    if spec == "limits":
+        if model is None:
+            raise TaskError("time = limits: needs the robot model (plan through pickplace_cli.planner.plan)")
+        return _limits_duration(model, dwell, (tv, ta, tj, binding), check, parts)
     t_fit = fit_binding = None
     if model is not None:
         t_fit, fit_binding = fit_duration(model, dwell, start=t_auto, check=check)
@@ -123,6 +138,27 @@ def choose_duration(
             )
         return Duration(t_fit, "fit", tv, ta, tj, fit_binding, t_fit)  # type: ignore[arg-type]
     return Duration(float(spec), "given", tv, ta, tj, "given", t_fit)
+
+
+def _limits_duration(model, dwell: float, auto: tuple, check=None, parts=None) -> Duration:
+    """``--time limits`` (the default): the smallest T at which every limit of the profile holds, the joint and
+    motor limits (the fit) and the Cartesian capacity (auto, exact: the path's peaks scale as 1/T^k). When the
+    capacity binds, the fit is only screened (within ~1e-8, :func:`fit_screen`): the plan's final check at the
+    longer auto duration is the exact one. ``Duration.t_fit`` is the motors' fit alone, shown next to it.
+    ``parts``: the model already evaluated on a grid that holds the check's points (the plan's first samples),
+    screened instead of the fit grid."""
+    tv, ta, tj, binding = auto
+    t_auto = max(tv, ta, tj or 0.0)
+    found = fit_screen(model, dwell, parts)
+    if found is None:  # no joint or motor limit depends on the duration: the capacity alone decides
+        return Duration(t_auto, "limits", tv, ta, tj, f"capacity {binding}", None)
+    t_screen, fit_binding, parts = found
+    if t_screen * (1.0 + 1e-6) < t_auto:
+        return Duration(t_auto, "limits", tv, ta, tj, f"capacity {binding}", t_screen * (1.0 + 1e-7))
+    t_fit = fit_confirm(model, t_screen, dwell, check=check, parts=parts)
+    if t_auto > t_fit:
+        return Duration(t_auto, "limits", tv, ta, tj, f"capacity {binding}", t_fit)
+    return Duration(t_fit, "limits", tv, ta, tj, fit_binding, t_fit)
 
 
 def _worst_utilisation(model, dwell: float = 0.0, tau=None):
@@ -198,10 +234,11 @@ def fit_duration(model, dwell: float = 0.0, start: float = 0.1, margin: float = 
                  check=None) -> tuple[float | None, str | None]:
     """Smallest T [s] such that every T-dependent limit holds at T and at every longer duration.
 
-    Velocity-type limits scale as 1/T^k (monotone). The peak motor torque max_τ |A_m s + G_m| is convex
-    in s = 1/T², so its feasible set is an interval containing s = 0 when the holding torque fits. So
-    scanning T down from a feasible value and root-finding the first crossing (brentq) gives the true
-    minimum. Position, singularity and workcell limits do not depend on T and are not fitted (the limit
+    Every timed quantity is a closed-form function of T at each sample (:mod:`pickplace_cli.timing.fit`), so
+    the smallest T at which the samples of the fit grid hold is solved exactly, sample by sample (velocity-type
+    limits scale as 1/T^k; the peak motor torque |A_m s + G_m| is convex in s = 1/T², its feasible set an
+    interval containing s = 0 when the holding torque fits; the torque rate is a cubic in 1/T; the RMS a
+    quartic in T). Position, singularity and workcell limits do not depend on T and are not fitted (the limit
     report shows them). The result is nudged up until the exact (refined) check passes, starting ``margin``
     (relative) above the sampled root: 1e-7 for a method's own path; a composed time law's torque rate peaks
     sharply near the ends, where the sampled peak sits up to ~1e-5 under the continuous one (each failed
@@ -211,26 +248,83 @@ def fit_duration(model, dwell: float = 0.0, start: float = 0.1, margin: float = 
     which is then the plan's own when the fit's T is the plan's.
     Returns (T, the binding quantity "joint quantity"), or (None, None) when no limit depends on T.
     """
-    from ..limits.check import check_limits
-
-    found = _worst_utilisation(model, dwell)
+    found = fit_screen(model, dwell)
     if found is None:
         return None, None
-    worst, parts = found
+    return fit_confirm(model, found[0], dwell, margin, check, found[2]), found[1]
 
-    T = screened_root(worst, start)
-    # the sampled peaks can sit a hair under the continuous ones (~1e-8 relative on this grid): start the
-    # exact check 1e-7 above the sampled root (far inside the 0.1 % criterion), nudge up until it passes
-    binding = worst(T * (1 - 1e-9))[1]
+
+def fit_screen(model, dwell: float = 0.0, parts=None) -> tuple[float, str, object] | None:
+    """The fit on the model's fit grid, in closed form (:mod:`pickplace_cli.timing.fit`), raised to the closed form
+    at the parabola vertices of the timed columns' top samples: (T [s], binding "joint quantity", the Parts on the
+    grid); None when no limit depends on the duration. Within ~1e-8 of the continuous fit; :func:`fit_confirm`
+    confirms it by the exact check. ``parts``: the model on another grid holding the check's extra points
+    (e.g. the plan's first samples), used instead of the fit grid."""
+    from ..limits.grid import fit_grid
+    from .fit import screened_fit
+
+    path = model.path
+    parts = model.parts(fit_grid(path.breakpoints, path.jumps)) if parts is None else parts.sorted()
+    found = screened_fit(model, parts, dwell)
+    if found is None:
+        return None
+    T, binding = found
+    if not (math.isfinite(T) and T <= 1e4):
+        from ..model.errors import NoFeasibleDuration
+
+        raise NoFeasibleDuration(f"time = fit: no duration up to 1e4 s satisfies {binding}")
+    return _at_peaks(model, parts, max(T, 1e-4), dwell), binding, parts
+
+
+def fit_confirm(model, T: float, dwell: float = 0.0, margin: float = 1e-7, check=None, parts=None) -> float:
+    """T [s] from :func:`fit_screen`, ``margin`` (relative) above, nudged up until the exact check (``check(model,
+    T)``, default :func:`check_limits` on ``parts``) finds no timed limit exceeded."""
+    from ..limits.check import check_limits
+
     T *= 1.0 + margin
     for _ in range(10):
         rep = check_limits(model, T, parts=parts, dwell=dwell) if check is None else check(model, T)
         bad = [r for r in rep.violations if r.kind != "reach"]
         if not bad:
             break
-        # every timed quantity falls at least as 1/T, so T·u (u = worst utilisation, ~1 + 1e-6) clears it
-        T *= max(r.utilisation for r in bad) * (1.0 + 1e-9)
-    return float(T), binding
+        # re-solve at the continuous peaks the check found (once more where a peak moves with T); where that does
+        # not move T, every timed quantity but the RMS falls at least as 1/T, and the RMS is solved exactly: T·u
+        again = _solve_at(model, np.array([r.t_peak / T for r in bad if r.t_peak is not None]), dwell)
+        T = again * (1.0 + margin) if again > T else T * max(r.utilisation for r in bad) * (1.0 + 1e-9)
+    return float(T)
+
+
+def _solve_at(model, tau, dwell: float) -> float:
+    """The closed-form fit (:func:`~pickplace_cli.timing.fit.fit_thresholds`, without the RMS, which is exact
+    already) on the model evaluated at the points ``tau`` only; 0 when there are none."""
+    import numpy as np
+
+    from .fit import fit_thresholds
+
+    tau = np.clip(np.unique(np.asarray(tau, float)), 0.0, 1.0)
+    if not tau.size:
+        return 0.0
+    found = fit_thresholds(model, model.parts(tau), dwell, rms=False)
+    return max((t for _, t in found), default=0.0)
+
+
+def _at_peaks(model, parts, T: float, dwell: float) -> float:
+    """T [s] raised to the closed-form fit at the parabola vertices of every timed column's top samples at T
+    (the continuous peaks near their limits, to ~1e-8 relative)."""
+    import numpy as np
+
+    from ..limits.check import _parabolic_peak
+    from ..limits.grid import interior_jumps, segment_ids
+
+    meta, data = model.columns(parts, T)
+    timed = [c for c, m in enumerate(meta) if m[4] == "limit"]
+    if not timed:
+        return T
+    tau = parts.tau
+    seg = segment_ids(tau, interior_jumps(model.path.breakpoints, model.path.jumps))
+    d = data[:, timed]
+    _, at = _parabolic_peak(tau, d, np.argmax(d, axis=0), seg)
+    return max(T, _solve_at(model, at, dwell))
 
 
 # ------------------------------------------------------------------ paths that depend on the duration
@@ -306,7 +400,7 @@ def choose_duration_for(
             t_auto *= 1 + max(excess(t_auto), 1e-12)
     else:
         t_auto = float(start)
-    if spec == "auto" and start is None:
+    if spec in ("auto", "limits") and start is None:
         final = getattr(factory, "final", None)  # a factory that continued from a nearby T confirms it
         if final is not None and not final(t_auto)[1]:
             return choose_duration_for(factory, capacity, spec, model_of, dwell, start)  # a better branch
@@ -314,11 +408,25 @@ def choose_duration_for(
     if spec == "auto":
         return Duration(t_auto, "auto", tv, ta, tj, binding, None), path
     if model_of is None:
-        raise TaskError("time = fit: needs the robot model (plan through pickplace_cli.planner.plan)")
-    t_fit, fit_binding, path = fit_duration_for(factory, model_of, dwell, start=t_auto)
+        raise TaskError(f"time = {spec}: needs the robot model (plan through pickplace_cli.planner.plan)")
+    t_fit, fit_binding, fpath = fit_duration_for(factory, model_of, dwell, start=t_auto)
     final = getattr(factory, "final", None)
-    if final is not None and not final(t_fit)[1]:
-        t_fit, fit_binding, path = fit_duration_for(factory, model_of, dwell, start=t_auto)
+    if final is not None and t_fit is not None and not final(t_fit)[1]:
+        t_fit, fit_binding, fpath = fit_duration_for(factory, model_of, dwell, start=t_auto)
+    if spec == "limits":  # the fit and the capacity: the longer of the two, the capacity confirmed at a longer fit
+        if t_fit is None or t_fit <= t_auto:
+            return Duration(t_auto, "limits", tv, ta, tj, f"capacity {binding}", t_fit), path
+        T = t_fit
+        for _ in range(20):
+            ex = excess(T)
+            if ex <= 1e-12:
+                break
+            T *= 1.0 + ex + 1e-12
+        if T == t_fit:
+            return Duration(T, "limits", tv, ta, tj, fit_binding, t_fit), fpath
+        cpath, (_, _, _, cap) = bounds(T)
+        return Duration(T, "limits", tv, ta, tj, f"capacity {cap}", t_fit), cpath
+    path = fpath
     if t_fit is None:
         raise TaskError(
             "time = fit: the profile sets no velocity, acceleration, jerk or motor limit that depends on the "

@@ -1,0 +1,113 @@
+"""A continuous motion through sampled positions whose jerk may jump: the reconstruction ``check`` runs a
+trajectory file through.
+
+An interpolating spline through samples of a motion whose jerk steps (a 3-4-5 law starting from rest, a
+superposition of laws, a corner's curvature rate) rings next to the step: its third derivative overshoots the
+one-sided values by ~10 % of the step, however fine the sampling, and a torque rate computed from it is then
+overstated (a plan at exactly its torque-rate limit read back 8.7 % over it). This module finds the steps with
+the essentially non-oscillatory (ENO) idea of Harten, Engquist, Osher & Chakravarthy (1987) and places them
+inside their interval by subcell resolution (Harten 1989):
+
+* the roughness of six consecutive samples is their fifth divided difference (p⁽⁵⁾/120 on a smooth motion; a
+  jerk step J between two of them makes it ~J/h² larger; round-off makes it ~ε/h⁵, whatever the motion);
+* an interval between two samples holds a step when every six-sample stencil over it is ``STEP_RATIO`` times
+  rougher than the smoother one-sided stencil beside it and than the median stencil (the data's own level of
+  smoothness or noise);
+* the samples between steps get each their own interpolating quintic spline (C⁴, not-a-knot ends, as
+  :func:`scipy.interpolate.make_interp_spline` builds it), extended to the step, which sits where the two
+  splines' accelerations meet (the motion is C² across a jerk step).
+
+The result passes through every sample; without steps it is the interpolating quintic spline itself.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: samples a piece needs: a quintic has 6 coefficients
+STENCIL = 6
+#: an interval holds a step when the smoothest stencil containing it is this many times rougher (fifth divided
+#: difference) than the smoother of the one-sided stencils beside it; smooth data gives ratios of order 1 (the
+#: fifth derivative varies over a few samples), a jerk step of size J gives ~J/h² against p⁽⁵⁾
+STEP_RATIO = 20.0
+
+
+def _divided5(t: np.ndarray, p: np.ndarray, starts: np.ndarray) -> np.ndarray:
+    """|fifth divided difference| of the 6 samples from each start, the largest over the coordinates: (len(starts),)."""
+    idx = starts[:, None] + np.arange(STENCIL)[None, :]
+    x, y = t[idx], p[idx]  # (K, 6), (K, 6, d)
+    for k in range(1, STENCIL):
+        y = (y[:, 1:] - y[:, :-1]) / (x[:, k:] - x[:, :-k])[:, :, None]
+    return np.abs(y[:, 0]).max(axis=1)
+
+
+def steps_of(t: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """The intervals k (between samples k and k + 1) that hold a jerk step (module docstring), increasing; none
+    with fewer than 12 samples."""
+    n = len(t)
+    if n < 2 * STENCIL:
+        return np.zeros(0, int)
+    last = n - STENCIL
+    rough = _divided5(t, p, np.arange(last + 1))
+    k = np.arange(STENCIL - 1, n - STENCIL)  # intervals with six samples on either side
+    cand = k[:, None] + np.arange(-(STENCIL - 2), 1)[None, :]  # the stencils over interval k start at k − 4 … k
+    over = rough[cand].min(axis=1)
+    beside = np.minimum(rough[k - (STENCIL - 1)], rough[k + 1])
+    level = max(float(np.median(rough)), 1e-300)
+    return k[over > STEP_RATIO * np.maximum(beside, level)]
+
+
+def reconstruct(t: np.ndarray, p: np.ndarray):
+    """(evaluate(x, nu) → (len(x), d), the times [s] of the jerk steps found) for samples at t (N,) s, increasing,
+    of positions p (N, d) m: the interpolating quintic spline of the samples between steps, each extended to its
+    steps (module docstring). Needs N ≥ 6."""
+    from scipy.interpolate import make_interp_spline
+
+    t = np.asarray(t, float)
+    p = np.asarray(p, float)
+    n = len(t)
+    if n < STENCIL:
+        raise ValueError(f"{n} samples: a quintic needs {STENCIL}")
+    ks = steps_of(t, p)
+    bounds = np.concatenate([[0], ks + 1, [n]])  # the samples of segment i: bounds[i] … bounds[i + 1] − 1
+    splines = []
+    for lo, hi in zip(bounds[:-1], bounds[1:]):
+        m = hi - lo
+        splines.append(make_interp_spline(t[lo:hi], p[lo:hi], k=min(5, m - 1 - (m % 2 == 1 and m < 6))))
+    cuts = np.array([_join_time(splines[i], splines[i + 1], t[kk], t[kk + 1]) for i, kk in enumerate(ks)])
+
+    def evaluate(x: np.ndarray, nu: int = 0) -> np.ndarray:
+        x = np.asarray(x, float)
+        if not cuts.size:
+            return splines[0](x, nu)
+        seg = np.searchsorted(cuts, x, side="right")
+        out = np.empty((len(x), p.shape[1]))
+        for i in np.unique(seg):
+            sel = seg == i
+            out[sel] = splines[i](x[sel], nu)
+        return out
+
+    return evaluate, cuts
+
+
+def _join_time(left, right, t0: float, t1: float) -> float:
+    """Where the accelerations of the two splines meet in [t0, t1] (least squares over the coordinates of the nearly
+    linear difference a_R − a_L ≈ J·(t − t*)); the middle when they run parallel."""
+    f0 = right(t0, 2) - left(t0, 2)
+    f1 = right(t1, 2) - left(t1, 2)
+    slope = (f1 - f0) / (t1 - t0)
+    den = float(np.dot(slope, slope))
+    if den <= 0.0:
+        return 0.5 * (t0 + t1)
+    return float(t0 + min(max(-float(np.dot(f0, slope)) / den, 0.0), t1 - t0))
+
+
+def noise_level(t: np.ndarray, p: np.ndarray) -> float:
+    """The standard deviation [m] of white noise on the positions ``p`` (N, d), the largest over the coordinates,
+    from their sixth differences (variance 924 σ² for white noise; a smooth motion adds only h⁶·p⁽⁶⁾), robustly
+    (1.4826 × the median absolute value); 0 for fewer than 7 samples."""
+    p = np.asarray(p, float)
+    if len(p) < 7:
+        return 0.0
+    d6 = np.diff(p, n=6, axis=0)
+    return float((1.4826 * np.median(np.abs(d6), axis=0) / np.sqrt(924.0)).max())

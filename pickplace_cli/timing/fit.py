@@ -1,0 +1,186 @@
+"""The fitted duration in closed form: for a fixed path every limited quantity is a known function of the duration
+T at each sample, so the smallest T at which a sample holds its limit is solved exactly, sample by sample, with
+no root search (and no import of scipy.optimize: the default duration of ``plan`` is a fit, and start-up counts).
+
+With the model evaluated once at T = 1 s (:class:`~pickplace_cli.limits.motion.Parts`), at a duration T and with
+u = 1/T, s = 1/T²:
+
+========================  ==========================  =====================================================
+quantity                  value at T                  smallest T that holds the limit L at one sample
+========================  ==========================  =====================================================
+joint velocity, motor     |c|·u                       T = |c| / L
+speed
+joint acceleration        |c|·u²                      T = √(|c| / L)
+joint jerk                |c|·u³                      T = ∛(|c| / L)
+motor torque              |A·s + G|                   feasible s form an interval holding 0 when |G| ≤ L:
+                                                      s ≤ (L − sgn(A)·G)/|A|, so T = 1/√(min over samples)
+motor torque rate         |a·u³ + b·u|                the first u > 0 where |a·u³ + b·u| = L (convex pieces,
+                                                      Newton from the safe side, monotone convergence)
+RMS motor torque          √((2·T·(I_AA/T⁴ + 2·I_AG/T²  the largest real root of the quartic
+                          + I_GG) + d·H)/(2T + 2d))   2(R² − I_GG)T⁴ + d(2R² − H)T³ − 4·I_AG·T² − 2·I_AA
+========================  ==========================  =====================================================
+
+Each threshold is the smallest T from which the limit holds at that sample *for every longer duration* (the
+torque rate of one sample can dip back under its limit at a shorter T; the threshold is the first crossing
+seen from long durations, as the bracketing search of :func:`~pickplace_cli.timing.screened_root` finds it).
+The maximum over samples and quantities is the fit on the samples; the exact check (the continuous peaks)
+then confirms it or nudges it up (:func:`~pickplace_cli.timing.fit_duration`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..model.errors import NoFeasibleDuration
+
+
+def _largest(values: np.ndarray) -> tuple[float, int]:
+    """(max, its index) of a 1-D array; (0, -1) when empty."""
+    if values.size == 0:
+        return 0.0, -1
+    k = int(np.argmax(values))
+    return float(values[k]), k
+
+
+def torque_rate_threshold(a: np.ndarray, b: np.ndarray, limit: float) -> np.ndarray:
+    """Per sample, the smallest u = 1/T > 0 at which |a·u³ + b·u| reaches ``limit`` (inf: never), in closed form.
+
+    With a > 0 (the sign of both flipped otherwise, |·| unchanged) and p = b/a, ℓ = limit/a: for b ≥ 0 the
+    function rises from 0, and the crossing is the one real root of u³ + p·u − ℓ = 0 (hyperbolic form). For b < 0
+    it dips below 0 down to −(2/3)|b|·u_m at u_m = √(−p/3) and rises beyond u₀ = √(−p): when the dip reaches −limit
+    the crossing is the smaller positive root of u³ + p·u + ℓ = 0 (trigonometric form, three real roots), else
+    the largest root of u³ + p·u − ℓ = 0 (hyperbolic form with one real root, trigonometric with three). a = 0:
+    u = limit/|b|."""
+    a = np.asarray(a, float)
+    b = np.asarray(b, float)
+    flip = a < 0
+    a = np.where(flip, -a, a)
+    b = np.where(flip, -b, b)
+    a, b, L = np.broadcast_arrays(a, b, np.asarray(limit, float))
+    out = np.full(a.shape, np.inf)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        lin = a == 0.0
+        out[lin & (b != 0)] = L[lin & (b != 0)] / np.abs(b[lin & (b != 0)])
+        cub = ~lin
+        if not cub.any():
+            return out
+        p, ell = b[cub] / a[cub], L[cub] / a[cub]
+        u = np.empty(p.shape)
+        pos, neg = p > 0, p < 0
+        u[p == 0] = np.cbrt(ell[p == 0])
+        # u³ + p·u − ℓ = 0, p > 0: u = 2√(p/3)·sinh(asinh(3ℓ/(2p)·√(3/p))/3)
+        r = np.sqrt(p[pos] / 3.0)
+        u[pos] = 2.0 * r * np.sinh(np.arcsinh(1.5 * ell[pos] / (p[pos] * r)) / 3.0)
+        r = np.sqrt(-p[neg] / 3.0)  # p < 0: the extremes of u³ + p·u are at ±r, of size 2r³
+        e = ell[neg]
+        dip = e <= 2.0 * r**3  # |u³ + p·u| reaches ℓ on the dip
+        x = np.clip(e / (2.0 * r**3), -1.0, 1.0)
+        # dip: u³ + p·u + ℓ = 0, roots 2r·cos(θ/3 − 2πk/3) with cos θ = −ℓ/(2r³); the smaller positive one is k = 1
+        th = np.arccos(-x)
+        u_dip = 2.0 * r * np.cos(th / 3.0 - 2.0 * np.pi / 3.0)
+        # beyond: u³ + p·u − ℓ = 0; one real root 2r·cosh(acosh(ℓ/(2r³))/3) when ℓ > 2r³, else the largest 2r·cos(θ/3)
+        big = e / (2.0 * r**3)
+        u_far = np.where(big > 1.0, 2.0 * r * np.cosh(np.arccosh(np.maximum(big, 1.0)) / 3.0),
+                         2.0 * r * np.cos(np.arccos(x) / 3.0))
+        u[neg] = np.where(dip, u_dip, u_far)
+        out[cub] = u
+    return out
+
+
+def rms_thresholds(iaa, iag, igg, hold, dwell: float, rated) -> np.ndarray:
+    """Per joint, the smallest T [s] from which the RMS motor torque over the duty cycle stays ≤ ``rated``: the
+    largest real root of the quartic of the module's table (its companion matrices' eigenvalues, all joints in
+    one call); inf where the holding torque alone exceeds the rating (the RMS tends to √I_GG for long moves)."""
+    iaa, iag, igg, hold, r2 = (np.asarray(x, float) for x in (iaa, iag, igg, hold, np.square(rated)))
+    lead = 2.0 * (r2 - igg)
+    out = np.full(lead.shape, np.inf)
+    ok = lead > 0
+    if not ok.any():
+        return out
+    # monic: T⁴ + c3·T³ + c2·T² + 0·T + c0
+    c3 = dwell * (2.0 * r2[ok] - hold[ok]) / lead[ok]
+    c2 = -4.0 * iag[ok] / lead[ok]
+    c0 = -2.0 * iaa[ok] / lead[ok]
+    m = np.zeros((int(ok.sum()), 4, 4))
+    m[:, 1, 0] = m[:, 2, 1] = m[:, 3, 2] = 1.0
+    m[:, 0, 0], m[:, 0, 1], m[:, 0, 3] = -c3, -c2, -c0
+    roots = np.linalg.eigvals(m)
+    real = np.where(np.abs(roots.imag) <= 1e-9 * np.maximum(np.abs(roots.real), 1.0), roots.real, 0.0)
+    out[ok] = np.maximum(real.max(axis=1), 0.0)
+    return out
+
+
+def fit_thresholds(model, parts, dwell: float = 0.0, rms: bool = True) -> list[tuple[str, float]]:
+    """[(name "joint quantity", the smallest T [s] from which it holds at every sample of ``parts``)] for every
+    limit of ``model`` that depends on the duration (the module's table); an empty list when none does.
+    Raises NoFeasibleDuration naming the quantity when no duration holds it (the holding torque alone exceeds it).
+    ``rms=False`` leaves the RMS out (it does not depend on the samples)."""
+    meta, _ = model.columns(parts, 1.0)
+    index = {name: i for i, name in enumerate(model.robot.joint_names)}
+    out: list[tuple[str, float]] = []
+    rates: list[tuple[str, int, float]] = []
+    for joint, quantity, _unit, limit, kind, _sign in meta:
+        if kind != "limit":
+            continue
+        i = index[joint]
+        name = f"{joint} {quantity}"
+        if quantity == "velocity":
+            t = _largest(np.abs(parts.qd1[:, i]))[0] / limit
+        elif quantity == "motor speed":
+            t = _largest(np.abs(model.gear[i] * parts.qd1[:, i]))[0] / limit
+        elif quantity == "acceleration":
+            t = math.sqrt(_largest(np.abs(parts.qdd1[:, i]))[0] / limit)
+        elif quantity == "jerk":
+            t = math.cbrt(_largest(np.abs(parts.qddd1[:, i]))[0] / limit)
+        elif quantity == "motor torque":
+            t = _torque_threshold(parts.Am[:, i], parts.Gm[:, i], limit, name)
+        elif quantity == "motor torque rate":  # solved below, every joint in one call
+            rates.append((name, i, float(limit)))
+            continue
+        else:  # pragma: no cover - a new timed quantity must be added to the table above
+            raise ValueError(f"fit: no closed form for {quantity}")
+        out.append((name, float(t)))
+    if rates and len(parts.tau):
+        cols = [i for _, i, _ in rates]
+        u = torque_rate_threshold(parts.dAm[:, cols], parts.dGm[:, cols], np.array([lim for *_, lim in rates]))
+        for (name, _, _), first in zip(rates, u.min(axis=0)):
+            out.append((name, 1.0 / float(first) if np.isfinite(first) and first > 0 else 0.0))
+    rated = [s.drive.rated_torque if s.drive is not None and s.drive.rated_torque else None for s in model.specs]
+    has = [i for i, r in enumerate(rated) if r is not None]
+    if rms and has:
+        (iaa, iag, igg), g = model.rms_integrals(parts)
+        hold = g[0] ** 2 + g[1] ** 2
+        ts = rms_thresholds(iaa[has], iag[has], igg[has], hold[has], dwell, [rated[i] for i in has])
+        for i, t in zip(has, ts):
+            name = f"{model.robot.joint_names[i]} rms motor torque"
+            if not math.isfinite(t):
+                raise NoFeasibleDuration(f"time = fit: no duration satisfies {name} (the holding torque alone "
+                                         f"exceeds the rated {rated[i]:g} N·m)")
+            out.append((name, float(t)))
+    return out
+
+
+def _torque_threshold(A: np.ndarray, G: np.ndarray, limit: float, name: str) -> float:
+    """The smallest T with |A/T² + G| ≤ limit at every sample (module table)."""
+    if np.any(np.abs(G) > limit):
+        raise NoFeasibleDuration(f"time = fit: no duration satisfies {name} (the holding torque alone exceeds "
+                                 f"{limit:g} N·m)")
+    absA = np.abs(A)
+    moving = absA > 0
+    if not moving.any():
+        return 0.0
+    s_max = (limit - np.sign(A[moving]) * G[moving]) / absA[moving]
+    smin = float(s_max.min())
+    return math.inf if smin <= 0 else 1.0 / math.sqrt(smin)
+
+
+def screened_fit(model, parts, dwell: float = 0.0) -> tuple[float, str] | None:
+    """(T [s], binding "joint quantity"): the fit on the samples of ``parts``, the largest threshold of
+    :func:`fit_thresholds`; None when no limit depends on the duration."""
+    found = fit_thresholds(model, parts, dwell)
+    if not found:
+        return None
+    name, t = max(found, key=lambda f: f[1])
+    return t, name
