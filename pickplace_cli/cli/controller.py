@@ -90,3 +90,37 @@ def check_cycle_usage(a, cycle: float | None, fmt) -> None:
 
 def table_format(fmt: OutputFormat) -> bool:
     return fmt.value in TABLE_FORMATS
+
+
+#: the tolerance of a table when none is given [rad or m]
+DEFAULT_TOLERANCE = 1e-6
+
+
+def write_table(a, prof, legs: list, track, grid) -> dict:
+    """``--format pvt|cam|cam-table[-st]``: fit the table to the continuous trajectory that would be written (points
+    from ``grid``, the written samples' times [s]), write it atomically to ``a.output`` as CSV or Structured Text, say
+    how many points it has and how close it is; → what the --json summary reports of it."""
+    from ..export import atomic_output
+    from ..export.tables import Master, format_table_csv, format_table_st, table_columns, table_header
+    from ..pipelines.controller import table_of, timeline_of
+
+    kind, st = TABLE_FORMATS[a.fmt.value]
+    motion = timeline_of(legs, prof, legs[0].report.dwell, a.round_trip, track)
+    tolerance = DEFAULT_TOLERANCE if a.tolerance is None else a.tolerance
+    table = table_of(kind, grid, motion, tolerance)
+    master = Master()
+    if a.cam_master.value == "belt":
+        part = a.rendezvous.part
+        master = Master("belt", part.speed, part.latency)
+    cols = table_columns(table, a.drive, legs[0].joint.units, master)
+    text = (format_table_st(table, cols, a.st_dialect.value, table_header(table, a.drive, master)) if st
+            else format_table_csv(cols))
+    with atomic_output(a.output) as stream:
+        stream.write(text)
+    info = {"format": a.fmt.value, **table.as_dict(), "master": master.kind}
+    if not a.quiet:
+        err = max(table.max_error)
+        sys.stderr.write(f"{a.fmt.value} table: {len(table.t)} points for {table.samples} samples "
+                         f"({table.samples / len(table.t):.1f} x fewer); max deviation {err:.3g} (rad or m) within "
+                         f"--tolerance {table.tolerance:g}\n")
+    return info

@@ -269,9 +269,11 @@ def plan(
         return
     task, workspace_fit, vel_from = _single_task(a, prof, params)
     rendezvous = track = None
+    a.rendezvous = None
     if to_belt is not None:
         legs, rendezvous, track = _plan_to_belt(task.p_from, task.p_to, to_belt, latency, prof, time, task.height,
                                                 task.eta, vel_from, params, rate, a.cycle_s)
+        a.rendezvous = rendezvous
     else:
         legs = [_run_plan(task, prof, options)]
     if round_trip:
@@ -521,13 +523,10 @@ def _write_plan_outputs(a, prof, writer, legs: list, track, code: int) -> None:
         unpromise(a.output)  # not written on purpose: a broken stdout later must not call it lost
         return
     from ..pipelines.timeline import on_cycle
+    from .controller import table_format, write_table
 
-    if a.fmt.value in ("csv", "json", "mcap"):
-        pass
-    else:
-        from .controller import write_table
-
-        a.table_info = write_table(a, prof, legs, track)
+    if table_format(a.fmt):  # a table the controller interpolates itself
+        a.table_info = write_table(a, prof, legs, track, _written_times(a, prof, legs, track))
         return
     if a.round_trip:
         from ..pipelines.timeline import round_trip as make_round_trip
@@ -543,6 +542,22 @@ def _write_plan_outputs(a, prof, writer, legs: list, track, code: int) -> None:
     else:
         samples = legs[0]
     writer(samples, a.output)
+
+
+def _written_times(a, prof, legs: list, track):
+    """The time stamps [s] of the samples the plan writes (the round trip with its dwells, the move and its tracking)."""
+    from ..pipelines.timeline import on_cycle
+
+    if a.round_trip:
+        from ..pipelines.timeline import round_trip as make_round_trip
+
+        rate_hz = 1.0 / a.cycle_s if a.cycle_s is not None else (a.rate if a.rate is not None else prof.planning.rate)
+        return on_cycle(make_round_trip(legs[0], legs[1], legs[0].report.dwell, rate_hz), a.cycle_s).t
+    if track is not None:
+        from ..pipelines.rendezvous import with_tracking
+
+        return on_cycle(with_tracking(legs[0], track), a.cycle_s).t
+    return legs[0].t
 
 
 def _plan_json(legs: list, cycle: float, code: int, report_only: bool, workspace_fit, rendezvous, track) -> dict:
