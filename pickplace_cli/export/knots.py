@@ -157,19 +157,31 @@ def fit_knots(kind: str, grid: np.ndarray, breaks: np.ndarray, evaluate: Evaluat
 
 def achieved_error(kind: str, t: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray | None,
                    evaluate: Evaluator, per_step: int = 4 * FINE) -> np.ndarray:
-    """Largest |interpolation − trajectory| per joint over the whole table, on ``per_step`` points per segment."""
-    err = np.zeros(q.shape[1])
-    for k in range(len(t) - 1):
-        s = np.linspace(t[k], t[k + 1], per_step + 1)
-        true = evaluate(s)[0]
-        if kind == "pvt":
-            approx = hermite3(t[k], t[k + 1], q[k], qd[k], q[k + 1], qd[k + 1], s)
-        elif kind == "cam":
-            approx = quintic(t[k], t[k + 1], q[k], qd[k], qdd[k], q[k + 1], qd[k + 1], qdd[k + 1], s)
-        else:
-            approx = q[k] + (q[k + 1] - q[k]) * ((s - t[k]) / (t[k + 1] - t[k]))[:, None]
-        err = np.maximum(err, np.max(np.abs(approx - true), axis=0))
-    return err
+    """Largest |interpolation − trajectory| per joint over the whole table, on ``per_step`` points per segment (one
+    evaluation of the trajectory for all segments)."""
+    t = np.asarray(t, float)
+    u = np.arange(per_step + 1) / per_step
+    h = np.diff(t)
+    s = (t[:-1, None] + h[:, None] * u).ravel()  # (segments · (per_step + 1),)
+    true = evaluate(s)[0]
+    k = np.repeat(np.arange(len(h)), per_step + 1)
+    x = np.tile(u, len(h))[:, None]
+    hk = h[k][:, None]
+    p0, p1 = q[k], q[k + 1]
+    if kind == "pvt":
+        x2, x3 = x * x, x * x * x
+        approx = ((2 * x3 - 3 * x2 + 1) * p0 + (x3 - 2 * x2 + x) * hk * qd[k] + (-2 * x3 + 3 * x2) * p1
+                  + (x3 - x2) * hk * qd[k + 1])
+    elif kind == "cam":
+        v0, v1, a0, a1 = qd[k], qd[k + 1], qdd[k], qdd[k + 1]
+        dp = p1 - p0 - v0 * hk - a0 * hk * hk / 2
+        dv = (v1 - v0 - a0 * hk) * hk
+        da = (a1 - a0) * hk * hk
+        c3, c4, c5 = 10 * dp - 4 * dv + da / 2, -15 * dp + 7 * dv - da, 6 * dp - 3 * dv + da / 2
+        approx = p0 + x * (v0 * hk + x * (a0 * hk * hk / 2 + x * (c3 + x * (c4 + x * c5))))
+    else:
+        approx = p0 + (p1 - p0) * x
+    return np.max(np.abs(approx - true), axis=0)
 
 
 def _linear_error(duration: float, n: int, evaluate: Evaluator) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
