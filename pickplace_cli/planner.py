@@ -84,7 +84,7 @@ class Plan:
             "cycle_time_round_trip_s": self.report.round_trip,
             "picks_per_minute": self.report.picks_per_minute,
             "limits_ok": self.report.ok,
-            **({"cycle": self.cycle.as_dict()} if self.cycle is not None else {}),
+            **({"cycle": self.cycle.as_dict()} if getattr(self, "cycle", None) is not None else {}),
         }
 
 
