@@ -39,6 +39,8 @@ class PlanOptions:
     hold_capacity: bool = False  # fit/optimal also hold the profile's Cartesian capacity (|v|, |a|, |j|)
     law_coefficients: int | None = None  # optimal: coefficients of the time law's cubic B-spline (None: auto, 20
     # refined to 40 when the law is far from uniform; more: finer, slower)
+    cycle: float | None = None  # s: the controller's cycle (duration and dwell rounded up to whole cycles, one
+    # sample per cycle: :mod:`pickplace_cli.timing.cycle`); None: sampled at ``rate``
     limit_use: float | None = None  # fraction (0, 1] of every timed limit's rating to plan to; None: the profile's
     # planning.limit_use
 
@@ -66,6 +68,7 @@ class Plan:
     joint: JointTrajectory
     report: LimitReport
     profile_name: str
+    cycle: Any = None  # timing.cycle.CycleRounding when planned on a controller's cycle, else None
 
     def summary(self) -> dict[str, Any]:
         """Scalars for reports and --format json (SI units, keys name the unit)."""
@@ -89,6 +92,7 @@ class Plan:
             "cycle_time_round_trip_s": self.report.round_trip,
             "picks_per_minute": self.report.picks_per_minute,
             "limits_ok": self.report.ok,
+            **({"cycle": self.cycle.as_dict()} if getattr(self, "cycle", None) is not None else {}),
         }
 
 
@@ -210,6 +214,8 @@ def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions(), *,
 
     _refuse_moving_ends(task, options)
     rate = options.rate if options.rate is not None else profile.planning.rate
+    if options.cycle is not None:
+        rate = 1.0 / options.cycle  # one sample per cycle
     shape = None
     if options.shape:
         task, options, shape = _optimised_shape(task, profile, options)
@@ -235,9 +241,37 @@ def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions(), *,
             samples = _sample(model, path, duration.seconds, rate)
         stop()
         report = check_limits(model, duration.seconds, parts=samples.parts, dwell=profile.planning.dwell, notes=notes)
+    rounding = None
+    if options.cycle is not None:
+        stop()
+        duration, model, path, samples, report, rounding = _cycle_stage(options.cycle, profile, model, path, factory,
+                                                                        duration, report)
     if holds_capacity(options):
         report = report.with_rows(capacity_rows(path, duration.seconds, profile.capacity))
-    return _assemble(task, profile, path, duration, model, samples, report.rated(profile.limit_use))
+    planned = _assemble(task, profile, path, duration, model, samples, report.rated(profile.limit_use))
+    return planned if rounding is None else replace(planned, cycle=rounding)
+
+
+def _cycle_stage(cycle: float, profile: Profile, model: MotionModel, path, factory, duration: Duration,
+                 report: LimitReport):
+    """The controller's cycle (:func:`pickplace_cli.timing.cycle.align_to_cycle`): the duration and the dwell rounded
+    up to whole cycles, the samples one per cycle (t = k·cycle), the limit check run again on them (a path planned
+    for its duration is planned again for the rounded one). → (duration, model, path, samples, report, rounding)."""
+    from .timing.cycle import align_to_cycle
+
+    def check(T: float, dwell: float):
+        m, p = model, path
+        if factory is not None and T != duration.seconds:
+            p = factory(T)
+            m = motion_model(p, profile)
+        s = _sample(m, p, T, 1.0 / cycle, cycle)
+        return (m, p, s), check_limits(m, T, parts=s.parts, dwell=dwell, notes=report.notes)
+
+    rounding, (model, path, samples), report = align_to_cycle(duration.seconds, profile.planning.dwell, cycle, check,
+                                                              report.ok)
+    if rounding.note:
+        report = replace(report, notes=report.notes + (rounding.note,))
+    return replace(duration, seconds=rounding.seconds), model, path, samples, report, rounding
 
 
 class _FinalCheck:
@@ -350,10 +384,15 @@ class _Samples:
     parts: Any
 
 
-def _sample(model: MotionModel, path, T: float, rate: float) -> _Samples:
+def _sample(model: MotionModel, path, T: float, rate: float, cycle: float | None = None) -> _Samples:
     """One evaluation of the model on the check grid (output samples ∪ a dense uniform grid ∪ knots) at
-    duration T [s]; an unreachable point names its earliest time."""
+    duration T [s]; an unreachable point names its earliest time. ``cycle`` [s]: T is a whole number of cycles and
+    the output samples are t = k·cycle exactly."""
     t = CartesianTrajectory(path, T).sample_times(rate)
+    if cycle is not None:
+        from .timing.cycle import cycle_times
+
+        t = cycle_times(len(t) - 1, cycle)
     grid, order = check_grid_order(t / T, path.breakpoints, path.jumps)
     try:
         return _Samples(path, t, model.parts(grid, order=order))

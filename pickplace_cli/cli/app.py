@@ -49,6 +49,24 @@ class OutputFormat(str, Enum):
     csv = "csv"
     json = "json"
     mcap = "mcap"
+    pvt = "pvt"
+    pvt_st = "pvt-st"
+    cam = "cam"
+    cam_st = "cam-st"
+    cam_table = "cam-table"
+    cam_table_st = "cam-table-st"
+
+
+class StDialect(str, Enum):
+    """Mirror of pickplace_cli.export.st.StDialect."""
+
+    strict = "strict"
+    codesys = "codesys"
+
+
+class CamMaster(str, Enum):
+    time = "time"
+    belt = "belt"
 
 
 class CsvDialectName(str, Enum):

@@ -108,7 +108,9 @@ def _plan_batch(source, prof, options, height, eta, fail_fast, writer, output, r
     if not quiet:
         _batch_line(codes, next((r.row for r in ordered if r.code), None), len(planned) if output is not None else None)
     if output is not None:
-        _write_batch_file(planned, writer, output, prof.planning.dwell)
+        from .controller import rounded_dwell
+
+        _write_batch_file(planned, writer, output, rounded_dwell(prof, options.cycle), options.cycle)
     if code:
         raise typer.Exit(code)
 
@@ -124,7 +126,7 @@ def _batch_exit(rows: list[tuple[int, bool]], report_only: bool, fail_fast: bool
     return max((c for c, planned in rows if c and not (report_only and planned and c == 3)), default=0)
 
 
-def _write_batch_file(planned, writer, output, dwell: float) -> None:
+def _write_batch_file(planned, writer, output, dwell: float, cycle: float | None = None) -> None:
     """A file batch's planned rows (RowResults) to ``output`` (atomically), or one line when there is none."""
     if planned and writer.csv_dialect is not None:
         # CSV: header, then each plan's rows (formatted by the workers when there are several)
@@ -140,9 +142,11 @@ def _write_batch_file(planned, writer, output, dwell: float) -> None:
 
         # CSV/JSON: each move keeps its own time (the move column tells them apart); MCAP: one timeline,
         # moves one dwell apart
+        from ..pipelines.timeline import on_cycle
+
         samples = concatenate([r.plan for r in planned], [r.row for r in planned],
                               restart_time=not writer.one_timeline, gap=dwell)
-        writer(samples, output)
+        writer(on_cycle(samples, cycle), output)
     else:
         sys.stderr.write("pickplace: no row could be written\n")
 
@@ -229,6 +233,9 @@ def _plan_schedule(items, name, streamed, prof, options, height, eta, fail_fast,
     from ..model.errors import TaskError
     from ..pipelines.schedule import ScheduleSummary, check_order, plan_schedule
 
+    if options.cycle is not None:
+        _usage("--cycle (or the profile's controller.cycle): a belt schedule keeps the detection clock; plan its rows "
+               "without a controller cycle (--cycle off), or as independent belt rows (no t_detect column)")
     if belt.get("method_given") and options.method != "bspline-vel":
         raise TaskError(f"method = {options.method}: a belt schedule meets each part with its velocity; it "
                         "needs --method bspline-vel (the default for a schedule)")
@@ -426,9 +433,12 @@ def _stream_batch(items, name, prof, options, height, eta, fail_fast, writer, ou
     if kept:
         from ..pipelines.timeline import concatenate
 
+        from ..pipelines.timeline import on_cycle
+        from .controller import rounded_dwell
+
         samples = concatenate([p for _, p in kept], [r for r, _ in kept], restart_time=not writer.one_timeline,
-                              gap=prof.planning.dwell)
-        writer(samples, output)
+                              gap=rounded_dwell(prof, options.cycle))
+        writer(on_cycle(samples, options.cycle), output)
     if report is not None:
         _write_report([r for _, r in reports], report, rows=[n for n, _ in reports])
     if not quiet:

@@ -10,7 +10,10 @@ from typing import Optional
 import typer
 
 from .. import __version__
-from .app import _handle_errors, _usage, app, TableMethod
+from .app import _handle_errors, _usage, app, StDialect, TableMethod
+
+#: the --st-dialect of the running build-table (strict or codesys), read where the table is formatted
+_ST_DIALECT = ["strict"]
 
 
 def _parse_weights(text: str) -> tuple[float, float]:
@@ -62,6 +65,11 @@ def build_table_cmd(
         TableFormat.csv, "--format", "-f",
         help="csv (the table file plan --table reads), json, or st (IEC 61131-3 Structured Text with a look-up function).",
     ),
+    st_dialect: StDialect = typer.Option(
+        StDialect.strict, "--st-dialect", help="With --format st: strict (IEC 61131-3: the table is a constant block "
+        "of the look-up FUNCTION; any compiler, matiec included) or codesys (a VAR_GLOBAL CONSTANT list beside the "
+        "FUNCTION, for a CODESYS/TwinCAT global variable list).",
+    ),
     table_method: TableMethod = typer.Option(
         TableMethod.bspline, "--method", "-m",
         help="bspline: Li 2018's λ → (k1, k2) table; bspline-vel: Yang 2022's conveyor-tracking table over the "
@@ -79,6 +87,9 @@ def build_table_cmd(
     from ..lookup.bspline_optimum import TableSettings
     from ..lookup.bspline_table import format_table
 
+    if st_dialect != StDialect.strict and table_format != TableFormat.st:
+        _usage(f"--st-dialect applies to --format st, not {table_format.value}")
+    _ST_DIALECT[0] = st_dialect.value
     if table_method == TableMethod.bspline_vel:
         if scheduler or resume or table_format != TableFormat.csv:
             _usage("--method bspline-vel builds on local processes into a CSV (no --scheduler, --resume, --format)")
@@ -124,7 +135,8 @@ def build_table_cmd(
         from ..export.table_st import format_table_st as formatter
     else:
         formatter = format_table
-    text = formatter(table, __version__, extra)
+    text = (formatter(table, __version__, extra, dialect=_ST_DIALECT[0]) if table_format is TableFormat.st
+            else formatter(table, __version__, extra))
     with atomic_output(output) as stream:
         stream.write(text)
     if ckpt is not None:
@@ -192,7 +204,7 @@ def _build_table_2d(lams, lam_text, settings, eta_list, eta_min, eta_max, eta_st
     if table_format is TableFormat.st:
         from ..export.table2d_st import format_table_2d_st
 
-        text = format_table_2d_st(table, __version__, extra)
+        text = format_table_2d_st(table, __version__, extra, dialect=_ST_DIALECT[0])
     else:
         text = format_table_2d(table, __version__, extra)
     from ..export import atomic_output

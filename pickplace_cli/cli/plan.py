@@ -17,12 +17,14 @@ from .app import (
     note_exit,
     app,
     Compression,
+    CamMaster,
     CsvDialectName,
     MAX_SHIFT,
     McapFlavor,
     MethodName,
     OptimizeWhat,
     OutputFormat,
+    StDialect,
 )
 from .batch import _plan_batch
 from .render import (
@@ -127,6 +129,25 @@ def plan(
         "~0.5 s of start-up (scipy.optimize); --time fit always computes it.",
     ),
     rate: Optional[float] = typer.Option(None, "--rate", help="Samples per second in Hz. [default: profile]"),
+    cycle: Optional[str] = typer.Option(
+        None, "--cycle", metavar="SECONDS|off", help="The controller's cycle in s (e.g. 0.001): the duration and the "
+        "dwell are rounded up to whole cycles, the limits checked again on the rounded move (a cycle more when it "
+        "breaks one that held), one sample per cycle at t = k*cycle (the tsv dialect writes k); the summary says what "
+        "the rounding cost. off: sample at --rate. [default: profile controller.cycle, else off]",
+    ),
+    tolerance: Optional[float] = typer.Option(
+        None, "--tolerance", help="pvt, cam, cam-table: the largest deviation in rad (revolute joint) or m (linear) of "
+        "the controller's interpolation of the table from the planned trajectory; the table has the fewest points that "
+        "hold it (the achieved error is reported). [default: 1e-6]",
+    ),
+    st_dialect: StDialect = typer.Option(
+        StDialect.strict, "--st-dialect", help="pvt-st, cam-st, cam-table-st: strict (IEC 61131-3: a FUNCTION_BLOCK "
+        "holding the tables, for any compiler) or codesys (a VAR_GLOBAL CONSTANT list, CODESYS/TwinCAT).",
+    ),
+    cam_master: CamMaster = typer.Option(
+        CamMaster.time, "--cam-master", help="cam, cam-table: the master axis: time [s] from the start, or belt (with "
+        "--to-belt): the belt's travel [m] since the part's detection.",
+    ),
     batch: Optional[str] = typer.Option(
         None, "--batch", help="Plan many moves from a CSV file; '-' (stdin) or the path of a named pipe is streamed: "
         "each row answered and flushed as soon as it is read. Columns from_x,from_y,from_z,to_x,to_y,to_z "
@@ -153,7 +174,12 @@ def plan(
     round_trip: bool = typer.Option(
         False, "--round-trip", help="Write there, dwell, back, dwell (the profile's dwell in s) as one trajectory."
     ),
-    fmt: OutputFormat = typer.Option(OutputFormat.csv, "--format", "-f", help="Output format."),
+    fmt: OutputFormat = typer.Option(
+        OutputFormat.csv, "--format", "-f", help="Output format: samples as csv, json or mcap; or a table a motion "
+        "kernel interpolates itself: pvt (position, velocity, time per point; cubic Hermite), cam (PLCopen MC_CamIn "
+        "points with position, velocity, acceleration: 5th-order segments), cam-table (equidistant positions, linear), "
+        "as CSV or, with -st, IEC 61131-3 Structured Text. Drive names and units from profile controller.joints.",
+    ),
     csv_dialect: CsvDialectName = typer.Option(
         CsvDialectName.default, "--csv-dialect",
         help="CSV flavour: default (',' LF, header), twincat (';' CRLF, header), tsv (tab, no header).",
@@ -162,7 +188,9 @@ def plan(
         None, "--columns", help="CSV: write only these columns, in this order: header names without units "
         "(t, x, vx, ax, jx, q1, qd1, qdd1, torque1, motor_speed1, motor_torque1, …), or with the unit exactly as the "
         "header prints it (q1[rad], torque1[N*m]), or shell-style globs (q?, q[12], motor_*), comma-separated, e.g. "
-        "t,q1,q2,q3 for a PLC's position feed. A batch's move column stays first. Default: all.",
+        "t,q1,q2,q3 for a PLC's position feed. The drive's view of each joint (profile controller.joints: NAME[unit], "
+        "NAME_vel[unit/s]) by name or by the sets drive, drive_vel and plc (= t,drive): --columns plc. A batch's move "
+        "column stays first. Default: every column but the drive's.",
     ),
     mcap_flavor: McapFlavor = typer.Option(
         McapFlavor.ros2, "--mcap-flavor", help="MCAP: ros2 (CDR, ROS 2 messages) or foxglove (JSON, Foxglove schemas)."
@@ -230,12 +258,19 @@ def plan(
         a.method = _belt_method(ctx, method, to_belt, latency, v_to, batch, round_trip, fit_ws, optimize)
     prof = load_profile(profile)
     params = _method_params(a)
-    writer = _writer(fmt, csv_dialect, mcap_flavor, compression, _columns(columns, prof))
+    from ..export.drive import drive_map
+    from .controller import check_cycle_usage, resolve_cycle
+
+    a.cycle_s = resolve_cycle(cycle, rate, prof)
+    check_cycle_usage(a, a.cycle_s, fmt)
+    a.drive = drive_map(prof)
+    writer = _writer(fmt, csv_dialect, mcap_flavor, compression, _columns(columns, prof, a.drive), a.drive)
     _check_shape_usage(a)
     options = PlanOptions(method=a.method.value, method_params=params, time=a.time, rate=rate,
                           fit=a.time == "fit" or show_fit, shape=a.optimize == OptimizeWhat.shape,
                           hold_eta=eta is not None, hold_capacity=hold_capacity,
-                          law_coefficients=_law_coefficients(law_coefficients), limit_use=limit_use)
+                          law_coefficients=_law_coefficients(law_coefficients), limit_use=limit_use,
+                          cycle=a.cycle_s)
     if batch is not None:
         if workers < 0:
             from ..model.errors import TaskError
@@ -248,9 +283,11 @@ def plan(
         return
     task, workspace_fit, vel_from = _single_task(a, prof, params)
     rendezvous = track = None
+    a.rendezvous = None
     if to_belt is not None:
         legs, rendezvous, track = _plan_to_belt(task.p_from, task.p_to, to_belt, latency, prof, a.time, task.height,
-                                                task.eta, vel_from, params, rate)
+                                                task.eta, vel_from, params, rate, a.cycle_s)
+        a.rendezvous = rendezvous
     else:
         legs = [_run_plan(task, prof, options)]
     if round_trip:
@@ -262,7 +299,14 @@ def plan(
     note_exit(0 if forgiven else code)  # the verdict, should stdout's reader go away before the end
     _write_plan_outputs(a, prof, writer, legs, track, code)
     if json_summary:
-        _emit_json(_plan_json(legs, cycle, code, forgiven, workspace_fit, rendezvous, track))
+        doc = _plan_json(legs, cycle, code, forgiven, workspace_fit, rendezvous, track)
+        if a.cycle_s is not None:
+            from .controller import cycle_cost
+
+            doc["cycle_rounding_cost_s"] = cycle_cost(legs, round_trip)
+        if getattr(a, "table_info", None) is not None:
+            doc["table"] = a.table_info
+        _emit_json(doc)
     if code and not forgiven:
         if a.output is not None:
             from .hints import not_written
@@ -313,7 +357,7 @@ def _law_coefficients(text: str) -> int | None:
     return n
 
 
-def _columns(text: str | None, prof) -> tuple[str, ...] | None:
+def _columns(text: str | None, prof, drive=None) -> tuple[str, ...] | None:
     """``--columns`` as names, checked against the profile's CSV columns (usage error, exit 2: no such column,
     a column twice, none given)."""
     if text is None:
@@ -323,12 +367,16 @@ def _columns(text: str | None, prof) -> tuple[str, ...] | None:
     from ..model.errors import ExportError
     from ..planner import motion_model_static
 
+    from ..export.drive import expand_columns
+
     robot, specs = motion_model_static(prof)[:2]
     drives = all(s.drive is not None for s in specs)  # the motor columns: as the planner's MotionModel.has_drives
     names = column_names(robot.joint_units, motor_speed=drives, motor_torque=drives)
+    if drive is not None:
+        names += drive.position_names + drive.velocity_names
     try:
         cols = parse_columns(text)
-        select_columns(tuple(names), cols)
+        select_columns(tuple(names), expand_columns(cols, drive, len(robot.joint_units)))
     except ExportError as exc:
         _usage(f"--{exc}")
     return cols
@@ -473,13 +521,16 @@ def _render_legs(a, prof, legs: list, rendezvous, track) -> tuple[int, float]:
             _print_limit_table(track.report)
         _print_verdict(track.report, quiet, with_cycle=False)
         code = max(code, track.report.exit_code())
-    dwell = prof.planning.dwell
+    dwell = legs[0].report.dwell  # the profile's (on a controller's cycle: rounded up to whole cycles)
     cycle = sum(leg.report.duration for leg in legs) + len(legs) * dwell if round_trip else legs[0].report.round_trip
     if round_trip and not quiet:
         sys.stderr.write(
             f"round trip: {legs[0].report.duration:.4f} s + {legs[1].report.duration:.4f} s + 2 × {dwell:g} s dwell "
             f"= {cycle:.4f} s, {60.0 / cycle:.1f} picks/min; {'all limits hold' if code == 0 else 'LIMITS EXCEEDED'}\n"
         )
+    from .controller import print_cycle_line
+
+    print_cycle_line(legs, round_trip, quiet)
     return code, cycle
 
 
@@ -494,18 +545,42 @@ def _write_plan_outputs(a, prof, writer, legs: list, track, code: int) -> None:
 
         unpromise(a.output)  # not written on purpose: a broken stdout later must not call it lost
         return
+    from ..pipelines.timeline import on_cycle
+    from .controller import table_format, write_table
+
+    if table_format(a.fmt):  # a table the controller interpolates itself
+        a.table_info = write_table(a, prof, legs, track, _written_times(a, prof, legs, track))
+        return
     if a.round_trip:
         from ..pipelines.timeline import round_trip as make_round_trip
 
         rate_hz = a.rate if a.rate is not None else prof.planning.rate
-        samples = make_round_trip(legs[0], legs[1], prof.planning.dwell, rate_hz)
+        if a.cycle_s is not None:
+            rate_hz = 1.0 / a.cycle_s
+        samples = on_cycle(make_round_trip(legs[0], legs[1], legs[0].report.dwell, rate_hz), a.cycle_s)
     elif track is not None:
         from ..pipelines.rendezvous import with_tracking
 
-        samples = with_tracking(legs[0], track)
+        samples = on_cycle(with_tracking(legs[0], track), a.cycle_s)
     else:
         samples = legs[0]
     writer(samples, a.output)
+
+
+def _written_times(a, prof, legs: list, track):
+    """The time stamps [s] of the samples the plan writes (the round trip with its dwells, the move and its tracking)."""
+    from ..pipelines.timeline import on_cycle
+
+    if a.round_trip:
+        from ..pipelines.timeline import round_trip as make_round_trip
+
+        rate_hz = 1.0 / a.cycle_s if a.cycle_s is not None else (a.rate if a.rate is not None else prof.planning.rate)
+        return on_cycle(make_round_trip(legs[0], legs[1], legs[0].report.dwell, rate_hz), a.cycle_s).t
+    if track is not None:
+        from ..pipelines.rendezvous import with_tracking
+
+        return on_cycle(with_tracking(legs[0], track), a.cycle_s).t
+    return legs[0].t
 
 
 def _plan_json(legs: list, cycle: float, code: int, forgiven: bool, workspace_fit, rendezvous, track) -> dict:
@@ -567,15 +642,15 @@ def _belt_method(ctx, method, to_belt, latency, v_to, batch, round_trip, fit_ws,
                     "--method bspline-vel (the default with --to-belt)")
 
 
-def _plan_to_belt(p_from, p_to, to_belt, latency, prof, time, height, eta, v_from, params, rate):
+def _plan_to_belt(p_from, p_to, to_belt, latency, prof, time, height, eta, v_from, params, rate, cycle=None):
     """The rendezvous move and its tracking segment (the profile's dwell; None when 0): ([plan], Rendezvous, track)."""
     from ..pipelines.rendezvous import Part, plan_rendezvous
 
     part = Part(p_to, _parse_point("to-belt", to_belt, "m/s"), 0.0 if latency is None else latency)
     from ..pipelines.rendezvous import plan_tracking
 
-    plan, rv = plan_rendezvous(p_from, part, prof, time, height, eta, v_from, params, rate)
-    track = plan_tracking(plan, part, prof, rate=rate) if prof.planning.dwell > 0 else None
+    plan, rv = plan_rendezvous(p_from, part, prof, time, height, eta, v_from, params, rate, cycle=cycle)
+    track = plan_tracking(plan, part, prof, rate=rate, cycle=cycle) if prof.planning.dwell > 0 else None
     return [plan], rv, track
 
 

@@ -18,9 +18,10 @@ def _print_rendezvous(rv) -> None:
     )
 
 
-def _writer(fmt, dialect, flavor, compression, columns: tuple[str, ...] | None = None) -> Callable:
+def _writer(fmt, dialect, flavor, compression, columns: tuple[str, ...] | None = None, drive=None) -> Callable:
     """A function (samples, output path) that writes atomically in the chosen format; ``columns``: the CSV
-    columns to write (:class:`~pickplace_cli.export.csv.CsvFormat`), None for all."""
+    columns to write (:class:`~pickplace_cli.export.csv.CsvFormat`), None for all; ``drive``: the profile's
+    :class:`~pickplace_cli.export.drive.DriveMap` (names, drive units), None without one."""
     from ..model.errors import ExportError
 
     if fmt != OutputFormat.mcap and compression != Compression.none:
@@ -32,7 +33,7 @@ def _writer(fmt, dialect, flavor, compression, columns: tuple[str, ...] | None =
     if fmt == OutputFormat.csv:
         from ..export.csv import CsvFormat
 
-        csv_format = CsvFormat(dialect.value, columns)
+        csv_format = CsvFormat(dialect.value, columns, drive)
 
     def write(samples, output: str) -> None:
         from ..export import atomic_output
@@ -46,13 +47,13 @@ def _writer(fmt, dialect, flavor, compression, columns: tuple[str, ...] | None =
             from ..export.json import write_json
 
             with atomic_output(output) as stream:
-                write_json(samples, stream)
+                write_json(samples, stream, drive=drive)
         else:
             from ..export.mcap import write_mcap
 
             with atomic_output(output, binary=True) as stream:
                 write_mcap(samples, stream, flavor=flavor.value,
-                           compression=None if compression == Compression.none else compression.value)
+                           compression=None if compression == Compression.none else compression.value, drive=drive)
 
     write.one_timeline = fmt == OutputFormat.mcap  # type: ignore[attr-defined]
     write.csv_dialect = csv_format  # type: ignore[attr-defined]
@@ -258,6 +259,8 @@ def _print_summary(result) -> None:
         f"peaks |v| = {s['peak_speed_m_s']:.4g} m/s, |a| = {s['peak_acceleration_m_s2']:.4g} m/s², "
         f"|j| = {s['peak_jerk_m_s3']:.4g} m/s³\n"
     )
+    if getattr(result, "cycle", None) is not None:  # the controller's cycle: what rounding did and cost
+        sys.stderr.write(result.cycle.text() + "\n")
 
 
 def _opt(x, fmt: str = "{:.4g}", scale: float = 1.0) -> str:

@@ -12,7 +12,10 @@ Columns (see :func:`pickplace_cli.export.plan_columns`): ``t[s]``, tool ``x y z 
 ``ax… [m/s^2]``, ``jx… [m/s^3]``, per joint ``q<i> qd<i> qdd<i>`` and, when computed, ``torque<i>``,
 ``motor_speed<i>``, ``motor_torque<i>``. A batch (samples with a ``move`` array) gets a leading
 ``move[-]`` column: the move number of each sample as the samples give it, printed as an integer.
-Floats use ``%.12g``; the decimal separator is always ``.``. :class:`CsvFormat` selects columns (``plan --columns``).
+Floats use ``%.12g``; the decimal separator is always ``.``. :class:`CsvFormat` selects columns (``plan --columns``),
+including the drive's view of each joint (:mod:`pickplace_cli.export.drive`: ``<name>[<unit>]``, ``<name>_vel``, the
+sets ``plc``, ``drive``, ``drive_vel``). Samples on a controller's cycle (a plan's ``cycle``, a timeline's ``cycle``
+[s]) have t = k·cycle; the numbers-only ``tsv`` dialect then writes t as the whole number k of cycles.
 """
 
 from __future__ import annotations
@@ -20,7 +23,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from enum import Enum
 from functools import lru_cache
-from typing import IO
+from typing import IO, Any
 
 import numpy as np
 
@@ -43,6 +46,7 @@ class DialectSpec:
     newline: str
     header: bool
     columns: tuple[str, ...] | None = None  # the columns written (:func:`select_columns`); None: all
+    drive: Any = None  # export.drive.DriveMap: the drive columns that may be selected
 
 
 @dataclass(frozen=True)
@@ -53,6 +57,7 @@ class CsvFormat:
 
     dialect: str = "default"
     columns: tuple[str, ...] | None = None
+    drive: Any = None  # export.drive.DriveMap (profile controller.joints) or None
 
 
 DIALECTS: dict[CsvDialect, DialectSpec] = {
@@ -65,12 +70,12 @@ DIALECTS: dict[CsvDialect, DialectSpec] = {
 def dialect_spec(dialect: CsvDialect | str | CsvFormat) -> DialectSpec:
     """Separator, line end, header flag (and columns, for a :class:`CsvFormat`) of ``dialect``; ExportError for
     an unknown name."""
-    columns = None
+    columns = drive = None
     if isinstance(dialect, CsvFormat):
-        dialect, columns = dialect.dialect, dialect.columns
+        dialect, columns, drive = dialect.dialect, dialect.columns, dialect.drive
     try:
         spec = DIALECTS[CsvDialect(dialect)]
-        return spec if columns is None else DialectSpec(spec.sep, spec.newline, spec.header, columns)
+        return spec if columns is None and drive is None else DialectSpec(spec.sep, spec.newline, spec.header, columns, drive)
     except ValueError:
         raise ExportError(f"csv dialect = {dialect!r}: must be one of {', '.join(d.value for d in CsvDialect)}") from None
 
@@ -152,12 +157,18 @@ def select_columns(names: tuple[str, ...], columns: tuple[str, ...]) -> tuple[in
     return tuple(out)
 
 
-def csv_columns(samples, columns: tuple[str, ...] | None = None) -> tuple[list[str], np.ndarray, int]:
+def csv_columns(samples, columns: tuple[str, ...] | None = None, drive=None) -> tuple[list[str], np.ndarray, int]:
     """Column names, data (N, n_columns) and the number of leading integer columns (1 with ``move``);
-    ``columns``: only those (:func:`select_columns`), the ``move`` column still first."""
+    ``columns``: only those (:func:`select_columns`; the sets of :func:`~pickplace_cli.export.drive.expand_columns`),
+    the ``move`` column still first; ``drive`` (a DriveMap): its columns may be selected (never written by default)."""
     names, data = plan_columns(samples)
     if columns is not None:
-        idx = select_columns(tuple(names), tuple(columns))
+        from .drive import expand_columns
+
+        if drive is not None:
+            dnames, ddata = drive.columns(samples)
+            names, data = names + dnames, np.hstack([data, ddata])
+        idx = select_columns(tuple(names), expand_columns(tuple(columns), drive, samples.joint.q.shape[1]))
         names, data = [names[i] for i in idx], data[:, idx]
     move = getattr(samples, "move", None)
     if move is None:
@@ -176,7 +187,7 @@ def csv_header(samples, dialect: CsvDialect | str | CsvFormat = CsvDialect.defau
     spec = dialect_spec(dialect)
     if not spec.header:
         return ""
-    names, _data, n_int = csv_columns(samples, spec.columns)
+    names, _data, n_int = csv_columns(samples, spec.columns, spec.drive)
     if move and not n_int:
         names = [MOVE_COLUMN, *names]
     elif move is False and n_int:
@@ -188,13 +199,24 @@ def csv_rows(samples, dialect: CsvDialect | str | CsvFormat = CsvDialect.default
     """The data lines of ``samples`` in ``dialect``. ``move``: a move number for a leading ``move`` column
     on every row (for writing a batch one plan at a time); otherwise the samples' own ``move``, if any."""
     spec = dialect_spec(dialect)
-    _names, data, n_int = csv_columns(samples, spec.columns)
+    names, data, n_int = csv_columns(samples, spec.columns, spec.drive)
+    cycle = sample_cycle(samples)
+    if cycle is not None and not spec.header and "t[s]" in names:  # numbers only: t as whole cycles k
+        k = names.index("t[s]")
+        data = data.copy()
+        data[:, k] = np.rint(data[:, k] / cycle)
     if move is not None:
         if n_int:
             data = data[:, 1:]
         data = np.hstack([np.full((data.shape[0], 1), float(int(move))), data])
         n_int = 1
     return format_rows(data, spec.sep, spec.newline, n_int)
+
+
+def sample_cycle(samples) -> float | None:
+    """The controller cycle [s] the samples are on (a Plan's ``cycle.cycle``, a Timeline's ``cycle``), else None."""
+    c = getattr(samples, "cycle", None)
+    return getattr(c, "cycle", c) if c is not None else None
 
 
 def write_csv(samples, stream: IO[str], dialect: CsvDialect | str | CsvFormat = CsvDialect.default) -> None:

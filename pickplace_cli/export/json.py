@@ -8,10 +8,16 @@ from typing import IO
 from . import plan_columns
 
 
-def write_json(samples, stream: IO[str]) -> None:
+def write_json(samples, stream: IO[str], drive=None) -> None:
     """``samples``: a Plan (``summary``: its summary) or a Timeline (``summaries``: one per move, and a
-    ``move[-]`` column)."""
+    ``move[-]`` column). ``drive`` (a :class:`~pickplace_cli.export.drive.DriveMap`): its columns (``<name>[<unit>]``,
+    ``<name>_vel[<unit>/s]``) follow the model's, and ``joints`` describes each joint's drive view."""
     names, data = plan_columns(samples)
+    if drive is not None:
+        import numpy as np
+
+        dnames, ddata = drive.columns(samples)
+        names, data = names + dnames, np.hstack([data, ddata])
     columns = {n: [float(f"{x:.12g}") for x in data[:, i]] for i, n in enumerate(names)}
     move = getattr(samples, "move", None)
     doc: dict = {}
@@ -22,6 +28,8 @@ def write_json(samples, stream: IO[str]) -> None:
     if move is not None:
         names = ["move[-]", *names]
         columns = {"move[-]": [int(m) for m in move], **columns}
+    if drive is not None:
+        doc["joints"] = drive.describe()
     doc["columns"] = names
     doc["samples"] = columns
     json.dump(doc, stream, allow_nan=False)

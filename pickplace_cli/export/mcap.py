@@ -339,11 +339,15 @@ def write_mcap(
     *,
     epoch_ns: int = EPOCH_NS,
     frame_id: str = FRAME_ID,
+    drive=None,
 ) -> None:
     """Write ``samples`` as MCAP to the binary ``stream`` (a file or a pipe; nothing is seeked).
 
     ``flavor`` ``ros2`` (CDR channels for ROS 2 tools) or ``foxglove`` (JSON channels with Foxglove schemas);
     ``compression`` None/"none" (default) or "zstd" (chunks compressed). Times: ``epoch_ns`` + t·1e9 ns.
+    ``drive`` (a :class:`~pickplace_cli.export.drive.DriveMap`): the joints carry its names, and (ros2 flavour) a
+    ``/drive_states`` channel (sensor_msgs/JointState) the drive positions and velocities in the drive's units
+    (``d = sign·k·(q − offset)``; effort empty).
     Raises ExportError on an unknown flavour/compression or samples that cannot be written.
     """
     from mcap.writer import CompressionType, Writer
@@ -367,10 +371,29 @@ def write_mcap(
         enable_crcs=True,
     )
     writer.start(profile="ros2" if flavor is McapFlavor.ros2 else "", library=LIBRARY)
+    if drive is not None:
+        samples = _Named(samples, drive)
     _WRITERS[flavor](writer, samples, epoch_ns, frame_id)
-    writer.add_metadata("pickplace", _metadata(flavor.value, epoch_ns, frame_id, samples))
+    meta = _metadata(flavor.value, epoch_ns, frame_id, samples)
+    if drive is not None:
+        meta["drive"] = "; ".join(f"{d['name']}: {d['label']} = {d['sign']:+d} * {d['scale_per_joint_unit']:.17g} * "
+                                  f"(q - {d['offset']:.17g})" for d in drive.describe())
+    writer.add_metadata("pickplace", meta)
     writer.finish()
     out.flush()
+
+
+class _Named:
+    """``samples`` with the drive map's joint names (every other attribute the samples'); ``drive`` the map."""
+
+    def __init__(self, samples, drive) -> None:
+        from dataclasses import replace
+
+        self._samples, self.drive = samples, drive
+        self.joint = replace(samples.joint, names=tuple(drive.names))
+
+    def __getattr__(self, name: str):
+        return getattr(self._samples, name)
 
 
 def mcap_bytes(samples, **kwargs: Any) -> bytes:
@@ -486,6 +509,16 @@ def _per_sample_channels(samples, names: list, motor_names: list, frame_id: str,
                 np.hstack([f64(jt.motor_speed), f64(jt.motor_torque)]),
             )
         )
+    drive = getattr(samples, "drive", None)
+    if drive is not None:  # what each drive is sent: position and velocity in its unit, under the joint's name
+        per_sample.append(
+            (
+                "/drive_states",
+                lambda s, c, x: {"header": hdr(s, c, ""), "name": names, "position": x[:nj], "velocity": x[nj:],
+                                 "effort": []},
+                np.hstack([drive.position(jt.q), drive.rate(jt.qd)]),
+            )
+        )
     per_sample += [
         (
             "/tool_pose",
@@ -517,6 +550,7 @@ def _write_ros2(writer, samples, epoch_ns: int, frame_id: str, fast: bool = True
         ("/joint_trajectory", "trajectory_msgs/msg/JointTrajectory"),
         ("/joint_states", "sensor_msgs/msg/JointState"),
         *([("/motor_states", "sensor_msgs/msg/JointState")] if drives else []),
+        *([("/drive_states", "sensor_msgs/msg/JointState")] if getattr(samples, "drive", None) is not None else []),
         ("/tool_pose", "geometry_msgs/msg/PoseStamped"),
         ("/tool_twist", "geometry_msgs/msg/TwistStamped"),
         ("/tool_accel", "geometry_msgs/msg/AccelStamped"),

@@ -1,6 +1,7 @@
 """IEC 61131-3 Structured Text export of the 2-D (λ, η) → (k1, k2) table (``build-table --eta-min … -f st``).
 
-* ``VAR_GLOBAL CONSTANT``: ``<PREFIX>_NETA``, ``<PREFIX>_NLAMBDA`` (DINT); the axes ``<PREFIX>_ETA``
+* the constants (a ``VAR CONSTANT`` block of the FUNCTION in the ``strict`` IEC 61131-3 dialect, the default; a
+  ``VAR_GLOBAL CONSTANT`` list before it in the ``codesys`` dialect): ``<PREFIX>_NETA``, ``<PREFIX>_NLAMBDA`` (DINT); the axes ``<PREFIX>_ETA``
   (``ARRAY[1..NE] OF LREAL``) and ``<PREFIX>_LAMBDA`` (``ARRAY[1..NL]``), both strictly increasing; the optima
   ``<PREFIX>_K1``, ``<PREFIX>_K2`` : ``ARRAY[1..NE, 1..NL] OF LREAL`` (η index first; initialiser row by row);
   ``<PREFIX>_JUMP`` : ``ARRAY[1..NE, 1..NL] OF BOOL``, TRUE for the grid cell whose lower corner is (i, j)
@@ -18,7 +19,7 @@ from __future__ import annotations
 
 from ..model.errors import ExportError
 from ..lookup.table2d import Table2D, _jump_cells, find_jumps
-from .table_st import _IDENT, VALUES_PER_LINE, _comment, st_real
+from .table_st import _IDENT, VALUES_PER_LINE, _comment, check_st_names, constants_block, st_real
 
 DERIVED_META = frozenset({"pickplace 2-D look-up table", "units", "basin_jumps"})
 
@@ -55,14 +56,16 @@ def _bisect(var: str, axis: str, n: int, lo: str, hi: str, mid: str, w: str) -> 
 
 def format_table_2d_st(
     table: Table2D, version: str | None = None, extra_meta: dict | None = None, *,
-    prefix: str = "PP_TABLE2D", function: str = "F_PickplaceK2D",
+    prefix: str = "PP_TABLE2D", function: str = "F_PickplaceK2D", dialect: str = "strict",
 ) -> str:
-    """Structured Text of a 2-D table: header comment (provenance, jumps), constants, look-up function."""
+    """Structured Text of a 2-D table: header comment (provenance, jumps), constants (inside the FUNCTION for
+    ``dialect`` strict, a global list before it for codesys), look-up function."""
     for what, ident in (("prefix", prefix), ("function", function)):
         if not _IDENT.match(ident):
             raise ExportError(f"{what} = {ident!r}: must be an IEC 61131-3 identifier (letter or _, then letters, digits, _)")
     ne, nl = len(table.etas), len(table.lams)
     E, L, K1, K2, J = (f"{prefix}_{s}" for s in ("ETA", "LAMBDA", "K1", "K2", "JUMP"))
+    check_st_names([("function", function)] + [("prefix", x) for x in (E, L, K1, K2, J, f"{prefix}_NETA")], dialect)
     cells = _jump_cells(find_jumps(table.grid("k1"), table.grid("k2")), ne, nl)
     meta = {k: v for k, v in table.meta.items() if k not in DERIVED_META}
     meta.update(extra_meta or {})
@@ -75,29 +78,32 @@ def format_table_2d_st(
         "   [Li2018, Eq. (20)-(22)] over lambda = b/h and eta (lift-off/set-down ratio), both dimensionless.\n"
         f"   Usage: bInterpolated := {function}(fLambda := b / h, fEta := eta, fK1 => k1, fK2 => k2);\n"
         "   FALSE: outside the grid or in a cell across a basin jump; k1, k2 are then the nearest node's.\n"
+        f"   Dialect: {dialect} ({'IEC 61131-3: the table is a constant block of the FUNCTION' if dialect == 'strict' else 'CODESYS/TwinCAT: the table is a global constant list'}).\n"
     ]
     for key in sorted(meta):
         val = meta[key]
         val = ",".join(f"{x:g}" for x in val) if isinstance(val, (list, tuple)) else val
         out.append(_comment(f"   {key}: {val}\n"))
-    out.append("*)\n\nVAR_GLOBAL CONSTANT\n")
-    out.append(f"    {prefix}_NETA : DINT := {ne};\n    {prefix}_NLAMBDA : DINT := {nl};\n")
-    out.append(f"    {E} : ARRAY[1..{ne}] OF LREAL := {_init([st_real(x) for x in table.etas])};\n")
-    out.append(f"    {L} : ARRAY[1..{nl}] OF LREAL := {_init([st_real(x) for x in table.lams])};\n")
+    out.append("*)\n\n")
+    const = [f"    {prefix}_NETA : DINT := {ne};\n    {prefix}_NLAMBDA : DINT := {nl};\n",
+             f"    {E} : ARRAY[1..{ne}] OF LREAL := {_init([st_real(x) for x in table.etas])};\n",
+             f"    {L} : ARRAY[1..{nl}] OF LREAL := {_init([st_real(x) for x in table.lams])};\n"]
     for name, col in ((K1, "k1"), (K2, "k2")):
         vals = [st_real(x) for x in table.grid(col).ravel()]
-        out.append(f"    (* {col} [-], row i = eta index, column j = lambda index *)\n")
-        out.append(f"    {name} : ARRAY[1..{ne}, 1..{nl}] OF LREAL := {_init(vals)};\n")
+        const.append(f"    (* {col} [-], row i = eta index, column j = lambda index *)\n")
+        const.append(f"    {name} : ARRAY[1..{ne}, 1..{nl}] OF LREAL := {_init(vals)};\n")
     flags = ["TRUE" if (i, j) in cells else "FALSE" for i in range(ne) for j in range(nl)]
-    out.append("    (* TRUE: the cell with lower corner (i, j) holds a basin jump (not interpolated) *)\n")
-    out.append(f"    {J} : ARRAY[1..{ne}, 1..{nl}] OF BOOL := {_init(flags)};\n")
-    out.append("END_VAR\n\n")
+    const.append("    (* TRUE: the cell with lower corner (i, j) holds a basin jump (not interpolated) *)\n")
+    const.append(f"    {J} : ARRAY[1..{ne}, 1..{nl}] OF BOOL := {_init(flags)};\n")
+    if dialect == "codesys":
+        out.append(constants_block(const, dialect) + "\n")
     out.append(
         f"FUNCTION {function} : BOOL\n"
         "VAR_INPUT\n    fLambda : LREAL; (* lambda = b/h [-] *)\n    fEta : LREAL; (* eta [-] *)\nEND_VAR\n"
         "VAR_OUTPUT\n    fK1 : LREAL; (* k1 [-] *)\n    fK2 : LREAL; (* k2 [-] *)\nEND_VAR\n"
+        + (constants_block(const, dialect) if dialect == "strict" else "") +
         "VAR\n    nE0 : DINT;\n    nE1 : DINT;\n    nL0 : DINT;\n    nL1 : DINT;\n    nMid : DINT;\n"
-        "    nE : DINT;\n    nL : DINT;\n    fWe : LREAL;\n    fWl : LREAL;\n    bIn : BOOL;\nEND_VAR\n"
+        "    nEi : DINT;\n    nLi : DINT;\n    fWe : LREAL;\n    fWl : LREAL;\n    bIn : BOOL;\nEND_VAR\n"
         f"bIn := fLambda >= {L}[1] AND fLambda <= {L}[{nl}] AND fEta >= {E}[1] AND fEta <= {E}[{ne}];\n"
     )
     out.append(_bisect("fLambda", L, nl, "nL0", "nL1", "nMid", "fWl"))
@@ -110,9 +116,9 @@ def format_table_2d_st(
         f"        + ({K2}[nE1, nL0] + fWl * ({K2}[nE1, nL1] - {K2}[nE1, nL0])) * fWe;\n"
         f"    {function} := TRUE;\n"
         "ELSE (* outside, NaN or a jump cell: the nearest node *)\n"
-        "    nE := nE0;\n    IF fWe >= 0.5 THEN nE := nE1; END_IF;\n"
-        "    nL := nL0;\n    IF fWl >= 0.5 THEN nL := nL1; END_IF;\n"
-        f"    fK1 := {K1}[nE, nL];\n    fK2 := {K2}[nE, nL];\n"
+        "    nEi := nE0;\n    IF fWe >= 0.5 THEN nEi := nE1; END_IF;\n"
+        "    nLi := nL0;\n    IF fWl >= 0.5 THEN nLi := nL1; END_IF;\n"
+        f"    fK1 := {K1}[nEi, nLi];\n    fK2 := {K2}[nEi, nLi];\n"
         f"    {function} := FALSE;\n"
         "END_IF;\nEND_FUNCTION\n"
     )

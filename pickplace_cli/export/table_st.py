@@ -3,9 +3,11 @@
 Li 2018 builds the table offline and reads it online for each move [Li2018, Sec. 3.2]: the controller
 computes λ = b/h of the move and interpolates k1, k2. This writes that table and that look-up for a PLC:
 
-* ``VAR_GLOBAL CONSTANT``: ``<PREFIX>_ROWS`` (DINT), ``<PREFIX>_ETA`` (LREAL, the η the table was built for)
-  and three parallel arrays ``<PREFIX>_LAMBDA``, ``<PREFIX>_K1``, ``<PREFIX>_K2`` : ``ARRAY[1..N] OF LREAL``
-  (λ strictly increasing);
+* the constants ``<PREFIX>_ROWS`` (DINT), ``<PREFIX>_ETA`` (LREAL, the η the table was built for) and three
+  parallel arrays ``<PREFIX>_LAMBDA``, ``<PREFIX>_K1``, ``<PREFIX>_K2`` : ``ARRAY[1..N] OF LREAL`` (λ strictly
+  increasing): in the ``strict`` dialect (the default) a ``VAR CONSTANT`` block of the FUNCTION itself, which every
+  IEC 61131-3 compiler accepts (matiec, the compiler of Beremiz/OpenPLC, included); in the ``codesys`` dialect a
+  ``VAR_GLOBAL CONSTANT`` list before it (a CODESYS/TwinCAT global variable list, an extension of the standard);
 * ``FUNCTION <NAME> : BOOL`` with ``VAR_INPUT fLambda : LREAL`` and ``VAR_OUTPUT fK1, fK2 : LREAL``: linear
   interpolation between the two rows around λ (found by bisection, ⌈log2 N⌉ steps), exactly the rule of
   :meth:`pickplace_cli.lookup.bspline_table.Table.lookup`. Outside the table's range the end row is returned (clamped)
@@ -13,7 +15,8 @@ computes λ = b/h of the move and interpolates k1, k2. This writes that table an
 
 Constants are written with the shortest decimal that reads back as the same double, so the PLC's LREAL
 table equals the Python table bit for bit. The text is deterministic: the same table gives the same bytes.
-Written for IEC 61131-3 3rd edition (array initialisers in ``[ ]``), as accepted by TwinCAT 3 and CODESYS.
+Array initialisers are written in ``[ ]`` (IEC 61131-3), as matiec, TwinCAT 3 and CODESYS read them; no identifier is
+an IEC keyword or standard function (:mod:`pickplace_cli.model.iec`, case-insensitively).
 """
 
 from __future__ import annotations
@@ -29,6 +32,29 @@ from ..lookup.bspline_table import Table
 DERIVED_META = frozenset({"pickplace look-up table", "units", "a_min, j_min", "fit_k1", "fit_k2", "fit"})
 _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*\Z")
 VALUES_PER_LINE = 4
+#: the Structured Text dialects of every ST export: strict IEC 61131-3 (constants inside the POU) or CODESYS/TwinCAT
+#: (a global constant list beside it)
+ST_DIALECTS = ("strict", "codesys")
+
+
+def check_st_names(names, dialect: str = "strict") -> None:
+    """ExportError when ``dialect`` is unknown or a name of the export is not an identifier of its own (the shape, a
+    keyword or a standard function of IEC 61131-3, case-insensitively: :func:`~pickplace_cli.model.iec.st_identifier_problem`)."""
+    from ..model.iec import st_identifier_problem
+
+    if dialect not in ST_DIALECTS:
+        raise ExportError(f"st dialect = {dialect!r}: must be one of {', '.join(ST_DIALECTS)}")
+    for what, name in names:
+        problem = st_identifier_problem(name)
+        if problem:
+            raise ExportError(f"{what} = {name!r}: {problem}")
+
+
+def constants_block(lines: list[str], dialect: str) -> str:
+    """The declarations ``lines`` (each ``    NAME : TYPE := VALUE;`` with its newline) as the dialect's constant
+    block: ``VAR CONSTANT`` inside the POU (strict) or ``VAR_GLOBAL CONSTANT`` before it (codesys)."""
+    head = "VAR CONSTANT\n" if dialect == "strict" else "VAR_GLOBAL CONSTANT\n"
+    return head + "".join(lines) + "END_VAR\n"
 
 
 def st_real(x: float) -> str:
@@ -85,8 +111,10 @@ def format_table_st(
     *,
     prefix: str = "PP_TABLE",
     function: str = "F_PickplaceK",
+    dialect: str = "strict",
 ) -> str:
-    """Structured Text of ``table``: header comment (provenance, units), global constants, look-up function."""
+    """Structured Text of ``table``: header comment (provenance, units), the constants (inside the FUNCTION for
+    ``dialect`` strict, a global constant list before it for codesys), the look-up function."""
     for what, ident in (("prefix", prefix), ("function", function)):
         if not _IDENT.match(ident):
             raise ExportError(f"{what} = {ident!r}: must be an IEC 61131-3 identifier (letter or _, then letters, digits, _)")
@@ -94,6 +122,8 @@ def format_table_st(
     lam, k1, k2 = table.lam, table.column("k1"), table.column("k2")
     eta = table.eta
     L, K1, K2 = f"{prefix}_LAMBDA", f"{prefix}_K1", f"{prefix}_K2"
+    check_st_names([("function", function), ("prefix", f"{prefix}_ROWS"), ("prefix", f"{prefix}_ETA"),
+                    ("prefix", L), ("prefix", K1), ("prefix", K2)], dialect)
     out: list[str] = []
     out.append(
         "(* pickplace look-up table: optimal time-ratio factors (k1, k2) of the quintic B-spline method\n"
@@ -101,21 +131,19 @@ def format_table_st(
         "   Units: lambda = b/h is dimensionless (b = horizontal width of the move [m], h = clearance\n"
         "   height above the higher end point [m]); k1, k2 are dimensionless knot ratios.\n"
         f"   Usage: bInRange := {function}(fLambda := b / h, fK1 => k1, fK2 => k2);\n"
+        f"   Dialect: {dialect} ({'IEC 61131-3: the table is a constant block of the FUNCTION' if dialect == 'strict' else 'CODESYS/TwinCAT: the table is a global constant list'}).\n"
     )
     for key, val in provenance(table, version, extra_meta):
         out.append(_comment(f"   {key}: {val}\n"))
     out.append("*)\n\n")
-    out.append("VAR_GLOBAL CONSTANT\n")
-    out.append(f"    {prefix}_ROWS : DINT := {n}; (* number of rows *)\n")
+    const = [f"    {prefix}_ROWS : DINT := {n}; (* number of rows *)\n"]
     if eta is not None:
-        out.append(f"    {prefix}_ETA : LREAL := {st_real(eta)}; (* lift-off/set-down ratio eta the table was built for *)\n")
-    out.append("    (* lambda = b/h [-], strictly increasing *)\n")
-    out.append(_array(L, lam))
-    out.append("    (* k1 [-] at each lambda *)\n")
-    out.append(_array(K1, k1))
-    out.append("    (* k2 [-] at each lambda *)\n")
-    out.append(_array(K2, k2))
-    out.append("END_VAR\n\n")
+        const.append(f"    {prefix}_ETA : LREAL := {st_real(eta)}; (* lift-off/set-down ratio eta the table was built for *)\n")
+    const += ["    (* lambda = b/h [-], strictly increasing *)\n", _array(L, lam),
+              "    (* k1 [-] at each lambda *)\n", _array(K1, k1),
+              "    (* k2 [-] at each lambda *)\n", _array(K2, k2)]
+    if dialect == "codesys":
+        out.append(constants_block(const, dialect) + "\n")
     out.append(
         f"FUNCTION {function} : BOOL\n"
         "(* k1, k2 at fLambda by linear interpolation between the two table rows around it.\n"
@@ -128,6 +156,10 @@ def format_table_st(
         "    fK1 : LREAL; (* k1 [-] *)\n"
         "    fK2 : LREAL; (* k2 [-] *)\n"
         "END_VAR\n"
+    )
+    if dialect == "strict":
+        out.append(constants_block(const, dialect))
+    out.append(
         "VAR\n"
         "    nLo : DINT;\n"
         "    nHi : DINT;\n"
@@ -168,6 +200,7 @@ def format_table_st(
     return "".join(out)
 
 
-def write_table_st(table: Table, stream: IO[str], version: str | None = None, extra_meta: dict | None = None) -> None:
+def write_table_st(table: Table, stream: IO[str], version: str | None = None, extra_meta: dict | None = None,
+                   dialect: str = "strict") -> None:
     """Write :func:`format_table_st` of ``table`` to the text ``stream``."""
-    stream.write(format_table_st(table, version, extra_meta))
+    stream.write(format_table_st(table, version, extra_meta, dialect=dialect))

@@ -11,6 +11,7 @@ from typing import Annotated, Any, Literal, Union, get_origin
 
 from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationError, model_validator
 
+from .controller import Controller
 from .errors import ProfileError
 
 DEFAULT_PROFILE = "delta-su2018"
@@ -272,6 +273,8 @@ class Profile(_Model):
     planning: Planning
     workcell: Workcell = Field(default_factory=Workcell)
     vibration: Vibration | None = Field(default=None, description="Flexible modes for the residual-vibration estimate (optional)")
+    controller: Controller | None = Field(default=None, description="The controller's cycle [s] and each joint's drive "
+                                          "view: name, unit, sign, offset (optional)")
     #: the limit-use fraction this profile's timed limits are scaled by (:func:`with_limit_use`; 1: as rated)
     _limit_use: float = PrivateAttr(default=1.0)
     _rated: Any = PrivateAttr(default=None)  # the profile as rated, when this one is scaled
@@ -681,12 +684,21 @@ def parse_profile(text: str, source: str = "<profile>") -> Profile:
         raise ProfileError(f"{source}: a profile must be a YAML mapping of keys (name, robot, capacity, planning)")
     _reject_flags(data, (), data, lines, source)
     try:
-        return Profile.model_validate(data)
+        profile = Profile.model_validate(data)
     except ValidationError as exc:
         errors = _prune_union_branches(exc.errors(), data)
         first = _describe(errors[0], data, lines, source, errors)
         more = f" (and {len(errors) - 1} more problem{'s' if len(errors) > 2 else ''})" if len(errors) > 1 else ""
         raise ProfileError(first + more) from None
+    if profile.controller is not None:  # the drive view against the robot: joint count, kinds, drives
+        from .controller import fit_problem
+
+        problem = fit_problem(profile.controller, profile.robot)
+        if problem is not None:
+            path, value, rule = problem
+            where = f"{source}:{lines[path]}" if path in lines else source
+            raise ProfileError(f"{where}: {'.'.join(str(p) for p in path)} = {_show(value)}: {rule}")
+    return profile
 
 
 def load_profile(name_or_path: str | Path | None = None) -> Profile:

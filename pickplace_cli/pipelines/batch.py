@@ -339,7 +339,7 @@ def _plan_belt_row(r: BatchRow, profile, options, height, eta, source: str):
                 v.get("latency", 0.0))
     v_from = np.array([v.get(f"v_from_{c}", 0.0) for c in "xyz"])
     return plan_belt_move(np.array([v["from_x"], v["from_y"], v["from_z"]]), part, profile, v.get("time", options.time),
-                          v.get("height", height), v.get("eta", eta), v_from, options.rate)
+                          v.get("height", height), v.get("eta", eta), v_from, options.rate, cycle=options.cycle)
 
 
 @dataclass(frozen=True)
@@ -355,13 +355,15 @@ class PlanRecord:
     joint: Any
     report: Any
     summary_doc: dict
+    cycle: Any = None  # timing.cycle.CycleRounding of a plan on a controller's cycle
 
     def summary(self) -> dict:
         return dict(self.summary_doc)
 
     @classmethod
     def of(cls, plan) -> "PlanRecord":
-        return cls(plan.t, plan.p, plan.v, plan.a, plan.j, plan.joint, plan.report, plan.summary())
+        return cls(plan.t, plan.p, plan.v, plan.a, plan.j, plan.joint, plan.report, plan.summary(),
+                   getattr(plan, "cycle", None))
 
 
 def _plan_chunk(args) -> list[RowResult]:

@@ -555,18 +555,31 @@ def _missed(part: Part, rule: _Rule, a: float, b: float, what: str, spec: str, k
 
 def plan_rendezvous(start, part: Part, profile, time: str | float = "auto", height: float | None = None,
                     eta: float | None = None, v_from=None, method_params: dict | None = None,
-                    rate: float | None = None, dwell: float | None = None):
+                    rate: float | None = None, dwell: float | None = None, cycle: float | None = None):
     """(Plan of the move to the meeting point, Rendezvous): :func:`find_rendezvous`, then the planner's
     pipeline (samples, joint motion, limit check) on that move at T, with the found shape (no second solve).
-    The plan's duration says how T was chosen; ``parameters["rendezvous"]`` says where and when it meets."""
+    The plan's duration says how T was chosen; ``parameters["rendezvous"]`` says where and when it meets.
+    ``cycle`` [s]: T rounded up to whole cycles, the part met where it is then (P(T) planned again for it)."""
     from ..planner import PlanOptions, plan
 
     rv = find_rendezvous(start, part, profile, time, height, eta, v_from, method_params, dwell)
+    T_rule = rv.seconds
+    if cycle is not None:  # the meeting moves with the rounded duration: solved again for it (exit 4 past the window)
+        from ..timing.cycle import whole_cycles
+
+        d = profile.planning.dwell if dwell is None else dwell
+        T_c = whole_cycles(T_rule, cycle) * cycle
+        if T_c != T_rule:
+            again = find_rendezvous(start, part, profile, T_c, height, eta, v_from, method_params,
+                                    whole_cycles(d, cycle) * cycle)
+            rv = replace(again, duration=replace(rv.duration, seconds=T_c))
     shape = [rv.path.parameters[k] for k in ("tau6", "tau7", "tau9", "tau10", "lambda1", "lambda2", "lambda3")]
-    options = PlanOptions(method="bspline-vel", method_params={"params": shape}, time=rv.seconds, rate=rate, fit=False)
+    options = PlanOptions(method="bspline-vel", method_params={"params": shape}, time=rv.seconds, rate=rate, fit=False,
+                          cycle=cycle)
     got = plan(rv.task, profile, options)
     parameters = {**rv.path.parameters, "rendezvous": rv.as_dict()}
-    return replace(got, duration=rv.duration, parameters=parameters), rv
+    extra = {} if got.cycle is None else {"cycle": replace(got.cycle, requested_s=T_rule)}
+    return replace(got, duration=rv.duration, parameters=parameters, **extra), rv
 
 
 # ------------------------------------------------------------------------------------------ tracking
@@ -588,7 +601,8 @@ def tracking_path(point, velocity, duration: float):
     return CartesianPath(evaluate, "track", params, (float(np.linalg.norm(d)), 0.0, 0.0), jumps=())
 
 
-def plan_tracking(move, part: Part, profile, duration: float | None = None, rate: float | None = None):
+def plan_tracking(move, part: Part, profile, duration: float | None = None, rate: float | None = None,
+                  cycle: float | None = None):
     """Plan of the tracking segment after the rendezvous ``move`` (a Plan ending at the part): the tool follows
     the part for ``duration`` [s] (default: the profile's dwell), joint motion by the robot's IK and dynamics,
     checked against every limit like a move (its RMS row covers the segment alone). Its ``t`` runs from 0; its
@@ -601,10 +615,16 @@ def plan_tracking(move, part: Part, profile, duration: float | None = None, rate
 
     D = float(profile.planning.dwell if duration is None else duration)
     rate = float(profile.planning.rate if rate is None else rate)
+    if cycle is not None:  # whole cycles, one sample per cycle
+        from ..timing.cycle import whole_cycles
+
+        D, rate = whole_cycles(D, cycle) * cycle, 1.0 / cycle
     T = float(move.duration.seconds)
     path = tracking_path(part.at(T), part.velocity, D)
     traj = CartesianTrajectory(path, D)
     t = traj.sample_times(rate)
+    if cycle is not None:
+        t = np.arange(len(t)) * cycle
     model = motion_model(path, profile)
     grid, order = check_grid_order(t / D, path.breakpoints, path.jumps)
     try:
@@ -646,17 +666,19 @@ def with_tracking(move, track):
 
 
 def plan_belt_move(start, part: Part, profile, time: str | float = "auto", height: float | None = None,
-                   eta: float | None = None, v_from=None, rate: float | None = None):
+                   eta: float | None = None, v_from=None, rate: float | None = None, cycle: float | None = None):
     """One Plan of the rendezvous move and its tracking segment (the profile's dwell), as a plain batch's belt
     row writes it: the samples run from 0 to T + dwell (the tracking samples after the meeting), the limit
     report holds the move's rows and the segment's (its quantities marked "(tracking)", its times
     trajectory time), the summary describes the move (its duration, peaks and method) and its parameters
     carry ``rendezvous`` and ``tracking``. Without a dwell it is the move alone."""
-    move, rv = plan_rendezvous(start, part, profile, time, height, eta, v_from, None, rate)
+    move, rv = plan_rendezvous(start, part, profile, time, height, eta, v_from, None, rate, cycle=cycle)
     if profile.planning.dwell <= 0:
         return move
-    track = plan_tracking(move, part, profile, rate=rate)
-    joined = with_tracking(move, track)
+    track = plan_tracking(move, part, profile, rate=rate, cycle=cycle)
+    from .timeline import on_cycle
+
+    joined = on_cycle(with_tracking(move, track), cycle)
     rows = move.report.rows + tuple(replace(r, quantity=f"{r.quantity} (tracking)") for r in track.report.rows)
     parameters = {**move.parameters, "tracking": {"t_start_s": rv.seconds, "duration_s": track.duration.seconds,
                                                  "velocity_m_s": part.velocity.tolist(),

@@ -47,6 +47,7 @@ class Timeline:
     move: np.ndarray
     segments: tuple[Segment, ...]
     summaries: tuple[dict[str, Any], ...] = ()
+    cycle: float | None = None  # s: the controller cycle every time stamp is a whole multiple of (None: any times)
 
     def __post_init__(self) -> None:
         n = len(self.t)
@@ -98,6 +99,22 @@ def from_plan(plan, move: int = 1) -> Timeline:
     """A single plan as a timeline (every sample in ``move``)."""
     seg = Segment(move, "move", float(plan.t[0]), float(plan.t[-1]))
     return _join([_pieces_of(plan, 0.0)], [move], plan.joint, [seg], [plan.summary()])
+
+
+def on_cycle(timeline: Timeline, cycle: float | None) -> Timeline:
+    """The timeline with every time stamp the exact multiple k·cycle it stands for (sums of rounded durations and
+    offsets drift by an ulp); ValueError when a stamp is not within 1e-6 cycles of a multiple. None: unchanged."""
+    if cycle is None:
+        return timeline
+    from dataclasses import replace
+
+    k = np.rint(timeline.t / cycle)
+    off = np.abs(timeline.t / cycle - k)
+    if off.size and off.max() > 1e-6:
+        i = int(np.argmax(off))
+        raise ValueError(f"t = {timeline.t[i]:.9g} s is not a whole number of {cycle:g} s cycles")
+    t = k * cycle
+    return replace(timeline, t=t, joint=replace(timeline.joint, t=t), cycle=cycle)
 
 
 def round_trip(there, back, dwell: float, rate: float) -> Timeline:

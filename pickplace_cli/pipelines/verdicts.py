@@ -115,6 +115,8 @@ def engine_applies(profile, options) -> bool:
     except ValueError:
         return False
     params = _given(options.method_params)
+    if getattr(options, "cycle", None) is not None:  # the controller's cycle: each row rounded and checked again
+        return False
     if options.fit or options.shape or options.time in ("fit", "optimal") or not set(params) <= _PARAMS or ("k1" in params) != ("k2" in params):
         return False
     try:

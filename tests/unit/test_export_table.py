@@ -32,7 +32,8 @@ TOL = 1e-12
 
 
 class ST:
-    """Parse ST text with blark, keep its global constants, run its FUNCTIONs."""
+    """Parse ST text with blark, keep its constants (a global constant list, or a FUNCTION's ``VAR CONSTANT``
+    block: the strict IEC dialect), run its FUNCTIONs."""
 
     def __init__(self, text: str) -> None:
         import blark.transform as tf
@@ -54,6 +55,13 @@ class ST:
                     self.globals[str(name)] = self.init_value(decl.init)
             elif isinstance(item, tf.Function):
                 self.functions[str(item.name)] = item
+                for block in item.declarations:
+                    if getattr(block, "attrs", None) is not None and "constant" in str(block.attrs).lower():
+                        self.constant_blocks += 1
+                        for decl in block.items:
+                            (name,) = decl.variables if hasattr(decl, "variables") else decl.spec.variables
+                            name = getattr(name, "name", name)
+                            self.globals[str(name)] = self.init_value(decl.init)
 
     def init_value(self, init):
         tf = self.tf
@@ -82,6 +90,8 @@ class ST:
         types: dict[str, str] = {}
         outputs = []
         for block in fn.declarations:
+            if getattr(block, "attrs", None) is not None and "constant" in str(block.attrs).lower():
+                continue  # read once, in __init__
             for decl in block.items:
                 typ = str(decl.init.spec.type)
                 for var in decl.variables:
