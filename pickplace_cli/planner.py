@@ -17,7 +17,7 @@ from .limits.grid import check_grid_order
 from .limits.motion import MotionModel
 from .limits.report import LimitReport
 from .paths import Method, depends_on_duration, path_factory, plan_path
-from .model.profile import Profile, limit_specs, with_limit_use
+from .model.profile import Profile, apply_limit_use, limit_specs
 from .robots import build_robot
 from .model.task import Task
 from .timing import Duration, choose_duration, choose_duration_for
@@ -43,11 +43,15 @@ class PlanOptions:
     # sample per cycle: :mod:`pickplace_cli.timing.cycle`); None: sampled at ``rate``
     limit_use: float | None = None  # fraction (0, 1] of every timed limit's rating to plan to; None: the profile's
     # planning.limit_use
+    capacity_rows: bool | None = None  # the Cartesian capacity's rows in the report: None by the rule
+    # (:func:`holds_capacity`); a caller that chose the duration itself (a conveyor rendezvous) says
 
 
 def holds_capacity(options: PlanOptions) -> bool:
     """Whether the duration rule holds the profile's Cartesian capacity (its rows then join the limit report):
     every rule but fit and optimal without ``hold_capacity`` (those hold the joint and motor limits alone)."""
+    if options.capacity_rows is not None:
+        return options.capacity_rows
     return options.hold_capacity or options.time not in ("fit", "optimal")
 
 
@@ -209,8 +213,7 @@ def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions(), *,
         from .timing import parse_time
 
         options = replace(options, time=parse_time(options.time))
-    use = profile.planning.limit_use if options.limit_use is None else options.limit_use
-    profile = with_limit_use(profile, use)  # every timed limit at use × its rating (the same profile at 1)
+    profile = apply_limit_use(profile, options.limit_use)  # every timed limit at use × its rating (itself at 1)
 
     _refuse_moving_ends(task, options)
     rate = options.rate if options.rate is not None else profile.planning.rate

@@ -45,7 +45,7 @@ def check(
     derivatives (split at the jerk steps found in the data, each side checked: the report says so), then the
     same dynamics and limit check as `plan`. Joint positions are checked as given (q1 = 5 rad is 5 rad, not
     wrapped). Every duration-dependent peak is estimated twice, from all samples and from every other one: the
-    difference is its accuracy (the "± %" column); a limit counts as exceeded when the peak less its accuracy is
+    difference, and at least 0.1 % of the peak, is its accuracy (the "± %" column); a limit counts as exceeded when the peak less its accuracy is
     beyond it, so a trajectory `plan` wrote as within its limits passes, and one 1 % faster fails.
 
     A file with a `move` column (`plan --batch` or `--round-trip` output) is checked move by move: each

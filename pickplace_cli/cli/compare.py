@@ -27,7 +27,10 @@ def compare(
     profile: Optional[str] = typer.Option(None, "--profile", "-p", help="Profile YAML file or shipped name. [default: delta-su2018]"),
     height: Optional[float] = typer.Option(None, "--height", help="Clearance h in m above the higher end point. [default: profile]"),
     eta: Optional[float] = typer.Option(None, "--eta", help="Lift-off/set-down ratio η, 0 < η < 1. [default: profile]"),
-    time: str = typer.Option("auto", "--time", "-t", help="Duration for the peaks and torques: 'auto', 'fit', 'optimal' (non-uniform time law) or seconds."),
+    time: str = typer.Option("limits", "--time", "-t", help="Duration for the peaks and torques: 'limits' (every limit "
+                             "of the profile holds: joint and motor limits and the Cartesian capacity), 'auto' (the "
+                             "capacity alone, Li 2018 Eq. 26), 'fit' (joint and motor limits alone), 'optimal' "
+                             "(non-uniform time law) or seconds."),
     fmt: CompareFormat = typer.Option(CompareFormat.table, "--format", "-f", help="table (stderr only), csv or json (stdout or -o)."),
     output: str = typer.Option("-", "--output", "-o", help="Output file for csv/json ('-' = stdout). Written atomically."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No table on stderr with csv/json (errors still print)."),

@@ -256,7 +256,9 @@ def plan(
         _finite_latency(latency)
     elif to_belt is not None or latency is not None:
         a.method = _belt_method(ctx, method, to_belt, latency, v_to, batch, round_trip, fit_ws, optimize)
-    prof = load_profile(profile)
+    from ..model.profile import apply_limit_use
+
+    prof = apply_limit_use(load_profile(profile), limit_use)  # --limit-use, else the profile's planning.limit_use
     params = _method_params(a)
     from ..export.drive import drive_map
     from .controller import check_cycle_usage, resolve_cycle

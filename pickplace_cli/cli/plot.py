@@ -20,7 +20,9 @@ def plot(
     profile: Optional[str] = typer.Option(None, "--profile", "-p", help="Profile YAML file or shipped name. [default: delta-su2018]"),
     height: Optional[float] = typer.Option(None, "--height", help="Clearance h in m above the higher end point. [default: profile]"),
     eta: Optional[float] = typer.Option(None, "--eta", help="Lift-off/set-down ratio η, 0 < η < 1. [default: profile]"),
-    time: str = typer.Option("auto", "--time", "-t", help="Duration of each method's move: 'auto', 'fit', 'optimal' (non-uniform time law, same path) or seconds."),
+    time: str = typer.Option("limits", "--time", "-t", help="Duration of each method's move: 'limits' (every limit of the "
+                             "profile holds), 'auto' (the Cartesian capacity alone), 'fit' (joint and motor limits "
+                             "alone), 'optimal' (non-uniform time law, same path) or seconds."),
     normalised: bool = typer.Option(False, "--normalised", help="Plot with b = 1 and T = 1 against τ (like Li 2018 Fig. 5)."),
     motors: bool = typer.Option(
         False, "--motors", help="Add each motor's speed, torque and torque rate against time in % of its limit "

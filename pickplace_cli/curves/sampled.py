@@ -111,3 +111,57 @@ def noise_level(t: np.ndarray, p: np.ndarray) -> float:
         return 0.0
     d6 = np.diff(p, n=6, axis=0)
     return float((1.4826 * np.median(np.abs(d6), axis=0) / np.sqrt(924.0)).max())
+
+
+def hermite(t: np.ndarray, p: np.ndarray, v: np.ndarray, a: np.ndarray, j: np.ndarray):
+    """(evaluate(x, nu) → (len(x), d), the times [s] of the jerk steps found) for samples at ``t`` (N,) s of positions,
+    velocities, accelerations and jerks (each (N, d), m and its derivatives): the septic Hermite interpolant, C³ and
+    exact at every sample (:meth:`scipy.interpolate.BPoly.from_derivatives`). An interval across which the jerk steps
+    (its jump |j(k+1) − j(k)| more than ``STEP_RATIO`` times its neighbours' and the median's: a smooth motion's
+    jumps vary slowly, ~h·snap) is not interpolated across the step: its two sides are the cubics of the samples'
+    own jerk, from each end, joined where their accelerations meet (the motion is C² across the step)."""
+    from scipy.interpolate import BPoly, PPoly
+
+    t = np.asarray(t, float)
+    data = np.stack([p, v, a, j], axis=1)  # (N, 4, d)
+    pp = PPoly.from_bernstein_basis(BPoly.from_derivatives(t, data))
+    n = len(t)
+    dj = np.linalg.norm(np.diff(np.asarray(j, float), axis=0), axis=1)  # (N − 1,)
+    if n < 4:
+        return (lambda x, nu=0: pp(np.asarray(x, float), nu)), np.zeros(0)
+    left = np.concatenate([[0.0], dj[:-1]])
+    right = np.concatenate([dj[1:], [0.0]])
+    level = max(float(np.median(dj)), 1e-300)
+    ks = np.flatnonzero(dj > STEP_RATIO * np.maximum(np.maximum(left, right), level))
+    if not ks.size:
+        return (lambda x, nu=0: pp(np.asarray(x, float), nu)), np.zeros(0)
+    x = list(t)
+    cols = [pp.c[:, i] for i in range(n - 1)]  # (8, d) each, powers of (t − t_i), highest first
+    cuts = []
+    for k in sorted(ks, reverse=True):
+        h = t[k + 1] - t[k]
+        a0, a1, j0, j1 = data[k, 2], data[k + 1, 2], data[k, 3], data[k + 1, 3]
+        den = float(np.dot(j0 - j1, j0 - j1))
+        # a0 + j0·s = a1 − j1·(h − s): least squares over the coordinates, inside the interval
+        s = float(np.dot(a1 - a0 - j1 * h, j0 - j1)) / den if den > 0 else 0.5 * h
+        s = min(max(s, 0.0), h)
+        lo = _taylor(data[k], 0.0)  # powers of (t − t_k)
+        hi = _taylor(data[k + 1], s - h)  # the cubic from t_(k+1), re-centred at the step
+        cols[k] = np.concatenate([np.zeros((4, lo.shape[1])), lo])
+        cols.insert(k + 1, np.concatenate([np.zeros((4, hi.shape[1])), hi]))
+        x.insert(k + 1, t[k] + s)
+        cuts.append(t[k] + s)
+    split = PPoly(np.stack(cols, axis=1), np.array(x))
+    return (lambda xx, nu=0: split(np.asarray(xx, float), nu)), np.array(sorted(cuts))
+
+
+def _taylor(row: np.ndarray, d: float) -> np.ndarray:
+    """The cubic p + v·s + a·s²/2 + j·s³/6 about a sample (``row`` (4, dims): p, v, a, j) written in powers of
+    (s − d), highest first: (4, dims)."""
+    p, v, a, j = row
+    # shift: s = u + d
+    c3 = j / 6.0
+    c2 = a / 2.0 + 3.0 * c3 * d
+    c1 = v + a * d + 3.0 * c3 * d * d
+    c0 = p + v * d + a * d * d / 2.0 + c3 * d**3
+    return np.stack([c3, c2, c1, c0])

@@ -47,8 +47,10 @@ class LimitRow:
 
     @property
     def resolved(self) -> bool:
-        """Whether the samples resolve the peak to ``RESOLVED`` of the allowed value (always, without an accuracy)."""
-        return self.accuracy is None or self.accuracy <= RESOLVED * abs(self.allowed)
+        """Whether the samples decide this row: the peak is known to ``RESOLVED`` of the allowed value, or it is within
+        the allowed value even at the far end of its accuracy (always, without an accuracy)."""
+        return (self.accuracy is None or self.accuracy <= RESOLVED * abs(self.allowed)
+                or self.peak + self.accuracy <= self.allowed)
 
     @property
     def allowed(self) -> float:

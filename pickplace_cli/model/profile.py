@@ -337,6 +337,16 @@ def with_limit_use(profile: Profile, use: float) -> Profile:
 _SCALED: dict = {}
 
 
+def apply_limit_use(profile: Profile, use: float | None = None) -> Profile:
+    """The profile at the limit-use fraction in force: ``use`` when given, else the one it is scaled to already,
+    else its own ``planning.limit_use`` (:func:`with_limit_use`)."""
+    if use is not None:
+        return with_limit_use(profile, use)
+    if profile.rated is not profile:
+        return profile
+    return with_limit_use(profile, profile.planning.limit_use)
+
+
 def limit_specs(profile: Profile) -> list[JointSpec]:
     """The profile's joint specs with their timed limits scaled by its limit-use fraction (:func:`with_limit_use`)."""
     specs = profile.robot.joint_specs()

@@ -2,7 +2,8 @@
 
 Input: a header row, then one move per row. Required columns ``from_x, from_y, from_z, to_x, to_y, to_z``
 [m, base frame]; optional ``height`` [m], ``eta`` [-], ``v_from_x … v_from_z``, ``v_to_x … v_to_z``
-[m/s] and ``time`` [s, or "auto"/"fit"]. An empty optional cell takes the command-line/profile value.
+[m/s], ``time`` [s, or a rule: "limits", "auto", "fit", "optimal", any case] and ``limit_use`` [fraction of every
+timed limit's rating, (0, 1]]. An empty optional cell takes the command-line/profile value.
 Blank lines and lines starting with ``#`` are skipped. Rows are numbered from 1 (the first data row),
 which is the number every message and the output's ``move`` column use. The cells may be separated by
 ``,``, ``;`` or a tab (:func:`sniff_delimiter`, as ``pickplace check`` reads), the decimal mark is ``.``,
@@ -28,14 +29,15 @@ REQUIRED = ("from_x", "from_y", "from_z", "to_x", "to_y", "to_z")
 #: a belt row of a plain batch (no ``t_detect``): the part was at ``to`` [m] when detected and moves at
 #: ``to_belt_v*`` [m/s]; the move starts ``latency`` [s, >= 0] after the detection (as ``--to-belt``/``--latency``)
 BELT = ("to_belt_vx", "to_belt_vy", "to_belt_vz")
-OPTIONAL = ("height", "eta", "v_from_x", "v_from_y", "v_from_z", "v_to_x", "v_to_y", "v_to_z", "time", *BELT, "latency")
+OPTIONAL = ("height", "eta", "v_from_x", "v_from_y", "v_from_z", "v_to_x", "v_to_y", "v_to_z", "time", *BELT, "latency",
+            "limit_use")
 #: a belt schedule (a ``t_detect`` column; :mod:`~pickplace_cli.pipelines.schedule`): one detected part per row — where it
 #: was seen [m], the belt velocity [m/s], the detection time stamp [s] and where to place it [m]; optional
 #: ``latency`` [s, >= 0] (earliest move start after the detection), ``height`` [m], ``eta``, ``time``, and
 #: ``from_x … from_z`` [m] on row 1 only (where the robot starts; later moves start where the previous ended)
 SCHEDULE_REQUIRED = ("to_x", "to_y", "to_z", "to_belt_vx", "to_belt_vy", "to_belt_vz", "t_detect",
                      "place_x", "place_y", "place_z")
-SCHEDULE_OPTIONAL = ("latency", "height", "eta", "time", "from_x", "from_y", "from_z")
+SCHEDULE_OPTIONAL = ("latency", "height", "eta", "time", "from_x", "from_y", "from_z", "limit_use")
 
 
 @dataclass(frozen=True)
@@ -240,8 +242,10 @@ def _row(number: int, line: int, text: str, header: list[str], sep: str, source:
                     unit = {"t_detect": "seconds"}.get(name, "m/s" if name.startswith("to_belt") else "metres")
                     raise TaskError(f"{name} is empty: give a number in {unit}")
                 continue
-            if name == "time" and cell in ("auto", "fit", "optimal"):
-                values[name] = cell
+            if name == "time" and not cell[:1].isdigit() and cell[:1] not in "+-.":  # a rule's name (any case)
+                from ..timing import parse_time
+
+                values[name] = parse_time(cell)  # TaskError with the nearest name for a near miss
                 continue
             try:
                 x = plain_float(cell)
@@ -250,12 +254,19 @@ def _row(number: int, line: int, text: str, header: list[str], sep: str, source:
                 if "_" in cell or not cell.isascii():
                     hint += " (plain ASCII digits: no '_' separators, no other scripts' or full-width digits)"
                 if name == "time":
-                    hint += "; give seconds, or auto, fit or optimal"
+                    hint += "; give seconds, or limits, auto, fit or optimal"
                 raise TaskError(f"{name} = {cell!r}: not a number{hint}") from None
             if not math.isfinite(x):
                 raise TaskError(f"{name} = {cell!r}: must be finite")
             if name == "latency" and x < 0:
                 raise TaskError(f"latency = {cell!r}: must be >= 0 s (the earliest move start after the detection)")
+            if name == "limit_use":
+                from ..model.profile import check_limit_use
+
+                try:
+                    check_limit_use(x)
+                except PickplaceError as exc:
+                    raise TaskError(str(exc)) from None
             values[name] = x
         return BatchRow(number, line, values)
     except TaskError as exc:
@@ -305,6 +316,8 @@ def plan_rows(
             else:
                 task = row_task(v, profile, height, eta)
                 opts = replace(options, time=v["time"]) if "time" in v else options
+                if "limit_use" in v:
+                    opts = replace(opts, limit_use=v["limit_use"])
                 result = plan(task, profile, opts)
             code = result.report.exit_code()
             err = None
@@ -338,6 +351,9 @@ def _plan_belt_row(r: BatchRow, profile, options, height, eta, source: str):
     part = Part(np.array([v["to_x"], v["to_y"], v["to_z"]]), np.array([v[c] for c in BELT]),
                 v.get("latency", 0.0))
     v_from = np.array([v.get(f"v_from_{c}", 0.0) for c in "xyz"])
+    from ..model.profile import apply_limit_use
+
+    profile = apply_limit_use(profile, v.get("limit_use", options.limit_use))
     return plan_belt_move(np.array([v["from_x"], v["from_y"], v["from_z"]]), part, profile, v.get("time", options.time),
                           v.get("height", height), v.get("eta", eta), v_from, options.rate, cycle=options.cycle)
 

@@ -43,8 +43,17 @@ from ..model.trajectory import CartesianPath
 #: folded in: tenths of a radian and more) and does not trip on a pose within 1e-3 of a singularity, where
 #: the singularity row reports the problem instead.
 BRANCH_TOL = 1e-3
+#: the finest accuracy ``check`` claims for a peak estimated from samples, relative to the peak: the values of a file
+#: carry 12 significant digits, a reconstruction's third derivative amplifies their round-off, and a plan's peak sits at
+#: its limit to ~1e-7; a file run 1 % faster moves every timed peak by 1 % or more
+CHECK_RESOLUTION = 1e-3
 #: fewest samples a move needs: a quintic spline has 6 coefficients
 MIN_SAMPLES = 6
+#: the tool's motion this tool's CSV writes beside the joints (m, m/s, m/s², m/s³): with all of them, and the
+#: positions FK(q) within ``TOOL_TOL``, the motion between samples is the septic Hermite through them
+TOOL_COLUMNS = ("x", "y", "z", "vx", "vy", "vz", "ax", "ay", "az", "jx", "jy", "jz")
+#: the file's x, y, z may differ from FK of its joint positions by this much [m] (12 significant digits: ~1e-12)
+TOOL_TOL = 1e-7
 
 
 @dataclass(frozen=True)
@@ -60,6 +69,9 @@ class Samples:
     lines: np.ndarray
     rest: int
     last_line: int
+    #: (N, 12) the tool's x, y, z [m], vx … [m/s], ax … [m/s²], jx … [m/s³] when the file has all of them (this
+    #: tool's CSV does), else None
+    tool: np.ndarray | None = None
 
     def where(self, source: str) -> str:
         name = f"move {self.move}" if self.move is not None else "the trajectory"
@@ -111,7 +123,8 @@ def read_moves(text: str, source: str, joint_names: tuple[str, ...]) -> list[Sam
     if len(rows) < 2:
         raise TaskError(f"{source}:{head_line}: a header and no samples (need rows of {', '.join(need)} after it; "
                         f"a move needs at least {MIN_SAMPLES})")
-    cols = need + (["move"] if "move" in header else [])
+    tool = [c for c in TOOL_COLUMNS if c in header] if all(c in header for c in TOOL_COLUMNS) else []
+    cols = need + tool + (["move"] if "move" in header else [])
     idx = [header.index(c) for c in cols]
     data = np.empty((len(rows) - 1, len(cols)))
     lines = np.array([n for n, _ in numbered[1:]], dtype=int)
@@ -122,8 +135,10 @@ def read_moves(text: str, source: str, joint_names: tuple[str, ...]) -> list[Sam
                     f"{source}:{line}: {name}: no value (the row has {len(r)} cells, the header {len(header)})"
                 )
             data[k, c] = _number(r[i], name, source, int(line), f"{i + 1}, {rows[0][i].strip()!r}")
+    nq = len(joint_names)
+    extra = (lambda a, b: data[a:b, 1 + nq:1 + nq + 12]) if tool else (lambda a, b: None)
     if "move" not in header:
-        return [_one_move(None, data[:, 0], data[:, 1:], lines, source, trim=False)]
+        return [_one_move(None, data[:, 0], data[:, 1:1 + nq], lines, source, trim=False, tool=extra(0, len(data)))]
     move = data[:, -1]
     bad = np.flatnonzero(move != np.round(move))
     if bad.size:
@@ -139,11 +154,12 @@ def read_moves(text: str, source: str, joint_names: tuple[str, ...]) -> list[Sam
                 f"{source}:{lines[a]}: move = {m}: its rows must be consecutive (move {m} already ended at line {seen[m]})"
             )
         seen[m] = int(lines[b - 1])
-        moves.append(_one_move(m, data[a:b, 0], data[a:b, 1:-1], lines[a:b], source, trim=True))
+        moves.append(_one_move(m, data[a:b, 0], data[a:b, 1:1 + nq], lines[a:b], source, trim=True, tool=extra(a, b)))
     return moves
 
 
-def _one_move(move: int | None, t: np.ndarray, q: np.ndarray, lines: np.ndarray, source: str, trim: bool) -> Samples:
+def _one_move(move: int | None, t: np.ndarray, q: np.ndarray, lines: np.ndarray, source: str, trim: bool,
+              tool: np.ndarray | None = None) -> Samples:
     what = f" (move {move})" if move is not None else ""
     dt = np.diff(t)
     if np.any(dt <= 0):
@@ -163,11 +179,12 @@ def _one_move(move: int | None, t: np.ndarray, q: np.ndarray, lines: np.ndarray,
         rest = len(q) - 1 - int(np.flatnonzero(~at_end)[-1] + 1) if not at_end.all() else 0
         if rest:
             t, q, lines = t[: len(t) - rest], q[: len(q) - rest], lines[: len(lines) - rest]
+            tool = None if tool is None else tool[: len(tool) - rest]
     if len(t) < MIN_SAMPLES:
         raise TaskError(
             f"{source}:{lines[0]}: {len(t)} samples{what}; a move needs at least {MIN_SAMPLES} for a quintic spline"
         )
-    return Samples(move, t, q, lines, rest, last_line)
+    return Samples(move, t, q, lines, rest, last_line, tool)
 
 
 def read_trajectory(text: str, source: str, joint_names: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:
@@ -200,15 +217,26 @@ def _check_branch(s: Samples, robot, pos: np.ndarray, source: str) -> None:
 
 
 def _motion_report(t: np.ndarray, pos: np.ndarray, robot, profile: Profile, smoothing: float, source: str,
-                   notes=None):
+                   notes=None, tool: np.ndarray | None = None):
     """The limit report of the tool positions ``pos`` (N, 3) m at ``t`` (N,) s from 0, through a reconstruction of
     the continuous motion (an interpolating spline split at the jerk steps found in the data,
     :func:`~pickplace_cli.curves.sampled.reconstruct`, or a smoothing spline), and the words that say how the
-    derivatives were found. ``notes``: a function of those words → the report's notes."""
+    derivatives were found. ``notes``: a function of those words → the report's notes. ``tool`` (N, 12): the
+    file's own tool positions, velocities, accelerations and jerks (consistent with ``pos``), through which the
+    motion between samples is the septic Hermite interpolant (exact at every sample up to the jerk)."""
     from scipy.interpolate import UnivariateSpline
 
     T = float(t[-1])
-    if smoothing > 0:
+    if tool is not None and not smoothing:
+        from ..curves.sampled import hermite
+
+        ev, steps = hermite(t, tool[:, 0:3], tool[:, 3:6], tool[:, 6:9], tool[:, 9:12])
+        how = ("septic Hermite polynomials through the file's tool positions, velocities, accelerations and jerks "
+               "(x … jz; x, y, z agree with FK(q))")
+        if steps.size:
+            shown = ", ".join(f"{x:.5g}" for x in steps[:6]) + (" …" if steps.size > 6 else "")
+            how += f", split at the jerk steps found between samples at t = {shown} s ({steps.size}; both sides checked)"
+    elif smoothing > 0:
         splines = [UnivariateSpline(t, pos[:, k], k=5, s=smoothing * len(t)) for k in range(3)]
 
         def ev(x: np.ndarray, order: int) -> np.ndarray:
@@ -251,8 +279,9 @@ def check_samples(s: Samples, profile: Profile, smoothing: float = 0.0, source: 
     """Limit report of one move read by :func:`read_moves` (see the module docstring).
 
     Every duration-dependent peak is estimated from the samples twice, from all of them and from every other one
-    (the same reconstruction): their difference is the peak's stated accuracy (the error of an estimate that
-    converges with the sample rate is smaller than its change when the rate halves). A row is exceeded only
+    (the same reconstruction): their difference, and at least 0.1 % of the peak (``CHECK_RESOLUTION``), is the
+    peak's stated accuracy (the error of an estimate that converges with the sample rate is smaller than its change
+    when the rate halves). A row is exceeded only
     when its peak less that accuracy is beyond the limit (the data shows it exceeded); a peak whose accuracy is
     worse than 1 % of the limit is reported as not resolved by the samples (``LimitReport.unresolved``)."""
     robot = build_robot(profile.robot)
@@ -270,11 +299,17 @@ def check_samples(s: Samples, profile: Profile, smoothing: float = 0.0, source: 
         from ..curves.sampled import noise_level
 
         smoothing = noise_level(t, pos) ** 2
-    report, _ = _motion_report(t, pos, robot, profile, smoothing, source, notes)
+    tool = s.tool
+    if tool is not None and np.max(np.abs(tool[:, :3] - pos)) > TOOL_TOL:
+        off = float(np.max(np.abs(tool[:, :3] - pos)))
+        rest += f"; its x, y, z differ from FK of its joint positions by up to {off:.3g} m, so its tool columns are not used"
+        tool = None
+    report, _ = _motion_report(t, pos, robot, profile, smoothing, source, notes, tool)
     others = []
     half = _half(len(t))
     if len(half) >= 6:
-        others.append(_motion_report(t[half], pos[half], robot, profile, smoothing, source)[0])
+        others.append(_motion_report(t[half], pos[half], robot, profile, smoothing, source, None,
+                                     None if tool is None else tool[half])[0])
     if smoothing:  # what the smoothing takes away is as uncertain as the rest: the interpolated data's peaks
         others.append(_motion_report(t, pos, robot, profile, 0.0, source)[0])
     report = _with_accuracy(report, others)
@@ -293,8 +328,8 @@ def check_samples(s: Samples, profile: Profile, smoothing: float = 0.0, source: 
 
 def _with_accuracy(fine: LimitReport, others: list[LimitReport]) -> LimitReport:
     """``fine``'s duration-dependent rows with accuracy = the largest |its peak − the same row's peak in ``others``|
-    (other estimates from the same data) and the verdict that the data supports: exceeded only when the peak less
-    its accuracy is beyond the allowed value."""
+    (other estimates from the same data), at least ``CHECK_RESOLUTION`` of the peak, and the verdict that the data
+    supports: exceeded only when the peak less its accuracy is beyond the allowed value."""
     from ..limits.report import LimitRow
 
     if not others:
@@ -304,7 +339,7 @@ def _with_accuracy(fine: LimitReport, others: list[LimitReport]) -> LimitReport:
     for r in fine.rows:
         cs = [o[(r.joint, r.quantity)] for o in other if (r.joint, r.quantity) in o]
         if r.kind == "limit" and r.bound == "upper" and cs:
-            acc = max(abs(r.peak - c.peak) for c in cs)
+            acc = max(max(abs(r.peak - c.peak) for c in cs), CHECK_RESOLUTION * abs(r.peak))
             ok = r.peak - acc <= r.allowed
             r = LimitRow(r.joint, r.quantity, r.unit, r.peak, r.limit, r.utilisation, r.t_peak, ok, r.kind, r.bound,
                          r.target, acc)
@@ -323,10 +358,9 @@ def check_file(path: str | Path, profile: Profile, smoothing: float | str = 0.0,
     ``smoothing``: m² per sample, or "auto" (the noise level of the data, :func:`~pickplace_cli.curves.sampled.
     noise_level`, squared); ``limit_use``: the fraction of every timed limit's rating allowed (default: the
     profile's planning.limit_use)."""
-    from ..model.profile import with_limit_use
+    from ..model.profile import apply_limit_use
 
-    use = profile.planning.limit_use if limit_use is None else limit_use
-    profile = with_limit_use(profile, use)
+    profile = apply_limit_use(profile, limit_use)
     import sys
 
     p = Path(path)

@@ -205,9 +205,12 @@ class _Rule:
             path = self.factory(T)
         except TaskError:  # e.g. the meeting point straight below the start (b = 0): no move of this method
             return math.inf
-        if self.kind == "auto":
+        cap = None
+        if self.kind in ("auto", "limits"):
             tv, ta, tj, _ = auto_duration(path, self.profile.capacity)
-            return max(tv, ta, tj or 0.0) / T - 1.0
+            cap = max(tv, ta, tj or 0.0) / T - 1.0
+            if self.kind == "auto":
+                return cap
         from ..planner import motion_model
         from ..timing import _worst_utilisation
 
@@ -216,11 +219,14 @@ class _Rule:
         except UnreachableError:  # this trial move leaves the workspace: not a feasible meeting
             return math.inf
         if found is None:
+            if cap is not None:  # limits: the capacity alone
+                return cap
             raise TaskError(
                 "time = fit: the profile sets no velocity, acceleration, jerk or motor limit that depends on the "
                 "duration; add joint limits or drives, or use --time auto / seconds"
             )
-        return found[0](T)[0]
+        fit = found[0](T)[0]
+        return fit if cap is None else max(fit, cap)
 
 
 def _finite(x: float) -> float:
@@ -416,7 +422,7 @@ ROOT_RTOL = 1e-5
 
 
 def find_rendezvous(
-    start, part: Part, profile, time: str | float = "auto", height: float | None = None, eta: float | None = None,
+    start, part: Part, profile, time: str | float = "limits", height: float | None = None, eta: float | None = None,
     v_from=None, method_params: dict | None = None, dwell: float | None = None,
 ) -> Rendezvous:
     """The duration T and meeting point P(T) of a bspline-vel move from ``start`` [m] (leaving with ``v_from``
@@ -490,6 +496,14 @@ def find_rendezvous(
     tv, ta, tj, binding = auto_duration(path, profile.capacity)
     if spec == "auto":
         duration = Duration(T, "auto", tv, ta, tj, binding)
+    elif spec == "limits":
+        from ..timing import _worst_utilisation
+        from ..planner import motion_model
+
+        found = _worst_utilisation(motion_model(path, profile), plan_dwell)
+        fit_excess, fit_name = found[0](T * (1 - 1e-9)) if found is not None else (-1.0, None)
+        cap_excess = max(tv, ta, tj or 0.0) / (T * (1 - 1e-9)) - 1.0
+        duration = Duration(T, "limits", tv, ta, tj, fit_name if fit_excess >= cap_excess else f"capacity {binding}")
     else:
         from ..timing import _worst_utilisation
         from ..planner import motion_model
@@ -504,12 +518,14 @@ def _nudge(rule: _Rule, factory, profile, spec: str, T: float, dwell: float) -> 
     """T nudged up until the rule holds exactly at T (a root is within brentq's tolerance of the crossing,
     and each nudge moves P(T) a little); for fit, the exact (refined) limit check decides, as in --time fit."""
     for _ in range(20):
-        if spec == "auto":
-            ex = rule(T)
-            if ex <= 0:
+        if spec in ("auto", "limits"):
+            ex = rule(T) if spec == "auto" else _Rule("auto", profile, factory, dwell)(T)
+            if ex > 0:
+                T *= 1.0 + ex + 1e-13
+                continue
+            if spec == "auto":
                 return T
-            T *= 1.0 + ex + 1e-13
-        else:
+        if spec != "auto":
             from ..limits.check import check_limits
             from ..planner import motion_model
 
@@ -553,15 +569,18 @@ def _missed(part: Part, rule: _Rule, a: float, b: float, what: str, spec: str, k
 # ------------------------------------------------------------------------------------------ the plan
 
 
-def plan_rendezvous(start, part: Part, profile, time: str | float = "auto", height: float | None = None,
+def plan_rendezvous(start, part: Part, profile, time: str | float = "limits", height: float | None = None,
                     eta: float | None = None, v_from=None, method_params: dict | None = None,
                     rate: float | None = None, dwell: float | None = None, cycle: float | None = None):
     """(Plan of the move to the meeting point, Rendezvous): :func:`find_rendezvous`, then the planner's
     pipeline (samples, joint motion, limit check) on that move at T, with the found shape (no second solve).
     The plan's duration says how T was chosen; ``parameters["rendezvous"]`` says where and when it meets.
     ``cycle`` [s]: T rounded up to whole cycles, the part met where it is then (P(T) planned again for it)."""
+    from ..model.profile import apply_limit_use
     from ..planner import PlanOptions, plan
+    from ..timing import parse_time
 
+    profile = apply_limit_use(profile)  # every timed limit at its limit-use fraction
     rv = find_rendezvous(start, part, profile, time, height, eta, v_from, method_params, dwell)
     T_rule = rv.seconds
     if cycle is not None:  # the meeting moves with the rounded duration: solved again for it (exit 4 past the window)
@@ -575,7 +594,7 @@ def plan_rendezvous(start, part: Part, profile, time: str | float = "auto", heig
             rv = replace(again, duration=replace(rv.duration, seconds=T_c))
     shape = [rv.path.parameters[k] for k in ("tau6", "tau7", "tau9", "tau10", "lambda1", "lambda2", "lambda3")]
     options = PlanOptions(method="bspline-vel", method_params={"params": shape}, time=rv.seconds, rate=rate, fit=False,
-                          cycle=cycle)
+                          cycle=cycle, capacity_rows=parse_time(time) != "fit")
     got = plan(rv.task, profile, options)
     parameters = {**rv.path.parameters, "rendezvous": rv.as_dict()}
     extra = {} if got.cycle is None else {"cycle": replace(got.cycle, requested_s=T_rule)}
@@ -632,7 +651,7 @@ def plan_tracking(move, part: Part, profile, duration: float | None = None, rate
     except UnreachableError as exc:
         raise UnreachableError(f"{part.label()}: the tracking segment (t = {T:.4f} … {T + D:.4f} s) leaves the "
                                f"workspace: {exc}") from None
-    report = check_limits(model, D, parts=parts, dwell=0.0)
+    report = check_limits(model, D, parts=parts, dwell=0.0).rated(profile.limit_use)
     # t_peak in the trajectory's time (the segment runs from T to T + D), as the written samples and the
     # segment's heading say; the segment's own clock would read 0 … D
     shifted = tuple(replace(r, t_peak=None if r.t_peak is None else r.t_peak + T) for r in report.rows)
@@ -665,7 +684,7 @@ def with_tracking(move, track):
     return _join([first, rest], [1, 1], move.joint, segments, [move.summary()])
 
 
-def plan_belt_move(start, part: Part, profile, time: str | float = "auto", height: float | None = None,
+def plan_belt_move(start, part: Part, profile, time: str | float = "limits", height: float | None = None,
                    eta: float | None = None, v_from=None, rate: float | None = None, cycle: float | None = None):
     """One Plan of the rendezvous move and its tracking segment (the profile's dwell), as a plain batch's belt
     row writes it: the samples run from 0 to T + dwell (the tracking samples after the meeting), the limit

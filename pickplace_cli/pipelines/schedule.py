@@ -239,7 +239,7 @@ def check_order(rows: Iterable, source: str = "batch") -> Iterator:
         yield r
 
 
-def plan_cycle(state: RobotState, r, profile, time: str = "auto", height: float | None = None,
+def plan_cycle(state: RobotState, r, profile, time: str = "limits", height: float | None = None,
                eta: float | None = None, rate: float | None = None, latency: float = 0.0,
                method_params: dict | None = None, source: str = "batch") -> ScheduleRow:
     """One row of the schedule from ``state`` (see the module docstring): a ScheduleRow with its Cycle, or the
@@ -256,6 +256,9 @@ def plan_cycle(state: RobotState, r, profile, time: str = "auto", height: float 
         part = Part(_xyz(v, "to_"), np.array([v[f"to_belt_v{c}"] for c in "xyz"], float), t_start - t_detect,
                     name=f"part of row {r.row}")
         time_rule = v.get("time", time)
+        from ..model.profile import apply_limit_use
+
+        profile = apply_limit_use(profile, v.get("limit_use"))
         h = v.get("height", height)
         e = v.get("eta", eta)
         move, rv = plan_rendezvous(state.position, part, profile, time_rule, h, e, np.zeros(3), method_params, rate)
@@ -282,7 +285,7 @@ def plan_cycle(state: RobotState, r, profile, time: str = "auto", height: float 
     return ScheduleRow(r.row, t_detect, t_start, cycle, error, cycle.code)
 
 
-def plan_schedule(rows: Iterable, profile, time: str = "auto", height: float | None = None, eta: float | None = None,
+def plan_schedule(rows: Iterable, profile, time: str = "limits", height: float | None = None, eta: float | None = None,
                   rate: float | None = None, latency: float = 0.0, method_params: dict | None = None,
                   source: str = "batch", fail_fast: bool = False, report_only: bool = False) -> Iterator[ScheduleRow]:
     """Plan the rows (BatchRows from :func:`~pickplace_cli.pipelines.batch.iter_batch`, lazily: a streamed row is answered

@@ -1,0 +1,101 @@
+"""What ``plan`` writes as within its limits, ``check`` accepts; a copy of that file run 1 % or 3 % faster (every time
+stamp divided by 1.01 or 1.03) is never accepted as within the limits: ``check`` shows a limit exceeded, or says
+that the samples do not resolve a peak (``--strict`` then fails it too).
+
+Random moves (seeded) on the three shipped profiles, every method, the rules that plan to a limit (fit, optimal and
+the default, limits) and two sample rates (1 kHz and 5 kHz). Files as plan writes them (its default CSV, with the
+tool's motion beside the joints) and with the joint positions only (another tool's file: the check then
+reconstructs the motion from the positions alone). Bounded: one random move per combination."""
+
+from __future__ import annotations
+
+import io
+
+import numpy as np
+import pytest
+
+from pickplace_cli.export.csv import write_csv
+from pickplace_cli.model.errors import PickplaceError
+from pickplace_cli.model.profile import load_profile
+from pickplace_cli.model.task import Task
+from pickplace_cli.pipelines.check import check_file
+from pickplace_cli.planner import PlanOptions, plan
+
+MOVES = {
+    "delta-su2018": ((-0.2, 0.2), (-0.2, 0.2), (-0.95, -0.8)),
+    "scara-600": ((0.25, 0.45), (-0.25, 0.25), (-0.18, -0.05)),
+    "gantry": ((-0.5, 0.5), (-0.5, 0.5), (-0.6, -0.3)),
+}
+METHODS = ("bspline", "ph", "superposition", "lame", "piecewise-poly", "bspline-vel")
+
+
+def _cases():
+    out = []
+    for prof in MOVES:
+        for method in METHODS:
+            for rule in ("fit", "optimal", "limits"):
+                if prof == "gantry" and rule != "limits":  # no joint or motor limit depends on the duration there
+                    continue
+                if method == "bspline-vel" and rule == "optimal":  # refused: its path is planned for a duration
+                    continue
+                rate = 5000.0 if (len(out) % 2) else 1000.0
+                out.append(pytest.param(prof, method, rule, rate, id=f"{prof}-{method}-{rule}-{rate:.0f}Hz"))
+    return out
+
+
+def _text(pl, speed: float = 1.0, positions_only: bool = False) -> str:
+    buf = io.StringIO()
+    write_csv(pl, buf)
+    lines = buf.getvalue().splitlines()
+    head = lines[0].split(",")
+    keep = [i for i, h in enumerate(head) if h.split("[")[0] == "t" or (h[0] == "q" and h.split("[")[0][1:].isdigit())]
+    if not positions_only:
+        keep = list(range(len(head)))
+    out = [",".join(head[i] for i in keep)]
+    for ln in lines[1:]:
+        cells = ln.split(",")
+        cells[0] = repr(float(cells[0]) / speed)
+        if speed != 1.0 and not positions_only:  # the tool's derivative columns scale with the speed
+            for i, h in enumerate(head):
+                k = {"v": 1, "a": 2, "j": 3}.get(h[:1]) if len(h) > 1 and h[1] in "xyz" and h[2] == "[" else None
+                if k:
+                    cells[i] = repr(float(cells[i]) * speed**k)
+        out.append(",".join(cells[i] for i in keep))
+    return "\n".join(out) + "\n"
+
+
+def _check(tmp_path, text: str, prof):
+    f = tmp_path / "t.csv"
+    f.write_text(text)
+    return check_file(str(f), prof)[0].report
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("prof_name,method,rule,rate", _cases())
+def test_plan_writes_what_check_accepts_and_faster_fails(tmp_path, prof_name, method, rule, rate):
+    prof = load_profile(prof_name)
+    rng = np.random.default_rng(sum(map(ord, prof_name + method + rule)))
+    ranges = MOVES[prof_name]
+    a = np.array([rng.uniform(*r) for r in ranges])
+    b = np.array([rng.uniform(*r) for r in ranges])
+    try:
+        pl = plan(Task(a, b, prof.planning.height, prof.planning.eta), prof, PlanOptions(method=method, time=rule,
+                                                                                       rate=rate))
+    except PickplaceError as exc:  # a move this method cannot plan (too flat, out of reach): not this test's subject
+        pytest.skip(f"not planned: {exc}")
+    if not pl.report.ok:
+        pytest.skip("a position limit (exit 4): not written by plan")
+    timed = [r for r in pl.report.rows if r.kind == "limit" and not r.quantity.startswith("capacity")]
+    at_limit = bool(timed) and max(r.utilisation for r in timed) > 0.999
+    for positions_only in (False, True):
+        rep = _check(tmp_path, _text(pl, positions_only=positions_only), prof)
+        assert rep.ok, [(r.joint, r.quantity, r.peak, r.accuracy, r.limit) for r in rep.violations]
+        if not positions_only:  # the file's own motion: every row decided
+            assert not rep.unresolved, [(r.joint, r.quantity, r.peak, r.accuracy) for r in rep.unresolved]
+        if not at_limit:  # the capacity binds (or nothing timed): running faster need not break a joint limit
+            continue
+        for speed in (1.01, 1.03):
+            fast = _check(tmp_path, _text(pl, speed, positions_only), prof)
+            assert not fast.ok or fast.unresolved, f"{speed}× faster accepted as within every limit"
+            if not positions_only:
+                assert not fast.ok, f"{speed}× faster: the file's own motion shows no limit exceeded"
