@@ -17,7 +17,8 @@ from .limits.grid import check_grid_order
 from .limits.motion import MotionModel
 from .limits.report import LimitReport
 from .paths import Method, depends_on_duration, path_factory, plan_path
-from .model.profile import Profile, apply_limit_use, limit_specs
+from .model.headroom import apply_limit_use, limit_specs
+from .model.profile import Profile
 from .robots import build_robot
 from .model.task import Task
 from .timing import Duration, choose_duration, choose_duration_for

@@ -68,7 +68,7 @@ def check(
         if not (smooth >= 0 and smooth < float("inf")):
             raise TaskError(f"smoothing = {smoothing!r}: must be a finite number >= 0 (m² per sample), or auto")
     if limit_use is not None:
-        from ..model.profile import check_limit_use
+        from ..model.headroom import check_limit_use
 
         check_limit_use(limit_use)
     prof = load_profile(profile)

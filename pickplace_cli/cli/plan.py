@@ -256,7 +256,7 @@ def plan(
         _finite_latency(latency)
     elif to_belt is not None or latency is not None:
         a.method = _belt_method(ctx, method, to_belt, latency, v_to, batch, round_trip, fit_ws, optimize)
-    from ..model.profile import apply_limit_use
+    from ..model.headroom import apply_limit_use
 
     prof = apply_limit_use(load_profile(profile), limit_use)  # --limit-use, else the profile's planning.limit_use
     params = _method_params(a)
@@ -320,7 +320,7 @@ def plan(
 def _check_plan_values(a) -> None:
     """Values (exit 1): the time rule (normalised: any case and spacing), height, rate, k1/k2, η, limit use."""
     from ..model.errors import TaskError
-    from ..model.profile import check_limit_use
+    from ..model.headroom import check_limit_use
     from ..timing import parse_time
 
     a.time = parse_time(a.time)

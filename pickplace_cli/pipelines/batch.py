@@ -261,7 +261,7 @@ def _row(number: int, line: int, text: str, header: list[str], sep: str, source:
             if name == "latency" and x < 0:
                 raise TaskError(f"latency = {cell!r}: must be >= 0 s (the earliest move start after the detection)")
             if name == "limit_use":
-                from ..model.profile import check_limit_use
+                from ..model.headroom import check_limit_use
 
                 try:
                     check_limit_use(x)
@@ -351,7 +351,7 @@ def _plan_belt_row(r: BatchRow, profile, options, height, eta, source: str):
     part = Part(np.array([v["to_x"], v["to_y"], v["to_z"]]), np.array([v[c] for c in BELT]),
                 v.get("latency", 0.0))
     v_from = np.array([v.get(f"v_from_{c}", 0.0) for c in "xyz"])
-    from ..model.profile import apply_limit_use
+    from ..model.headroom import apply_limit_use
 
     profile = apply_limit_use(profile, v.get("limit_use", options.limit_use))
     return plan_belt_move(np.array([v["from_x"], v["from_y"], v["from_z"]]), part, profile, v.get("time", options.time),

@@ -33,7 +33,8 @@ from ..limits.check import _range_row, check_limits
 from ..limits.grid import check_grid
 from ..limits.motion import MotionModel
 from ..limits.report import LimitReport
-from ..model.profile import Profile, limit_specs
+from ..model.headroom import limit_specs
+from ..model.profile import Profile
 from ..robots import build_robot
 from ..model.trajectory import CartesianPath
 
@@ -358,7 +359,7 @@ def check_file(path: str | Path, profile: Profile, smoothing: float | str = 0.0,
     ``smoothing``: m² per sample, or "auto" (the noise level of the data, :func:`~pickplace_cli.curves.sampled.
     noise_level`, squared); ``limit_use``: the fraction of every timed limit's rating allowed (default: the
     profile's planning.limit_use)."""
-    from ..model.profile import apply_limit_use
+    from ..model.headroom import apply_limit_use
 
     profile = apply_limit_use(profile, limit_use)
     import sys

@@ -576,7 +576,7 @@ def plan_rendezvous(start, part: Part, profile, time: str | float = "limits", he
     pipeline (samples, joint motion, limit check) on that move at T, with the found shape (no second solve).
     The plan's duration says how T was chosen; ``parameters["rendezvous"]`` says where and when it meets.
     ``cycle`` [s]: T rounded up to whole cycles, the part met where it is then (P(T) planned again for it)."""
-    from ..model.profile import apply_limit_use
+    from ..model.headroom import apply_limit_use
     from ..planner import PlanOptions, plan
     from ..timing import parse_time
 

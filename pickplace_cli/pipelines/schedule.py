@@ -256,7 +256,7 @@ def plan_cycle(state: RobotState, r, profile, time: str = "limits", height: floa
         part = Part(_xyz(v, "to_"), np.array([v[f"to_belt_v{c}"] for c in "xyz"], float), t_start - t_detect,
                     name=f"part of row {r.row}")
         time_rule = v.get("time", time)
-        from ..model.profile import apply_limit_use
+        from ..model.headroom import apply_limit_use
 
         profile = apply_limit_use(profile, v.get("limit_use"))
         h = v.get("height", height)

@@ -47,6 +47,7 @@ from .batch import BELT, BatchRow, RowResult, plan_rows, row_task, run_chunks_in
 from ..curves.bspline import DEGREE
 from ..paths.bspline import batch_paths
 from ..model.errors import PickplaceError, UnreachableError
+from ..limits.check import capacity_rows
 from ..limits.report import LimitReport
 
 #: uniform τ samples of the screening grid per move (plus its interior knots and PIECE_SAMPLES points inside
@@ -117,7 +118,9 @@ def engine_applies(profile, options) -> bool:
     params = _given(options.method_params)
     if getattr(options, "cycle", None) is not None:  # the controller's cycle: each row rounded and checked again
         return False
-    if options.fit or options.shape or options.time in ("fit", "optimal") or not set(params) <= _PARAMS or ("k1" in params) != ("k2" in params):
+    # the default rule (limits) fits every move to its motors: plan() decides those rows (the engine decides the rows
+    # of auto and given seconds)
+    if options.fit or options.shape or options.time in ("fit", "optimal", "limits") or not set(params) <= _PARAMS or ("k1" in params) != ("k2" in params):
         return False
     try:
         robot = build_robot(profile.robot)
@@ -321,7 +324,7 @@ def decide(rows: list[BatchRow], profile, options, height: float | None = None, 
     for r in rows:
         v = r.values
         spec = v.get("time", options.time)
-        if spec in ("fit", "optimal") or any(v.get(f"v_{e}_{c}", 0.0) for e in ("from", "to") for c in "xyz") or any(
+        if spec in ("fit", "optimal", "limits") or any(v.get(f"v_{e}_{c}", 0.0) for e in ("from", "to") for c in "xyz") or any(
                 c in v for c in BELT):  # moving ends and belt rows: plan()
             continue
         try:
@@ -368,6 +371,8 @@ def decide(rows: list[BatchRow], profile, options, height: float | None = None, 
                 traj = CartesianTrajectory(path, duration.seconds)
             except (PickplaceError, ValueError):
                 continue
+            if not all(c.ok for c in capacity_rows(path, duration.seconds, profile.capacity)):
+                continue  # a given duration past the Cartesian capacity: plan() says which (exit 3)
             done.append((i, r, task, path, duration, traj))
         if not done:
             continue

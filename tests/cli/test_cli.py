@@ -60,7 +60,7 @@ def test_last_sample_is_T_and_summary_json():
     doc = json.loads(r.stdout)
     T = doc["summary"]["duration_s"]
     assert doc["samples"]["t[s]"][-1] == pytest.approx(T, abs=1e-12)
-    assert doc["summary"]["binding"] in ("velocity", "acceleration")
+    assert doc["summary"]["binding"] in ("capacity velocity", "capacity acceleration")
     assert r.stderr == ""
 
 
@@ -288,11 +288,12 @@ def test_usage_errors_are_one_line_exit_2(args, words):
 
 
 def test_a_verdict_says_when_nothing_timed_was_checked():
-    """The gantry profile has position and workcell limits only: at 1 ms (|v| ~ 900 m/s) "all limits hold" is true
-    but says nothing of speed; the verdict names its scope (review, session 16). A Delta's verdict is unchanged."""
+    """The gantry profile has position and workcell limits and its Cartesian capacity only: at 1 ms (|v| ~ 900 m/s)
+    a given duration breaks the capacity (exit 3); the default plans to it. With the capacity not held (a library
+    caller's fit-free rule), the verdict names its scope. A Delta's verdict is unchanged."""
     r = run("plan", "-p", "gantry", "--from", "0.1,0.1,-0.1", "--to", "0.4,0.3,-0.1", "--time", "0.001", "-o", "-")
-    assert r.exit_code == 0
-    assert ("verdict: all limits hold (positions and workcell only: this profile sets no limit that depends on the "
-            "duration); cycle") in r.stderr
+    assert r.exit_code == 3 and "tool capacity speed" in r.stderr
+    r = run("plan", "-p", "gantry", "--from", "0.1,0.1,-0.1", "--to", "0.4,0.3,-0.1", "-o", "-")
+    assert r.exit_code == 0 and "binding: capacity acceleration" in r.stderr
     r = run("plan", *ADEPT, "-o", "-")
     assert "verdict: all limits hold; cycle" in r.stderr

@@ -83,13 +83,15 @@ def test_check_own_csv_agrees_with_plan(tmp_path):
     rc = tmp_path / "check.json"
     assert run("plan", *ADEPT, "-q", "-o", str(out), "--report", str(rp)).exit_code == 0
     r = run("check", str(out), "--report", str(rc))
-    assert r.exit_code == 0 and "quintic interpolating spline" in r.stderr
-    a = {(x["joint"], x["quantity"]): x["peak"] for x in json.loads(rp.read_text())["limits"]["rows"]}
+    assert r.exit_code == 0 and "septic Hermite" in r.stderr
+    # the Cartesian capacity is a planning rule: the check holds the joint and motor limits of the file
+    a = {(x["joint"], x["quantity"]): x["peak"] for x in json.loads(rp.read_text())["limits"]["rows"]
+         if not x["quantity"].startswith("capacity")}
     b = {(x["joint"], x["quantity"]): x["peak"] for x in json.loads(rc.read_text())["limits"]["rows"]}
     for key in a:
-        # torques need a second derivative of the interpolated positions: 1 % (ends of the spline);
-        # positions and speeds agree far better
-        tol = 2e-2 if "rate" in key[1] else 1e-2
+        # through the file's own tool motion (septic Hermite) every peak agrees to 1e-6 (12-digit values); a position
+        # is checked on the file's samples, which may miss the continuous extreme between two of them by ~1e-5
+        tol = 1e-5 if key[1].startswith(("position", "workcell")) else 1e-6
         if key[1].startswith(("position", "workcell")):  # a range row may show either side on a tie
             assert abs(b[key]) == pytest.approx(abs(a[key]), rel=tol, abs=1e-9), key
         else:

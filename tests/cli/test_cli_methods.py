@@ -17,9 +17,10 @@ ADEPT = ["--from", "-0.1525,0,-0.8", "--to", "0.1525,0,-0.8"]
 
 @pytest.mark.parametrize("method", ["ph", "superposition", "lame", "piecewise-poly"])
 def test_plan_each_method_json(method):
-    # --report-only: on the default Delta the 3-4-5 jerk steps can exceed the motor torque-rate limit at
+    # --write-anyway: on the default Delta the 3-4-5 jerk steps can exceed the motor torque-rate limit at
     # the auto duration (exit 3 is then the right verdict); this test is about the planning, not the verdict
-    r = runner.invoke(app, ["plan", *ADEPT, "--method", method, "--format", "json", "-q", "--report-only"], catch_exceptions=False)
+    r = runner.invoke(app, ["plan", *ADEPT, "--method", method, "-t", "auto", "--format", "json", "-q", "--write-anyway"],
+                      catch_exceptions=False)
     assert r.exit_code == 0, r.stderr
     doc = json.loads(r.stdout)
     s = doc["summary"] if "summary" in doc else doc
@@ -32,7 +33,7 @@ def test_plan_each_method_json(method):
 
 
 def test_plan_ph_stderr_summary_names_method():
-    r = runner.invoke(app, ["plan", *ADEPT, "-m", "ph", "-o", "-", "--report-only"], catch_exceptions=False)
+    r = runner.invoke(app, ["plan", *ADEPT, "-m", "ph", "-t", "auto", "-o", "-", "--write-anyway"], catch_exceptions=False)
     assert r.exit_code == 0
     assert "delta-su2018 / ph" in r.stderr and "|a| = 100 m/s²" in r.stderr
 

@@ -100,30 +100,28 @@ def test_batch_report_only_writes_limit_rows_but_not_broken_ones(tmp_path):
 
 
 @pytest.mark.parametrize("source", ["file", "stdin", "-j2"])
-def test_report_only_exit_code_of_a_workcell_row_is_the_single_plans(tmp_path, source):
-    """A move that leaves the workcell box (a limit of the report, exit 4) with --report-only: the single plan writes it
-    and exits 0; a batch wrote it too but exited 4 (review, session 16). Now 0 as well; an unreachable row (no
-    trajectory) still gives its 4."""
+def test_write_anyway_never_writes_a_workcell_row(tmp_path, source):
+    """A move that leaves the workcell box (exit 4) is not a trajectory a drive may run: --write-anyway (which
+    writes moves past a timed limit) does not write it, in a single plan or a batch, and the batch exits 4; the
+    batch's good rows are written."""
     move = ["--from", "-0.1,0,-0.575", "--to", "0.1,0,-0.575", "--height", "0.03"]
-    single = run("plan", *move, "-q", "--report-only", "-o", str(tmp_path / "one.csv"))
-    assert single.exit_code == 0 and "workcell z" in single.stderr and (tmp_path / "one.csv").exists()
+    single = run("plan", *move, "-q", "--write-anyway", "-o", str(tmp_path / "one.csv"))
+    assert single.exit_code == 4 and "workcell z" in single.stderr and not (tmp_path / "one.csv").exists()
     row = "-0.1,0,-0.575,0.1,0,-0.575,0.03\n"
-    for rows, code in ((row, 0), (row + "5,0,-0.8,0,0,-0.8,\n", 4)):
-        text = "from_x,from_y,from_z,to_x,to_y,to_z,height\n" + rows
-        f = tmp_path / "b.csv"
-        f.write_text(text)
-        out = tmp_path / "o.csv"
-        args = {"file": [str(f)], "stdin": ["-"], "-j2": [str(f), "-j", "2"]}[source]
-        r = run("plan", "--batch", *args, "-q", "--report-only", "-o", str(out), input=text if source == "stdin" else None)
-        assert r.exit_code == code, r.stderr
-        assert "row 1" in r.stderr and "workcell z" in r.stderr
-        _, data = parse(out.read_text())
-        assert sorted(set(data[:, 0].astype(int))) == [1]
-    # --fail-fast stops at that row: the rows after it are not planned, and the exit code is that row's
-    f.write_text("from_x,from_y,from_z,to_x,to_y,to_z,height\n" + row + "-0.1525,0,-0.8,0.1525,0,-0.8,\n")
+    good = "-0.1525,0,-0.8,0.1525,0,-0.8,\n"
+    text = "from_x,from_y,from_z,to_x,to_y,to_z,height\n" + row + good
+    f = tmp_path / "b.csv"
+    f.write_text(text)
+    out = tmp_path / "o.csv"
     args = {"file": [str(f)], "stdin": ["-"], "-j2": [str(f), "-j", "2"]}[source]
-    r = run("plan", "--batch", *args, "-q", "--report-only", "--fail-fast", "-o", str(out),
-            input=f.read_text() if source == "stdin" else None)
+    r = run("plan", "--batch", *args, "-q", "--write-anyway", "-o", str(out), input=text if source == "stdin" else None)
+    assert r.exit_code == 4, r.stderr
+    assert "row 1" in r.stderr and "workcell z" in r.stderr
+    _, data = parse(out.read_text())
+    assert sorted(set(data[:, 0].astype(int))) == [2]
+    # --fail-fast stops at that row: the rows after it are not planned, and the exit code is that row's
+    r = run("plan", "--batch", *args, "-q", "--write-anyway", "--fail-fast", "-o", str(out),
+            input=text if source == "stdin" else None)
     assert r.exit_code == 4, r.stderr
 
 

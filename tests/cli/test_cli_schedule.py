@@ -127,14 +127,15 @@ def test_report_only_runs_the_cycles_that_break_a_limit(tmp_path):
     prof.write_text(text)
     src = tmp_path / "p.csv"
     src.write_text(HEAD + f"0.00,0.1525,-0.25,-0.8,0,0.3,0,{P},{P}\n0.20,0.20,-0.35,-0.8,0,0.3,0,{P},,,\n")
-    r = run("plan", "-p", str(prof), "--batch", str(src), "--json", "-o", str(tmp_path / "o.csv"))
+    r = run("plan", "-p", str(prof), "--batch", str(src), "-t", "auto", "--json", "-o", str(tmp_path / "o.csv"))
     assert r.exit_code == 3
     docs = [json.loads(x) for x in r.stdout.splitlines()]
     assert [d["exit_code"] for d in docs[:2]] == [3, 3]
     assert docs[1]["start_m"] == [-0.1525, 0.0, -0.8]  # the failed row 1 moved nothing
     assert "motor torque rate" in r.stderr and ": pick: limit exceeded:" in r.stderr
     out, rep = tmp_path / "o2.csv", tmp_path / "r.json"
-    r = run("plan", "-p", str(prof), "--batch", str(src), "--json", "--report-only", "--report", str(rep), "-o", str(out))
+    r = run("plan", "-p", str(prof), "--batch", str(src), "-t", "auto", "--json", "--write-anyway", "--report", str(rep),
+            "-o", str(out))
     assert r.exit_code == 0
     docs = [json.loads(x) for x in r.stdout.splitlines()]
     assert docs[1]["t_start_s"] == pytest.approx(docs[0]["t_end_s"], abs=1e-12)  # row 2 starts when row 1 ends

@@ -64,7 +64,7 @@ def spy(monkeypatch) -> list:
 @pytest.mark.parametrize("extra", [[], ["-q"], ["--fail-fast"], ["--rate", "250", "--height", "0.03"], ["--eta", "0.4"]])
 def test_mixed_batch_identical_with_and_without_the_engine(monkeypatch, extra):
     seen = spy(monkeypatch)
-    on, off = both(["plan", "--batch", "-", "--json", "-j", "1", *extra], MIXED, monkeypatch)
+    on, off = both(["plan", "--batch", "-", "--json", "-t", "auto", "-j", "1", *extra], MIXED, monkeypatch)
     assert seen  # the engine ran
     if extra != ["--eta", "0.4"]:  # (the shipped table is for η = 0.5: every row goes to plan(), which solves it)
         assert seen[0] >= 2  # it decided rows 1, 2 (and 7) itself
@@ -90,7 +90,7 @@ def test_a_row_with_too_many_samples_fails_alone_with_the_engine(monkeypatch, tm
     src.write_text("from_x,from_y,from_z,to_x,to_y,to_z,time\n-0.1525,0,-0.8,0.1525,0,-0.8,0.3\n"
                    "-0.1525,0,-0.8,0.1525,0,-0.8,1500\n0.1,0.1,-0.8,-0.1,-0.1,-0.8,0.4\n")
     seen = spy(monkeypatch)
-    on, off = both(["plan", "--batch", str(src), "--json", "-j", jobs], None, monkeypatch)
+    on, off = both(["plan", "--batch", str(src), "--json", "-t", "auto", "-j", jobs], None, monkeypatch)
     assert seen  # the engine ran
     assert on.stdout == off.stdout and on.stderr == off.stderr and on.exit_code == off.exit_code == 1
     docs = [json.loads(x) for x in on.stdout.splitlines()]
@@ -105,7 +105,7 @@ def test_random_batch_identical_on_two_workers(monkeypatch, tmp_path):
     monkeypatch.setattr(verdicts, "verdict_rows_parallel", partial(verdicts.verdict_rows_parallel, chunk=100))
     src = tmp_path / "moves.csv"
     src.write_text(random_rows(300, seed=1))
-    on, off = both(["plan", "--batch", str(src), "--json", "-q", "-j", "2"], None, monkeypatch)
+    on, off = both(["plan", "--batch", str(src), "--json", "-t", "auto", "-q", "-j", "2"], None, monkeypatch)
     assert on.stdout == off.stdout and on.stderr == off.stderr and on.exit_code == off.exit_code
     codes = {json.loads(x)["exit_code"] for x in on.stdout.splitlines()}
     assert 0 in codes and 3 in codes  # both verdicts occur

@@ -86,13 +86,15 @@ def test_every_command_is_covered():
 
 def test_default_plan_to_csv_loads_no_scipy(tmp_path):
     """`pickplace plan` of the Adept cycle on the default profile to CSV (the 0.8 s cold-start target) runs
-    without scipy: the default method's spline is evaluated with numpy and no fitted duration is computed
-    unless asked (--show-fit, --time fit). With --show-fit, scipy.optimize comes in (brentq)."""
+    without scipy: the default method's spline is evaluated with numpy and the default duration's fit is solved in
+    closed form (no root finder), as with --show-fit. The time-optimal law brings scipy.optimize in."""
     args = ["plan", "--from", "-0.1525,0,-0.8", "--to", "0.1525,0,-0.8", "-o", str(tmp_path / "a.csv"), "-q"]
     res = _loaded_after(_run_cli(args))
     assert "scipy" not in res["modules"] and "mcap" not in res["modules"]
     assert (tmp_path / "a.csv").read_text().startswith("t[s]")
-    res = _loaded_after(_run_cli(args + ["--show-fit"]))
+    res = _loaded_after(_run_cli(args + ["-t", "auto", "--show-fit"]))
+    assert "scipy" not in res["modules"]
+    res = _loaded_after(_run_cli(args + ["-t", "optimal"]))
     assert "scipy" in res["modules"]
 
 
@@ -101,7 +103,7 @@ def test_show_fit_adds_the_fitted_duration(tmp_path):
 
     from pickplace_cli.cli import app
 
-    base = ["plan", "--from", "-0.1525,0,-0.8", "--to", "0.1525,0,-0.8", "--json", "-q"]
+    base = ["plan", "--from", "-0.1525,0,-0.8", "--to", "0.1525,0,-0.8", "-t", "auto", "--json", "-q"]
     plain = json.loads(CliRunner().invoke(app, base).stdout)
     shown = json.loads(CliRunner().invoke(app, base + ["--show-fit"]).stdout)
     assert plain["fit_s"] is None

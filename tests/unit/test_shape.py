@@ -117,7 +117,7 @@ def test_other_methods_and_given_k_are_refused():
 @pytest.mark.parametrize("extra, words", [
     (["--optimize", "shape", "-m", "ph", "--time", "fit"], "method ph"),
     (["--optimize", "shape", "--k1", "0.3", "--k2", "0.2", "--time", "fit"], "drop --k1/--k2"),
-    (["--optimize", "shape"], "--time fit or --time optimal"),
+    (["--optimize", "shape", "-t", "auto"], "--time limits (the default), fit or optimal"),
 ])
 def test_cli_refusals_are_one_line_exit_2(extra, words):
     r = CliRunner().invoke(app, ADEPT_ARGS + extra)
