@@ -17,6 +17,7 @@ from .limits.grid import check_grid_order
 from .limits.motion import MotionModel
 from .limits.report import LimitReport
 from .paths import Method, depends_on_duration, path_factory, plan_path
+from .paths.turn import resolve_task, turned, turned_factory
 from .model.profile import Profile
 from .robots import build_robot
 from .model.task import Task
@@ -39,6 +40,8 @@ class PlanOptions:
     hold_capacity: bool = False  # fit/optimal also hold the profile's Cartesian capacity (|v|, |a|, |j|)
     law_coefficients: int | None = None  # optimal: coefficients of the time law's cubic B-spline (None: auto, 20
     # refined to 40 when the law is far from uniform; more: finer, slower)
+    turn: str = "shortest"  # a rotary fourth axis: the way round to the task's end angle (curves.rotation.TurnRule)
+    turn_during: str = "transfer"  # … and when the tool turns: between lift-off and set-down, or the whole move
 
 
 @dataclass(frozen=True)
@@ -68,6 +71,8 @@ class Plan:
             "parameters": dict(self.parameters),
             "from_m": self.task.p_from.tolist(),
             "to_m": self.task.p_to.tolist(),
+            **({} if self.task.theta_from is None else
+               {"from_theta_rad": self.task.theta_from, "to_theta_rad": self.task.theta_to}),
             "height_m": self.task.height,
             "eta": self.task.eta,
             "b_m": self.task.b,
@@ -151,7 +156,7 @@ def _optimised_shape(task: Task, profile: Profile, options: PlanOptions) -> tupl
     base = {k: v for k, v in options.method_params.items() if v is not None and k not in ("k1", "k2")}
 
     def model_of(p):
-        return motion_model(p, profile)
+        return motion_model(turned(p, task, options.turn_during), profile)
 
     table_shape, t_table, ref = None, None, None
     try:
@@ -165,7 +170,7 @@ def _optimised_shape(task: Task, profile: Profile, options: PlanOptions) -> tupl
                                   hold_capacity=options.hold_capacity).seconds
     found = optimise_shape(task, profile, model_of, eta_fixed=task.eta if options.hold_eta else None,
                            table_shape=table_shape, capacity=profile.capacity if options.hold_capacity else None)
-    shaped = Task(task.p_from, task.p_to, task.height, found.eta, task.v_from, task.v_to)
+    shaped = replace(task, eta=found.eta)
     info = {"k1": found.k1, "k2": found.k2, "eta": found.eta, "screened_fit_s": found.t_screen,
             "shapes_screened": found.evaluations, "note": found.note,
             "table": None if table_shape is None else {"k1": table_shape[0], "k2": table_shape[1],
@@ -193,6 +198,7 @@ def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions(), *,
             raise PlanInterrupted
 
     _refuse_moving_ends(task, options)
+    task = resolve_task(task, options.turn, *motion_model_static(profile)[:2], profile.name)
     rate = options.rate if options.rate is not None else profile.planning.rate
     shape = None
     if options.shape:
@@ -261,10 +267,11 @@ def _path_stage(task: Task, profile: Profile, options: PlanOptions, shape: dict 
     try:
         if depends_on_duration(options.method):  # the path is planned for a duration (e.g. conveyor tracking)
             _refuse_retiming(options)
-            factory = path_factory(task, options.method, **options.method_params)
+            factory = turned_factory(path_factory(task, options.method, **options.method_params), task,
+                                     options.turn_during)
             first, path = choose_duration_for(factory, profile.capacity, first_spec)
             return path, factory, first
-        path = plan_path(task, options.method, **options.method_params)
+        path = turned(plan_path(task, options.method, **options.method_params), task, options.turn_during)
     except TableError:
         check_ends_reachable(task, profile)
         raise
