@@ -17,7 +17,7 @@ from typing import Callable
 import numpy as np
 
 from ..curves.rotation import TurnRule, TurnWindow, resolve_turn, transfer_window, with_rotation
-from ..model.errors import TaskError
+from ..model.errors import TaskError, UnreachableError
 from ..model.task import Task
 
 
@@ -26,23 +26,41 @@ def resolve_task(task: Task, rule: TurnRule | str, robot, specs, profile_name: s
     tool angle on a profile without a rotary axis or a turn longer than the axis' range (module docstring)."""
     if task.theta_from is None:
         return task
+    _, end = resolve_angles(task.p_from, task.p_to, task.theta_from, task.theta_to, rule, robot, specs, profile_name)
+    return replace(task, theta_to=end)
+
+
+def resolve_angles(p_from, p_to, theta_from: float | None, theta_to: float | None, rule: TurnRule | str, robot, specs,
+                   profile_name: str) -> tuple[float | None, float | None]:
+    """(start, end) tool angles [rad] of a move from ``p_from`` to ``p_to`` [m] with the end reached by ``rule``
+    ((None, None) without angles); TaskError as :func:`resolve_task` (also for only one angle given)."""
+    if theta_from is None and theta_to is None:
+        return None, None
+    if theta_from is None or theta_to is None:
+        given = "to_theta" if theta_from is None else "from_theta"
+        raise TaskError(f"{given} = {theta_to if theta_from is None else theta_from!r} rad alone: give the tool "
+                        "angle at both ends of the move (or at neither)")
     if not getattr(robot, "rotary", False):
-        pose = ",".join(f"{c:g}" for c in task.p_from)
-        raise TaskError(f"from = {pose},{task.theta_from:g}: a tool angle (the fourth number, rad) needs a robot with "
+        pose = ",".join(f"{c:g}" for c in p_from)
+        raise TaskError(f"from = {pose},{theta_from:g}: a tool angle (the fourth number, rad) needs a robot with "
                         f"a rotary fourth axis; profile {profile_name} has {len(robot.joint_names)} joints and no "
                         "robot.rotary (give X,Y,Z, or a 4-axis profile)")
-    end = resolve_turn(task.theta_from, task.theta_to, rule)
+    end = resolve_turn(theta_from, theta_to, rule)
     rng = specs[-1].limits.position
     if rng is not None:
-        q = robot.inverse_kinematics(np.stack([task.p_from, task.p_to]), np.array([task.theta_from, end]))
+        try:
+            q = robot.inverse_kinematics(np.stack([np.asarray(p_from, float), np.asarray(p_to, float)]),
+                                         np.array([theta_from, end]))
+        except UnreachableError:  # an end out of reach: the planner's own check names it (exit 4)
+            return float(theta_from), end
         travel, width = abs(q[1, -1] - q[0, -1]), rng[1] - rng[0]
         if travel > width:
             name = robot.joint_names[-1]
             raise TaskError(
-                f"to_theta = {task.theta_to:g} rad: turning from {task.theta_from:g} to {end:g} rad ({rule_name(rule)}) "
+                f"to_theta = {theta_to:g} rad: turning from {theta_from:g} to {end:g} rad ({rule_name(rule)}) "
                 f"moves {name} by {travel:.4g} rad, beyond its whole range [{rng[0]:g}, {rng[1]:g}] rad "
                 f"({width:.4g} rad): no start angle makes this turn (give another end angle or --turn)")
-    return replace(task, theta_to=end)
+    return float(theta_from), end
 
 
 def rule_name(rule: TurnRule | str) -> str:
@@ -80,4 +98,14 @@ def turned_factory(factory: Callable, task: Task, during: TurnWindow | str) -> C
         hook = getattr(factory, name, None)
         if hook is not None:
             setattr(call, name, lambda T, hook=hook: (lambda r: (turned(r[0], task, during), *r[1:]))(hook(T)))
+    return call
+
+
+def turned_at(factory, during: TurnWindow | str) -> Callable:
+    """T → ``factory(T)`` carrying the turn of ``factory.task_at(T)`` (a factory whose task changes with T, as a
+    conveyor rendezvous' end point does)."""
+
+    def call(T: float):
+        return turned(factory(T), factory.task_at(T), during)
+
     return call

@@ -182,7 +182,8 @@ def read_trajectory(text: str, source: str, joint_names: tuple[str, ...]) -> tup
 
 def _check_branch(s: Samples, robot, pos: np.ndarray, source: str) -> None:
     """TaskError when the file's joint positions are not the model's configuration (module docstring)."""
-    q_model = robot.inverse_kinematics(pos)
+    rotary = getattr(robot, "rotary", False)  # a fourth axis: the model's q4 for the file's own tool angle
+    q_model = robot.inverse_kinematics(pos, robot.tool_angle(s.q)) if rotary else robot.inverse_kinematics(pos)
     diff = s.q - q_model
     revolute = np.array([u == "rad" for u in robot.joint_units])
     turns = np.where(revolute, 2 * np.pi * np.round(diff / (2 * np.pi)), 0.0)
@@ -208,26 +209,34 @@ def check_samples(s: Samples, profile: Profile, smoothing: float = 0.0, source: 
     pos = robot.forward_kinematics(s.q)
     _check_branch(s, robot, pos, source)
     T = float(t[-1])
+    rotary = getattr(robot, "rotary", False)
+    if rotary:  # the tool angle θ = FK of the fourth axis, splined with the positions as one more column
+        pos = np.column_stack([pos, robot.tool_angle(s.q)])
     if smoothing > 0:
-        splines = [UnivariateSpline(t, pos[:, k], k=5, s=smoothing * len(t)) for k in range(3)]
+        splines = [UnivariateSpline(t, pos[:, k], k=5, s=smoothing * len(t)) for k in range(pos.shape[1])]
 
         def ev(x: np.ndarray, order: int) -> np.ndarray:
             return np.column_stack([sp.derivative(order)(x) if order else sp(x) for sp in splines])
 
-        how = f"a quintic smoothing spline (s = {smoothing:g}·N) of the tool positions FK(q)"
+        how = f"a quintic smoothing spline (s = {smoothing:g}·N) of the tool positions FK(q)" + (" and angle" if rotary else "")
     else:
         spline = make_interp_spline(t, pos, k=5)
 
         def ev(x: np.ndarray, order: int) -> np.ndarray:
             return spline(x, nu=order)
 
-        how = "a quintic interpolating spline of the tool positions FK(q)"
+        how = "a quintic interpolating spline of the tool positions FK(q)" + (" and angle" if rotary else "")
 
     def evaluate(tau: np.ndarray, order: int) -> np.ndarray:
-        return ev(np.clip(tau, 0.0, 1.0) * T, order) * T**order
+        return ev(np.clip(tau, 0.0, 1.0) * T, order)[:, :3] * T**order
 
+    angle = None
+    if rotary:
+        from ..curves.rotation import SampledRotation
+
+        angle = SampledRotation(lambda tau, order: ev(np.clip(tau, 0.0, 1.0) * T, order)[:, 3] * T**order)
     # the quintic spline is C⁴ across the samples (its knots): nothing jumps, peaks are fitted across them
-    cpath = CartesianPath(evaluate, "checked", {"source": source}, (0.0, 0.0, 0.0), t / T, jumps=())
+    cpath = CartesianPath(evaluate, "checked", {"source": source}, (0.0, 0.0, 0.0), t / T, jumps=(), angle=angle)
     margin = getattr(profile.robot, "singularity_margin", None)
     specs = profile.robot.joint_specs()
     model = MotionModel(cpath, robot, specs, margin, profile.workcell.box)

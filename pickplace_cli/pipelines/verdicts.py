@@ -121,6 +121,8 @@ def engine_applies(profile, options) -> bool:
         robot = build_robot(profile.robot)
     except PickplaceError:
         return False
+    if getattr(robot, "rotary", False):  # a fourth axis: its angle law is not batched (the per-row planner decides)
+        return False
     return all(hasattr(robot, n) for n in ("torque_rate", "reachable", "singularity_measure")) and (
         getattr(profile.robot, "singularity_margin", None) is not None
     )
