@@ -188,6 +188,8 @@ def _check_branch(s: Samples, robot, pos: np.ndarray, source: str) -> None:
     revolute = np.array([u == "rad" for u in robot.joint_units])
     turns = np.where(revolute, 2 * np.pi * np.round(diff / (2 * np.pi)), 0.0)
     off = np.abs(diff - turns)
+    if rotary and np.max(off[:, :-1]) > BRANCH_TOL:  # the arm's branch: name its joint (q4 follows from it)
+        off[:, -1] = 0.0
     if np.max(off) > BRANCH_TOL:
         k = int(np.flatnonzero(np.max(off, axis=1) > BRANCH_TOL)[0])  # the first such row
         j = int(np.argmax(off[k]))
