@@ -139,12 +139,14 @@ def plan(
     batch: Optional[str] = typer.Option(
         None, "--batch", help="Plan many moves from a CSV file; '-' (stdin) or the path of a named pipe is streamed: "
         "each row answered and flushed as soon as it is read. Columns from_x,from_y,from_z,to_x,to_y,to_z "
-        "[m], optional height [m], eta, v_from_x.. v_to_z [m/s], time [s|auto|fit|optimal]; a belt row (as "
+        "[m], optional height [m], eta, v_from_x.. v_to_z [m/s], time [s|auto|fit|optimal], from_theta, to_theta "
+        "[rad, the tool angle at the ends: a profile with a rotary fourth axis]; a belt row (as "
         "--to-belt): to_belt_vx,to_belt_vy,to_belt_vz [m/s] and optional latency [s >= 0]. Output gets a move column. "
         "A t_detect column makes it a belt schedule (one detected part per row, in time order, the robot's state "
         "carried over): t_detect [s], to_x,to_y,to_z [m, where the part was seen], to_belt_vx,to_belt_vy,to_belt_vz "
         "[m/s], place_x,place_y,place_z [m], optional latency [s >= 0, default --latency], height, eta, time, "
-        "from_x,from_y,from_z [m, row 1 only: the robot's start]."
+        "from_x,from_y,from_z [m, row 1 only: the robot's start], to_theta [rad, the part's angle as detected], "
+        "place_theta [rad], from_theta [rad, row 1 only]."
     ),
     fail_fast: bool = typer.Option(False, "--fail-fast", help="With --batch: stop at the first row that fails."),
     workers: int = typer.Option(
