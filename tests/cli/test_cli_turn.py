@@ -193,3 +193,24 @@ def test_schedule_with_angles(tmp_path):
     # a schedule with angles on a profile without the axis: row errors, exit 1
     r = run("plan", "--batch", str(src), "--latency", "0.05", "-o", str(tmp_path / "x.csv"), "-q")
     assert r.exit_code == 1 and "rotary fourth axis" in r.stderr
+
+
+def test_fit_workspace_keeps_the_angles():
+    r = run("plan", *TURN, *D4, "--height", "0.4", "--fit-workspace", "--json", "-q")
+    doc = json.loads(r.stdout)
+    assert doc["height_m"] < 0.4 and doc["to_theta_rad"] == 1.5708  # the height lowered, the turn kept
+
+
+def test_profile_rotary_section(tmp_path):
+    from pickplace_cli.model.profile import resolve_profile_path
+
+    r = run("profile", "show", "scara-600")
+    assert "rotary fourth axis: tool angle = q1 + q2 + q4" in r.stdout and "q4: position [-6.283, 6.283] rad" in r.stdout
+    text = resolve_profile_path("delta-4axis").read_text()
+    for old, new, needle in (("    sign: 1\n", "    sign: 2\n", "robot.rotary.sign = 2"),
+                             ("    tool_inertia: 1.0e-4", "    tool_inertia: -1.0e-4", "robot.rotary.tool_inertia = -0.0001"),
+                             ("    sign: 1\n", "    sign: 1\n    mass: 2\n", "unknown key 'robot.rotary.mass'")):
+        bad = tmp_path / "bad.yaml"
+        bad.write_text(text.replace(old, new, 1))
+        r = run("profile", "validate", str(bad))
+        assert r.exit_code == 1 and needle in r.stderr and len(r.stderr.strip().splitlines()) == 1, r.stderr
