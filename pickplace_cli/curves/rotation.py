@@ -12,7 +12,7 @@ polynomial
 (s′(x) = 630 x⁴(1 − x)⁴), the lowest-degree polynomial whose first four derivatives vanish at both ends, and
 θ constant outside the window. So θ is C⁴ everywhere — as smooth as the quintic B-spline path, which is C⁴
 inside the move — and the angle's jerk (and with it every motor's torque rate) is continuous: the law adds no
-jump to the limit check. Its exact peaks are Δ·max|s⁽ᵏ⁾|/(τb − τa)ᵏ (:data:`STEP_PEAKS`, from the roots of
+jump to the limit check. Its exact peaks are Δ·max|s⁽ᵏ⁾|/(τb − τa)ᵏ (:func:`step_peaks`, from the roots of
 s⁽ᵏ⁺¹⁾).
 
 **The window** (:class:`TurnWindow`): the whole move (τa, τb = 0, 1), or only the transfer between lift-off and
@@ -28,6 +28,7 @@ counter-clockwise (Δ ∈ [0, 2π)), always clockwise (Δ ∈ (−2π, 0]), or t
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from enum import Enum
@@ -73,21 +74,29 @@ class TurnWindow(str, Enum):
     transfer = "transfer"
 
 
-#: s(x) of the module docstring, coefficients of x⁰ … x⁹ (numpy's Polynomial order)
-STEP = np.polynomial.Polynomial([0, 0, 0, 0, 0, 126, -420, 540, -315, 70])
-_STEP_D = [STEP.deriv(k) for k in range(5)]
+#: s(x) of the module docstring and its derivatives up to the fifth: coefficients, highest power first (np.polyval)
+_STEP_D = [np.array([70, -315, 540, -420, 126, 0, 0, 0, 0, 0], float)]
+for _k in range(5):
+    _STEP_D.append(np.polyder(_STEP_D[-1]))
+del _k
 
 
-def _step_peak(k: int) -> float:
-    """max |s⁽ᵏ⁾| on [0, 1], exact: s⁽ᵏ⁾ at the real roots of s⁽ᵏ⁺¹⁾ in [0, 1] and at the ends."""
-    roots = _STEP_D[k].deriv().roots() if k < 4 else STEP.deriv(k + 1).roots()
-    x = np.concatenate([[0.0, 1.0], roots[np.abs(roots.imag) < 1e-12].real])
-    x = x[(x >= 0.0) & (x <= 1.0)]
-    return float(np.max(np.abs(_STEP_D[k](x))))
+def step(x, k: int = 0) -> np.ndarray:
+    """s⁽ᵏ⁾(x) (k = 0 … 5) of the module docstring."""
+    return np.polyval(_STEP_D[k], x)
 
 
-#: max |s′|, |s″|, |s‴| on [0, 1] (s′ peaks at x = ½: 630/256)
-STEP_PEAKS = tuple(_step_peak(k) for k in (1, 2, 3))
+@functools.cache
+def step_peaks() -> tuple[float, float, float]:
+    """max |s′|, |s″|, |s‴| on [0, 1], exact: s⁽ᵏ⁾ at the real roots of s⁽ᵏ⁺¹⁾ in [0, 1] and at the ends
+    (s′ peaks at x = ½: 630/256)."""
+    out = []
+    for k in (1, 2, 3):
+        roots = np.roots(_STEP_D[k + 1])
+        x = np.concatenate([[0.0, 1.0], roots[np.abs(roots.imag) < 1e-12].real])
+        x = x[(x >= 0.0) & (x <= 1.0)]
+        out.append(float(np.max(np.abs(step(x, k)))))
+    return tuple(out)  # type: ignore[return-value]
 
 
 @dataclass(frozen=True)
@@ -117,9 +126,9 @@ class RotationLaw:
         x = np.clip((tau - self.tau0) / w, 0.0, 1.0)
         inside = (tau > self.tau0) & (tau < self.tau1)
         out = np.empty((4, len(tau)))
-        out[0] = self.start + self.turn * _STEP_D[0](x)
+        out[0] = self.start + self.turn * step(x)
         for k in (1, 2, 3):
-            out[k] = np.where(inside, self.turn * _STEP_D[k](x) / w**k, 0.0)
+            out[k] = np.where(inside, self.turn * step(x, k) / w**k, 0.0)
         return out
 
     def __call__(self, tau: np.ndarray, order: int = 0) -> np.ndarray:
@@ -131,7 +140,7 @@ class RotationLaw:
     def peaks(self) -> tuple[float, float, float]:
         """Exact max |θ′|, |θ″|, |θ‴| on τ ∈ [0, 1] (rad/1^k)."""
         w = self.tau1 - self.tau0
-        return tuple(abs(self.turn) * STEP_PEAKS[k - 1] / w**k for k in (1, 2, 3))  # type: ignore[return-value]
+        return tuple(abs(self.turn) * step_peaks()[k - 1] / w**k for k in (1, 2, 3))  # type: ignore[return-value]
 
     @property
     def breakpoints(self) -> tuple[float, ...]:

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from pickplace_cli.curves.rotation import (
-    STEP, STEP_PEAKS, ComposedRotation, RotationLaw, TurnRule, resolve_turn, transfer_window, with_rotation,
+    ComposedRotation, RotationLaw, TurnRule, resolve_turn, step, step_peaks, transfer_window, with_rotation,
 )
 from pickplace_cli.model.task import Task
 from pickplace_cli.paths import plan_path
@@ -31,26 +31,26 @@ def s_hand(x, k=0):
 def test_step_polynomial_is_the_hand_derived_one():
     # the module's coefficients are the primitive of 630 x⁴(1-x)⁴ (exact rationals: 1e-12 is round-off)
     x = np.linspace(0, 1, 101)
-    assert np.max(np.abs(STEP(x) - s_hand(x))) < 1e-12
-    assert STEP(0.0) == 0.0 and STEP(1.0) == pytest.approx(1.0, abs=1e-12)
+    assert np.max(np.abs(step(x) - s_hand(x))) < 1e-12
+    assert step(0.0) == 0.0 and step(1.0) == pytest.approx(1.0, abs=1e-12)
 
 
 @pytest.mark.parametrize("k", [1, 2, 3, 4])
 def test_step_derivatives_vanish_at_both_ends(k):
     # C⁴ rest to rest: s′ … s⁗ are zero at x = 0 and 1 (integer coefficients: 1e-9 is round-off of ~1e4 terms)
     assert abs(s_hand(0.0, k)) < 1e-9 and abs(s_hand(1.0, k)) < 1e-9
-    assert abs(STEP.deriv(k)(0.0)) < 1e-9 and abs(STEP.deriv(k)(1.0)) < 1e-9
+    assert abs(step(0.0, k)) < 1e-9 and abs(step(1.0, k)) < 1e-9
     # the fifth does not: the law is C⁴, not C⁵ (s⁽⁵⁾(0) = 630·4! = 15120)
-    assert abs(STEP.deriv(5)(0.0) - 15120.0) < 1e-6
+    assert abs(step(0.0, 5) - 15120.0) < 1e-6
 
 
 def test_step_peaks_match_dense_sampling():
     x = np.linspace(0, 1, 2_000_001)
-    for k, peak in zip((1, 2, 3), STEP_PEAKS):
+    for k, peak in zip((1, 2, 3), step_peaks()):
         dense = np.max(np.abs(s_hand(x, k)))
         # sampled every 5e-7: a smooth maximum is missed by ~(5e-7)²·|s⁽ᵏ⁺²⁾|, below 1e-8 relative
         assert peak == pytest.approx(dense, rel=1e-8)
-    assert STEP_PEAKS[0] == pytest.approx(630 / 256, rel=1e-14)  # s′(½) = 630/2⁸, by hand
+    assert step_peaks()[0] == pytest.approx(630 / 256, rel=1e-14)  # s′(½) = 630/2⁸, by hand
 
 
 def test_law_on_a_window_values_and_derivatives():
