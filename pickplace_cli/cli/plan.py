@@ -428,9 +428,9 @@ def _single_task(a, prof, params: dict):
     p_from, th_from = _parse_pose("from", a.from_)
     p_to, th_to = _parse_pose("to", a.to)
     if (th_from is None) != (th_to is None):
-        given, other = ("from", "to") if th_to is None else ("to", "from")
-        raise TaskError(f"{given} = {getattr(a, given + ('_' if given == 'from' else ''))!r}: a tool angle THETA (the "
-                        f"fourth number, rad) needs one at --{other} too (or give neither: the tool does not turn)")
+        given, other, text = ("from", "to", a.from_) if th_to is None else ("to", "from", a.to)
+        raise TaskError(f"{given} = {text!r}: a tool angle THETA (the fourth number, rad) needs one at --{other} too "
+                        "(or give neither: the tool does not turn)")
     h = a.height if a.height is not None else prof.planning.height
     e = a.eta if a.eta is not None else prof.planning.eta
     wc = prof.workcell

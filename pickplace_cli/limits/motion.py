@@ -132,8 +132,8 @@ class MotionModel:
         the model (step ``DTAU``, two more evaluations). ``motion`` = (p, v, a, j), each (N, 3) at T = 1 s,
         gives the Cartesian motion at τ directly instead of evaluating ``path`` (the batched verdict engine
         stacks many moves' samples into one call; needs the analytic rates); a fifth entry, the tool angle's
-        θ, θ′, θ″, θ‴ (4, N), is passed to a robot with a rotary fourth axis (without it: the path's angle law). ``order``: the permutation that
-        sorts an unsorted ``tau`` (:func:`check_grid_order`), kept in the Parts for the check.
+        θ, θ′, θ″, θ‴ (4, N), goes to a robot with a rotary fourth axis (without it: the path's angle law).
+        ``order``: the permutation that sorts an unsorted ``tau`` (:func:`check_grid_order`), kept in the Parts.
         ``singularity=False`` skips the singularity measure (and its column)."""
         tau = np.asarray(tau, float)
         analytic = derivatives and hasattr(self.robot, "torque_rate")

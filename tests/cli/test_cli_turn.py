@@ -123,10 +123,12 @@ def test_batch_json_lines_carry_the_angles(tmp_path):
     assert doc["exit_code"] == 0 and doc["from_theta_rad"] == 0.5 and doc["to_theta_rad"] == -0.5
 
 
-def test_check_reads_the_fourth_joint(tmp_path):
+@pytest.mark.parametrize("move, prof", [(TURN, D4), (["--from", "0.35,-0.1525,-0.15,2.5", "--to", "0.35,0.1525,-0.15,-2.5"],
+                                                ["-p", "scara-600"])], ids=["delta-4axis", "scara-600"])
+def test_check_reads_the_fourth_joint(tmp_path, move, prof):
     out, rep, chk = tmp_path / "t.csv", tmp_path / "plan.json", tmp_path / "check.json"
-    assert run("plan", *TURN, *D4, "-o", str(out), "--report", str(rep), "-q").exit_code == 0
-    r = run("check", str(out), *D4, "--report", str(chk))
+    assert run("plan", *move, *prof, "-o", str(out), "--report", str(rep), "-q").exit_code == 0
+    r = run("check", str(out), *prof, "--report", str(chk))
     assert r.exit_code == 0, r.stderr
     planned = {(x["joint"], x["quantity"]): x["peak"] for x in json.loads(rep.read_text())["limits"]["rows"]}
     checked = {(x["joint"], x["quantity"]): x["peak"] for x in json.loads(chk.read_text())["limits"]["rows"]}
