@@ -216,3 +216,10 @@ def test_profile_rotary_section(tmp_path):
         bad.write_text(text.replace(old, new, 1))
         r = run("profile", "validate", str(bad))
         assert r.exit_code == 1 and needle in r.stderr and len(r.stderr.strip().splitlines()) == 1, r.stderr
+
+
+def test_check_without_the_fourth_column_is_refused(tmp_path):
+    f = tmp_path / "three.csv"
+    f.write_text("t,q1,q2,q3\n" + "".join(f"{k * 0.01:g},0.1,-1.0,-0.1\n" for k in range(8)))
+    r = run("check", str(f), "-p", "scara-600")
+    assert r.exit_code == 1 and "lacks column(s) q4" in r.stderr and len(r.stderr.strip().splitlines()) == 1
