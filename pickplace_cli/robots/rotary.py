@@ -13,7 +13,7 @@ Conventions (SI units: m, rad, s, kg, N·m)
     Both ends of the shaft are vertical (the motor's axis and the tool's), so with the two yokes of the
     intermediate shaft in phase the double Cardan joint passes the angle on exactly (homokinetic): the model
     has no kinematic error to add. Only the intermediate tube turns unevenly (its speed ratio swings between
-    cos β and 1/cos β for a shaft inclined β to the vertical: ±1.7 % at the Adept cycle's ends on the shipped
+    cos β and 1/cos β for a shaft inclined β to the vertical: ±1.8 % at the Adept cycle's ends on the shipped
     Delta); its own inertia is counted as if it turned with q4, that fluctuation is neglected.
   * **SCARA** (c = (1, 1, 0)): J4 turns the spline shaft at the end of link 2, so θ = q1 + q2 + σ·q4. Holding
     the tool's angle while the arm swings therefore moves J4 (q4 = σ(θ − q1 − q2)): J4 counter-rotates.
