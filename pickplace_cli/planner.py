@@ -365,6 +365,7 @@ def _assemble(task: Task, profile: Profile, path, duration: Duration, model: Mot
         torque=out["A"] / T**2 + out["G"],
         motor_speed=model.gear * out["qd1"] / T if model.has_drives else None,
         motor_torque=out["Am"] / T**2 + out["Gm"] if model.has_drives else None,
+        angle_weights=getattr(robot, "angle_weights", None),
     )
     p, v, a, j = out["p"], out["v1"] / T, out["a1"] / T**2, out["j1"] / T**3
     traj = CartesianTrajectory(path, T)

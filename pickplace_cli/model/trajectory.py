@@ -138,6 +138,9 @@ class JointTrajectory:
     torque: np.ndarray | None = None
     motor_speed: np.ndarray | None = None
     motor_torque: np.ndarray | None = None
+    #: a robot with a rotary fourth axis: the tool angle about the base z axis is θ = q·angle_weights [rad] (and
+    #: θ̇ = q̇·w, θ̈ = q̈·w: it is linear in the joints); None: the tool does not turn
+    angle_weights: tuple[float, ...] | None = None
 
     def __post_init__(self) -> None:
         n = len(self.t)

@@ -656,6 +656,7 @@ def plan_tracking(move, part: Part, profile, duration: float | None = None, rate
         torque=out["A"] / D**2 + out["G"],
         motor_speed=model.gear * out["qd1"] / D if model.has_drives else None,
         motor_torque=out["Am"] / D**2 + out["Gm"] if model.has_drives else None,
+        angle_weights=getattr(robot, "angle_weights", None),
     )
     duration_info = Duration(D, "tracking", 0.0, 0.0, None, "belt")
     return Plan(move.task, "track", dict(path.parameters), duration_info, traj, t, out["p"], out["v1"] / D,

@@ -79,6 +79,11 @@ class RotaryAxisRobot:
         object.__setattr__(self, "joint_units", (*self.base.joint_units, "rad"))
 
     @property
+    def angle_weights(self) -> tuple[float, ...]:
+        """w with θ = q·w (q (N, 4)): the carrier's weights and σ."""
+        return (*map(float, self.carrier), float(self.sign))
+
+    @property
     def _c(self) -> np.ndarray:
         return np.asarray(self.carrier, float)
 

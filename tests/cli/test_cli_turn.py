@@ -138,25 +138,43 @@ def test_check_reads_the_fourth_joint(tmp_path, move, prof):
     assert checked[("q4", "motor torque rate")] == pytest.approx(planned[("q4", "motor torque rate")], rel=0.02)
 
 
-def test_mcap_joint_four_read_by_rosbags(tmp_path):
+@pytest.mark.parametrize("move, prof", [(TURN, D4), (["--from", "0.35,-0.1525,-0.15,2.5", "--to", "0.35,0.1525,-0.15,-2.5"],
+                                                ["-p", "scara-600"])], ids=["delta-4axis", "scara-600"])
+def test_mcap_joint_four_and_the_tool_orientation(tmp_path, move, prof):
+    """ROS 2 MCAP read back by rosbags (its own reader and CDR decoder) against the CSV of the same plan: joint 4 in
+    the joint states, the tool's orientation about z (θ = q1 + q2 + q4 or q4, from the CSV's columns, the
+    quaternion built here) and its angular rates. 1e-11: the CSV's 12 digits."""
     from tests.golden.samples import read_ros2
-    from tests.unit.test_export_mcap import check_ros2_against_csv
 
-    from pickplace_cli.model.profile import load_profile
-    from pickplace_cli.model.task import Task
-    from pickplace_cli.planner import PlanOptions, plan
-
-    out = tmp_path / "t.mcap"
-    r = run("plan", *TURN, *D4, "-f", "mcap", "-o", str(out), "-q")
-    assert r.exit_code == 0
+    out, csv_out = tmp_path / "t.mcap", tmp_path / "t.csv"
+    assert run("plan", *move, *prof, "-f", "mcap", "-o", str(out), "-q").exit_code == 0
+    assert run("plan", *move, *prof, "-o", str(csv_out), "-q").exit_code == 0
+    col = table(csv_out.read_text())
+    scara = prof[-1] == "scara-600"
+    theta = col["q4"] + (col["q1"] + col["q2"] if scara else 0.0)
+    omega = col["qd4"] + (col["qd1"] + col["qd2"] if scara else 0.0)
+    alpha = col["qdd4"] + (col["qdd1"] + col["qdd2"] if scara else 0.0)
     msgs = read_ros2(out)
     js = [m for _, m in msgs["/joint_states"]]
-    assert list(js[0].name) == ["q1", "q2", "q3", "q4"]
-    assert js[-1].position[3] == pytest.approx(1.5708, abs=1e-12)
-    # every value against the CSV of the same plan (the export tests' own comparison)
-    pl = plan(Task([-0.1525, 0, -0.8], [0.1525, 0, -0.8], 0.025, theta_from=0.0, theta_to=1.5708),
-              load_profile("delta-4axis"), PlanOptions(fit=False))
-    check_ros2_against_csv(pl, msgs, drives=True)
+    assert list(js[0].name) == ["q1", "q2", "q3", "q4"] and len(js) == len(theta)
+    np.testing.assert_allclose([m.position[3] for m in js], col["q4"], rtol=0, atol=1e-11)
+    quat = np.array([[m.pose.orientation.x, m.pose.orientation.y, m.pose.orientation.z, m.pose.orientation.w]
+                     for _, m in msgs["/tool_pose"]])
+    np.testing.assert_allclose(quat, np.column_stack([0 * theta, 0 * theta, np.sin(theta / 2), np.cos(theta / 2)]),
+                               rtol=0, atol=1e-11)
+    np.testing.assert_allclose([m.twist.angular.z for _, m in msgs["/tool_twist"]], omega, rtol=0,
+                               atol=1e-11 * max(1.0, np.abs(omega).max()))
+    np.testing.assert_allclose([m.accel.angular.z for _, m in msgs["/tool_accel"]], alpha, rtol=0,
+                               atol=1e-11 * max(1.0, np.abs(alpha).max()))
+    assert all(m.twist.angular.x == 0 and m.twist.angular.y == 0 for _, m in msgs["/tool_twist"])
+    # the foxglove flavour's poses carry the same orientation (mcap's own reader, JSON)
+    from tests.golden.samples import read_mcap_json
+
+    fox = tmp_path / "f.mcap"
+    assert run("plan", *move, *prof, "-f", "mcap", "--mcap-flavor", "foxglove", "-o", str(fox), "-q").exit_code == 0
+    poses = read_mcap_json(fox.read_bytes())[1]["/tool_pose"]
+    got = np.array([[d["pose"]["orientation"][k] for k in "zw"] for _, d in poses])
+    np.testing.assert_allclose(got, np.column_stack([np.sin(theta / 2), np.cos(theta / 2)]), rtol=0, atol=1e-11)
 
 
 def test_belt_rendezvous_meets_the_part_at_its_angle(tmp_path):
