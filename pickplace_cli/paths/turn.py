@@ -94,10 +94,14 @@ def turned_factory(factory: Callable, task: Task, during: TurnWindow | str) -> C
     def call(T: float):
         return turned(factory(T), task, during)
 
-    for name in ("final",):  # the factory's own hooks (a continued solve's confirmation) pass through
-        hook = getattr(factory, name, None)
-        if hook is not None:
-            setattr(call, name, lambda T, hook=hook: (lambda r: (turned(r[0], task, during), *r[1:]))(hook(T)))
+    final = getattr(factory, "final", None)
+    if final is not None:  # the factory's confirmation of a continued solve (bspline-vel) passes through
+
+        def confirm(T: float):
+            path, *rest = final(T)
+            return (turned(path, task, during), *rest)
+
+        call.final = confirm  # type: ignore[attr-defined]
     return call
 
 
