@@ -18,6 +18,7 @@ from .limits.motion import MotionModel
 from .limits.report import LimitReport
 from .paths import Method, depends_on_duration, path_factory, plan_path
 from .model.headroom import apply_limit_use, limit_specs
+from .paths.turn import resolve_task, turned, turned_factory
 from .model.profile import Profile
 from .robots import build_robot
 from .model.task import Task
@@ -46,6 +47,8 @@ class PlanOptions:
     # planning.limit_use
     capacity_rows: bool | None = None  # the Cartesian capacity's rows in the report: None by the rule
     # (:func:`holds_capacity`); a caller that chose the duration itself (a conveyor rendezvous) says
+    turn: str = "shortest"  # a rotary fourth axis: the way round to the task's end angle (curves.rotation.TurnRule)
+    turn_during: str = "transfer"  # … and when the tool turns: between lift-off and set-down, or the whole move
 
 
 def holds_capacity(options: PlanOptions) -> bool:
@@ -84,6 +87,8 @@ class Plan:
             "parameters": dict(self.parameters),
             "from_m": self.task.p_from.tolist(),
             "to_m": self.task.p_to.tolist(),
+            **({} if self.task.theta_from is None else
+               {"from_theta_rad": self.task.theta_from, "to_theta_rad": self.task.theta_to}),
             "height_m": self.task.height,
             "eta": self.task.eta,
             "b_m": self.task.b,
@@ -169,7 +174,7 @@ def _optimised_shape(task: Task, profile: Profile, options: PlanOptions) -> tupl
     base = {k: v for k, v in options.method_params.items() if v is not None and k not in ("k1", "k2")}
 
     def model_of(p):
-        return motion_model(p, profile)
+        return motion_model(turned(p, task, options.turn_during), profile)
 
     table_shape, t_table, ref = None, None, None
     try:
@@ -183,7 +188,7 @@ def _optimised_shape(task: Task, profile: Profile, options: PlanOptions) -> tupl
                                   model=model_of(ref), dwell=profile.planning.dwell, hold_capacity=hold).seconds
     found = optimise_shape(task, profile, model_of, eta_fixed=task.eta if options.hold_eta else None,
                            table_shape=table_shape, capacity=profile.capacity if hold else None)
-    shaped = Task(task.p_from, task.p_to, task.height, found.eta, task.v_from, task.v_to)
+    shaped = replace(task, eta=found.eta)
     info = {"k1": found.k1, "k2": found.k2, "eta": found.eta, "screened_fit_s": found.t_screen,
             "shapes_screened": found.evaluations, "note": found.note,
             "table": None if table_shape is None else {"k1": table_shape[0], "k2": table_shape[1],
@@ -217,6 +222,7 @@ def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions(), *,
     profile = apply_limit_use(profile, options.limit_use)  # every timed limit at use × its rating (itself at 1)
 
     _refuse_moving_ends(task, options)
+    task = resolve_task(task, options.turn, *motion_model_static(profile)[:2], profile.name)
     rate = options.rate if options.rate is not None else profile.planning.rate
     if options.cycle is not None:
         rate = 1.0 / options.cycle  # one sample per cycle
@@ -318,10 +324,11 @@ def _path_stage(task: Task, profile: Profile, options: PlanOptions, shape: dict 
     try:
         if depends_on_duration(options.method):  # the path is planned for a duration (e.g. conveyor tracking)
             _refuse_retiming(options)
-            factory = path_factory(task, options.method, **options.method_params)
+            factory = turned_factory(path_factory(task, options.method, **options.method_params), task,
+                                     options.turn_during)
             first, path = choose_duration_for(factory, profile.capacity, first_spec)
             return path, factory, first
-        path = plan_path(task, options.method, **options.method_params)
+        path = turned(plan_path(task, options.method, **options.method_params), task, options.turn_during)
     except TableError:
         check_ends_reachable(task, profile)
         raise
@@ -423,6 +430,7 @@ def _assemble(task: Task, profile: Profile, path, duration: Duration, model: Mot
         torque=out["A"] / T**2 + out["G"],
         motor_speed=model.gear * out["qd1"] / T if model.has_drives else None,
         motor_torque=out["Am"] / T**2 + out["Gm"] if model.has_drives else None,
+        angle_weights=getattr(robot, "angle_weights", None),
     )
     p, v, a, j = out["p"], out["v1"] / T, out["a1"] / T**2, out["j1"] / T**3
     traj = CartesianTrajectory(path, T)

@@ -112,6 +112,22 @@ class OptimizeWhat(str, Enum):
     shape = "shape"
 
 
+class TurnName(str, Enum):
+    """Mirror of pickplace_cli.curves.rotation.TurnRule."""
+
+    shortest = "shortest"
+    ccw = "ccw"
+    cw = "cw"
+    as_given = "as-given"
+
+
+class TurnDuring(str, Enum):
+    """Mirror of pickplace_cli.curves.rotation.TurnWindow."""
+
+    transfer = "transfer"
+    whole = "whole"
+
+
 def _err(message: str) -> None:
     sys.stderr.write(f"pickplace: error: {message}\n")
 
@@ -290,6 +306,30 @@ def _parse_point(name: str, text: str, unit: str = "m"):
     if not all(math.isfinite(v) for v in values):
         raise TaskError(f"{name} = {text!r}: every coordinate must be a finite number (no NaN or inf)")
     return values
+
+
+def _parse_pose(name: str, text: str) -> tuple[list, Optional[float]]:
+    """--from/--to: X,Y,Z in m, optionally a fourth number THETA, the tool angle in rad about the base z axis (a
+    robot with a rotary fourth axis) → (xyz, theta or None); TaskError naming the option, the text and the rule."""
+    from ..model.errors import TaskError
+
+    parts = [p.strip() for p in text.split(",")]
+    if len(parts) == 4 and all(parts):
+        from ..model.text import plain_float
+
+        try:
+            theta = plain_float(parts[3])
+        except ValueError:
+            raise TaskError(f"{name} = {text!r}: the fourth number, the tool angle THETA, must be a number in rad") from None
+        import math
+
+        if not math.isfinite(theta):
+            raise TaskError(f"{name} = {text!r}: the tool angle THETA must be a finite number of radians (no NaN or inf)")
+        return _parse_point(name, ",".join(parts[:3])), theta
+    if len(parts) > 4 or (len(parts) == 4 and not all(parts)):
+        raise TaskError(f"{name} = {text!r}: give X,Y,Z in metres and optionally the tool angle THETA in rad, e.g. "
+                        "-0.1525,0,-0.8,1.5708")
+    return _parse_point(name, text), None
 
 
 def _finite(name: str, value: Optional[float], rule: str = "> 0") -> Optional[float]:

@@ -29,8 +29,9 @@ def _plan_batch(source, prof, options, height, eta, fail_fast, writer, output, r
         if info.get("schedule"):
             if warmer is not None:
                 _usage("--keep-warm does not apply to a belt schedule (a batch with a t_detect column)")
+            angles = any(c.endswith("_theta") for c in info.get("columns", ()))  # tool angles: the robot's is carried
             _plan_schedule(items, name, streamed, prof, options, height, eta, fail_fast, writer, output, report,
-                           report_only, json_summary, quiet, workers, belt)
+                           report_only, json_summary, quiet, workers, {**belt, "angles": angles})
             return
         if belt.get("latency") is not None:
             _usage("--latency with --batch is the default latency of a belt schedule's rows (a batch with a "
@@ -246,7 +247,8 @@ def _plan_schedule(items, name, streamed, prof, options, height, eta, fail_fast,
         items = list(check_order(items, name))
     params = {k: v for k, v in options.method_params.items() if k in ("solver", "table") and v is not None}
     results = plan_schedule(items, prof, options.time, height, eta, options.rate, belt.get("latency") or 0.0,
-                            params, name, fail_fast, report_only)
+                            params, name, fail_fast, report_only, bool(belt.get("angles")), options.turn,
+                            options.turn_during)
     report_rows: list = []  # --report: every row, its segments' summaries and limit reports
     codes: list[int] = []
     summary = ScheduleSummary()

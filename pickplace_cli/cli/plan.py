@@ -13,6 +13,7 @@ from .app import (
     _handle_errors,
     _JSON_ERRORS,
     _parse_point,
+    _parse_pose,
     _usage,
     note_exit,
     app,
@@ -25,6 +26,8 @@ from .app import (
     OptimizeWhat,
     OutputFormat,
     StDialect,
+    TurnDuring,
+    TurnName,
 )
 from .batch import _plan_batch
 from .render import (
@@ -44,8 +47,21 @@ from .render import (
 @_handle_errors
 def plan(
     ctx: typer.Context,
-    from_: Optional[str] = typer.Option(None, "--from", help="Pick point X,Y,Z in m (base frame), e.g. -0.1525,0,-0.8."),
-    to: Optional[str] = typer.Option(None, "--to", help="Place point X,Y,Z in m (base frame)."),
+    from_: Optional[str] = typer.Option(None, "--from", help="Pick point X,Y,Z in m (base frame), e.g. -0.1525,0,-0.8; "
+                                        "X,Y,Z,THETA adds the tool angle THETA in rad about the base z axis (a profile "
+                                        "with a rotary fourth axis; three numbers: the tool does not turn)."),
+    to: Optional[str] = typer.Option(None, "--to", help="Place point X,Y,Z in m (base frame), or X,Y,Z,THETA with the "
+                                     "tool angle in rad (give it with --from too)."),
+    turn: TurnName = typer.Option(
+        TurnName.shortest, "--turn", help="With tool angles (--from/--to X,Y,Z,THETA, or batch columns from_theta, "
+        "to_theta [rad]): the way round to the end angle: shortest (at most half a turn), ccw or cw (always "
+        "counter-clockwise or clockwise seen from above), as-given (to exactly THETA, even beyond a turn).",
+    ),
+    turn_during: TurnDuring = typer.Option(
+        TurnDuring.transfer, "--turn-during", help="With tool angles: when the tool turns: transfer (between lift-off "
+        "and set-down, the heights of η of the rise: the part is not turned while the gripper engages it at either "
+        "end) or whole (over the whole move: lower peaks on the fourth axis).",
+    ),
     profile: Optional[str] = typer.Option(
         None, "--profile", "-p", help="Profile YAML file, or the name of a shipped profile. [default: delta-su2018]",
         autocompletion=_complete_profile,
@@ -151,12 +167,14 @@ def plan(
     batch: Optional[str] = typer.Option(
         None, "--batch", help="Plan many moves from a CSV file; '-' (stdin) or the path of a named pipe is streamed: "
         "each row answered and flushed as soon as it is read. Columns from_x,from_y,from_z,to_x,to_y,to_z "
-        "[m], optional height [m], eta, v_from_x.. v_to_z [m/s], time [s|auto|fit|optimal]; a belt row (as "
+        "[m], optional height [m], eta, v_from_x.. v_to_z [m/s], time [s|auto|fit|optimal], from_theta, to_theta "
+        "[rad, the tool angle at the ends: a profile with a rotary fourth axis]; a belt row (as "
         "--to-belt): to_belt_vx,to_belt_vy,to_belt_vz [m/s] and optional latency [s >= 0]. Output gets a move column. "
         "A t_detect column makes it a belt schedule (one detected part per row, in time order, the robot's state "
         "carried over): t_detect [s], to_x,to_y,to_z [m, where the part was seen], to_belt_vx,to_belt_vy,to_belt_vz "
         "[m/s], place_x,place_y,place_z [m], optional latency [s >= 0, default --latency], height, eta, time, "
-        "from_x,from_y,from_z [m, row 1 only: the robot's start]."
+        "from_x,from_y,from_z [m, row 1 only: the robot's start], to_theta [rad, the part's angle as detected], "
+        "place_theta [rad], from_theta [rad, row 1 only]."
     ),
     fail_fast: bool = typer.Option(False, "--fail-fast", help="With --batch: stop at the first row that fails."),
     workers: int = typer.Option(
@@ -272,7 +290,7 @@ def plan(
                           fit=a.time == "fit" or show_fit, shape=a.optimize == OptimizeWhat.shape,
                           hold_eta=eta is not None, hold_capacity=hold_capacity,
                           law_coefficients=_law_coefficients(law_coefficients), limit_use=limit_use,
-                          cycle=a.cycle_s)
+                          cycle=a.cycle_s, turn=turn.value, turn_during=turn_during.value)
     if batch is not None:
         if workers < 0:
             from ..model.errors import TaskError
@@ -287,15 +305,18 @@ def plan(
     rendezvous = track = None
     a.rendezvous = None
     if to_belt is not None:
-        legs, rendezvous, track = _plan_to_belt(task.p_from, task.p_to, to_belt, latency, prof, a.time, task.height,
-                                                task.eta, vel_from, params, rate, a.cycle_s)
+        legs, rendezvous, track = _plan_to_belt(task, to_belt, latency, prof, a.time, vel_from, params, rate, options)
         a.rendezvous = rendezvous
     else:
         legs = [_run_plan(task, prof, options)]
-    if round_trip:
+    if round_trip:  # back the same way: from the angle reached to the start's, retracing the turn
+        from dataclasses import replace
+
         from ..model.task import Task
 
-        legs.append(_run_plan(Task(task.p_to, task.p_from, task.height, task.eta), prof, options))
+        back = Task(task.p_to, task.p_from, task.height, task.eta, theta_from=legs[0].task.theta_to,
+                    theta_to=task.theta_from)
+        legs.append(_run_plan(back, prof, replace(options, turn=TurnName.as_given.value)))
     code, cycle = _render_legs(a, prof, legs, rendezvous, track)
     forgiven = write_anyway and code == 3  # a timed limit only: a position past its range is never written
     note_exit(0 if forgiven else code)  # the verdict, should stdout's reader go away before the end
@@ -414,6 +435,10 @@ def _check_plan_usage(a) -> None:
         _usage("--format/--csv-dialect: with --json and no -o FILE no trajectory is written (stdout carries the summary)")
     if a.json_summary and a.output is None and a.columns is not None:
         _usage("--columns: with --json and no -o FILE no trajectory is written (stdout carries the summary)")
+    angles = batch is not None or any(len((x or "").split(",")) == 4 for x in (a.from_, a.to))
+    if not angles and (a.turn != TurnName.shortest or a.turn_during != TurnDuring.transfer):
+        what = f"--turn {a.turn.value}" if a.turn != TurnName.shortest else f"--turn-during {a.turn_during.value}"
+        _usage(f"{what} only applies with tool angles: --from/--to X,Y,Z,THETA (or batch columns from_theta, to_theta)")
     if a.adjust_points and not a.fit_ws:
         _usage("--adjust-points only applies with --fit-workspace")
     if a.max_shift != MAX_SHIFT and not a.adjust_points:
@@ -471,8 +496,12 @@ def _single_task(a, prof, params: dict):
     from ..model.errors import TaskError
     from ..model.task import Task
 
-    p_from = _parse_point("from", a.from_)
-    p_to = _parse_point("to", a.to)
+    p_from, th_from = _parse_pose("from", a.from_)
+    p_to, th_to = _parse_pose("to", a.to)
+    if (th_from is None) != (th_to is None):
+        given, other, text = ("from", "to", a.from_) if th_to is None else ("to", "from", a.to)
+        raise TaskError(f"{given} = {text!r}: a tool angle THETA (the fourth number, rad) needs one at --{other} too "
+                        "(or give neither: the tool does not turn)")
     h = a.height if a.height is not None else prof.planning.height
     e = a.eta if a.eta is not None else prof.planning.eta
     wc = prof.workcell
@@ -488,7 +517,7 @@ def _single_task(a, prof, params: dict):
         vel_from = vel_to = (0.0, 0.0, 0.0)  # the profile's conveyors concern bspline-vel only
     if a.round_trip and moving_ends and a.method == MethodName.bspline_vel:
         _usage("--round-trip dwells at rest between the legs: not possible with moving ends (--v-from/--v-to)")
-    task = Task(p_from, p_to, h, e, v_from=vel_from, v_to=vel_to)
+    task = Task(p_from, p_to, h, e, v_from=vel_from, v_to=vel_to, theta_from=th_from, theta_to=th_to)
     workspace_fit = None
     if a.fit_ws:
         from ..studies.workspace import fit_workspace
@@ -644,15 +673,20 @@ def _belt_method(ctx, method, to_belt, latency, v_to, batch, round_trip, fit_ws,
                     "--method bspline-vel (the default with --to-belt)")
 
 
-def _plan_to_belt(p_from, p_to, to_belt, latency, prof, time, height, eta, v_from, params, rate, cycle=None):
-    """The rendezvous move and its tracking segment (the profile's dwell; None when 0): ([plan], Rendezvous, track)."""
+def _plan_to_belt(task, to_belt, latency, prof, time, v_from, params, rate, options):
+    """The rendezvous move and its tracking segment (the profile's dwell; None when 0): ([plan], Rendezvous, track).
+    The part lies on the belt at the tool angle ``task.theta_to`` (rad; None: no angle), the move starts at
+    ``task.theta_from``."""
     from ..pipelines.rendezvous import Part, plan_rendezvous
 
-    part = Part(p_to, _parse_point("to-belt", to_belt, "m/s"), 0.0 if latency is None else latency)
+    part = Part(task.p_to, _parse_point("to-belt", to_belt, "m/s"), 0.0 if latency is None else latency,
+                angle=task.theta_to)
     from ..pipelines.rendezvous import plan_tracking
 
-    plan, rv = plan_rendezvous(p_from, part, prof, time, height, eta, v_from, params, rate, cycle=cycle)
-    track = plan_tracking(plan, part, prof, rate=rate, cycle=cycle) if prof.planning.dwell > 0 else None
+    plan, rv = plan_rendezvous(task.p_from, part, prof, time, task.height, task.eta, v_from, params, rate,
+                               start_angle=task.theta_from, turn=options.turn, turn_during=options.turn_during,
+                               cycle=options.cycle)
+    track = plan_tracking(plan, part, prof, rate=rate, cycle=options.cycle) if prof.planning.dwell > 0 else None
     return [plan], rv, track
 
 

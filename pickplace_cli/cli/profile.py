@@ -59,6 +59,13 @@ def profile_show(
         out.print(f"carried by link 2 (z axis + payload, lumped at its end): {robot.carried_mass:.4g} kg")
     else:
         out.print("moved masses (payload included): " + ", ".join(f"{n} {m:g} kg" for n, m in zip("xyz", robot.masses)))
+    rot = getattr(prof.robot, "rotary", None)
+    if rot is not None:  # the fourth axis: what it turns and how the tool angle follows from the joints
+        angle = f"q1 + q2 {'+' if rot.sign > 0 else '-'} q4" if kind == "scara" else f"{'' if rot.sign > 0 else '-'}q4"
+        out.print(escape(
+            f"rotary fourth axis: tool angle = {angle} (rad, about the base z axis); turns J_t = {rot.inertia:.4g} "
+            f"kg·m² (shaft {rot.shaft_inertia:g}, tool {rot.tool_inertia:g}, payload {rot.payload_inertia:g})"
+        ))
     cap = prof.capacity
     out.print(escape(
         f"capacity: [v] = {cap.velocity:g} m/s, [a] = {cap.acceleration:g} m/s², "

@@ -235,6 +235,14 @@ def _print_summary(result) -> None:
                   f"→ {t_shape:.4f} s = {t_shape / tab['fit_s']:.3f} × table" if tab and tab.get("fit_s")
                   else "the table has no shape for this move")
         ks += f"\nshape: η = {shape['eta']:.4g} chosen with k1, k2 for this robot's limits (fit, uniform law): {versus}; {shape['note']}"
+    turn = par.get("turn")
+    if turn:  # a rotary fourth axis: the tool's turn planned with the move
+        import math
+
+        when = ("over the whole move" if turn["during"] == "whole" else
+                "between lift-off and set-down (τ {:.3f} … {:.3f})".format(*turn["window_tau"]))
+        ks += (f"\nturn: tool angle {turn['from_rad']:.4g} → {turn['to_rad']:.4g} rad "
+               f"({math.degrees(turn['turn_rad']):+.1f}°) {when}")
     bounds = f"v {d.t_velocity:.4f} s, a {d.t_acceleration:.4f} s" + (f", j {d.t_jerk:.4f} s" if d.t_jerk else "")
     fit = f"; fit {d.t_fit:.4f} s" if d.t_fit is not None else ""
     rule = d.mode

@@ -22,9 +22,12 @@ topic             type                                  content
 /joint_states     sensor_msgs/msg/JointState            per sample: position q, velocity q̇, effort torque
 /motor_states     sensor_msgs/msg/JointState            per sample, only with drives: velocity = motor
                                                         speed [rad/s], effort = motor torque [N·m]
-/tool_pose        geometry_msgs/msg/PoseStamped         per sample: tool position (orientation identity)
-/tool_twist       geometry_msgs/msg/TwistStamped        per sample: linear = tool velocity, angular = 0
+/tool_pose        geometry_msgs/msg/PoseStamped         per sample: tool position (orientation identity, or
+                                                        the turn about z of a rotary fourth axis)
+/tool_twist       geometry_msgs/msg/TwistStamped        per sample: linear = tool velocity, angular = 0 (z:
+                                                        the fourth axis' θ̇)
 /tool_accel       geometry_msgs/msg/AccelStamped        per sample: linear = tool acceleration, angular = 0
+                                                        (z: θ̈)
 /tool_jerk        geometry_msgs/msg/Vector3Stamped      per sample: tool jerk [m/s³]
 ================  ====================================  ===================================================
 
@@ -537,7 +540,31 @@ def _per_sample_channels(samples, names: list, motor_names: list, frame_id: str,
         ),
         ("/tool_jerk", lambda s, c, x: {"header": hdr(s, c, frame_id), "vector": _vec(x)}, f64(samples.j)),
     ]
+    turn = tool_turn(jt)
+    if turn is not None:  # a rotary fourth axis: the tool's orientation about z, its angular velocity and acceleration
+        per_sample[-4:-1] = [
+            ("/tool_pose", lambda s, c, x: {"header": hdr(s, c, frame_id), "pose": {
+                "position": _vec(x[:3]), "orientation": {"x": 0.0, "y": 0.0, "z": x[3], "w": x[4]}}},
+             np.hstack([f64(samples.p), turn[0]])),
+            ("/tool_twist", lambda s, c, x: {"header": hdr(s, c, frame_id), "twist": {
+                "linear": _vec(x[:3]), "angular": {"x": 0.0, "y": 0.0, "z": x[3]}}}, np.hstack([f64(samples.v), turn[1]])),
+            ("/tool_accel", lambda s, c, x: {"header": hdr(s, c, frame_id), "accel": {
+                "linear": _vec(x[:3]), "angular": {"x": 0.0, "y": 0.0, "z": x[3]}}}, np.hstack([f64(samples.a), turn[2]])),
+        ]
     return per_sample
+
+
+def tool_turn(jt) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """A rotary fourth axis (``jt.angle_weights``): the tool's orientation about the base z axis as the quaternion's
+    (z, w) = (sin θ/2, cos θ/2) (N, 2), its angular velocity θ̇ [rad/s] and acceleration θ̈ [rad/s²] (each (N, 1)),
+    θ = q·w; None when the tool does not turn."""
+    w = getattr(jt, "angle_weights", None)
+    if w is None:
+        return None
+    w = np.asarray(w, dtype=float)
+    theta = np.asarray(jt.q, dtype=float) @ w
+    return (np.column_stack([np.sin(theta / 2), np.cos(theta / 2)]), (np.asarray(jt.qd, dtype=float) @ w)[:, None],
+            (np.asarray(jt.qdd, dtype=float) @ w)[:, None])
 
 
 def _write_ros2(writer, samples, epoch_ns: int, frame_id: str, fast: bool = True) -> None:
@@ -626,13 +653,16 @@ def _write_foxglove(writer, samples, epoch_ns: int, frame_id: str) -> None:
     mspeed = jt.motor_speed.tolist() if drives else None
     mtorque = jt.motor_torque.tolist() if drives else None
     p, v, a, j = (np.asarray(x, dtype=float).tolist() for x in (samples.p, samples.v, samples.a, samples.j))
+    turn = tool_turn(jt)
+    quat = [{"x": 0.0, "y": 0.0, "z": z, "w": w} for z, w in turn[0].tolist()] if turn is not None else None
 
     def ts(n: int) -> dict:
         return {"sec": n // 1_000_000_000, "nsec": n % 1_000_000_000}
 
     for sl in move_slices(samples):
         t0 = ns[sl.start]
-        poses = [{"position": _vec(p[i]), "orientation": _IDENTITY} for i in range(sl.start, sl.stop)]
+        poses = [{"position": _vec(p[i]), "orientation": _IDENTITY if quat is None else quat[i]}
+                 for i in range(sl.start, sl.stop)]
         channels.write("/tool_path", t0, _json({"timestamp": ts(t0), "frame_id": frame_id, "poses": poses}))
         for i in range(sl.start, sl.stop):
             ti = ns[i]

@@ -107,9 +107,13 @@ class MotionModel:
     # --------------------------------------------------------------------------------- evaluation
     def _torques(self, tau: np.ndarray, rates: bool = False, motion: tuple | None = None, singularity: bool = True):
         robot = self.robot
-        p, v, a, j = motion if motion is not None else self.path.all_orders(tau)
+        p, v, a, j = motion[:4] if motion is not None else self.path.all_orders(tau)
         dA = dG = sing = None
-        if hasattr(robot, "motion_and_dynamics"):  # one pass over the geometry (Delta)
+        if getattr(robot, "rotary", False):  # a fourth axis: the tool angle's law joins the motion (None: θ ≡ 0)
+            angle = motion[4] if motion is not None and len(motion) > 4 else self.path.angle_orders(tau)
+            q, qd, qdd, qddd, A, G, dA, dG, sing = robot.motion_and_dynamics(p, v, a, j, rates=rates, angle=angle,
+                                                                             singularity=singularity)
+        elif hasattr(robot, "motion_and_dynamics"):  # one pass over the geometry (Delta)
             q, qd, qdd, qddd, A, G, dA, dG, sing = robot.motion_and_dynamics(p, v, a, j, rates=rates)
         else:
             q, qd, qdd, qddd = robot.joint_motion(p, v, a, j)
@@ -137,8 +141,9 @@ class MotionModel:
         The robot's analytic ``torque_rate`` gives them when it has one; otherwise central differences of
         the model (step ``DTAU``, two more evaluations). ``motion`` = (p, v, a, j), each (N, 3) at T = 1 s,
         gives the Cartesian motion at τ directly instead of evaluating ``path`` (the batched verdict engine
-        stacks many moves' samples into one call; needs the analytic rates). ``order``: the permutation that
-        sorts an unsorted ``tau`` (:func:`check_grid_order`), kept in the Parts for the check.
+        stacks many moves' samples into one call; needs the analytic rates); a fifth entry, the tool angle's
+        θ, θ′, θ″, θ‴ (4, N), goes to a robot with a rotary fourth axis (without it: the path's angle law).
+        ``order``: the permutation that sorts an unsorted ``tau`` (:func:`check_grid_order`), kept in the Parts.
         ``singularity=False`` skips the singularity measure (and its column)."""
         tau = np.asarray(tau, float)
         analytic = derivatives and hasattr(self.robot, "torque_rate")

@@ -137,11 +137,35 @@ class DeltaMasses(_Model):
     plate: float = Field(ge=0, description="Travelling plate mass in kg (tool included)")
 
 
+class RotaryAxis(_Model):
+    """The fourth axis: turns the tool about the vertical (a Delta's rotary axis on the base, driving the tool
+    through a telescopic shaft with a universal joint at each end; a SCARA's J4 spline shaft at the end of link 2).
+    Tool angle θ (rad, about the base z axis) = sign·q4 on a Delta, q1 + q2 + sign·q4 on a SCARA."""
+
+    sign: Literal[1, -1] = Field(default=1, description="Direction of q4 [1]: +1 when a positive q4 turns the tool "
+                                 "counter-clockwise seen from above, -1 when clockwise")
+    shaft_inertia: float = Field(default=0.0, ge=0, description="Inertia of the shaft the axis turns (telescopic or "
+                                 "spline shaft) about its axis, in kg·m²")
+    tool_inertia: float = Field(default=0.0, ge=0, description="Inertia of the tool (gripper, flange) about the tool "
+                                "axis, in kg·m²")
+    payload_inertia: float = Field(default=0.0, ge=0, description="Inertia of the payload about the tool axis, in "
+                                   "kg·m² (its mass is robot.payload)")
+    joint: JointSpec = Field(default_factory=JointSpec, description="Limits of q4 (rad, rad/s, …) and its drive "
+                             "(motor + gearbox; gear_ratio in motor rad per tool rad)")
+
+    @property
+    def inertia(self) -> float:
+        """J_t [kg·m²]: everything the axis turns about the tool axis."""
+        return self.shaft_inertia + self.tool_inertia + self.payload_inertia
+
+
 class _ThreeJoints(_Model):
-    """A robot whose ``joints`` field is one JointSpec for all three joints or a list of three."""
+    """A robot whose ``joints`` field is one JointSpec for all three joints or a list of three, with an optional
+    rotary fourth axis (``rotary``: its spec follows the three)."""
 
     def joint_specs(self) -> list[JointSpec]:
-        return _per_joint(self.joints, 3)  # type: ignore[attr-defined]
+        rotary = getattr(self, "rotary", None)
+        return _per_joint(self.joints, 3) + ([rotary.joint] if rotary is not None else [])  # type: ignore[attr-defined]
 
     @model_validator(mode="after")
     def _count(self) -> "_ThreeJoints":
@@ -158,6 +182,8 @@ class DeltaModel(_ThreeJoints):
     payload: float = Field(default=0.0, ge=0, description="Payload in kg")
     singularity_margin: float = Field(default=0.05, ge=0, lt=1, description="Minimum singularity measure (0 = singular, 1 = best)")
     joints: JointSpecs = Field(default_factory=JointSpec, description="One joint spec for all three arms, or a list of three")
+    rotary: RotaryAxis | None = Field(default=None, description="The rotary fourth axis q4 on the base, turning the "
+                                      "tool through a telescopic shaft (optional; without it the tool does not turn)")
 
 
 class ScaraLink(_Model):
@@ -168,7 +194,7 @@ class ScaraLink(_Model):
 
 
 class ScaraModel(_ThreeJoints):
-    """Serial SCARA: two revolute links, a prismatic z axis (q3, m, positive up), tool rotation held fixed."""
+    """Serial SCARA: two revolute links, a prismatic z axis (q3, m, positive up), optionally J4 (``rotary``)."""
 
     kind: Literal["scara"]
     link1: ScaraLink
@@ -179,6 +205,8 @@ class ScaraModel(_ThreeJoints):
     payload: float = Field(default=0.0, ge=0, description="Payload in kg")
     singularity_margin: float = Field(default=0.05, ge=0, lt=1, description="Minimum |sin q2| (0 at full stretch or fold)")
     joints: JointSpecs = Field(default_factory=JointSpec, description="One joint spec for all joints, or a list of three (q1, q2 rad; q3 m)")
+    rotary: RotaryAxis | None = Field(default=None, description="J4, the rotary fourth axis at the end of link 2 "
+                                      "(optional; without it the tool's angle is held fixed)")
 
 
 RobotModel = Annotated[Union[GantryModel, DeltaModel, ScaraModel], Field(discriminator="kind")]

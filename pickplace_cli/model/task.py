@@ -18,6 +18,24 @@ MAX_SPEED = 1e3
 #: the smallest clearance accepted [m] (below it some methods divide by zero; the default method refuses λ = b/h
 #: beyond 1e5 long before)
 MIN_HEIGHT = 1e-6
+#: the largest tool angle accepted [rad] (~159 turns: beyond any axis range; keeps the limit check's numbers finite)
+MAX_RADIANS = 1e3
+
+
+def _angle(name: str, value) -> float | None:
+    """A tool angle [rad]: None stays None (no angle given); TaskError unless a finite number within ±MAX_RADIANS."""
+    if value is None:
+        return None
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        raise TaskError(f"{name} = {value!r}: the tool angle must be a number of radians") from None
+    if not isfinite(x):
+        raise TaskError(f"{name} = {value!r}: the tool angle must be a finite number of radians (no NaN or inf)")
+    if abs(x) > MAX_RADIANS:
+        raise TaskError(f"{name} = {value!r} rad: the tool angle must lie within ±{MAX_RADIANS:g} rad (SI units: "
+                        "radians, not degrees)")
+    return x
 
 
 def _vec3(name: str, value, limit: float = MAX_METRES, unit: str = "m") -> np.ndarray:
@@ -45,7 +63,9 @@ class Task:
 
     ``height`` [m] is the clearance of the path's midpoint P3 above the *higher* of the two end points;
     ``eta`` is the lift-off/set-down ratio η of [Li2018, Eq. (11)]; ``v_from``/``v_to`` [m/s] are the tool
-    velocities at the ends (zero for a move from rest to rest).
+    velocities at the ends (zero for a move from rest to rest). ``theta_from``/``theta_to`` [rad] are the tool's
+    angles about the base z axis at the ends, for a robot with a rotary fourth axis (both or neither; None: the
+    tool does not turn); the planner turns the shorter way round unless told otherwise.
 
     Immutable: the derived quantities (b, γ, λ, the via points) are computed once, on first use.
     """
@@ -56,8 +76,16 @@ class Task:
     eta: float = 0.5
     v_from: np.ndarray = field(default_factory=lambda: np.zeros(3))
     v_to: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    theta_from: float | None = None
+    theta_to: float | None = None
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "theta_from", _angle("from_theta", self.theta_from))
+        object.__setattr__(self, "theta_to", _angle("to_theta", self.theta_to))
+        if (self.theta_from is None) != (self.theta_to is None):
+            given, other = ("from_theta", "to_theta") if self.theta_to is None else ("to_theta", "from_theta")
+            raise TaskError(f"{given} = {self.theta_from if self.theta_to is None else self.theta_to!r} rad without "
+                            f"{other}: give the tool angle at both ends (or at neither)")
         object.__setattr__(self, "p_from", _vec3("from", self.p_from))
         object.__setattr__(self, "p_to", _vec3("to", self.p_to))
         object.__setattr__(self, "v_from", _vec3("v_from", self.v_from, MAX_SPEED, "m/s"))

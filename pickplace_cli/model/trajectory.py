@@ -46,6 +46,14 @@ class CartesianPath:
     #: optional (tau (N,)) → [p, p′, p″, p‴] in one pass (new arrays); :meth:`all_orders` falls back to
     #: ``evaluate`` per order without it
     evaluate_all: Callable[[np.ndarray], list] | None = None
+    #: optional angle law of the tool about the vertical (a rotary fourth axis): ``angle(tau, order)`` → (N,) in
+    #: rad/1^order and ``angle.all_orders(tau)`` → (4, N), on the same τ and scaled with T like the path
+    #: (:mod:`pickplace_cli.curves.rotation`); None: the tool does not turn
+    angle: Any = None
+
+    def angle_orders(self, tau: np.ndarray) -> np.ndarray | None:
+        """θ, θ′, θ″, θ‴ at τ as a (4, N) array [rad/1^k], or None when the path carries no angle law."""
+        return None if self.angle is None else self.angle.all_orders(np.atleast_1d(np.asarray(tau, dtype=float)))
 
     @property
     def jump_points(self) -> np.ndarray:
@@ -130,6 +138,9 @@ class JointTrajectory:
     torque: np.ndarray | None = None
     motor_speed: np.ndarray | None = None
     motor_torque: np.ndarray | None = None
+    #: a robot with a rotary fourth axis: the tool angle about the base z axis is θ = q·angle_weights [rad] (and
+    #: θ̇ = q̇·w, θ̈ = q̈·w: it is linear in the joints); None: the tool does not turn
+    angle_weights: tuple[float, ...] | None = None
 
     def __post_init__(self) -> None:
         n = len(self.t)

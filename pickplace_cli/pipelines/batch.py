@@ -29,15 +29,18 @@ REQUIRED = ("from_x", "from_y", "from_z", "to_x", "to_y", "to_z")
 #: a belt row of a plain batch (no ``t_detect``): the part was at ``to`` [m] when detected and moves at
 #: ``to_belt_v*`` [m/s]; the move starts ``latency`` [s, >= 0] after the detection (as ``--to-belt``/``--latency``)
 BELT = ("to_belt_vx", "to_belt_vy", "to_belt_vz")
+#: the tool angle about the base z axis at the ends [rad] (a profile with a rotary fourth axis; both or neither)
+ANGLES = ("from_theta", "to_theta")
 OPTIONAL = ("height", "eta", "v_from_x", "v_from_y", "v_from_z", "v_to_x", "v_to_y", "v_to_z", "time", *BELT, "latency",
-            "limit_use")
+            *ANGLES, "limit_use")
 #: a belt schedule (a ``t_detect`` column; :mod:`~pickplace_cli.pipelines.schedule`): one detected part per row — where it
 #: was seen [m], the belt velocity [m/s], the detection time stamp [s] and where to place it [m]; optional
 #: ``latency`` [s, >= 0] (earliest move start after the detection), ``height`` [m], ``eta``, ``time``, and
 #: ``from_x … from_z`` [m] on row 1 only (where the robot starts; later moves start where the previous ended)
 SCHEDULE_REQUIRED = ("to_x", "to_y", "to_z", "to_belt_vx", "to_belt_vy", "to_belt_vz", "t_detect",
                      "place_x", "place_y", "place_z")
-SCHEDULE_OPTIONAL = ("latency", "height", "eta", "time", "from_x", "from_y", "from_z", "limit_use")
+SCHEDULE_OPTIONAL = ("latency", "height", "eta", "time", "from_x", "from_y", "from_z", "to_theta", "place_theta",
+                     "from_theta", "limit_use")
 
 
 @dataclass(frozen=True)
@@ -163,6 +166,8 @@ def _unit_of(name: str) -> str:
         return "1"
     if name in ("time", "latency", "t_detect"):
         return "s"
+    if name.endswith("_theta"):
+        return "rad"
     if name.startswith(("v_from_", "v_to_", "to_belt_v")):
         return "m/s"
     return "m"
@@ -210,6 +215,10 @@ def _header(text: str, sep: str, source: str, line: int) -> list[str]:
         if "latency" in header and not belt:
             raise TaskError(f"{source}:{line}: column 'latency' needs the belt columns {', '.join(BELT)} (m/s), or a "
                             "t_detect column for a belt schedule")
+        angles = [h for h in ANGLES if h in header]
+        if len(angles) == 1:
+            raise TaskError(f"{source}:{line}: column {angles[0]!r} without "
+                            f"{next(h for h in ANGLES if h != angles[0])!r}: the tool angle (rad) is given at both ends")
         if belt and any(h in header for h in ("v_to_x", "v_to_y", "v_to_z")):
             raise TaskError(f"{source}:{line}: columns v_to_* and to_belt_v* both give the end velocity: a belt row "
                             "arrives with the belt's")
@@ -295,6 +304,7 @@ def row_task(values: dict, profile, height: float | None = None, eta: float | No
         v.get("eta", eta if eta is not None else profile.planning.eta),
         v_from=[v.get("v_from_x", 0.0), v.get("v_from_y", 0.0), v.get("v_from_z", 0.0)],
         v_to=[v.get("v_to_x", 0.0), v.get("v_to_y", 0.0), v.get("v_to_z", 0.0)],
+        theta_from=v.get("from_theta"), theta_to=v.get("to_theta"),
     )
 
 
@@ -349,13 +359,14 @@ def _plan_belt_row(r: BatchRow, profile, options, height, eta, source: str):
         raise TaskError(f"to_belt_v* = ({', '.join(f'{v[c]:g}' for c in BELT)}) m/s: method "
                         f"{Method(options.method).value} plans moves from rest to rest; a belt row is planned by bspline-vel")
     part = Part(np.array([v["to_x"], v["to_y"], v["to_z"]]), np.array([v[c] for c in BELT]),
-                v.get("latency", 0.0))
+                v.get("latency", 0.0), angle=v.get("to_theta"))
     v_from = np.array([v.get(f"v_from_{c}", 0.0) for c in "xyz"])
     from ..model.headroom import apply_limit_use
 
     profile = apply_limit_use(profile, v.get("limit_use", options.limit_use))
     return plan_belt_move(np.array([v["from_x"], v["from_y"], v["from_z"]]), part, profile, v.get("time", options.time),
-                          v.get("height", height), v.get("eta", eta), v_from, options.rate, cycle=options.cycle)
+                          v.get("height", height), v.get("eta", eta), v_from, options.rate, v.get("from_theta"),
+                          options.turn, options.turn_during, cycle=options.cycle)
 
 
 @dataclass(frozen=True)

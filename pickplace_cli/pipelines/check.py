@@ -200,11 +200,14 @@ def read_trajectory(text: str, source: str, joint_names: tuple[str, ...]) -> tup
 
 def _check_branch(s: Samples, robot, pos: np.ndarray, source: str) -> None:
     """TaskError when the file's joint positions are not the model's configuration (module docstring)."""
-    q_model = robot.inverse_kinematics(pos)
+    rotary = getattr(robot, "rotary", False)  # a fourth axis: the model's q4 for the file's own tool angle
+    q_model = robot.inverse_kinematics(pos, robot.tool_angle(s.q)) if rotary else robot.inverse_kinematics(pos)
     diff = s.q - q_model
     revolute = np.array([u == "rad" for u in robot.joint_units])
     turns = np.where(revolute, 2 * np.pi * np.round(diff / (2 * np.pi)), 0.0)
     off = np.abs(diff - turns)
+    if rotary and np.max(off[:, :-1]) > BRANCH_TOL:  # the arm's branch: name its joint (q4 follows from it)
+        off[:, -1] = 0.0
     if np.max(off) > BRANCH_TOL:
         k = int(np.flatnonzero(np.max(off, axis=1) > BRANCH_TOL)[0])  # the first such row
         j = int(np.argmax(off[k]))
@@ -219,7 +222,8 @@ def _check_branch(s: Samples, robot, pos: np.ndarray, source: str) -> None:
 
 def _motion_report(t: np.ndarray, pos: np.ndarray, robot, profile: Profile, smoothing: float, source: str,
                    notes=None, tool: np.ndarray | None = None):
-    """The limit report of the tool positions ``pos`` (N, 3) m at ``t`` (N,) s from 0, through a reconstruction of
+    """The limit report of the tool positions ``pos`` (N, 3) m (and angle, rad, a 4th column with a rotary axis) at
+    ``t`` (N,) s from 0, through a reconstruction of
     the continuous motion (an interpolating spline split at the jerk steps found in the data,
     :func:`~pickplace_cli.curves.sampled.reconstruct`, or a smoothing spline), and the words that say how the
     derivatives were found. ``notes``: a function of those words → the report's notes. ``tool`` (N, 12): the
@@ -228,41 +232,57 @@ def _motion_report(t: np.ndarray, pos: np.ndarray, robot, profile: Profile, smoo
     from scipy.interpolate import UnivariateSpline
 
     T = float(t[-1])
+    rotary = pos.shape[1] == 4  # the tool angle θ (a rotary fourth axis) as one more column
+    extra = " and angle" if rotary else ""
     if tool is not None and not smoothing:
-        from ..curves.sampled import hermite
+        from ..curves.sampled import hermite, reconstruct
 
-        ev, steps = hermite(t, tool[:, 0:3], tool[:, 3:6], tool[:, 6:9], tool[:, 9:12])
+        ev3, steps = hermite(t, tool[:, 0:3], tool[:, 3:6], tool[:, 6:9], tool[:, 9:12])
         how = ("septic Hermite polynomials through the file's tool positions, velocities, accelerations and jerks "
                "(x … jz; x, y, z agree with FK(q))")
+        ev = ev3
+        if rotary:  # the angle has no derivative columns: its interpolating spline, split at its own steps
+            ev_angle, angle_steps = reconstruct(t, pos[:, 3:4])
+            steps = np.union1d(steps, angle_steps)
+            how += ", and a quintic interpolating spline of the tool angle"
+
+            def ev(x: np.ndarray, order: int) -> np.ndarray:
+                return np.column_stack([ev3(x, order), ev_angle(x, order)])
+
         if steps.size:
             shown = ", ".join(f"{x:.5g}" for x in steps[:6]) + (" …" if steps.size > 6 else "")
             how += f", split at the jerk steps found between samples at t = {shown} s ({steps.size}; both sides checked)"
     elif smoothing > 0:
-        splines = [UnivariateSpline(t, pos[:, k], k=5, s=smoothing * len(t)) for k in range(3)]
+        splines = [UnivariateSpline(t, pos[:, k], k=5, s=smoothing * len(t)) for k in range(pos.shape[1])]
 
         def ev(x: np.ndarray, order: int) -> np.ndarray:
             return np.column_stack([sp.derivative(order)(x) if order else sp(x) for sp in splines])
 
-        how = f"a quintic smoothing spline (s = {smoothing:g}·N) of the tool positions FK(q)"
+        how = f"a quintic smoothing spline (s = {smoothing:g}·N) of the tool positions FK(q){extra}"
         steps = np.zeros(0)
     else:
         from ..curves.sampled import reconstruct
 
         ev, steps = reconstruct(t, pos)
-        how = "a quintic interpolating spline of the tool positions FK(q)"
+        how = f"a quintic interpolating spline of the tool positions FK(q){extra}"
         if steps.size:
             shown = ", ".join(f"{x:.5g}" for x in steps[:6]) + (" …" if steps.size > 6 else "")
             how += (f", one per stretch between the jerk steps found in the data at t = {shown} s ({steps.size}; both "
                     "sides checked)")
 
     def evaluate(tau: np.ndarray, order: int) -> np.ndarray:
-        return ev(np.clip(tau, 0.0, 1.0) * T, order) * T**order
+        return ev(np.clip(tau, 0.0, 1.0) * T, order)[:, :3] * T**order
 
+    angle = None
+    if rotary:
+        from ..curves.rotation import SampledRotation
+
+        angle = SampledRotation(lambda tau, order: ev(np.clip(tau, 0.0, 1.0) * T, order)[:, 3] * T**order)
     # the pieces join across the samples to the interpolation error: nothing jumps there, peaks are fitted across
     # them; at a jerk step found in the data the check takes both one-sided values (never across it)
     jumps = steps / T
     cpath = CartesianPath(evaluate, "checked", {"source": source}, (0.0, 0.0, 0.0),
-                          np.sort(np.concatenate([t / T, jumps])), jumps=jumps)
+                          np.sort(np.concatenate([t / T, jumps])), jumps=jumps, angle=angle)
     margin = getattr(profile.robot, "singularity_margin", None)
     model = MotionModel(cpath, robot, limit_specs(profile), margin, profile.workcell.box)
     grid = check_grid(t / T, cpath.breakpoints, jumps=jumps)
@@ -305,6 +325,8 @@ def check_samples(s: Samples, profile: Profile, smoothing: float = 0.0, source: 
         off = float(np.max(np.abs(tool[:, :3] - pos)))
         rest += f"; its x, y, z differ from FK of its joint positions by up to {off:.3g} m, so its tool columns are not used"
         tool = None
+    if getattr(robot, "rotary", False):  # the tool angle θ = FK of the fourth axis, one more column
+        pos = np.column_stack([pos, robot.tool_angle(s.q)])
     report, _ = _motion_report(t, pos, robot, profile, smoothing, source, notes, tool)
     others = []
     half = _half(len(t))

@@ -61,15 +61,20 @@ WORKSPACE_STEP = 1e-3
 @dataclass(frozen=True)
 class Part:
     """A part on a belt: detected at ``position`` [m, base frame], moving at ``velocity`` [m/s]; the move
-    starts ``latency`` [s] after the detection. ``name`` labels it in messages (e.g. "row 3")."""
+    starts ``latency`` [s] after the detection. ``name`` labels it in messages (e.g. "row 3"). ``angle`` [rad]:
+    the part's angle about the base z axis as detected (a robot with a rotary fourth axis meets it at that
+    angle: the belt translates it, it does not turn it); None: no angle given."""
 
     position: np.ndarray
     velocity: np.ndarray
     latency: float = 0.0
     name: str = "part"
+    angle: float | None = None
 
     def __post_init__(self) -> None:
-        from ..model.task import MAX_METRES, MAX_SPEED
+        from ..model.task import MAX_METRES, MAX_SPEED, _angle
+
+        object.__setattr__(self, "angle", _angle("to_theta", self.angle))
 
         for label, unit, value, limit in (("to", "m", self.position, MAX_METRES),
                                           ("to-belt", "m/s", self.velocity, MAX_SPEED)):
@@ -130,6 +135,7 @@ class Rendezvous:
         return {
             "part_detected_m": self.part.position.tolist(),
             "belt_velocity_m_s": self.part.velocity.tolist(),
+            **({} if self.part.angle is None else {"part_theta_rad": self.part.angle}),
             "latency_s": self.part.latency,
             "meeting_point_m": self.meeting_point.tolist(),
             "meeting_time_s": self.seconds,
@@ -150,9 +156,11 @@ def _factory_class():
         """T [s] → the bspline-vel path from the start to P(T), arriving with the belt velocity, planned for T
         (memoised; the exact solver continues its optimum from the nearest solved T, like ``--time auto``)."""
 
-        def __init__(self, start: np.ndarray, part: Part, height: float, eta: float, v_from, **params: Any) -> None:
+        def __init__(self, start: np.ndarray, part: Part, height: float, eta: float, v_from,
+                     angles: tuple = (None, None), **params: Any) -> None:
             self.start, self.part = np.asarray(start, float), part
             self.height, self.eta, self.v_from = height, eta, np.asarray(v_from, float)
+            self.angles = angles  # the tool angle at the start and at the meeting [rad] (the turn resolved), or None
             self._tasks: dict[float, Task] = {}
             super().__init__(self.task_at(1.0), **params)
 
@@ -163,7 +171,7 @@ def _factory_class():
                 if len(self._tasks) > 512:
                     self._tasks.clear()
                 task = self._tasks[T] = Task(self.start, self.part.at(T), self.height, self.eta, self.v_from,
-                                             self.part.velocity)
+                                             self.part.velocity, *self.angles)
             return task
 
     return RendezvousFactory
@@ -423,14 +431,18 @@ ROOT_RTOL = 1e-5
 
 def find_rendezvous(
     start, part: Part, profile, time: str | float = "limits", height: float | None = None, eta: float | None = None,
-    v_from=None, method_params: dict | None = None, dwell: float | None = None,
+    v_from=None, method_params: dict | None = None, dwell: float | None = None, start_angle: float | None = None,
+    turn: str = "shortest", turn_during: str = "transfer",
 ) -> Rendezvous:
     """The duration T and meeting point P(T) of a bspline-vel move from ``start`` [m] (leaving with ``v_from``
     [m/s], default 0) that meets ``part`` with the belt's velocity, under the duration rule ``time`` (seconds,
     "auto" or "fit"; "optimal" is refused like for ``--method bspline-vel``). ``dwell`` [s]: the tracking
     segment that must stay in the window and workspace after the meeting (default: the profile's dwell).
-    See the module docstring for the method; UnreachableError (exit 4) when there is no rendezvous."""
+    ``start_angle`` [rad]: the tool angle at the start, turned to the part's ``angle`` by ``turn`` over
+    ``turn_during`` (a rotary fourth axis; both or neither). See the module docstring for the method;
+    UnreachableError (exit 4) when there is no rendezvous."""
     from ..model.errors import UsageError
+    from ..paths.turn import turned_at
     from ..timing import Duration, auto_duration, parse_time
 
     spec = parse_time(time)
@@ -447,11 +459,13 @@ def find_rendezvous(
     dwell = float(profile.planning.dwell if dwell is None else dwell)
     start = np.asarray(start, float)
     v0 = np.zeros(3) if v_from is None else np.asarray(v_from, float)
+    angles = _angles(start, part, profile, start_angle, turn)
     a, b, what = allowed_interval(part, profile, dwell)
     cls = _factory_class()
     # the first exact solve from the table's seeds only ("seeded": one SLSQP run per stage, about half the
     # multi-start's time); later trial T continue from it, and a global solve confirms the shape at the root
-    exact = cls(start, part, h, e_ratio, v0, **({"solver": FIRST_SOLVER} | params))
+    exact = cls(start, part, h, e_ratio, v0, angles, **({"solver": FIRST_SOLVER} | params))
+    turning = turned_at(exact, turn_during)  # the paths the limits see: with the tool's turn, when there is one
     if isinstance(spec, float):
         T = spec
         if not a - 1e-12 <= T <= b + 1e-12:
@@ -471,7 +485,7 @@ def find_rendezvous(
             T0 = min(max(0.2, a), b)
             break
     T_screen = _first_feasible(screen, a, b, T0, 0.9, 1e-6)
-    rule = _Rule(spec, profile, exact, plan_dwell)
+    rule = _Rule(spec, profile, turning, plan_dwell)
     if T_screen is None:  # by how much: the first feasible T beyond b, screened, then on the exact shape
         beyond = _first_feasible(screen, b, HORIZON, b, 0.8, 1e-6) if b < HORIZON else None
         if beyond is not None and math.isfinite(beyond):
@@ -489,7 +503,7 @@ def find_rendezvous(
             T = T2 if T2 is not None else _first_feasible(rule, a, b, T, 0.98, 1e-8)
     if T is None:
         _missed(part, rule, a, b, what, spec)
-    T = _nudge(rule, exact, profile, spec, T, plan_dwell)
+    T = _nudge(rule, turning, profile, spec, T, plan_dwell)
     if T > b + 1e-12:
         _missed(part, rule, a, b, what, spec, known=T)
     path = exact(T)
@@ -508,10 +522,19 @@ def find_rendezvous(
         from ..timing import _worst_utilisation
         from ..planner import motion_model
 
-        worst = _worst_utilisation(motion_model(path, profile), plan_dwell)[0]
+        worst = _worst_utilisation(motion_model(turning(T), profile), plan_dwell)[0]
         duration = Duration(T, "fit", tv, ta, tj, worst(T * (1 - 1e-9))[1], T)
     return Rendezvous(part, exact.task_at(T), duration, path, (a, b), waited=T <= a + 1e-12,
                       evaluations={"screening": screen.count + cap.count, "exact": rule.count})
+
+
+def _angles(start, part: Part, profile, start_angle: float | None, turn: str) -> tuple:
+    """(tool angle at the start, at the meeting) [rad] (:func:`~pickplace_cli.paths.turn.resolve_angles`)."""
+    from ..paths.turn import resolve_angles
+    from ..planner import motion_model_static
+
+    robot, specs = motion_model_static(profile)[:2]
+    return resolve_angles(start, part.position, start_angle, part.angle, turn, robot, specs, profile.name)
 
 
 def _nudge(rule: _Rule, factory, profile, spec: str, T: float, dwell: float) -> float:
@@ -571,17 +594,20 @@ def _missed(part: Part, rule: _Rule, a: float, b: float, what: str, spec: str, k
 
 def plan_rendezvous(start, part: Part, profile, time: str | float = "limits", height: float | None = None,
                     eta: float | None = None, v_from=None, method_params: dict | None = None,
-                    rate: float | None = None, dwell: float | None = None, cycle: float | None = None):
+                    rate: float | None = None, dwell: float | None = None, start_angle: float | None = None,
+                    turn: str = "shortest", turn_during: str = "transfer", cycle: float | None = None):
     """(Plan of the move to the meeting point, Rendezvous): :func:`find_rendezvous`, then the planner's
     pipeline (samples, joint motion, limit check) on that move at T, with the found shape (no second solve).
     The plan's duration says how T was chosen; ``parameters["rendezvous"]`` says where and when it meets.
+    ``start_angle``, ``turn``, ``turn_during``: the tool's turn to the part's angle (:func:`find_rendezvous`).
     ``cycle`` [s]: T rounded up to whole cycles, the part met where it is then (P(T) planned again for it)."""
     from ..model.headroom import apply_limit_use
     from ..planner import PlanOptions, plan
     from ..timing import parse_time
 
     profile = apply_limit_use(profile)  # every timed limit at its limit-use fraction
-    rv = find_rendezvous(start, part, profile, time, height, eta, v_from, method_params, dwell)
+    rv = find_rendezvous(start, part, profile, time, height, eta, v_from, method_params, dwell, start_angle, turn,
+                         turn_during)
     T_rule = rv.seconds
     if cycle is not None:  # the meeting moves with the rounded duration: solved again for it (exit 4 past the window)
         from ..timing.cycle import whole_cycles
@@ -590,11 +616,12 @@ def plan_rendezvous(start, part: Part, profile, time: str | float = "limits", he
         T_c = whole_cycles(T_rule, cycle) * cycle
         if T_c != T_rule:
             again = find_rendezvous(start, part, profile, T_c, height, eta, v_from, method_params,
-                                    whole_cycles(d, cycle) * cycle)
+                                    whole_cycles(d, cycle) * cycle, start_angle, turn, turn_during)
             rv = replace(again, duration=replace(rv.duration, seconds=T_c))
     shape = [rv.path.parameters[k] for k in ("tau6", "tau7", "tau9", "tau10", "lambda1", "lambda2", "lambda3")]
     options = PlanOptions(method="bspline-vel", method_params={"params": shape}, time=rv.seconds, rate=rate, fit=False,
-                          cycle=cycle, capacity_rows=parse_time(time) != "fit")
+                          cycle=cycle, capacity_rows=parse_time(time) != "fit",
+                          turn="as-given", turn_during=turn_during)  # the task's end angle is resolved already
     got = plan(rv.task, profile, options)
     parameters = {**rv.path.parameters, "rendezvous": rv.as_dict()}
     extra = {} if got.cycle is None else {"cycle": replace(got.cycle, requested_s=T_rule)}
@@ -640,6 +667,10 @@ def plan_tracking(move, part: Part, profile, duration: float | None = None, rate
         D, rate = whole_cycles(D, cycle) * cycle, 1.0 / cycle
     T = float(move.duration.seconds)
     path = tracking_path(part.at(T), part.velocity, D)
+    if move.task.theta_to is not None:  # the tool holds the part's angle while it tracks it
+        from ..curves.rotation import with_rotation
+
+        path = with_rotation(path, move.task.theta_to, 0.0)
     traj = CartesianTrajectory(path, D)
     t = traj.sample_times(rate)
     if cycle is not None:
@@ -664,6 +695,7 @@ def plan_tracking(move, part: Part, profile, duration: float | None = None, rate
         torque=out["A"] / D**2 + out["G"],
         motor_speed=model.gear * out["qd1"] / D if model.has_drives else None,
         motor_torque=out["Am"] / D**2 + out["Gm"] if model.has_drives else None,
+        angle_weights=getattr(robot, "angle_weights", None),
     )
     duration_info = Duration(D, "tracking", 0.0, 0.0, None, "belt")
     return Plan(move.task, "track", dict(path.parameters), duration_info, traj, t, out["p"], out["v1"] / D,
@@ -685,13 +717,15 @@ def with_tracking(move, track):
 
 
 def plan_belt_move(start, part: Part, profile, time: str | float = "limits", height: float | None = None,
-                   eta: float | None = None, v_from=None, rate: float | None = None, cycle: float | None = None):
+                   eta: float | None = None, v_from=None, rate: float | None = None, start_angle: float | None = None,
+                   turn: str = "shortest", turn_during: str = "transfer", cycle: float | None = None):
     """One Plan of the rendezvous move and its tracking segment (the profile's dwell), as a plain batch's belt
     row writes it: the samples run from 0 to T + dwell (the tracking samples after the meeting), the limit
     report holds the move's rows and the segment's (its quantities marked "(tracking)", its times
     trajectory time), the summary describes the move (its duration, peaks and method) and its parameters
     carry ``rendezvous`` and ``tracking``. Without a dwell it is the move alone."""
-    move, rv = plan_rendezvous(start, part, profile, time, height, eta, v_from, None, rate, cycle=cycle)
+    move, rv = plan_rendezvous(start, part, profile, time, height, eta, v_from, None, rate, None, start_angle, turn,
+                               turn_during, cycle=cycle)
     if profile.planning.dwell <= 0:
         return move
     track = plan_tracking(move, part, profile, rate=rate, cycle=cycle)

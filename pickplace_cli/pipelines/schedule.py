@@ -38,11 +38,12 @@ from ..model.errors import PickplaceError, TaskError
 
 @dataclass(frozen=True)
 class RobotState:
-    """Where the robot is (at rest, ``position`` [m]) and from when it is free (``t_free`` [s, detection clock];
-    -inf: from the start)."""
+    """Where the robot is (at rest, ``position`` [m]; ``angle`` [rad] its tool angle, None when the schedule gives
+    no angles) and from when it is free (``t_free`` [s, detection clock]; -inf: from the start)."""
 
     position: np.ndarray
     t_free: float = -math.inf
+    angle: float | None = None
 
 
 @dataclass(frozen=True)
@@ -90,6 +91,8 @@ class Cycle:
             "start_m": self.move.task.p_from.tolist(),
             "t_meet_s": self.t_meet, "meeting_point_m": self.rendezvous.meeting_point.tolist(),
             "t_place_s": self.t_place, "t_end_s": self.t_end, "place_m": self.place.task.p_to.tolist(),
+            **({} if self.place.task.theta_to is None else {"start_theta_rad": self.move.task.theta_from,
+               "pick_theta_rad": self.move.task.theta_to, "place_theta_rad": self.place.task.theta_to}),
             "pick_duration_s": self.rendezvous.seconds, "place_duration_s": float(self.place.duration.seconds),
             "dwell_s": self.dwell, "cycle_s": self.t_end - self.t_start,
             "rendezvous": self.rendezvous.as_dict(),
@@ -205,14 +208,17 @@ def _xyz(values: dict, prefix: str) -> np.ndarray:
     return np.array([values[f"{prefix}{c}"] for c in "xyz"], float)
 
 
-def start_state(first_values: dict) -> RobotState:
-    """The robot at rest at row 1's ``from_x … from_z`` (all three, or none: then at row 1's place point)."""
+def start_state(first_values: dict, angles: bool = False) -> RobotState:
+    """The robot at rest at row 1's ``from_x … from_z`` (all three, or none: then at row 1's place point); with
+    ``angles`` (the schedule has tool angle columns) its tool angle is row 1's ``from_theta``, else its
+    ``place_theta``, else 0 rad."""
     given = [c for c in "xyz" if f"from_{c}" in first_values]
     if given and len(given) != 3:
         missing = next(c for c in "xyz" if c not in given)
         raise TaskError(f"from_{missing} is empty: row 1 gives the robot's start with all of from_x, from_y, from_z "
                         "(or none: it starts at the place point)")
-    return RobotState(_xyz(first_values, "from_" if given else "place_"))
+    angle = first_values.get("from_theta", first_values.get("place_theta", 0.0)) if angles else None
+    return RobotState(_xyz(first_values, "from_" if given else "place_"), angle=angle)
 
 
 def check_order(rows: Iterable, source: str = "batch") -> Iterator:
@@ -231,7 +237,7 @@ def check_order(rows: Iterable, source: str = "batch") -> Iterator:
             raise TaskError(f"{where}: t_detect = {t:g} s is earlier than row {prev[0]}'s {prev[1]:g} s; a belt "
                             "schedule's rows must be in time order (non-decreasing t_detect)")
         if prev is not None:
-            extra = next((f"from_{c}" for c in "xyz" if f"from_{c}" in r.values), None)
+            extra = next((f"from_{c}" for c in ("x", "y", "z", "theta") if f"from_{c}" in r.values), None)
             if extra:
                 raise TaskError(f"{where}: {extra} = {r.values[extra]:g}: only row 1 may say where the robot starts; "
                                 "each later move starts where the previous cycle ended (leave it empty)")
@@ -241,9 +247,12 @@ def check_order(rows: Iterable, source: str = "batch") -> Iterator:
 
 def plan_cycle(state: RobotState, r, profile, time: str = "limits", height: float | None = None,
                eta: float | None = None, rate: float | None = None, latency: float = 0.0,
-               method_params: dict | None = None, source: str = "batch") -> ScheduleRow:
+               method_params: dict | None = None, source: str = "batch", turn: str = "shortest",
+               turn_during: str = "transfer") -> ScheduleRow:
     """One row of the schedule from ``state`` (see the module docstring): a ScheduleRow with its Cycle, or the
-    reason the part is missed (exit 4) or the cycle fails (1, 3)."""
+    reason the part is missed (exit 4) or the cycle fails (1, 3). With tool angles (``state.angle`` not None) the
+    pick turns the tool to the part's ``to_theta`` (empty: no turn) by ``turn`` over ``turn_during``, the tool
+    holds it while tracking, and the place turns it to ``place_theta`` (empty: the part's angle)."""
     from ..planner import PlanOptions, plan
     from .rendezvous import Part, plan_rendezvous, plan_tracking
     from ..model.task import Task
@@ -253,22 +262,27 @@ def plan_cycle(state: RobotState, r, profile, time: str = "limits", height: floa
     t_start = max(state.t_free, t_detect + float(v.get("latency", latency)))
     where = f"row {r.row} ({source}:{r.line})"
     try:
+        angle = state.angle
         part = Part(_xyz(v, "to_"), np.array([v[f"to_belt_v{c}"] for c in "xyz"], float), t_start - t_detect,
-                    name=f"part of row {r.row}")
+                    name=f"part of row {r.row}", angle=None if angle is None else v.get("to_theta", angle))
         time_rule = v.get("time", time)
         from ..model.headroom import apply_limit_use
 
         profile = apply_limit_use(profile, v.get("limit_use"))
         h = v.get("height", height)
         e = v.get("eta", eta)
-        move, rv = plan_rendezvous(state.position, part, profile, time_rule, h, e, np.zeros(3), method_params, rate)
+        move, rv = plan_rendezvous(state.position, part, profile, time_rule, h, e, np.zeros(3), method_params, rate,
+                                   None, angle, turn, turn_during)
         dwell = float(profile.planning.dwell)
         track = plan_tracking(move, part, profile, rate=rate) if dwell > 0 else None
         leave = part.at(rv.seconds + dwell) if track is not None else rv.meeting_point
+        held = move.task.theta_to  # the part's angle as the tool holds it (None without angles)
         place_task = Task(leave, _xyz(v, "place_"), h if h is not None else profile.planning.height,
-                          e if e is not None else profile.planning.eta, v_from=part.velocity, v_to=np.zeros(3))
+                          e if e is not None else profile.planning.eta, v_from=part.velocity, v_to=np.zeros(3),
+                          theta_from=held, theta_to=None if held is None else v.get("place_theta", held))
         place = plan(place_task, profile, PlanOptions(method="bspline-vel", method_params=dict(method_params or {}),
-                                                      time=time_rule, rate=rate, fit=time_rule == "fit"))
+                                                      time=time_rule, rate=rate, fit=time_rule == "fit", turn=turn,
+                                                      turn_during=turn_during))
     except PickplaceError as exc:
         busy = f"robot busy until t = {state.t_free:.4f} s, " if state.t_free > t_detect + v.get("latency", latency) else ""
         return ScheduleRow(r.row, t_detect, t_start,
@@ -287,22 +301,25 @@ def plan_cycle(state: RobotState, r, profile, time: str = "limits", height: floa
 
 def plan_schedule(rows: Iterable, profile, time: str = "limits", height: float | None = None, eta: float | None = None,
                   rate: float | None = None, latency: float = 0.0, method_params: dict | None = None,
-                  source: str = "batch", fail_fast: bool = False, report_only: bool = False) -> Iterator[ScheduleRow]:
+                  source: str = "batch", fail_fast: bool = False, report_only: bool = False, angles: bool = False,
+                  turn: str = "shortest", turn_during: str = "transfer") -> Iterator[ScheduleRow]:
     """Plan the rows (BatchRows from :func:`~pickplace_cli.pipelines.batch.iter_batch`, lazily: a streamed row is answered
     as soon as it is read) one after another, the robot's state carried from each picked part to the next;
     yields a ScheduleRow per row. Input errors (order, a bad row) raise TaskError at that row. ``report_only``:
     a cycle that only exceeds a limit (exit 3) is run as planned (the robot's state goes on from it), so the
-    schedule is the one the robot would run if the limits were not checked."""
+    schedule is the one the robot would run if the limits were not checked. ``angles``: the schedule has tool angle
+    columns (``to_theta``, ``place_theta``, ``from_theta``; rad): the robot's tool angle is carried too, each turn
+    by ``turn`` over ``turn_during`` (:func:`plan_cycle`)."""
     state = None
     for r in check_order(rows, source):
         if state is None:
             try:
-                state = start_state(r.values)
+                state = start_state(r.values, angles)
             except TaskError as exc:
                 raise TaskError(f"row {r.row} ({source}:{r.line}): {exc}") from None
-        res = plan_cycle(state, r, profile, time, height, eta, rate, latency, method_params, source)
+        res = plan_cycle(state, r, profile, time, height, eta, rate, latency, method_params, source, turn, turn_during)
         if res.code == 0 or (report_only and res.code == 3 and res.cycle is not None):
-            state = RobotState(res.cycle.place.task.p_to, res.cycle.t_end)
+            state = RobotState(res.cycle.place.task.p_to, res.cycle.t_end, res.cycle.place.task.theta_to)
         yield res
         if fail_fast and res.code:
             return

@@ -91,7 +91,8 @@ def _join(pieces: list[dict[str, Any]], moves: list[int], template: JointTraject
         arrs = [pc["joint"][name] for pc in pieces]
         joint[name] = None if any(a is None for a in arrs) else np.concatenate(arrs)
     move = np.concatenate([np.full(len(pc["t"]), m, dtype=int) for pc, m in zip(pieces, moves)])
-    jt = JointTrajectory(cat["t"], names=template.names, units=template.units, **joint)
+    jt = JointTrajectory(cat["t"], names=template.names, units=template.units, angle_weights=template.angle_weights,
+                         **joint)
     return Timeline(cat["t"], cat["p"], cat["v"], cat["a"], cat["j"], jt, move, tuple(segments), tuple(summaries))
 
 

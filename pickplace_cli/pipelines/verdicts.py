@@ -43,7 +43,7 @@ from typing import Any
 
 import numpy as np
 
-from .batch import BELT, BatchRow, RowResult, plan_rows, row_task, run_chunks_in_order
+from .batch import ANGLES, BELT, BatchRow, RowResult, plan_rows, row_task, run_chunks_in_order
 from ..curves.bspline import DEGREE
 from ..paths.bspline import batch_paths
 from ..model.errors import PickplaceError, UnreachableError
@@ -325,7 +325,7 @@ def decide(rows: list[BatchRow], profile, options, height: float | None = None, 
         v = r.values
         spec = v.get("time", options.time)
         if spec in ("fit", "optimal", "limits") or any(v.get(f"v_{e}_{c}", 0.0) for e in ("from", "to") for c in "xyz") or any(
-                c in v for c in BELT):  # moving ends and belt rows: plan()
+                c in v for c in BELT + ANGLES):  # moving ends, belt rows and turns of the tool: plan()
             continue
         try:
             task = row_task(v, profile, height, eta)

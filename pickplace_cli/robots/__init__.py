@@ -47,10 +47,21 @@ def _scara(model: Any):
 BUILDERS: dict[str, Callable[[Any], Any]] = {"gantry": _gantry, "delta": _delta, "scara": _scara}
 
 
+#: the tool angle's dependence on the base joints of a robot with a rotary fourth axis (robots/rotary.py): a SCARA's
+#: J4 sits at the end of link 2 (θ = q1 + q2 + σ·q4), a Delta's plate does not turn (θ = σ·q4)
+CARRIERS: dict[str, tuple[float, float, float]] = {"delta": (0.0, 0.0, 0.0), "scara": (1.0, 1.0, 0.0)}
+
+
 def build_robot(model: Any):
-    """The robot model for a validated ``profile.robot`` section."""
+    """The robot model for a validated ``profile.robot`` section (with its rotary fourth axis when it has one)."""
     try:
-        return BUILDERS[model.kind](model)
+        robot = BUILDERS[model.kind](model)
+        rotary = getattr(model, "rotary", None)
+        if rotary is not None:
+            from .rotary import RotaryAxisRobot
+
+            robot = RotaryAxisRobot(robot, inertia=rotary.inertia, sign=float(rotary.sign), carrier=CARRIERS[model.kind])
+        return robot
     except ValueError as exc:
         raise ProfileError(f"robot ({model.kind}): {exc}") from None
 

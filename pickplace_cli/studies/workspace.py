@@ -35,7 +35,7 @@ workcell box (or p_i ± 0.5 m), and takes normalised steps with step halving (it
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, Mapping
 
 import numpy as np
@@ -483,7 +483,7 @@ def fit_workspace(
             )
         adjustments.append(PointAdjustment(name, p.copy(), q, dist, why, it))
         points[name] = q
-    base = Task(points["from"], points["to"], task.height, task.eta, task.v_from, task.v_to)
+    base = replace(task, p_from=points["from"], p_to=points["to"])  # the tool angles, if any, stay
 
     def outside(t: Task):
         """(path, None) when the path of t is inside W, else (path or None, reason)."""
@@ -530,7 +530,7 @@ def fit_workspace(
                 f"height: no clearance between {task.height:.4g} m and {min_height:.4g} m (step {step:g} m) keeps "
                 f"the path inside the workspace; at h = {task.height:.4g} m: {first}; last tried: {reason}"
             )
-        cand = Task(base.p_from, base.p_to, h, base.eta, base.v_from, base.v_to)
+        cand = replace(base, height=h)
         path, reason = outside(cand)
         if path is None:
             raise UnreachableError(

@@ -122,7 +122,11 @@ def _law_grid(path, points: int = 0, spans: bool = True, clustered: bool = False
 def _inertia_along(model, tau: np.ndarray, p: np.ndarray, p1: np.ndarray) -> np.ndarray:
     """m(τ): the motor torque of acceleration p′(τ) at rest at p(τ) (the inertia along the path)."""
     z = np.zeros_like(p)
-    return model.parts(tau, derivatives=False, motion=(p, z, p1, z), singularity=False).Am
+    motion: tuple = (p, z, p1, z)
+    angle = model.path.angle_orders(tau)
+    if angle is not None:  # the tool's turn accelerates along with the path, from rest
+        motion += (np.stack([angle[0], np.zeros(len(tau)), angle[1], np.zeros(len(tau))]),)
+    return model.parts(tau, derivatives=False, motion=motion, singularity=False).Am
 
 
 class _Problem:
@@ -504,13 +508,14 @@ def compose(path, b) -> object:
     inv = CubicHermiteSpline(u_tab, tab, speed)  # τ(u)
     fwd = CubicHermiteSpline(tab, u_tab, 1.0 / speed)  # u(τ)
 
-    def orders(u: np.ndarray):
+    def chain(u: np.ndarray):
         u = np.clip(np.asarray(u, float), 0.0, 1.0)
         tau = np.clip(inv(u), 0.0, 1.0)
         bb = b(tau)
-        s1 = T * np.sqrt(bb)
-        s2 = T**2 * b1(tau) / 2
-        s3 = T**3 * np.sqrt(bb) * b2(tau) / 2
+        return tau, T * np.sqrt(bb), T**2 * b1(tau) / 2, T**3 * np.sqrt(bb) * b2(tau) / 2
+
+    def orders(u: np.ndarray):
+        tau, s1, s2, s3 = chain(u)
         p, d1, d2, d3 = path.all_orders(tau)
         return [p, d1 * s1[:, None], d2 * (s1**2)[:, None] + d1 * s2[:, None],
                 d3 * (s1**3)[:, None] + 3 * d2 * (s1 * s2)[:, None] + d1 * s3[:, None]]
@@ -530,5 +535,10 @@ def compose(path, b) -> object:
     peaks = true_peaks(shell, np.unique(np.concatenate([dense, shell.breakpoints])))
     params = dict(path.parameters)
     params.update(time_law="optimal", law_coefficients=len(b.c))
+    angle = None
+    if path.angle is not None:  # the tool's turn runs on the same time law
+        from ..curves.rotation import ComposedRotation
+
+        angle = ComposedRotation(path.angle, chain)
     return CartesianPath(evaluate, path.method, params, tuple(float(x) for x in peaks), shell.breakpoints,
-                         max_order=path.max_order, jumps=shell.jumps, evaluate_all=orders)
+                         max_order=path.max_order, jumps=shell.jumps, evaluate_all=orders, angle=angle)
