@@ -590,7 +590,7 @@ def _write_plan_outputs(a, prof, writer, legs: list, track, code: int) -> None:
             rate_hz = 1.0 / a.cycle_s
         samples = on_cycle(make_round_trip(legs[0], legs[1], legs[0].report.dwell, rate_hz), a.cycle_s)
     elif track is not None:
-        from ..pipelines.rendezvous import with_tracking
+        from ..pipelines.tracking import with_tracking
 
         samples = on_cycle(with_tracking(legs[0], track), a.cycle_s)
     else:
@@ -608,7 +608,7 @@ def _written_times(a, prof, legs: list, track):
         rate_hz = 1.0 / a.cycle_s if a.cycle_s is not None else (a.rate if a.rate is not None else prof.planning.rate)
         return on_cycle(make_round_trip(legs[0], legs[1], legs[0].report.dwell, rate_hz), a.cycle_s).t
     if track is not None:
-        from ..pipelines.rendezvous import with_tracking
+        from ..pipelines.tracking import with_tracking
 
         return on_cycle(with_tracking(legs[0], track), a.cycle_s).t
     return legs[0].t
@@ -681,7 +681,7 @@ def _plan_to_belt(task, to_belt, latency, prof, time, v_from, params, rate, opti
 
     part = Part(task.p_to, _parse_point("to-belt", to_belt, "m/s"), 0.0 if latency is None else latency,
                 angle=task.theta_to)
-    from ..pipelines.rendezvous import plan_tracking
+    from ..pipelines.tracking import plan_tracking
 
     plan, rv = plan_rendezvous(task.p_from, part, prof, time, task.height, task.eta, v_from, params, rate,
                                start_angle=task.theta_from, turn=options.turn, turn_during=options.turn_during,

@@ -344,12 +344,13 @@ def plan_rows(
 
 def _plan_belt_row(r: BatchRow, profile, options, height, eta, source: str):
     """A plain batch's belt row: the conveyor rendezvous of ``--to-belt`` (bspline-vel) with its tracking segment
-    (:func:`~pickplace_cli.pipelines.rendezvous.plan_belt_move`). TaskError for a partial belt velocity or a
+    (:func:`~pickplace_cli.pipelines.tracking.plan_belt_move`). TaskError for a partial belt velocity or a
     method that cannot meet a moving part."""
     import numpy as np
 
     from ..paths import Method
-    from .rendezvous import Part, plan_belt_move
+    from .rendezvous import Part
+    from .tracking import plan_belt_move
 
     v = r.values
     missing = [c for c in BELT if c not in v]

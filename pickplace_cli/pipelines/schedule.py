@@ -254,7 +254,8 @@ def plan_cycle(state: RobotState, r, profile, time: str = "limits", height: floa
     pick turns the tool to the part's ``to_theta`` (empty: no turn) by ``turn`` over ``turn_during``, the tool
     holds it while tracking, and the place turns it to ``place_theta`` (empty: the part's angle)."""
     from ..planner import PlanOptions, plan
-    from .rendezvous import Part, plan_rendezvous, plan_tracking
+    from .rendezvous import Part, plan_rendezvous
+    from .tracking import plan_tracking
     from ..model.task import Task
 
     v = r.values

@@ -156,7 +156,9 @@ def test_mcap_joint_four_and_the_tool_orientation(tmp_path, move, prof):
     alpha = col["qdd4"] + (col["qdd1"] + col["qdd2"] if scara else 0.0)
     msgs = read_ros2(out)
     js = [m for _, m in msgs["/joint_states"]]
-    assert list(js[0].name) == ["q1", "q2", "q3", "q4"] and len(js) == len(theta)
+    # the profile's drive names (controller.joints)
+    names = ["J1", "J2", "J3", "J4"] if scara else ["A1", "A2", "A3", "A4"]
+    assert list(js[0].name) == names and len(js) == len(theta)
     np.testing.assert_allclose([m.position[3] for m in js], col["q4"], rtol=0, atol=1e-11)
     quat = np.array([[m.pose.orientation.x, m.pose.orientation.y, m.pose.orientation.z, m.pose.orientation.w]
                      for _, m in msgs["/tool_pose"]])

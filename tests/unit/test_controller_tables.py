@@ -49,7 +49,7 @@ def drive_scale(profile_name: str) -> tuple[np.ndarray, np.ndarray]:
         k = 25.0 * 1048576 / (2 * math.pi)
         return np.array([k, k, k]), np.zeros(3)
     if profile_name == "scara-600":
-        return np.array([180 / math.pi, 180 / math.pi, -1000.0]), np.zeros(3)
+        return np.array([180 / math.pi, 180 / math.pi, -1000.0, 180 / math.pi]), np.zeros(4)
     return np.array([1000.0, 1000.0, 1000.0]), np.zeros(3)
 
 
@@ -100,7 +100,7 @@ def continuous_q(profile_name: str, legs: list, dwell: float, t: np.ndarray) -> 
     """The joint positions of the written trajectory at ``t`` [s]: the legs one after another with a dwell after each
     (none after a single leg), by the robot's inverse kinematics of each plan's Cartesian trajectory."""
     robot = build_robot(load_profile(profile_name).robot)
-    out = np.full((len(t), 3), np.nan)
+    out = np.full((len(t), len(robot.joint_names)), np.nan)
     t0 = 0.0
     for leg in legs:  # (the CSV's 12 digits put the last time up to 1e-12 s past the end)
         T = leg.cartesian.duration
@@ -200,7 +200,8 @@ def test_belt_master_cam_is_belt_travel_with_derivatives_per_metre(tmp_path):
     assert head[0] == "master[m]" and head[2] == "A1_vel[counts/m]" and head[3] == "A1_acc[counts/m^2]"
     x = data[:, 0]
     assert x[0] == pytest.approx(0.3 * 0.05, abs=1e-12)  # the belt travelled during the latency
-    from pickplace_cli.pipelines.rendezvous import Part, plan_rendezvous, plan_tracking
+    from pickplace_cli.pipelines.rendezvous import Part, plan_rendezvous
+    from pickplace_cli.pipelines.tracking import plan_tracking
 
     prof = load_profile("delta-su2018")
     part = Part(np.array([0.05, 0.1, -0.8]), np.array([0.3, 0.0, 0.0]), 0.05)

@@ -160,5 +160,5 @@ def test_shipped_profiles_name_their_joints():
     from pickplace_cli.model.profile import load_profile
 
     names = {p: drive_map(load_profile(p)).names for p in ("delta-su2018", "scara-600", "gantry")}
-    assert names == {"delta-su2018": ("A1", "A2", "A3"), "scara-600": ("J1", "J2", "J3"),
+    assert names == {"delta-su2018": ("A1", "A2", "A3"), "scara-600": ("J1", "J2", "J3", "J4"),
                      "gantry": ("AxisX", "AxisY", "AxisZ")}

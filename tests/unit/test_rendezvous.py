@@ -194,7 +194,7 @@ def test_tracking_segment_follows_the_part(name):
     zero acceleration and jerk; the joint columns come from the robot's IK (FK of q gives p back, 1e-9 m) and
     the segment is limit-checked; the joined trajectory has strictly increasing t and no duplicate meeting."""
     from pickplace_cli.planner import motion_model_static
-    from pickplace_cli.pipelines.rendezvous import plan_tracking, with_tracking
+    from pickplace_cli.pipelines.tracking import plan_tracking, with_tracking
 
     prof = load_profile(name)
     start, part = random_case(np.random.default_rng(5), name)
@@ -294,7 +294,7 @@ def test_window_must_intersect_the_box():
 def test_belt_move_is_the_move_and_its_tracking():
     """plan_belt_move (a plain batch's belt row): the samples run to T + dwell, the limit report holds the move's
     rows and the tracking segment's (marked, times after T), as plan_rendezvous and plan_tracking give them."""
-    from pickplace_cli.pipelines.rendezvous import plan_belt_move, plan_tracking
+    from pickplace_cli.pipelines.tracking import plan_belt_move, plan_tracking
 
     prof = load_profile("delta-su2018")
     part = Part(np.array([0.1525, -0.1, -0.8]), np.array([0.0, 0.5, 0.0]), 0.05)
