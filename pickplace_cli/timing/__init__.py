@@ -152,10 +152,10 @@ def _limits_duration(model, dwell: float, auto: tuple, check=None, parts=None) -
     found = fit_screen(model, dwell, parts)
     if found is None:  # no joint or motor limit depends on the duration: the capacity alone decides
         return Duration(t_auto, "limits", tv, ta, tj, f"capacity {binding}", None)
-    t_screen, fit_binding, parts = found
-    if t_screen * (1.0 + 1e-6) < t_auto:
+    t_screen, fit_binding, parts, _ = found
+    if t_screen * (1.0 + 1e-5) < t_auto:
         return Duration(t_auto, "limits", tv, ta, tj, f"capacity {binding}", t_screen * (1.0 + 1e-7))
-    t_fit = fit_confirm(model, t_screen, dwell, check=check, parts=parts)
+    t_fit = fit_confirm(model, fit_precise(model, found, dwell), dwell, check=check, parts=parts)
     if t_auto > t_fit:
         return Duration(t_auto, "limits", tv, ta, tj, f"capacity {binding}", t_fit)
     return Duration(t_fit, "limits", tv, ta, tj, fit_binding, t_fit)
@@ -251,21 +251,36 @@ def fit_duration(model, dwell: float = 0.0, start: float = 0.1, margin: float = 
     found = fit_screen(model, dwell)
     if found is None:
         return None, None
-    return fit_confirm(model, found[0], dwell, margin, check, found[2]), found[1]
+    return fit_confirm(model, fit_precise(model, found, dwell), dwell, margin, check, found[2]), found[1]
+
+
+def fit_precise(model, screen: tuple, dwell: float = 0.0) -> float:
+    """The screened fit ``screen`` (:func:`fit_screen`) solved again in closed form on the model itself at the τ of
+    every quantity's maximum (one small evaluation of the model): the parabola's value estimate can sit a little
+    above or below the continuous peak, the model's value at its vertex sits at or below it, ~1e-8 off. The RMS
+    thresholds are exact already."""
+    from .fit import fit_thresholds, rms_threshold
+
+    T, _, parts, _ = screen
+    where: list = []
+    fit_thresholds(model, parts, dwell, rms=False, seg=screen[3], refine=True, vertices=where)
+    precise = max(_solve_at(model, np.array(where), dwell), rms_threshold(model, parts, dwell))
+    return precise if precise > 0 else T
 
 
 def fit_screen(model, dwell: float = 0.0, parts=None) -> tuple[float, str, object] | None:
-    """The fit on the model's fit grid, in closed form (:mod:`pickplace_cli.timing.fit`), raised to the closed form
-    at the parabola vertices of the timed columns' top samples: (T [s], binding "joint quantity", the Parts on the
-    grid); None when no limit depends on the duration. Within ~1e-8 of the continuous fit; :func:`fit_confirm`
+    """The fit on the model's fit grid, in closed form (:mod:`pickplace_cli.timing.fit`), each quantity's largest
+    per-sample threshold refined to the vertex of the parabola through it and its neighbours: (T [s], binding "joint
+    quantity", the Parts on the grid); None when no limit depends on the duration. Within ~1e-8 of the continuous fit; :func:`fit_confirm`
     confirms it by the exact check. ``parts``: the model on another grid holding the check's extra points
     (e.g. the plan's first samples), used instead of the fit grid."""
-    from ..limits.grid import fit_grid
+    from ..limits.grid import fit_grid, interior_jumps, segment_ids
     from .fit import screened_fit
 
     path = model.path
     parts = model.parts(fit_grid(path.breakpoints, path.jumps)) if parts is None else parts.sorted()
-    found = screened_fit(model, parts, dwell)
+    seg = segment_ids(parts.tau, interior_jumps(path.breakpoints, path.jumps))
+    found = screened_fit(model, parts, dwell, seg, refine=True)
     if found is None:
         return None
     T, binding = found
@@ -273,7 +288,7 @@ def fit_screen(model, dwell: float = 0.0, parts=None) -> tuple[float, str, objec
         from ..model.errors import NoFeasibleDuration
 
         raise NoFeasibleDuration(f"time = fit: no duration up to 1e4 s satisfies {binding}")
-    return _at_peaks(model, parts, max(T, 1e-4), dwell), binding, parts
+    return max(T, 1e-4), binding, parts, seg
 
 
 def fit_confirm(model, T: float, dwell: float = 0.0, margin: float = 1e-7, check=None, parts=None) -> float:
@@ -306,25 +321,6 @@ def _solve_at(model, tau, dwell: float) -> float:
         return 0.0
     found = fit_thresholds(model, model.parts(tau), dwell, rms=False)
     return max((t for _, t in found), default=0.0)
-
-
-def _at_peaks(model, parts, T: float, dwell: float) -> float:
-    """T [s] raised to the closed-form fit at the parabola vertices of every timed column's top samples at T
-    (the continuous peaks near their limits, to ~1e-8 relative)."""
-    import numpy as np
-
-    from ..limits.check import _parabolic_peak
-    from ..limits.grid import interior_jumps, segment_ids
-
-    meta, data = model.columns(parts, T)
-    timed = [c for c, m in enumerate(meta) if m[4] == "limit"]
-    if not timed:
-        return T
-    tau = parts.tau
-    seg = segment_ids(tau, interior_jumps(model.path.breakpoints, model.path.jumps))
-    d = data[:, timed]
-    _, at = _parabolic_peak(tau, d, np.argmax(d, axis=0), seg)
-    return max(T, _solve_at(model, at, dwell))
 
 
 # ------------------------------------------------------------------ paths that depend on the duration

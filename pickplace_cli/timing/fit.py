@@ -36,14 +36,6 @@ import numpy as np
 from ..model.errors import NoFeasibleDuration
 
 
-def _largest(values: np.ndarray) -> tuple[float, int]:
-    """(max, its index) of a 1-D array; (0, -1) when empty."""
-    if values.size == 0:
-        return 0.0, -1
-    k = int(np.argmax(values))
-    return float(values[k]), k
-
-
 def torque_rate_threshold(a: np.ndarray, b: np.ndarray, limit: float) -> np.ndarray:
     """Per sample, the smallest u = 1/T > 0 at which |a·u³ + b·u| reaches ``limit`` (inf: never), in closed form.
 
@@ -112,41 +104,61 @@ def rms_thresholds(iaa, iag, igg, hold, dwell: float, rated) -> np.ndarray:
     return out
 
 
-def fit_thresholds(model, parts, dwell: float = 0.0, rms: bool = True) -> list[tuple[str, float]]:
+def fit_thresholds(model, parts, dwell: float = 0.0, rms: bool = True, seg=None,
+                   refine: bool = False, vertices: list | None = None) -> list[tuple[str, float]]:
     """[(name "joint quantity", the smallest T [s] from which it holds at every sample of ``parts``)] for every
     limit of ``model`` that depends on the duration (the module's table); an empty list when none does.
     Raises NoFeasibleDuration naming the quantity when no duration holds it (the holding torque alone exceeds it).
-    ``rms=False`` leaves the RMS out (it does not depend on the samples)."""
+    ``rms=False`` leaves the RMS out (it does not depend on the samples). ``refine``: each quantity's threshold is
+    a smooth function of τ, so its largest sample is replaced by the vertex of the parabola through it and its
+    neighbours (never across a jump: ``seg``, :func:`~pickplace_cli.limits.grid.segment_ids` of sorted ``parts``):
+    the continuous maximum to ~1e-6 on the fit grid. ``vertices``: a list that receives the τ of each quantity's
+    maximum (sampled or refined), the RMS aside."""
     meta, _ = model.columns(parts, 1.0)
     index = {name: i for i, name in enumerate(model.robot.joint_names)}
+    names, cols = [], []
+    rates: list[tuple[int, float]] = []
+    with np.errstate(divide="ignore", invalid="ignore"):
+        for joint, quantity, _unit, limit, kind, _sign in meta:
+            if kind != "limit":
+                continue
+            i = index[joint]
+            name = f"{joint} {quantity}"
+            if quantity == "velocity":
+                col = np.abs(parts.qd1[:, i]) / limit
+            elif quantity == "motor speed":
+                col = np.abs(model.gear[i] * parts.qd1[:, i]) / limit
+            elif quantity == "acceleration":
+                col = np.sqrt(np.abs(parts.qdd1[:, i]) / limit)
+            elif quantity == "jerk":
+                col = np.cbrt(np.abs(parts.qddd1[:, i]) / limit)
+            elif quantity == "motor torque":
+                col = _torque_thresholds(parts.Am[:, i], parts.Gm[:, i], limit, name)
+            elif quantity == "motor torque rate":  # solved below, every joint in one call
+                rates.append((i, float(limit)))
+                col = None
+            else:  # pragma: no cover - a new timed quantity must be added to the table above
+                raise ValueError(f"fit: no closed form for {quantity}")
+            names.append(name)
+            cols.append(col)
+        if rates:
+            idx = [i for i, _ in rates]
+            u = torque_rate_threshold(parts.dAm[:, idx], parts.dGm[:, idx], np.array([lim for _, lim in rates]))
+            per = iter(np.where(np.isfinite(u) & (u > 0), 1.0 / u, 0.0).T)
+            cols = [next(per) if c is None else c for c in cols]
     out: list[tuple[str, float]] = []
-    rates: list[tuple[str, int, float]] = []
-    for joint, quantity, _unit, limit, kind, _sign in meta:
-        if kind != "limit":
-            continue
-        i = index[joint]
-        name = f"{joint} {quantity}"
-        if quantity == "velocity":
-            t = _largest(np.abs(parts.qd1[:, i]))[0] / limit
-        elif quantity == "motor speed":
-            t = _largest(np.abs(model.gear[i] * parts.qd1[:, i]))[0] / limit
-        elif quantity == "acceleration":
-            t = math.sqrt(_largest(np.abs(parts.qdd1[:, i]))[0] / limit)
-        elif quantity == "jerk":
-            t = math.cbrt(_largest(np.abs(parts.qddd1[:, i]))[0] / limit)
-        elif quantity == "motor torque":
-            t = _torque_threshold(parts.Am[:, i], parts.Gm[:, i], limit, name)
-        elif quantity == "motor torque rate":  # solved below, every joint in one call
-            rates.append((name, i, float(limit)))
-            continue
-        else:  # pragma: no cover - a new timed quantity must be added to the table above
-            raise ValueError(f"fit: no closed form for {quantity}")
-        out.append((name, float(t)))
-    if rates and len(parts.tau):
-        cols = [i for _, i, _ in rates]
-        u = torque_rate_threshold(parts.dAm[:, cols], parts.dGm[:, cols], np.array([lim for *_, lim in rates]))
-        for (name, _, _), first in zip(rates, u.min(axis=0)):
-            out.append((name, 1.0 / float(first) if np.isfinite(first) and first > 0 else 0.0))
+    if cols and len(parts.tau):
+        data = np.column_stack(cols)
+        top = np.argmax(data, axis=0)
+        if refine:
+            from ..limits.check import _parabolic_peak
+
+            peak, where = _parabolic_peak(parts.tau, data, top, seg)
+        else:
+            peak, where = data[top, np.arange(data.shape[1])], parts.tau[top]
+        out = [(n, float(v)) for n, v in zip(names, peak)]
+        if vertices is not None:
+            vertices.extend(float(x) for x in where)
     rated = [s.drive.rated_torque if s.drive is not None and s.drive.rated_torque else None for s in model.specs]
     has = [i for i, r in enumerate(rated) if r is not None]
     if rms and has:
@@ -162,25 +174,28 @@ def fit_thresholds(model, parts, dwell: float = 0.0, rms: bool = True) -> list[t
     return out
 
 
-def _torque_threshold(A: np.ndarray, G: np.ndarray, limit: float, name: str) -> float:
-    """The smallest T with |A/T² + G| ≤ limit at every sample (module table)."""
+def _torque_thresholds(A: np.ndarray, G: np.ndarray, limit: float, name: str) -> np.ndarray:
+    """Per sample, the smallest T with |A/T² + G| ≤ limit from then on (module table): 1/√s_max with
+    s_max = (limit − sgn(A)·G)/|A| (0 where A = 0)."""
     if np.any(np.abs(G) > limit):
         raise NoFeasibleDuration(f"time = fit: no duration satisfies {name} (the holding torque alone exceeds "
                                  f"{limit:g} N·m)")
     absA = np.abs(A)
-    moving = absA > 0
-    if not moving.any():
-        return 0.0
-    s_max = (limit - np.sign(A[moving]) * G[moving]) / absA[moving]
-    smin = float(s_max.min())
-    return math.inf if smin <= 0 else 1.0 / math.sqrt(smin)
+    s_max = (limit - np.sign(A) * G) / absA  # inf where A = 0
+    return np.where(absA > 0, 1.0 / np.sqrt(np.maximum(s_max, 0.0)), 0.0)
 
 
-def screened_fit(model, parts, dwell: float = 0.0) -> tuple[float, str] | None:
+def screened_fit(model, parts, dwell: float = 0.0, seg=None, refine: bool = False) -> tuple[float, str] | None:
     """(T [s], binding "joint quantity"): the fit on the samples of ``parts``, the largest threshold of
-    :func:`fit_thresholds`; None when no limit depends on the duration."""
-    found = fit_thresholds(model, parts, dwell)
+    :func:`fit_thresholds` (``seg``, ``refine``: its parabola-vertex refinement); None when no limit depends on the
+    duration."""
+    found = fit_thresholds(model, parts, dwell, seg=seg, refine=refine)
     if not found:
         return None
     name, t = max(found, key=lambda f: f[1])
     return t, name
+
+
+def rms_threshold(model, parts, dwell: float = 0.0) -> float:
+    """The largest RMS threshold of :func:`fit_thresholds` [s] (0 without a rated torque): exact, sample-free."""
+    return max((t for n, t in fit_thresholds(model, parts, dwell) if n.endswith("rms motor torque")), default=0.0)
