@@ -280,13 +280,26 @@ class LineRobot:
             where = "its window's end" if self.meet_end < self.window[0] + 1e-12 or along0 > self.window[0] else "it"
             return Decline(f"robot {self.name}: {busy}the part is at along {along0:.4f} m when a move could start, past "
                            f"{where} (last meeting point along {self.meet_end:.4f} m)")
-        p0 = self.part_at(along0, across)
-        moves = [Move(bs, st.position, st.velocity, p0, self.v_belt, self.v_belt, self.height, self.eta)
-                 for bs in self._shapes_for(st.position, st.velocity, p0 + self.v_belt * self.last_T, self.v_belt)]
         target, v_out = self.targets[self.next_target % len(self.targets)]
-        solved = self._pick_and_place(moves, a, b, target, v_out)
+        solved = None
+        waited = False
+        if along0 < self.window[0] and not st.moving:
+            # the part has not reached the window yet: the robot waits at rest and starts its move so as to meet it
+            # where it enters the window, when the rule's move there fits in the time left
+            entry = self.part_at(self.window[0], across)
+            t_entry = t_detect + (self.window[0] - along) / self.speed
+            wmoves = [Move(bs, st.position, st.velocity, entry, np.zeros(3), self.v_belt, self.height, self.eta)
+                      for bs in self._shapes_for(st.position, st.velocity, entry, self.v_belt)]
+            got = self._pick_and_place(wmoves, T_MIN, t_entry - t_start, target, v_out)
+            if isinstance(got, tuple) and t_entry - got[0].T >= t_start:
+                solved, t_start, waited = got, t_entry - got[0].T, True
         if solved is None:
-            return Decline(_Reason(self, moves, a, b, along0, busy))
+            p0 = self.part_at(along0, across)
+            moves = [Move(bs, st.position, st.velocity, p0, self.v_belt, self.v_belt, self.height, self.eta)
+                     for bs in self._shapes_for(st.position, st.velocity, p0 + self.v_belt * self.last_T, self.v_belt)]
+            solved = self._pick_and_place(moves, a, b, target, v_out)
+            if solved is None:
+                return Decline(_Reason(self, moves, a, b, along0, busy))
         if isinstance(solved, Decline):
             return solved
         pick, place = solved
@@ -301,7 +314,7 @@ class LineRobot:
         state = RobotState(end.copy(), v_out.copy(), legs[-1].t1)
         meet_line = self.frame.to_line(meet)
         return Cycle(legs, t_start, t_start + pick.T, meet.copy(), meet_line, self.next_target % len(self.targets),
-                     target.copy(), state, waited=pick.T <= a * (1 + 1e-12) and a > T_MIN)
+                     target.copy(), state, waited=waited)
 
     def commit(self, cycle: Cycle) -> None:
         self.state = cycle.state
