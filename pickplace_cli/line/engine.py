@@ -61,7 +61,7 @@ class PartResult:
                 "meet_across_m": float(c.meet_line[1]), "meet_m": c.meet_robot.tolist(),
                 "pick_duration_s": pick.duration, "place_duration_s": place.duration,
                 "t_placed_s": c.t_placed, "t_free_s": c.t_free, "target": c.target, "place_m": c.place_point.tolist(),
-                "waited_for_window": c.waited, "stopped_first": c.legs[0].kind == "stop",
+                "waited_for_window": c.waited,
                 "pick_shape": list(pick.solved.move.basis.params), "place_shape": list(place.solved.move.basis.params),
             })
         if self.declines:
@@ -150,7 +150,7 @@ class LineEngine:
         self.t_last = max(self.t_last, d.t)
         t_ready = d.t + self.line.parts.latency
         for run in self.runs:
-            self._stop_if_due(run, t_ready)
+            self._stop_if_due(run, t_ready, d.along, d.t)
         ask, left_out = self.sharing.order(d.across, self.n)
         declines = {self.robots[i].name: why for i, why in left_out.items()}
         for i in ask:
@@ -173,8 +173,8 @@ class LineEngine:
         self.results.append(out)
         return out
 
-    def _stop_if_due(self, run: RobotRun, t_ready: float) -> None:
-        leg = run.robot.stop_first(t_ready)
+    def _stop_if_due(self, run: RobotRun, t_ready: float, along: float = math.inf, t_detect: float = 0.0) -> None:
+        leg = run.robot.stop_first(t_ready, along, t_detect)
         if leg is None:
             return
         if isinstance(leg, Decline):

@@ -246,11 +246,16 @@ class LineRobot:
         return parts.Gm[0].copy() if self.has_drives else parts.G[0].copy()
 
     # --------------------------------------------------------------------------------------- the cycle
-    def stop_first(self, t_ready: float) -> Leg | Decline | None:
-        """The stop leg a robot moving with an outgoing belt needs before a part ready at ``t_ready`` (None when it
-        can start that pick from its motion, or is at rest)."""
+    def stop_first(self, t_ready: float, along: float = math.inf, t_detect: float = 0.0) -> Leg | Decline | None:
+        """The stop leg a robot moving with an outgoing belt needs before the next part (detected at ``t_detect``
+        at ``along``, ready at ``t_ready``): None when it can start that pick from its motion — the part is known and
+        already in its window when the robot is free — or it is at rest. Otherwise it comes to rest at its home
+        point at once (the parts after it come later still)."""
         st = self.state
-        if not st.moving or t_ready <= st.t_free:
+        if not st.moving:
+            return None
+        along_free = along + self.speed * (st.t_free - t_detect)
+        if t_ready <= st.t_free and along_free >= self.window[0]:
             return None
         moves = [Move(b, st.position, st.velocity, self.home, np.zeros(3), np.zeros(3), self.height, self.eta)
                  for b in self._shapes_for(st.position, st.velocity, self.home, np.zeros(3))]

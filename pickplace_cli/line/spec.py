@@ -290,7 +290,7 @@ def upstream_order(line: Line) -> list[int]:
 # ------------------------------------------------------------------------------------------------ loading
 
 
-def _describe(err: dict, data: Any, lines: dict, source: str) -> str:
+def _describe(err: dict, data: Any, lines: dict, source: str, errors: list) -> str:
     """One line ``FILE:LINE: FIELD = VALUE: RULE`` of a pydantic error."""
     from ..model.profile import _resolve, _show
 
@@ -304,6 +304,12 @@ def _describe(err: dict, data: Any, lines: dict, source: str) -> str:
     kind = err["type"]
     if kind == "extra_forbidden":
         return f"{where}: unknown key {field!r}: not a field of this section (check spelling; keys are case-sensitive)"
+    if kind == "missing" and real and isinstance(real[-1], int):  # a fixed-length list that is too short
+        parent = ".".join(str(p) for p in real[:-1])
+        given = err.get("input")
+        absent = sum(1 for e in errors if e["type"] == "missing" and tuple(e["loc"])[:-1] == tuple(err["loc"])[:-1])
+        n = len(given) if isinstance(given, (list, tuple)) else 0
+        return f"{where}: {parent} = {_show(given)}: needs {n + absent} values, got {n}"
     if kind == "missing":
         return f"{where}: {field}: required field is missing"
     if kind == "union_tag_invalid":
@@ -327,7 +333,8 @@ def parse_line(text: str, source: str = "<line>") -> Line:
         line = Line.model_validate(data)
     except ValidationError as exc:
         errors = _prune_union_branches(exc.errors(), data)
-        first = _describe(errors[0], data, lines, source)
+        errors.sort(key=lambda e: e["type"] != "extra_forbidden")  # a misspelt key explains the missing one
+        first = _describe(errors[0], data, lines, source, errors)
         more = f" (and {len(errors) - 1} more problem{'s' if len(errors) > 2 else ''})" if len(errors) > 1 else ""
         raise ProfileError(first + more) from None
     check_rules(line, source)
