@@ -244,7 +244,7 @@ def _single(line_file, detections, belt_speed, robots, strategy, seed, output, a
                 out.flush()
         summary = engine.finish()
         if as_json:
-            out.write(summary_json(summary, line.name).replace("\n", " ").strip() + "\n")
+            out.write(summary_json(summary, line.name, compact=True))
     _after(engine, summary, line, robots_csv, summary_file, plot, plot_kind if plot else None, mcap, rate, quiet)
     code = summary.exit_code()
     for v in summary.violations():
@@ -383,12 +383,12 @@ def _sweep(line_file, detections, belt_speed, robots, strategy, seed, speeds, ro
             write_sweep_plot(rows, fh, plot_kind, title=f"{base.name}: miss rate against belt speed")
     if ckpt is not None and ckpt.exists():
         os.unlink(ckpt)
-    errors = [r for r in rows if r.get("error")]
-    for r in errors[:5]:
+    failed = [r for r in rows if r.get("error") and r.get("exit_code") != 4]
+    for r in failed[:5]:
         sys.stderr.write(f"pickplace: case {r['strategy']}, {r['robots']} robots, {r['belt_speed']:g} m/s, seed "
                          f"{r['seed']}: {r['error']}\n")
-    if errors:
-        raise typer.Exit(max(r.get("exit_code", 1) for r in errors))
+    if failed:
+        raise typer.Exit(max(r.get("exit_code", 1) for r in failed))
 
 
 def _engine(stack: contextlib.ExitStack, scheduler, workers: int, quiet: bool, total: int):

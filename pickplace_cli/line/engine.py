@@ -25,7 +25,7 @@ import numpy as np
 
 from ..model.errors import PickplaceError, TaskError, UnreachableError
 from .parts import BadRow, Detection
-from .robot import Cycle, Decline, Leg, LineRobot, check_reach
+from .robot import Cycle, Decline, Leg, LineRobot, RobotState, check_reach
 from .spec import Line, robot_bands, upstream_order
 from .summary import LineSummary, summarise
 
@@ -126,7 +126,7 @@ class LineEngine:
         for r, (lo, hi) in zip(self.robots, self.sharing.bands):
             across = (lo + hi) / 2 if self.line.strategy.kind == "bands" else 0.0
             along = r.window[0] - r.speed * 1.0
-            res = r.plan(along, across, 0.0, r.state.__class__(r.home.copy(), np.zeros(3), -math.inf))
+            res = r.plan(along, across, 0.0, RobotState(r.home.copy(), np.zeros(3), -math.inf))
             if isinstance(res, Decline):
                 why.append(res.reason)
         if len(why) == len(self.robots):

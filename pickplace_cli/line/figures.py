@@ -67,9 +67,9 @@ def write_timeline(engine, summary, stream: IO[bytes], fmt: str = "png", title: 
     ax.set_ylim(min([r.window[0] for r in robots] + [d.along for d in (x.detection for x in engine.results) if d]) - 0.05,
                 end_of_line)
     ax.set_ylabel("along the belt [m]")
-    ax.set_title(title or f"{summary.parts} parts, {summary.picked} picked, {summary.missed} missed "
-                          f"({100 * summary.miss_rate:.1f} %), {summary.picks_per_minute:.1f} picks/min; "
-                          "grey: missed")
+    ax.set_title(title or f"{summary.parts} parts ({summary.parts_per_minute:.0f}/min), {summary.picked} picked, "
+                          f"{summary.missed} missed ({100 * summary.miss_rate:.1f} %): "
+                          f"{summary.picks_per_minute:.1f} picks/min; grey: missed")
     for k, run in enumerate(engine.runs):
         for kind, colour in LEG_COLOURS.items():
             bars = [(leg.t0, leg.duration) for leg in run.legs if leg.kind == kind]

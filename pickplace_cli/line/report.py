@@ -72,9 +72,11 @@ def _finite(doc: Any) -> Any:
     return doc
 
 
-def summary_json(summary, line_name: str, settings: dict | None = None) -> str:
-    """The run (line, robots) as one JSON document."""
-    doc = {"line": line_name, **(settings or {}), **summary.as_dict()}
+def summary_json(summary, line_name: str, compact: bool = False) -> str:
+    """The run (line, robots) as one JSON document (``compact``: one line)."""
+    doc = {"line": line_name, **summary.as_dict()}
+    if compact:
+        return json.dumps(_finite(doc), separators=(",", ":")) + "\n"
     return json.dumps(_finite(doc), indent=1) + "\n"
 
 
@@ -107,9 +109,9 @@ def print_table(summary, console=None) -> None:
     from rich.table import Table
 
     console = console or Console(stderr=True, highlight=False)
-    t = Table(title=f"line: {summary.parts} parts, {summary.picked} picked, {summary.missed} missed "
-                    f"({100 * summary.miss_rate:.1f} %), {summary.picks_per_minute:.1f} picks/min over "
-                    f"{summary.span:.2f} s", title_justify="left")
+    t = Table(title=f"line: {summary.parts} parts ({summary.parts_per_minute:.1f}/min), {summary.picked} picked, "
+                    f"{summary.missed} missed ({100 * summary.miss_rate:.1f} %): {summary.picks_per_minute:.1f} "
+                    f"picks/min; run {summary.span:.2f} s", title_justify="left")
     for col, just in (("robot", "left"), ("picks", "right"), ("picks/min", "right"), ("utilisation", "right"),
                       ("idle [s]", "right"), ("peak limit use", "left"), ("RMS torque / rated", "left")):
         t.add_column(col, justify=just)

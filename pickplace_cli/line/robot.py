@@ -45,7 +45,7 @@ SCREEN_MARGIN = 0.9
 #: check rarely has to nudge one (which would move the meeting point and so the place move's start)
 GRID_SAFETY = 2e-4
 #: uniform samples of a tracking leg's grid (plus its Gauss–Legendre nodes)
-TRACK_UNIFORM = 17
+TRACK_UNIFORM = 9
 #: the quantities a duration changes (the fit rule's); positions, workcell and singularity do not
 TIMED = frozenset({"velocity", "acceleration", "jerk", "motor speed", "motor torque", "motor torque rate"})
 
@@ -69,8 +69,8 @@ class Leg:
     """One segment of a robot's sequence: ``kind`` (pick, track, place, release, stop), its start ``t0`` [s, line
     clock] and ``duration`` [s]; ``solved`` (the B-spline move; None for a track/release leg, which is
     ``point`` + ``velocity``·t); the exact ∫ motor torque² dt per motor over the leg [N²·m²·s]; the use of every
-    limit (joint, quantity) → utilisation; the motor torque at its end [N·m]; ``exact``: checked by the exact
-    limit check."""
+    limit (in the order of the robot's ``use_keys``: (joint, quantity)); the motor torque at its end [N·m];
+    ``exact``: checked by the exact limit check."""
 
     kind: str
     t0: float
@@ -79,7 +79,7 @@ class Leg:
     point: np.ndarray | None = None
     velocity: np.ndarray | None = None
     integral: np.ndarray | None = None
-    use: dict = field(default_factory=dict)
+    use: np.ndarray | None = None
     end_torque: np.ndarray | None = None
     exact: bool = False
 
@@ -231,6 +231,9 @@ class LineRobot:
         self.next_target = 0
         self.state = RobotState(self.home.copy(), np.zeros(3), -math.inf)
         self.last_T = 0.2
+        self.last_place_T = 0.2
+        self._plan = None
+        self.use_keys: list = []
         self.home_torque = self._holding(self.home)
 
     # ------------------------------------------------------------------------------------------ geometry
@@ -325,6 +328,7 @@ class LineRobot:
         self.state = cycle.state
         self.next_target += 1
         self.last_T = cycle.pick.duration
+        self.last_place_T = next(leg.duration for leg in cycle.legs if leg.kind == "place")
 
     # ------------------------------------------------------------------------------------------ solving
     def _shapes_for(self, start, v_from, end, v_to) -> list:
@@ -353,14 +357,14 @@ class LineRobot:
                 return None
             place = self._solve(self._place_moves(pick.end + self.v_belt * self.dwell, target, v_out), T_MIN, HORIZON)
             return (pick, place) if place is not None else self._no_place(pick.end + self.v_belt * self.dwell, target)
-        found = search_auto(moves, self.capacity, a, b)
+        found = search_auto(moves, self.capacity, a, b, guess=self.last_T)
         if found is None:
             return None
         mv, T = found
         T = min(T * (1 + GRID_SAFETY), b) if T > a else T
         leave = mv.end(T) + self.v_belt * self.dwell
         pmoves = self._place_moves(leave, target, v_out)
-        pfound = search_auto(pmoves, self.capacity, T_MIN, HORIZON)
+        pfound = search_auto(pmoves, self.capacity, T_MIN, HORIZON, guess=self.last_place_T)
         if pfound is None:
             return self._no_place(leave, target)
         pmv, pT = pfound
@@ -394,7 +398,7 @@ class LineRobot:
         text = (f"robot {self.name}: {busy}cannot meet the part in its window by the rule {rule} (the meeting must lie "
                 f"between along {max(self.window[0], along0):.4f} and {self.meet_end:.4f} m)")
         if by_how_much and self.rule == "auto" and b < HORIZON:
-            T = first_feasible(moves[0].excess_auto(self.capacity), b, HORIZON)
+            T = first_feasible(moves[0].excess_auto(self.capacity), b, HORIZON, guess=b)
             if T is not None:
                 text += f"; the earliest meeting is {self.speed * (T - b) * 1e3:.0f} mm past that"
         return text
@@ -472,22 +476,32 @@ class LineRobot:
             return Decline(f"robot {self.name}: the {legs[k].kind} move (t = {legs[k].t0:.4f} … {legs[k].t1:.4f} s) "
                            f"leaves the workspace: {exc}")
         meta, data = self.model.columns(parts, Ts)
+        plan = self._use_plan(meta)
         start = 0
-        for leg, (gtau, _, gl_i, gl_w) in zip(legs, grids):
+        peaks = np.empty((len(legs), data.shape[1]))
+        for k, (leg, (gtau, _, gl_i, gl_w)) in enumerate(zip(legs, grids)):
             sl = slice(start, start + len(gtau))
             start += len(gtau)
-            use = _use(meta, _peaks(gtau, data[sl].T))
+            peaks[k] = _peaks(gtau, data[sl].T)
             T = max(leg.duration, 1e-9)
             am, gm = (parts.Am[sl], parts.Gm[sl]) if self.has_drives else (parts.A[sl], parts.G[sl])
             torque = am / T**2 + gm
             leg.integral = T * (gl_w[:, None] * torque[gl_i] ** 2).sum(axis=0)
             leg.end_torque = torque[-1].copy()
+        uses = plan(peaks)
+        for leg, use in zip(legs, uses):
             leg.use = use
-            if max(use.values(), default=0.0) > SCREEN_MARGIN:
+            if use.max(initial=0.0) > SCREEN_MARGIN:
                 bad = self._exact_check(leg)
                 if bad is not None:
                     return bad
         return None
+
+    def _use_plan(self, meta) -> "UsePlan":
+        if self._plan is None or self._plan.meta != meta:  # the same columns every time (a new list each call)
+            self._plan = UsePlan(meta)
+            self.use_keys = self._plan.keys
+        return self._plan
 
     def _exact_check(self, leg: Leg) -> Decline | None:
         """The exact limit check of one leg on its real path (RMS aside); the leg's use from it."""
@@ -503,7 +517,12 @@ class LineRobot:
             return Decline(f"robot {self.name}: the {leg.kind} move (t = {leg.t0:.4f} … {leg.t1:.4f} s) leaves the "
                            f"workspace: {exc}")
         leg.exact = True
-        leg.use = {(r.joint, r.quantity): r.utilisation for r in rep.rows if r.quantity != "rms motor torque"}
+        use = leg.use.copy()
+        index = {k: i for i, k in enumerate(self.use_keys)}
+        for r in rep.rows:
+            if (r.joint, r.quantity) in index:
+                use[index[(r.joint, r.quantity)]] = r.utilisation
+        leg.use = use
         bad = [r for r in rep.violations if r.quantity != "rms motor torque"]
         if not bad:
             return None
@@ -549,25 +568,44 @@ def _peaks(tau: np.ndarray, block: np.ndarray) -> np.ndarray:
     return _parabolic_max(tau, block)
 
 
-def _use(meta: list, peak: np.ndarray) -> dict:
-    """(joint, quantity) → utilisation as the limit report gives it: peak/limit; a [min, max] range by the side
-    nearer its bound, |x − mid| / half-range; the singularity measure limit/minimum."""
-    out: dict = {}
-    ranges: dict = {}
-    for c, (joint, quantity, _unit, limit, _kind, sign) in enumerate(meta):
-        value = sign * peak[c]
-        base, _, side = quantity.rpartition(" ")
-        if side in ("max", "min") and base.startswith(("position", "workcell")):
-            ranges.setdefault((joint, base), {})[side] = (value, float(limit))
-        elif sign < 0:
-            out[(joint, quantity)] = float(limit) / value if value > 0 else math.inf
-        else:
-            out[(joint, quantity)] = float(value) / float(limit)
-    for (joint, base), sides in ranges.items():
-        (vmax, hi), (vmin, lo) = sides["max"], sides["min"]
-        mid, half = (lo + hi) / 2, (hi - lo) / 2
-        out[(joint, base)] = max((vmax - mid) / half, (mid - vmin) / half)
-    return out
+class UsePlan:
+    """How the columns' peaks (:meth:`~pickplace_cli.limits.motion.MotionModel.columns`) become the use of every limit
+    as the limit report gives it (``keys``: (joint, quantity) per row): peak/limit; the singularity measure
+    limit/minimum; a [min, max] range by the side nearer its bound, |x − mid| / half-range. Built once per robot."""
+
+    def __init__(self, meta: list) -> None:
+        self.meta = meta
+        keys, cols, limits, lower = [], [], [], []
+        ranges: dict = {}
+        for c, (joint, quantity, _unit, limit, _kind, sign) in enumerate(meta):
+            base, _, side = quantity.rpartition(" ")
+            if side in ("max", "min") and base.startswith(("position", "workcell")):
+                ranges.setdefault((joint, base), {})[side] = (c, float(limit))
+            else:
+                keys.append((joint, quantity))
+                cols.append(c)
+                limits.append(float(limit))
+                lower.append(sign < 0)
+        self.cols, self.limits, self.lower = np.array(cols, int), np.array(limits), np.array(lower, bool)
+        rmax, rmin, mid, half = [], [], [], []
+        for key, sides in ranges.items():
+            (cmax, hi), (cmin, lo) = sides["max"], sides["min"]
+            keys.append(key)
+            rmax.append(cmax)
+            rmin.append(cmin)
+            mid.append((lo + hi) / 2)
+            half.append((hi - lo) / 2)
+        self.rmax, self.rmin, self.mid, self.half = np.array(rmax, int), np.array(rmin, int), np.array(mid), np.array(half)
+        self.keys = keys
+
+    def __call__(self, peak: np.ndarray) -> np.ndarray:
+        """(L, C) column peaks (column sign convention) → (L, R) use per row."""
+        v = peak[:, self.cols]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            single = np.where(self.lower, np.where(-v > 0, self.limits / -v, np.inf), v / self.limits)
+        vmax, vmin = peak[:, self.rmax], -peak[:, self.rmin]
+        ranged = np.maximum((vmax - self.mid) / self.half, (self.mid - vmin) / self.half)
+        return np.concatenate([single, ranged], axis=1)
 
 
 def _leg_of(index, grids) -> int:

@@ -12,7 +12,6 @@ Every position in the file is given as ``[along, across, height]`` in this frame
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 from typing import Annotated, Any, Literal, Optional, Union
 
@@ -377,6 +376,3 @@ def time_rule(robot: RobotSpec) -> str | float:
         return "auto"
     return robot.time if isinstance(robot.time, str) else float(robot.time)
 
-
-def finite(x: float) -> bool:
-    return isinstance(x, float) and math.isfinite(x)

@@ -74,9 +74,9 @@ def _quota(s: Sharing, across: float, n: int):
 def _bands(s: Sharing, across: float, n: int):
     tol = float(getattr(s.spec, "overlap", 0.0))
     own, near, out = [], [], {}
-    last = s.n - 1
+    top = max(hi for _, hi in s.bands)
     for i, (lo, hi) in enumerate(s.bands):
-        inside = lo <= across < hi or (i == last and across == hi) or (across == hi and hi == s.bands[-1][1])
+        inside = lo <= across < hi or across == hi == top  # [low, high); the highest band is closed
         if inside:
             own.append(i)
         elif lo - tol <= across <= hi + tol:

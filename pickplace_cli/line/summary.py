@@ -1,6 +1,12 @@
 """A line run summed up: per robot (picks/min, utilisation, idle time, peak use of every limit, RMS torque of every
 motor over its actual sequence) and per line (picks/min, miss rate); the exit code of the run.
 
+Two spans: the **feed**, from the first detection to the last, gives the rates — parts/min fed = 60·(N − 1)/feed
+(exact for N parts at a regular rate), picks/min = parts/min · picked/N (the line's throughput: parts/min · (1 − miss
+rate)), a robot's picks/min = parts/min · its picks/N; the **run**, from the first detection to the end of the last
+leg of any robot (the last parts still travel to the downstream robots after the feed), is what utilisation, idle
+time and the RMS torques are taken over, so that every move counts.
+
 The RMS of a motor over the run (see :mod:`~pickplace_cli.line.engine`) adds the exact integral of τ² over every
 leg and the holding torque squared over every rest: before the robot's first leg it holds the tool at its home
 point; between legs it rests where the previous leg ended (a leg ending in motion — a release on an outgoing
@@ -18,14 +24,16 @@ import numpy as np
 
 @dataclass
 class RobotSummary:
-    """One robot over the run [t_begin, t_end]: picks, picks/min, busy time (moves and dwells), utilisation
-    (busy / span), idle time, the peak use of every limit over its legs ((joint, quantity) → utilisation), and per
+    """One robot: picks, picks/min (its share of the parts fed per minute), and over the run [t_begin, t_end]
+    (``span``): busy time (moves and dwells), utilisation (busy / span), idle time, the peak use of every limit over its legs ((joint, quantity) → utilisation), and per
     motor the RMS torque over the sequence [N·m], its rated torque and use."""
 
     name: str
     picks: int
     busy: float
     span: float
+    parts_per_minute: float
+    parts: int
     peak_use: dict
     joints: list
     rms: np.ndarray
@@ -35,7 +43,7 @@ class RobotSummary:
 
     @property
     def picks_per_minute(self) -> float:
-        return 60.0 * self.picks / self.span if self.span > 0 else 0.0
+        return self.parts_per_minute * self.picks / self.parts if self.parts else 0.0
 
     @property
     def utilisation(self) -> float:
@@ -81,6 +89,7 @@ class LineSummary:
     bad_rows: int
     t_begin: float
     t_end: float
+    t_last_detection: float
     robots: list = field(default_factory=list)
     warnings: list = field(default_factory=list)
 
@@ -93,8 +102,17 @@ class LineSummary:
         return self.missed / self.parts if self.parts else 0.0
 
     @property
+    def feed(self) -> float:
+        """First to last detection [s]."""
+        return max(self.t_last_detection - self.t_begin, 0.0)
+
+    @property
+    def parts_per_minute(self) -> float:
+        return 60.0 * (self.parts - 1) / self.feed if self.feed > 0 and self.parts > 1 else 0.0
+
+    @property
     def picks_per_minute(self) -> float:
-        return 60.0 * self.picked / self.span if self.span > 0 else 0.0
+        return self.parts_per_minute * self.picked / self.parts if self.parts else 0.0
 
     def violations(self) -> list[str]:
         return [v for r in self.robots for v in r.violations()]
@@ -109,7 +127,8 @@ class LineSummary:
     def as_dict(self) -> dict[str, Any]:
         return {
             "parts": self.parts, "picked": self.picked, "missed": self.missed, "bad_rows": self.bad_rows,
-            "miss_rate": self.miss_rate, "picks_per_minute": self.picks_per_minute,
+            "miss_rate": self.miss_rate, "parts_per_minute": self.parts_per_minute,
+            "picks_per_minute": self.picks_per_minute, "feed_s": self.feed,
             "t_begin_s": self.t_begin if math.isfinite(self.t_begin) else None,
             "t_end_s": self.t_end if math.isfinite(self.t_end) else None, "span_s": self.span,
             "exit_code": self.exit_code(), "violations": self.violations(), "warnings": list(self.warnings),
@@ -143,17 +162,17 @@ def summarise(engine) -> LineSummary:
     t_end = max([engine.t_last if math.isfinite(engine.t_last) else t_begin] + ends)
     picked = sum(1 for r in engine.results if r.picked)
     parts = sum(1 for r in engine.results if r.detection is not None)
-    out = LineSummary(parts, picked, parts - picked, engine.bad_rows, t_begin, t_end, warnings=list(engine.warnings))
+    t_last = engine.t_last if math.isfinite(engine.t_last) else t_begin
+    out = LineSummary(parts, picked, parts - picked, engine.bad_rows, t_begin, t_end, t_last,
+                      warnings=list(engine.warnings))
     span = max(t_end - t_begin, 0.0)
     for run in engine.runs:
         r = run.robot
         integral, busy = sequence_integral(run.legs, r.home_torque, t_begin, t_end)
         rms = np.sqrt(integral / span) if span > 0 else np.zeros_like(integral)
-        peak: dict = {}
-        for leg in run.legs:
-            for key, u in leg.use.items():
-                if u > peak.get(key, -math.inf):
-                    peak[key] = u
-        out.robots.append(RobotSummary(r.name, run.picks, busy, span, peak, r.joint_names, rms, r.rated,
+        uses = [leg.use for leg in run.legs if leg.use is not None and len(leg.use)]
+        peak = dict(zip(r.use_keys, np.max(uses, axis=0).tolist())) if uses else {}
+        out.robots.append(RobotSummary(r.name, run.picks, busy, span, out.parts_per_minute, parts, peak, r.joint_names,
+                                       rms, r.rated,
                                        len(run.legs), sum(1 for leg in run.legs if leg.exact)))
     return out

@@ -81,6 +81,8 @@ def run_case(args: tuple) -> dict:
     from .engine import LineEngine
     from .parts import generate, in_time_order
 
+    from ..model.errors import UnreachableError
+
     line, profiles, case, detections = args
     t0 = time.perf_counter()
     row = {"strategy": case.strategy, "robots": case.robots, "belt_speed": case.speed, "seed": case.seed, "key": case.key}
@@ -90,8 +92,15 @@ def run_case(args: tuple) -> dict:
 
         check_rules(cl, "line")
         eng = LineEngine(cl, profiles)
-        eng.check_speed()
         items = detections if detections is not None else generate(cl.parts.generate, cl.belt.width)
+        try:
+            eng.check_speed()
+        except UnreachableError as exc:  # a belt too fast for every robot: every part is missed (a result)
+            n = sum(1 for d in items if not hasattr(d, "error"))
+            row.update(parts=n, picked=0, missed=n, miss_rate=1.0 if n else math.nan, picks_per_minute=0.0,
+                       utilisation=[0.0] * len(eng.robots), rms_use_max=math.nan, exit_code=4, error=str(exc),
+                       seconds=time.perf_counter() - t0)
+            return row
         for item in in_time_order(items, cl.parts.reorder):
             eng.offer(item)
         s = eng.finish()
