@@ -215,6 +215,7 @@ class LineRobot:
             self.meet_end = min(self.meet_end, self.window[0] + float(claim))
         self.latency, self.grip = float(latency), float(grip)
         self.rule = time_rule(spec)
+        self.optimal = spec.shape == "optimal"
         self.dwell = float(profile.planning.dwell)
         self.height, self.eta = float(profile.planning.height), float(profile.planning.eta)
         self.capacity = profile.capacity
@@ -351,6 +352,10 @@ class LineRobot:
         """(pick, place) Solved, None when the pick cannot meet the part in [a, b], or a Decline for the place.
         The capacity rule: both durations searched on the grid (raised by ``GRID_SAFETY``), then checked on their
         exact peaks in one batch; a move the exact check nudges is searched again from where it must start."""
+        if self.optimal:
+            from .optimal import pick_and_place
+
+            return pick_and_place(self, moves[0], a, b, target, v_out)
         if self.rule != "auto":
             pick = self._solve(moves, a, b)
             if pick is None:
@@ -646,18 +651,6 @@ def check_reach(robot: LineRobot, bands: tuple[float, float], step: float = 5e-3
             ln = robot.frame.to_line(pts[k])
             raise UnreachableError(f"robot {robot.name}: {what} [{ln[0]:g}, {ln[1]:g}, {ln[2]:g}] m (line frame) is "
                                    f"outside the workspace of profile {robot.profile.name}")
-
-
-def profile_with_window(robot: LineRobot):
-    """The robot's profile with its window as the belt window (``workcell.belt_window``, robot frame), for the
-    project's rendezvous search (``--to-belt``), which then meets a part where this line would."""
-    from ..model.profile import Box
-
-    corners = robot.frame.to_robot(np.array([[robot.window[0], -10.0, robot.grip - 1e-3],
-                                             [robot.meet_end + robot.speed * robot.dwell, 10.0, robot.grip + 1e-3]]))
-    box = Box(min=tuple(np.minimum(*corners)), max=tuple(np.maximum(*corners)))
-    wc = robot.profile.workcell.model_copy(update={"belt_window": box})
-    return robot.profile.model_copy(update={"workcell": wc})
 
 
 __all__ = ["LineRobot", "RobotState", "Leg", "Cycle", "Decline", "check_reach", "PickplaceError"]

@@ -100,6 +100,9 @@ class RobotSpec(_Model):
     time: Union[Literal["auto", "fit"], Num, None] = Field(
         default=None, description="Duration rule of every move: auto (capacity), fit (every motor limit), or seconds "
                                   "(default: auto)")
+    shape: Literal["table", "optimal"] = Field(
+        default="table", description="table: each move's shape from the conveyor table, held fixed while its duration "
+        "is searched (fast); optimal: re-optimised at every trial duration, as plan --to-belt (about a second a pick)")
 
     @model_validator(mode="after")
     def _window(self) -> "RobotSpec":

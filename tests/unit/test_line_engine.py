@@ -149,3 +149,30 @@ def test_a_robot_that_waits_meets_the_part_at_its_window(run):
     for res in waited:
         window = next(r.window for r in line.robots if r.name == res.robot)
         assert float(res.cycle.meet_line[0]) == pytest.approx(window[0], abs=1e-9)
+
+
+@pytest.mark.slow
+def test_optimal_shapes_meet_exactly_too():
+    """``shape: optimal`` (the project's rendezvous search and planner per move): every pick meets its part as
+    above (1e-6 m, 1e-6 m/s, the planner re-run to the part's position worked out by hand)."""
+    from pickplace_cli.model.task import Task
+    from pickplace_cli.planner import PlanOptions, plan
+
+    text = LINE.replace("    window: [0.4, 0.8]\n", "    window: [0.4, 0.8]\n    shape: optimal\n").replace(
+        "count: 60", "count: 4")
+    line = parse_line(text, "l.yaml")
+    eng = LineEngine(line, {r.name: PROFILE for r in line.robots})
+    for d in generate(line.parts.generate, line.belt.width):
+        eng.offer(d)
+    v_belt = np.array([0.0, line.belt.speed, 0.0])
+    spec = line.robots[0]
+    mine = [res for res in eng.results if res.robot == "r1"]
+    assert mine
+    for res in mine:
+        d, c = res.detection, res.cycle
+        target = _robot_point(spec, d.along + line.belt.speed * (c.t_meet - d.t), d.across, line.parts.height)
+        mv = c.pick.solved.move
+        got = plan(Task(mv.start, target, PROFILE.planning.height, PROFILE.planning.eta, mv.v_from, v_belt), PROFILE,
+                   PlanOptions(method="bspline-vel", method_params={"params": list(mv.basis.params)},
+                               time=c.pick.duration, fit=False))
+        assert np.abs(got.p[-1] - target).max() < 1e-6 and np.abs(got.v[-1] - v_belt).max() < 1e-6
