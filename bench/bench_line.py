@@ -14,8 +14,9 @@ Where the time goes (one warm run, timers around the engine's stages, their over
 look-ups of shapes, the grid searches of the durations, the exact peak checks, the limit checks (one robot
 model evaluation per cycle, and the exact check of a leg near a limit), the reasons of misses, and the rest.
 
-The sweep: belt speed × strategy cases of ``--sweep-seconds`` simulated each, run by ``run_sweep`` on 1 worker
-(in process) and on 2 local processes; speed-up = wall(1) / wall(2). Results: ``bench/results/line.json``.
+The sweep: belt speed × strategy cases of ``--sweep-seconds`` simulated each, run by ``run_sweep`` on a pool of 1
+local process and on a pool of 2 (both fresh: each process imports and fills its shape memo, as in a real sweep);
+speed-up = wall(1) / wall(2). Results: ``bench/results/line.json``.
 """
 
 from __future__ import annotations
@@ -126,9 +127,15 @@ def sweep(seconds: float, speeds: list[float], strategies: list[str]) -> dict:
     profiles = {r.name: load_profile(r.profile) for r in line.robots}
     all_cases = cases(speeds, [3], strategies, [1])
     out = {"cases": len(all_cases), "simulated_s_each": seconds}
+    from concurrent.futures import ProcessPoolExecutor
+
+    from pickplace_cli.lookup.executors import ignore_sigint
+
     for workers in (1, 2):
+        # both sides on fresh local processes (imports and the shape memo start cold in each), as a sweep runs
         w0 = time.perf_counter()
-        rows = run_sweep(line, profiles, all_cases, None, workers)
+        with ProcessPoolExecutor(max_workers=workers, initializer=ignore_sigint) as ex:
+            rows = run_sweep(line, profiles, all_cases, None, workers, ex)
         out[f"wall_s_{workers}"] = time.perf_counter() - w0
         out[f"miss_rates_{workers}"] = [r["miss_rate"] for r in rows]
     out["speedup"] = out["wall_s_1"] / out["wall_s_2"]

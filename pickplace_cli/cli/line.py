@@ -367,7 +367,10 @@ def _sweep(line_file, detections, belt_speed, robots, strategy, seed, speeds, ro
     ckpt = checkpoint_path(output) if output != "-" else None
     tag = digest(base, axes)
     with contextlib.ExitStack() as stack:
-        executor, n_workers, tick = _engine(stack, scheduler, workers, quiet, len(all_cases))
+        from .build_table import _engine
+
+        executor, n_workers, tick = _engine(stack, scheduler, workers, quiet, len(all_cases), "runs", eta=False,
+                                            label="line sweep")
         try:
             rows = run_sweep(base, profiles, all_cases, dets, n_workers, executor, tick, ckpt, resume, tag)
         except KeyboardInterrupt:
@@ -389,27 +392,3 @@ def _sweep(line_file, detections, belt_speed, robots, strategy, seed, speeds, ro
                          f"{r['seed']}: {r['error']}\n")
     if failed:
         raise typer.Exit(max(r.get("exit_code", 1) for r in failed))
-
-
-def _engine(stack: contextlib.ExitStack, scheduler, workers: int, quiet: bool, total: int):
-    """(executor or None, workers, progress callback or None): a Dask cluster when ``scheduler`` is given, else
-    ``workers`` local processes (0: all cores); a rich progress bar on stderr unless ``quiet``."""
-    import os
-
-    n_workers = workers or os.cpu_count() or 1
-    executor = None
-    if scheduler:
-        from ..lookup.executors import dask_executor
-
-        executor, n_workers = stack.enter_context(dask_executor(scheduler))
-    if quiet:
-        return executor, n_workers, None
-    from rich.console import Console
-    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
-
-    progress = stack.enter_context(Progress(TextColumn("{task.description}"), BarColumn(),
-                                            TextColumn("{task.completed}/{task.total} runs"), TimeElapsedColumn(),
-                                            TimeRemainingColumn(), console=Console(stderr=True)))
-    where = f"Dask {scheduler}" if scheduler else f"{n_workers} process{'es' if n_workers > 1 else ''}"
-    bar = progress.add_task(f"line sweep ({where})", total=total)
-    return executor, n_workers, lambda done, n: progress.update(bar, completed=done, total=n)

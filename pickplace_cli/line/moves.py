@@ -250,22 +250,10 @@ class Move:
 
 def _parabolic_max(tau: np.ndarray, y: np.ndarray) -> np.ndarray:
     """Row-wise max of ``y`` (K, G) on the sorted grid ``tau`` (G,), refined by the vertex of the parabola through
-    the top sample and its neighbours (kept only when it opens downwards and lies above the sample)."""
-    K, G = y.shape
-    i = np.argmax(y, axis=1)
-    rows = np.arange(K)
-    top = y[rows, i]
-    k = np.clip(i, 1, G - 2)
-    x0, x1, x2 = tau[k - 1], tau[k], tau[k + 1]
-    y0, y1, y2 = y[rows, k - 1], y[rows, k], y[rows, k + 1]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        d1 = (y1 - y0) / (x1 - x0)
-        d2 = (y2 - y1) / (x2 - x1)
-        curv = (d2 - d1) / (x2 - x0)
-        slope = d1 + curv * (x1 - x0)
-        yv = y1 - slope**2 / (4 * curv)
-    good = (k == i) & (curv < 0) & np.isfinite(yv)
-    return np.where(good, np.maximum(yv, top), top)
+    the top sample and its neighbours (the batch verdict engine's estimate: never below the top sample)."""
+    from ..pipelines.verdicts import _batched_parabolic_peak
+
+    return _batched_parabolic_peak(np.broadcast_to(tau, y.shape), y[:, :, None])[:, 0]
 
 
 def first_feasible(excess: Callable[[np.ndarray], np.ndarray], a: float, b: float, rtol: float = RTOL,
