@@ -135,6 +135,12 @@ class LineEngine:
                                    + (f" (and {len(why) - 1} more robot{'s' if len(why) > 2 else ''})" if len(why) > 1 else ""))
         self.warnings += [f"{w} (a part detected 1 s before its window, the robot at rest): it can never take a part "
                           f"at belt speed {self.line.belt.speed:g} m/s" for w in why]
+        gen = self.line.parts.generate
+        if gen is not None:
+            reach = gen.detect_at + self.line.belt.speed * self.line.parts.latency
+            self.warnings += [f"robot {r.name}: its last meeting point along {r.meet_end:.4g} m is upstream of where the "
+                              f"parts are when a move may start (detected at {gen.detect_at:g} m, then {reach:.4g} m "
+                              "after the latency): it can never take a part" for r in self.robots if r.meet_end < reach]
 
     # ----------------------------------------------------------------------------------------------- run
     def offer(self, item: Detection | BadRow) -> PartResult:

@@ -49,11 +49,10 @@ def _plan(robot, mv: Move, T_end):
 
 
 def pick_and_place(robot, mv: Move, a: float, b: float, target, v_out):
-    """(pick, place) Solved, None when the pick cannot meet the part in [a, b], or a Decline for the place:
-    ``mv`` describes the pick (a moving end: the rendezvous; a fixed end: the move to the window's entry, which
-    must take at most b)."""
+    """(pick, place) Solved, None when the pick cannot meet the part in [a, b], or the reason (text) the place move
+    cannot be planned: ``mv`` describes the pick (a moving end: the rendezvous; a fixed end: the move to the
+    window's entry, which must take at most b)."""
     from ..pipelines.rendezvous import Part, find_rendezvous
-    from .robot import Decline
 
     try:
         if np.any(mv.end_b != 0):
@@ -77,5 +76,5 @@ def pick_and_place(robot, mv: Move, a: float, b: float, target, v_out):
     try:
         got = _plan(robot, pmv, 0.0)
     except PickplaceError as exc:
-        return Decline(f"robot {robot.name}: no place move from {leave} m to {target} m: {exc}", exc.exit_code)
+        return f"robot {robot.name}: no place move from {leave} m to {target} m: {exc}"
     return pick, _solved(robot, pmv, got.parameters, float(got.duration.seconds), got.cartesian.path)

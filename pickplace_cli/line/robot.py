@@ -355,7 +355,8 @@ class LineRobot:
         if self.optimal:
             from .optimal import pick_and_place
 
-            return pick_and_place(self, moves[0], a, b, target, v_out)
+            got = pick_and_place(self, moves[0], a, b, target, v_out)
+            return Decline(got, 1) if isinstance(got, str) else got
         if self.rule != "auto":
             pick = self._solve(moves, a, b)
             if pick is None:

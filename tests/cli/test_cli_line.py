@@ -171,3 +171,32 @@ def test_a_sweep_writes_its_table_and_figure(line_file, tmp_path):
 def test_help_lists_the_command():
     r = run("line", "--help")
     assert r.exit_code == 0 and "--detections" in r.stdout and "--speeds" in r.stdout
+
+
+def test_max_miss_rate_and_a_robot_that_can_never_take_a_part(line_file):
+    """Parts detected past the first robot's window: a warning names it, and every part goes to r2; a miss-rate
+    bound below the run's is exit 4 with one line."""
+    line_file.write_text(LINE.replace("seed: 2}", "seed: 2, detect_at: 0.9}"))
+    r = run("line", line_file, "--json", "-q", "--max-miss-rate", "0")
+    warn = [x for x in r.stderr.splitlines() if x.startswith("pickplace: warning:")]
+    assert len(warn) == 1 and "robot r1: its last meeting point along 0.75 m is upstream of where the parts are" in warn[0]
+    docs = [json.loads(x) for x in r.stdout.splitlines()]
+    assert {d["robot"] for d in docs[:-1] if d["picked"]} == {"r2"}
+    if docs[-1]["missed"]:
+        assert r.exit_code == 4 and "exceeds --max-miss-rate 0 %" in r.stderr
+    else:
+        assert r.exit_code == 0
+
+
+def test_mcap_has_every_robots_topics(line_file, tmp_path):
+    from mcap.reader import make_reader
+
+    out = tmp_path / "run.mcap"
+    r = run("line", line_file, "--mcap", out, "--rate", "100", "-q", "-o", tmp_path / "p.csv")
+    assert r.exit_code == 0, r.stderr
+    summary = make_reader(out.open("rb")).get_summary()
+    topics = sorted(c.topic for c in summary.channels.values())
+    assert topics == ["/r1/joint_states", "/r1/motor_states", "/r1/tool_pose",
+                      "/r2/joint_states", "/r2/motor_states", "/r2/tool_pose"]
+    counts = {summary.channels[k].topic: v for k, v in summary.statistics.channel_message_counts.items()}
+    assert len(set(counts.values())) == 1  # one clock for every robot and topic
