@@ -120,6 +120,25 @@ def breakdown(seconds: float, seed: int) -> dict:
     return {"parts": s.parts, "picked": s.picked, "cycles_planned": plans, "wall_s": wall, "stages": rows}
 
 
+def reference(n: int = 50) -> float:
+    """Median CPU ms of the project's plan() of the Adept cycle on the Delta (1 kHz, limit check, no fitted duration:
+    bench/bench_plan.py's case): a yardstick of the machine's speed in this run (README, Known gaps: 0.85–0.92 ms in
+    its normal phases, 1.2–1.5 ms in slow ones)."""
+    from pickplace_cli.model.task import Task
+    from pickplace_cli.planner import PlanOptions, plan
+
+    prof = load_profile()
+    task = Task([-0.1525, 0, -0.8], [0.1525, 0, -0.8], 0.025)
+    options = PlanOptions(fit=False)
+    plan(task, prof, options)
+    times = []
+    for _ in range(n):
+        c0 = time.process_time()
+        plan(task, prof, options)
+        times.append(time.process_time() - c0)
+    return 1e3 * statistics.median(times)
+
+
 def sweep(seconds: float, speeds: list[float], strategies: list[str]) -> dict:
     line = load_line(LINE)
     gen = line.parts.generate.model_copy(update={"duration": seconds, "count": None})
@@ -155,6 +174,8 @@ def main() -> None:
         args.seconds, args.runs, args.sweep_seconds = 60.0, 1, 15.0
     load = os.getloadavg()
     print(f"load average {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}; {os.cpu_count()} cores", flush=True)
+    yard = reference()
+    print(f"yardstick: plan() of the Adept cycle on the Delta {yard:.3f} ms CPU (median of 50)", flush=True)
     cold = one_run(args.seconds, 1)
     print(f"cold run (fills the shape memo): {cold['simulated_s']:.1f} s simulated in {cold['wall_s']:.2f} s wall "
           f"({cold['ratio_wall']:.1f}×), {cold['cpu_s']:.2f} s CPU ({cold['ratio_cpu']:.1f}×)", flush=True)
@@ -174,7 +195,10 @@ def main() -> None:
     sw = sweep(args.sweep_seconds, [0.3, 0.5, 0.7, 0.9], ["upstream_first", "quota"])
     print(f"sweep: {sw['cases']} cases of {sw['simulated_s_each']:g} s: 1 worker {sw['wall_s_1']:.2f} s, 2 local "
           f"processes {sw['wall_s_2']:.2f} s: speed-up {sw['speedup']:.2f}× (same rows: {sw['same_rows']})", flush=True)
-    doc = {"load_average": load, "cores": os.cpu_count(), "seconds": args.seconds, "cold": cold, "warm": warm,
+    yard_after = reference()
+    print(f"yardstick after the runs: {yard_after:.3f} ms CPU", flush=True)
+    doc = {"load_average": load, "cores": os.cpu_count(), "yardstick_ms": [yard, yard_after], "seconds": args.seconds,
+           "cold": cold, "warm": warm,
            "median": med, "breakdown": parts, "sweep": sw}
     Path(args.output).parent.mkdir(parents=True, exist_ok=True)
     Path(args.output).write_text(json.dumps(doc, indent=1) + "\n")

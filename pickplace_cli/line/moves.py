@@ -41,9 +41,9 @@ GRID_UNIFORM = 33
 #: uniform τ samples of the grid the durations are searched on (plus the breakpoints; the peaks refined by a
 #: parabola: within ~1e-4 of the exact ones, which then decide)
 SEARCH_UNIFORM = 129
-#: Gauss–Legendre nodes per knot span: the RMS integrals of a move are this quadrature (exact to ~1e-9 for the
-#: smooth integrand between knots; tests hold it to the adaptive Gauss–Kronrod of the limit check)
-GL_NODES = 10
+#: Gauss–Legendre nodes per knot span: the RMS integrals of a move are this quadrature (within 3.4e-7 of the limit
+#: check's adaptive Gauss–Kronrod on 30 random moves; 10 nodes: 4e-8, 6: 2e-4)
+GL_NODES = 8
 #: the velocity groups v·T/b are rounded to this step, and h/b to this step in log h/b, before the table is asked
 #: (the memo's key; the table's grid is 5× coarser, and its answer is an interpolation between optima)
 GROUP_STEP = 0.05
@@ -250,10 +250,24 @@ class Move:
 
 def _parabolic_max(tau: np.ndarray, y: np.ndarray) -> np.ndarray:
     """Row-wise max of ``y`` (K, G) on the sorted grid ``tau`` (G,), refined by the vertex of the parabola through
-    the top sample and its neighbours (the batch verdict engine's estimate: never below the top sample)."""
-    from ..pipelines.verdicts import _batched_parabolic_peak
-
-    return _batched_parabolic_peak(np.broadcast_to(tau, y.shape), y[:, :, None])[:, 0]
+    the top sample and its neighbours (kept only when it opens downwards and lies above the sample): the batch
+    verdict engine's estimate (``_batched_parabolic_peak``) for one shared grid and one column per row, written
+    for 2-D arrays — 2.5× faster at this size (52 against 130 µs for 16 × 136; it is the search's inner loop)."""
+    K, G = y.shape
+    i = np.argmax(y, axis=1)
+    rows = np.arange(K)
+    top = y[rows, i]
+    k = np.clip(i, 1, G - 2)
+    x0, x1, x2 = tau[k - 1], tau[k], tau[k + 1]
+    y0, y1, y2 = y[rows, k - 1], y[rows, k], y[rows, k + 1]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        d1 = (y1 - y0) / (x1 - x0)
+        d2 = (y2 - y1) / (x2 - x1)
+        curv = (d2 - d1) / (x2 - x0)
+        slope = d1 + curv * (x1 - x0)
+        yv = y1 - slope**2 / (4 * curv)
+    good = (k == i) & (curv < 0) & np.isfinite(yv)
+    return np.where(good, np.maximum(yv, top), top)
 
 
 def first_feasible(excess: Callable[[np.ndarray], np.ndarray], a: float, b: float, rtol: float = RTOL,
@@ -472,7 +486,7 @@ def exact_rule(found: list[tuple[Move, float]], capacity) -> tuple[list[tuple[fl
     from ..curves.peaks import batch_norm_peaks
 
     all_orders = (1, 2, 3) if capacity.jerk else (1, 2)
-    grid = np.array([_rule_times(mv.grid_peaks(np.array([T]), all_orders)[0], capacity) for mv, T in found])
+    grid = np.array([_rule_times([mv.peak_at(T, k) for k in all_orders], capacity) for mv, T in found])
     need = np.any(grid >= BIND_SHARE * grid.max(axis=1, keepdims=True), axis=0)
     orders = tuple(o for o, n in zip(all_orders, need) if n)
     breaks = np.stack([mv.basis.breaks for mv, _ in found])

@@ -125,8 +125,8 @@ def test_table_shape_is_the_tables_own_answer():
 
 def test_gauss_legendre_rms_integral_against_the_limit_check():
     """∫ (A_m/T² + G_m)² dτ per motor from the move's Gauss–Legendre nodes against the limit check's adaptive
-    Gauss–Kronrod integrals of the same path (MotionModel.rms_integrals; tolerance 1e-7 relative: both converge
-    on a smooth integrand)."""
+    Gauss–Kronrod integrals of the same path (MotionModel.rms_integrals; tolerance 1e-6 relative: 8 nodes per span
+    on a smooth integrand, 3.4e-7 measured on 30 random moves)."""
     from pickplace_cli.limits.motion import MotionModel
     from pickplace_cli.planner import motion_model, motion_model_static
 
@@ -143,7 +143,7 @@ def test_gauss_legendre_rms_integral_against_the_limit_check():
     torque = parts.Am / T**2 + parts.Gm
     b = mv.basis
     got = T * (b.gl_weight[:, None] * torque[b.gl_index] ** 2).sum(axis=0)
-    assert np.allclose(got, ref, rtol=1e-7, atol=0)
+    assert np.allclose(got, ref, rtol=1e-6, atol=0)
 
 
 def test_solve_auto_keeps_the_better_candidate():
@@ -156,3 +156,44 @@ def test_solve_auto_keeps_the_better_candidate():
     one = [solve_auto([m], PROFILE.capacity, 0.01, 5.0).T for m in (a, b)]
     both = solve_auto([a, b], PROFILE.capacity, 0.01, 5.0)
     assert both.T == pytest.approx(min(one), rel=1e-9)
+
+
+def test_parabolic_max_is_the_verdict_engines_estimate():
+    """The 2-D estimate equals the batch verdict engine's 3-D one on random rows (bitwise: the same arithmetic)."""
+    from pickplace_cli.line.moves import _parabolic_max
+    from pickplace_cli.pipelines.verdicts import _batched_parabolic_peak
+
+    rng = np.random.default_rng(0)
+    tau = np.sort(rng.random(97))
+    y = rng.random((20, 97))
+    ref = _batched_parabolic_peak(np.broadcast_to(tau, y.shape), y[:, :, None])[:, 0]
+    assert np.array_equal(_parabolic_max(tau, y), ref)
+
+
+def test_screened_limit_use_against_the_exact_check():
+    """The use of every limit from the move's check grid (model once, parabola at the top sample) against the
+    project's exact limit check on the method's path, on 40 random moves: within 1 % (the screening decides a leg
+    only below 90 % use; measured 0.2 %)."""
+    from pickplace_cli.limits.check import check_limits
+    from pickplace_cli.limits.motion import MotionModel
+    from pickplace_cli.line.robot import UsePlan, _peaks
+    from pickplace_cli.planner import motion_model, motion_model_static
+
+    rng = np.random.default_rng(1)
+    worst = 0.0
+    for _ in range(40):
+        shape = (rng.uniform(0.01, 0.05), rng.uniform(0.15, 0.3), rng.uniform(0.7, 0.85), rng.uniform(0.95, 0.99),
+                 rng.uniform(0, 1), 0.5, rng.uniform(0, 1))
+        mv = _random_move(rng, ShapeBasis(shape))
+        T = rng.uniform(0.15, 0.3)
+        path = mv.path(T)
+        rep = check_limits(motion_model(path, PROFILE), T, dwell=0.0)
+        model = MotionModel(path, *motion_model_static(PROFILE))
+        parts = model.parts(mv.basis.tau, motion=tuple(mv.samples(T)))
+        meta, data = model.columns(parts, np.full(len(mv.basis.tau), T))
+        plan = UsePlan(meta)
+        use = dict(zip(plan.keys, plan(_peaks(mv.basis.tau, data.T)[None])[0]))
+        for r in rep.rows:
+            if (r.joint, r.quantity) in use and r.utilisation > 0.05:
+                worst = max(worst, abs(use[(r.joint, r.quantity)] / r.utilisation - 1))
+    assert worst < 0.01
