@@ -157,6 +157,8 @@ def sweep(seconds: float, speeds: list[float], strategies: list[str]) -> dict:
             rows = run_sweep(line, profiles, all_cases, None, workers, ex)
         out[f"wall_s_{workers}"] = time.perf_counter() - w0
         out[f"miss_rates_{workers}"] = [r["miss_rate"] for r in rows]
+        out[f"cpu_s_{workers}"] = sum(r["cpu_seconds"] for r in rows)  # CPU time the workers got
+        out[f"cores_used_{workers}"] = out[f"cpu_s_{workers}"] / out[f"wall_s_{workers}"]
     out["speedup"] = out["wall_s_1"] / out["wall_s_2"]
     out["same_rows"] = out["miss_rates_1"] == out["miss_rates_2"]
     return out
@@ -193,8 +195,10 @@ def main() -> None:
     for k, v in parts["stages"].items():
         print(f"  {k:48s} {v['ms_per_part']:6.3f} ms/part  {100 * v['share']:5.1f} %  ({v['calls']} calls)")
     sw = sweep(args.sweep_seconds, [0.3, 0.5, 0.7, 0.9], ["upstream_first", "quota"])
-    print(f"sweep: {sw['cases']} cases of {sw['simulated_s_each']:g} s: 1 worker {sw['wall_s_1']:.2f} s, 2 local "
-          f"processes {sw['wall_s_2']:.2f} s: speed-up {sw['speedup']:.2f}× (same rows: {sw['same_rows']})", flush=True)
+    print(f"sweep: {sw['cases']} cases of {sw['simulated_s_each']:g} s: 1 worker {sw['wall_s_1']:.2f} s wall "
+          f"({sw['cpu_s_1']:.2f} s CPU: {sw['cores_used_1']:.2f} cores), 2 local processes {sw['wall_s_2']:.2f} s wall "
+          f"({sw['cpu_s_2']:.2f} s CPU: {sw['cores_used_2']:.2f} cores): speed-up {sw['speedup']:.2f}× (same rows: "
+          f"{sw['same_rows']})", flush=True)
     yard_after = reference()
     print(f"yardstick after the runs: {yard_after:.3f} ms CPU", flush=True)
     doc = {"load_average": load, "cores": os.cpu_count(), "yardstick_ms": [yard, yard_after], "seconds": args.seconds,
