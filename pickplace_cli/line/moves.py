@@ -12,17 +12,19 @@ points are a fixed linear map of them (the collocation matrix of the shape's kno
     d^k p/dτ^k (τ; T) = A_k(τ) + T·B_k(τ),   k = 0 … 5,
 
 with A_k, B_k two matrix products per move. The search for the duration then costs a few vector operations per
-trial T (:meth:`Move.excess_auto`), and the exact peaks of the path at the chosen T come from its piece
-polynomials (:func:`~pickplace_cli.curves.bspline.pieces_norm_peaks`, the same routine the method's own paths
-use). The path is the one :func:`~pickplace_cli.paths.bspline_vel.plan_bspline_vel` builds for the same task,
+trial T (:meth:`Move.excess_auto`, on a 129-point grid, peaks refined by a parabola), and the exact peaks of the
+path at the chosen T come from its piece polynomials (:func:`exact_rule`: the batched root search of
+:func:`~pickplace_cli.curves.peaks.batch_norm_peaks`, the routine behind the method's own exact peaks), which
+nudge T up until the rule holds exactly (:func:`verify_auto`). The path is the one :func:`~pickplace_cli.paths.bspline_vel.plan_bspline_vel` builds for the same task,
 duration and shape (:meth:`Move.path`; tests compare them to 1e-12 m).
 
 **The shape** comes from the shipped conveyor table for the move's dimensionless groups at a first estimate of
 T (:class:`Shapes`, memoised on the groups rounded to ``GROUP_STEP``), or the paper's initial shape where the
-table does not apply (other η, unequal heights, groups outside its range: then the groups are clipped to its
-range and the better of the two shapes by the searched T is used). It is not re-optimised at every trial T as
-``plan --to-belt`` does (a full solve per trial: 0.1–1 s a move); the duration rule still holds exactly for the
-path that is run, and the meeting point and velocity are exact by construction.
+table does not apply (other η, unequal heights); groups outside its range are clipped to it and the better of the
+two shapes by the searched T is used. It is not re-optimised at every trial T as ``plan --to-belt`` does (a full
+solve per trial: 0.1–1 s a move; :mod:`~pickplace_cli.line.optimal` does that for a robot with ``shape: optimal``);
+the duration rule still holds exactly for the path that is run, and the meeting point and velocity are exact by
+construction.
 """
 
 from __future__ import annotations
