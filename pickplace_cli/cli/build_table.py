@@ -287,9 +287,11 @@ def _checkpoint_for(output: str, resume: bool, workers: int):
     return checkpoint_path(output)
 
 
-def _engine(stack: contextlib.ExitStack, scheduler, workers: int, quiet: bool, total: int, unit: str, eta: bool):
-    """(executor or None, workers, progress callback or None) of a build: a Dask cluster when ``scheduler`` is
-    given, else ``workers`` local processes (0: all cores); a rich progress bar on stderr unless ``quiet``."""
+def _engine(stack: contextlib.ExitStack, scheduler, workers: int, quiet: bool, total: int, unit: str, eta: bool,
+            label: str = "optimising k1, k2"):
+    """(executor or None, workers, progress callback or None) of a build (or a line sweep: ``label``): a Dask
+    cluster when ``scheduler`` is given, else ``workers`` local processes (0: all cores); a rich progress bar on
+    stderr unless ``quiet``."""
     import os
 
     n_workers = workers or os.cpu_count() or 1
@@ -309,7 +311,7 @@ def _engine(stack: contextlib.ExitStack, scheduler, workers: int, quiet: bool, t
         columns.append(TimeRemainingColumn())
     progress = stack.enter_context(Progress(*columns, console=Console(stderr=True), transient=False))
     engine = f"Dask {scheduler}" if scheduler else f"{n_workers} process{'es' if n_workers > 1 else ''}"
-    bar = progress.add_task(f"optimising k1, k2 ({engine})", total=total)
+    bar = progress.add_task(f"{label} ({engine})", total=total)
 
     def tick(n_done: int, n_total: int) -> None:
         progress.update(bar, completed=n_done, total=n_total)

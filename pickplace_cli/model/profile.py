@@ -349,10 +349,11 @@ PROFILE_MAX_BYTES = 1 << 20
 PROFILE_MAX_DEPTH = 32
 
 
-def _safe_loader(text: str, source: str):
+def _safe_loader(text: str, source: str, what: str = "profile"):
     """A yaml.SafeLoader that refuses aliases and anchors (a recursive alias or a "billion laughs" profile
     must not exhaust the stack or the memory) and nesting deeper than ``PROFILE_MAX_DEPTH``, each with one
-    line naming the file, the line and the rule."""
+    line naming the file, the line and the rule. ``what`` names the kind of file in the messages (a line file
+    is read the same way)."""
     import yaml
 
     class Loader(yaml.SafeLoader):
@@ -362,16 +363,16 @@ def _safe_loader(text: str, source: str):
             if self.check_event(yaml.AliasEvent):
                 ev = self.peek_event()
                 raise ProfileError(f"{source}:{ev.start_mark.line + 1}: YAML alias *{ev.anchor} is not allowed in a "
-                                   "profile (write the value out; aliases can expand without bound)")
+                                   f"{what} (write the value out; aliases can expand without bound)")
             ev = self.peek_event()
             if getattr(ev, "anchor", None):
                 raise ProfileError(f"{source}:{ev.start_mark.line + 1}: YAML anchor &{ev.anchor} is not allowed in a "
-                                   "profile (write the value out; aliases can expand without bound)")
+                                   f"{what} (write the value out; aliases can expand without bound)")
             self.depth += 1
             try:
                 if self.depth > PROFILE_MAX_DEPTH:
                     raise ProfileError(f"{source}:{ev.start_mark.line + 1}: nested deeper than {PROFILE_MAX_DEPTH} "
-                                       "levels (a profile needs 5)")
+                                       f"levels (a {what} needs {'5' if what == 'profile' else 'at most 8'})")
                 return super().compose_node(parent, index)
             finally:
                 self.depth -= 1
@@ -379,14 +380,15 @@ def _safe_loader(text: str, source: str):
     return Loader(text)
 
 
-def _yaml_with_lines(text: str, source: str) -> tuple[Any, dict[tuple, int]]:
-    """Parse YAML; return the data and a map from each value's path (keys/indices) to its 1-based line."""
+def _yaml_with_lines(text: str, source: str, what: str = "profile") -> tuple[Any, dict[tuple, int]]:
+    """Parse YAML; return the data and a map from each value's path (keys/indices) to its 1-based line
+    (``what``: the kind of file, for the messages)."""
     import yaml
 
     if len(text) > PROFILE_MAX_BYTES:
-        raise ProfileError(f"{source}: {len(text)} characters; a profile may have at most {PROFILE_MAX_BYTES} "
+        raise ProfileError(f"{source}: {len(text)} characters; a {what} may have at most {PROFILE_MAX_BYTES} "
                            "(1 MiB): is this the right file?")
-    loader = _safe_loader(text, source)
+    loader = _safe_loader(text, source, what)
     try:
         node = loader.get_single_node()
         if node is None:

@@ -23,7 +23,8 @@ STAGES = {
     "timing": 5,
     "planner": 6,
     "pipelines": 7, "studies": 7,
-    "cli": 8, "__main__": 8,
+    "line": 8,
+    "cli": 9, "__main__": 9,
 }
 MAX_MODULE_LINES = 700
 MAX_FUNCTION_LINES = 100

@@ -1,0 +1,394 @@
+"""`pickplace line LINE.yaml`: a line of robots on one belt — who takes which part, picks/min, misses, motors over
+the real sequence; sweeps over belt speed × robot count × strategy × seed."""
+
+from __future__ import annotations
+
+import contextlib
+import sys
+from typing import Optional
+
+import typer
+
+from .app import _handle_errors, _usage, app, note_exit
+
+
+@app.command("line")
+@_handle_errors
+def line_cmd(
+    line_file: str = typer.Argument(..., metavar="LINE.yaml", help="The line file: belt, robots, parts, strategy (YAML)."),
+    detections: Optional[str] = typer.Option(
+        None, "--detections", "-d", metavar="FILE|-",
+        help="Detections CSV (t[s], along[m], across[m], optional angle[rad], id) instead of the file's parts; '-' = "
+             "standard input, each detection answered as it is read."),
+    belt_speed: Optional[float] = typer.Option(None, "--belt-speed", help="Belt speed in m/s instead of the file's."),
+    robots: Optional[int] = typer.Option(None, "--robots", help="Use only the first N robots of the file."),
+    strategy: Optional[str] = typer.Option(
+        None, "--strategy", help="Strategy instead of the file's: upstream_first, quota, bands or skip (its defaults "
+                                 "unless the file's is of that kind)."),
+    seed: Optional[int] = typer.Option(None, "--seed", help="Seed of the file's part generator."),
+    output: str = typer.Option(
+        "-", "--output", "-o",
+        help="Per-part results: CSV (units in the header), or JSON lines with --json; '-' = stdout, row by row as the "
+             "parts are answered. A file is written atomically at the end. In a sweep: the sweep's CSV."),
+    as_json: bool = typer.Option(False, "--json", help="Per-part results as JSON lines (robot, meeting, plan, or why "
+                                                       "missed), then one line with the run's summary."),
+    robots_csv: Optional[str] = typer.Option(None, "--robots-csv", metavar="FILE",
+                                             help="Per-robot results CSV (picks/min, utilisation, idle, RMS, peak use)."),
+    summary_file: Optional[str] = typer.Option(None, "--summary", metavar="FILE",
+                                               help="The run's summary (line and robots) as JSON."),
+    plot: Optional[str] = typer.Option(
+        None, "--plot", metavar="FILE.png|svg",
+        help="Figure: the parts along the belt against time and the robots' legs (a sweep: miss rate against belt "
+             "speed). Needs pickplace-cli[plot]."),
+    mcap: Optional[str] = typer.Option(None, "--mcap", metavar="FILE.mcap",
+                                       help="Every robot's joint trajectory over the run (ROS 2 MCAP, topics "
+                                            "/ROBOT/joint_states, /ROBOT/motor_states, /ROBOT/tool_pose)."),
+    rate: Optional[float] = typer.Option(None, "--rate", help="Sample rate of --mcap in Hz. [default: the first robot's "
+                                                              "profile]"),
+    max_miss_rate: Optional[float] = typer.Option(
+        None, "--max-miss-rate", help="Exit 4 when the share of missed parts exceeds this (0 … 1)."),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="No table or progress bar on stderr."),
+    speeds: Optional[str] = typer.Option(
+        None, "--speeds", help="Sweep: belt speeds in m/s, a list 0.2,0.5 or a range START:STOP:STEP."),
+    robot_counts: Optional[str] = typer.Option(None, "--robot-counts", help="Sweep: robot counts, e.g. 3,4 (the first "
+                                                                            "N robots of the file)."),
+    strategies: Optional[str] = typer.Option(None, "--strategies", help="Sweep: strategies, e.g. upstream_first,quota "
+                                                                        "or all."),
+    seeds: Optional[str] = typer.Option(None, "--seeds", help="Sweep: generator seeds, e.g. 1,2,3 or 1:10."),
+    workers: int = typer.Option(0, "--workers", "-j", help="Sweep: local worker processes (0 = all cores; 1 = in this "
+                                                          "process)."),
+    scheduler: Optional[str] = typer.Option(None, "--scheduler", metavar="tcp://HOST:PORT",
+                                            help="Sweep: run the cases on this Dask scheduler (pickplace-cli[dask])."),
+    resume: bool = typer.Option(False, "--resume", help="Sweep: continue from OUTPUT.partial.jsonl (needs -o FILE)."),
+) -> None:
+    """Run a line of robots along one belt: each part is offered to the robots in the strategy's order and taken
+    by the first that can meet it in its window (a real plan: rendezvous, tracking, place, every limit checked);
+    a part no robot can take is missed, with the reason. Prints a table per robot (picks/min, utilisation, idle,
+    peak limit use, RMS torque over the run) on stderr. Exit codes: 0 ok (missed parts are results); 1 invalid
+    input (line file, profile, a refused detection row: the other rows are still answered); 2 usage; 3 a motor's
+    RMS torque over the run exceeds its rated torque; 4 a window, home or place point outside the workspace, a belt
+    no robot can ever keep up with, or --max-miss-rate exceeded.
+    """
+    from ..model.errors import TaskError
+
+    sweep = any(x is not None for x in (speeds, robot_counts, strategies, seeds))
+    if max_miss_rate is not None and not (0.0 <= max_miss_rate <= 1.0):
+        raise TaskError(f"max-miss-rate = {max_miss_rate!r}: must be a share between 0 and 1")
+    if rate is not None and not (rate > 0 and rate <= 1e5):
+        raise TaskError(f"rate = {rate!r}: must be a sample rate in Hz, > 0 and at most 1e5")
+    if sweep:
+        for name, given in (("--detections -", detections == "-"), ("--mcap", mcap), ("--robots-csv", robots_csv),
+                            ("--summary", summary_file), ("--json", as_json)):
+            if given:
+                _usage(f"{name} is for a single run; a sweep writes its table (-o) and --plot")
+        _sweep(line_file, detections, belt_speed, robots, strategy, seed, speeds, robot_counts, strategies, seeds,
+               output, plot, workers, scheduler, resume, quiet)
+        return
+    if resume or scheduler or workers:
+        _usage("--resume, --scheduler and --workers are for a sweep (--speeds, --robot-counts, --strategies, --seeds)")
+    _single(line_file, detections, belt_speed, robots, strategy, seed, output, as_json, robots_csv, summary_file, plot,
+            mcap, rate, max_miss_rate, quiet)
+
+
+# ------------------------------------------------------------------------------------------------ a single run
+
+
+def _prepare(line_file, belt_speed, robots, strategy, seed):
+    """(line, profiles) with the command line's overrides applied and checked."""
+    from ..line.spec import check_rules, load_line
+    from ..line.sweep import Case, case_line
+    from ..model.errors import TaskError
+
+    line = load_line(line_file)
+    if robots is not None and not (1 <= robots <= len(line.robots)):
+        raise TaskError(f"robots = {robots}: the line file has {len(line.robots)} robots; give 1 … {len(line.robots)}")
+    if belt_speed is not None and not (0 < belt_speed <= 100):
+        raise TaskError(f"belt-speed = {belt_speed!r}: must be > 0 and at most 100 m/s")
+    kind = _strategy_names(strategy)[0] if strategy is not None else line.strategy.kind
+    case = Case(float(belt_speed if belt_speed is not None else line.belt.speed),
+                int(robots if robots is not None else len(line.robots)), kind, seed)
+    line = case_line(line, case)
+    check_rules(line, line_file)
+    return line, _profiles(line, line_file)
+
+
+def _profiles(line, line_file) -> dict:
+    from ..line.spec import resolve_relative
+    from ..model.profile import load_profile
+
+    cache: dict = {}
+    out = {}
+    for r in line.robots:
+        ref = resolve_relative(r.profile, line_file)
+        if ref not in cache:
+            cache[ref] = load_profile(ref)
+        out[r.name] = cache[ref]
+    return out
+
+
+def _strategy_names(text: str) -> list[str]:
+    from ..line.spec import STRATEGIES
+    from ..model.errors import TaskError
+
+    names = list(STRATEGIES) if text.strip() == "all" else [s.strip() for s in text.split(",")]
+    for n in names:
+        if n not in STRATEGIES:
+            raise TaskError(f"strategy = {n!r}: choose from {', '.join(STRATEGIES)} (or all)")
+    return names
+
+
+def _inputs_of(line, line_file, detections) -> list[str]:
+    from ..line.spec import resolve_relative
+
+    files = [line_file]
+    if detections and detections != "-":
+        files.append(detections)
+    elif line.parts.detections:
+        files.append(resolve_relative(line.parts.detections, line_file))
+    return files
+
+
+def _check_outputs(outputs: dict, inputs: list[str]) -> None:
+    """Every output writable, none an input of the run, no two the same file."""
+    import os
+
+    from ..export import check_writable, promise
+    from ..model.errors import ExportError
+
+    seen = {}
+    real_inputs = {os.path.realpath(p): p for p in inputs}
+    for option, path in outputs.items():
+        if path is None or path == "-":
+            continue
+        check_writable(path)
+        real = os.path.realpath(path)
+        if real in real_inputs and not path.startswith("/dev/"):
+            raise ExportError(f"{option} {path}: is an input of this run ({real_inputs[real]}); give another file name")
+        if real in seen and not path.startswith("/dev/"):
+            raise ExportError(f"{option} {path}: also given to {seen[real]}; give each output its own file")
+        seen[real] = option
+        promise(path)
+
+
+@contextlib.contextmanager
+def _detection_lines(source: str):
+    """The lines of a detection file or of standard input (read as they arrive)."""
+    from ..model.errors import TaskError
+
+    if source == "-":
+        if sys.stdin is None:
+            raise TaskError("detections = -: standard input is closed; give the detections on stdin or a file")
+        try:
+            fd = sys.stdin.fileno()
+        except (AttributeError, ValueError, OSError):  # a test runner's stand-in
+            fd = None
+        if fd is None:
+            yield sys.stdin
+            return
+        from ..pipelines.warm import WarmLines
+
+        reader = WarmLines(fd, None, None, sys.stdin.encoding or "utf-8")
+        yield iter(lambda: reader.readline(8192), "")
+        return
+    try:
+        fh = open(source, encoding="utf-8-sig", newline="", errors="surrogateescape")
+    except OSError as exc:
+        raise TaskError(f"detections = {source}: cannot read it: {exc.strerror}") from None
+    with fh:
+        yield fh
+
+
+def _single(line_file, detections, belt_speed, robots, strategy, seed, output, as_json, robots_csv, summary_file,
+            plot, mcap, rate, max_miss_rate, quiet) -> None:
+    from ..export import atomic_output
+    from ..line.engine import LineEngine
+    from ..line.parts import generate, in_time_order, read_detections
+    from ..line.report import PartsCsv, part_json, print_table, summary_json
+    from ..line.spec import resolve_relative
+    from ..model.errors import TaskError
+
+    line, profiles = _prepare(line_file, belt_speed, robots, strategy, seed)
+    if plot is not None:
+        from ..export.plot import plot_format, require_matplotlib
+
+        require_matplotlib()
+        plot_kind = plot_format(plot, None)
+    _check_outputs({"--output": output, "--robots-csv": robots_csv, "--summary": summary_file, "--plot": plot,
+                    "--mcap": mcap}, _inputs_of(line, line_file, detections))
+    engine = LineEngine(line, profiles)
+    engine.check_speed()
+    for w in engine.warnings:
+        sys.stderr.write(f"pickplace: warning: {w}\n")
+    source = detections if detections is not None else (
+        resolve_relative(line.parts.detections, line_file) if line.parts.detections else None)
+    if source is None and line.parts.generate is None:
+        raise TaskError(f"{line_file}: parts: give a detection file (parts.detections, or --detections FILE|-) or a "
+                        "generator (parts.generate)")
+    streaming = output == "-"
+    with contextlib.ExitStack() as stack:
+        if source is not None:
+            lines = stack.enter_context(_detection_lines(source))
+            items = read_detections(lines, "stdin" if source == "-" else source)
+        else:
+            items = iter(generate(line.parts.generate, line.belt.width))
+        out = stack.enter_context(atomic_output(output))
+        writer = PartsCsv(out)
+        if not as_json:
+            writer.header()
+        for res in engine.run(in_time_order(items, line.parts.reorder)):
+            if res.code == 1:
+                sys.stderr.write(f"pickplace: {res.reason}\n")
+                note_exit(1)
+            out.write(part_json(res) + "\n") if as_json else writer.row(res)
+            if streaming and source == "-":
+                out.flush()
+        summary = engine.finish()
+        if as_json:
+            out.write(summary_json(summary, line.name, compact=True))
+    _after(engine, summary, line, robots_csv, summary_file, plot, plot_kind if plot else None, mcap, rate, quiet)
+    code = summary.exit_code()
+    for v in summary.violations():
+        sys.stderr.write(f"pickplace: {v}\n")
+    if max_miss_rate is not None and summary.miss_rate > max_miss_rate:
+        sys.stderr.write(f"pickplace: miss rate {100 * summary.miss_rate:.2f} % ({summary.missed} of {summary.parts} "
+                         f"parts) exceeds --max-miss-rate {100 * max_miss_rate:g} %\n")
+        code = max(code, 4)
+    if code:
+        raise typer.Exit(code)
+
+
+def _after(engine, summary, line, robots_csv, summary_file, plot, plot_kind, mcap, rate, quiet) -> None:
+    """The table, and the files written after the run: robots CSV, summary JSON, figure, MCAP."""
+    from ..export import atomic_output
+    from ..line.report import print_table, summary_json, write_robots_csv
+
+    if not quiet:
+        print_table(summary)
+    if robots_csv is not None:
+        with atomic_output(robots_csv) as fh:
+            write_robots_csv(summary, fh)
+    if summary_file is not None:
+        with atomic_output(summary_file) as fh:
+            fh.write(summary_json(summary, line.name))
+    if plot is not None:
+        from ..line.figures import write_timeline
+
+        with atomic_output(plot, binary=True) as fh:
+            write_timeline(engine, summary, fh, plot_kind)
+    if mcap is not None:
+        from ..line.trajectories import robot_samples, sample_times, write_line_mcap
+
+        hz = rate if rate is not None else float(engine.robots[0].profile.planning.rate)
+        t = sample_times(summary.t_begin, summary.t_end, hz)
+        samples = [robot_samples(run, t) for run in engine.runs]
+        with atomic_output(mcap, binary=True) as fh:
+            write_line_mcap(samples, summary.t_begin, fh)
+
+
+# ------------------------------------------------------------------------------------------------------ sweeps
+
+
+def _numbers(name: str, text: str, integer: bool = False) -> list:
+    """A list ``a,b,c`` or a range ``start:stop:step`` (stop included when on the grid)."""
+    import math
+
+    from ..model.errors import TaskError
+    from ..model.text import plain_float
+
+    try:
+        if ":" in text:
+            parts = [plain_float(x) for x in text.split(":")]
+            if len(parts) != 3 or parts[2] <= 0 or parts[1] < parts[0]:
+                raise ValueError
+            n = int(math.floor((parts[1] - parts[0]) / parts[2] + 1e-9)) + 1
+            if n > 10000:
+                raise TaskError(f"{name} = {text!r}: {n} values; at most 10000")
+            values = [round(parts[0] + k * parts[2], 12) for k in range(n)]
+        else:
+            values = [plain_float(x.strip()) for x in text.split(",") if x.strip()]
+        if not values or not all(math.isfinite(v) for v in values):
+            raise ValueError
+    except ValueError:
+        raise TaskError(f"{name} = {text!r}: give numbers separated by commas, or START:STOP:STEP") from None
+    if integer:
+        if not all(v == int(v) for v in values):
+            raise TaskError(f"{name} = {text!r}: give whole numbers")
+        values = [int(v) for v in values]
+    return list(dict.fromkeys(values))
+
+
+def _sweep(line_file, detections, belt_speed, robots, strategy, seed, speeds, robot_counts, strategies, seeds, output,
+           plot, workers, scheduler, resume, quiet) -> None:
+    import os
+
+    from ..export import atomic_output
+    from ..line.parts import BadRow, read_detections
+    from ..line.spec import load_line, resolve_relative
+    from ..line.sweep import cases, checkpoint_path, digest, run_sweep, write_sweep_csv
+    from ..model.errors import TaskError
+
+    base = load_line(line_file)
+    v = _numbers("speeds", speeds) if speeds else [belt_speed if belt_speed is not None else base.belt.speed]
+    if not all(0 < x <= 100 for x in v):
+        raise TaskError(f"speeds = {speeds!r}: every belt speed must be > 0 and at most 100 m/s")
+    n = _numbers("robot-counts", robot_counts, True) if robot_counts else [robots or len(base.robots)]
+    if not all(1 <= x <= len(base.robots) for x in n):
+        raise TaskError(f"robot-counts = {robot_counts!r}: the line file has {len(base.robots)} robots; give 1 … "
+                        f"{len(base.robots)}")
+    k = _strategy_names(strategies) if strategies else [strategy or base.strategy.kind]
+    s = _numbers("seeds", seeds, True) if seeds else [seed]
+    if seeds and any(x < 0 for x in s):
+        raise TaskError(f"seeds = {seeds!r}: seeds are whole numbers >= 0")
+    if workers < 0:
+        raise TaskError(f"workers = {workers}: must be 0 (all cores) or a positive number")
+    if resume and output == "-":
+        raise TaskError("--resume: needs -o FILE (the finished cases live in FILE.partial.jsonl)")
+    plot_kind = None
+    if plot is not None:
+        from ..export.plot import plot_format, require_matplotlib
+
+        require_matplotlib()
+        plot_kind = plot_format(plot, None)
+    _check_outputs({"--output": output, "--plot": plot}, _inputs_of(base, line_file, detections))
+    profiles = _profiles(base, line_file)
+    dets = None
+    src = detections if detections is not None else (
+        resolve_relative(base.parts.detections, line_file) if base.parts.detections else None)
+    if src is not None:
+        with _detection_lines(src) as lines:
+            dets = list(read_detections(lines, src))
+        bad = next((d for d in dets if isinstance(d, BadRow)), None)
+        if bad is not None:
+            raise TaskError(bad.error)
+    elif base.parts.generate is None:
+        raise TaskError(f"{line_file}: parts: a sweep needs a detection file or a generator")
+    all_cases = cases(v, n, k, s)
+    axes = {"speeds": v, "robots": n, "strategies": k, "seeds": s, "detections": src}
+    ckpt = checkpoint_path(output) if output != "-" else None
+    tag = digest(base, axes)
+    with contextlib.ExitStack() as stack:
+        from .build_table import _engine
+
+        executor, n_workers, tick = _engine(stack, scheduler, workers, quiet, len(all_cases), "runs", eta=False,
+                                            label="line sweep")
+        try:
+            rows = run_sweep(base, profiles, all_cases, dets, n_workers, executor, tick, ckpt, resume, tag)
+        except KeyboardInterrupt:
+            if ckpt is not None and ckpt.exists():
+                sys.stderr.write(f"pickplace: finished cases are saved in {ckpt}; run the same command with --resume\n")
+            raise
+    with atomic_output(output) as fh:
+        write_sweep_csv(rows, fh)
+    if plot is not None:
+        from ..line.figures import write_sweep_plot
+
+        with atomic_output(plot, binary=True) as fh:
+            write_sweep_plot(rows, fh, plot_kind, title=f"{base.name}: miss rate against belt speed")
+    if ckpt is not None and ckpt.exists():
+        os.unlink(ckpt)
+    failed = [r for r in rows if r.get("error") and r.get("exit_code") != 4]
+    for r in failed[:5]:
+        sys.stderr.write(f"pickplace: case {r['strategy']}, {r['robots']} robots, {r['belt_speed']:g} m/s, seed "
+                         f"{r['seed']}: {r['error']}\n")
+    if failed:
+        raise typer.Exit(max(r.get("exit_code", 1) for r in failed))

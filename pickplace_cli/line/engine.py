@@ -1,0 +1,203 @@
+"""The line: robots along one belt, a strategy, and the parts offered to them one after another.
+
+:class:`LineEngine` takes the detections in time order (:func:`~pickplace_cli.line.parts.in_time_order`) and
+answers each at once (:meth:`LineEngine.offer`: the robot that takes it, with its cycle, or the reason it is
+missed), so the same engine serves a file, a generator and a stream of detections. Robots are asked in the
+strategy's order (:mod:`~pickplace_cli.line.strategies`); the first that can take the part in time takes it
+and its state moves on (:mod:`~pickplace_cli.line.robot`). :meth:`LineEngine.finish` closes the run: per robot
+the picks, utilisation, idle time, the peak use of every limit over its moves, and each motor's RMS torque over
+the robot's actual sequence — its moves, dwells and the time it waits at rest holding the tool against gravity:
+
+    RMS_m = sqrt( (Σ_legs ∫ τ_m(t)² dt + Σ_rests τ_hold,m² · t_rest) / (t_end − t_begin) ),
+
+each leg's integral exact (Gauss–Legendre on every knot span of the leg: :mod:`~pickplace_cli.line.moves`), over
+the run's span [t_begin, t_end] = [first detection, the later of the last detection and the end of the last
+leg of any robot]; not the single-move duty cycle with its retrace assumption.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any, Iterable, Iterator
+
+import numpy as np
+
+from ..model.errors import PickplaceError, TaskError, UnreachableError
+from .parts import BadRow, Detection
+from .robot import Cycle, Decline, Leg, LineRobot, RobotState, check_reach
+from .spec import Line, robot_bands, upstream_order
+from .summary import LineSummary, summarise
+
+
+@dataclass
+class PartResult:
+    """The answer for one part: taken by ``robot`` with its ``cycle``, or missed (``reason``), or a bad row."""
+
+    detection: Detection | None
+    robot: str | None = None
+    cycle: Cycle | None = None
+    reason: str | None = None
+    code: int = 0
+    row: int = 0
+    declines: dict = field(default_factory=dict)
+
+    @property
+    def picked(self) -> bool:
+        return self.cycle is not None
+
+    def as_dict(self) -> dict[str, Any]:
+        d = self.detection
+        doc: dict[str, Any] = {"id": d.id if d else None, "row": self.row, "picked": self.picked,
+                               "exit_code": self.code, "robot": self.robot, "reason": self.reason}
+        if d is not None:
+            doc.update({"t_detect_s": d.t, "along_m": d.along, "across_m": d.across, "angle_rad": d.angle})
+        c = self.cycle
+        if c is not None:
+            pick = c.pick
+            place = next(leg for leg in c.legs if leg.kind == "place")
+            doc.update({
+                "t_start_s": c.t_start, "t_meet_s": c.t_meet, "meet_along_m": float(c.meet_line[0]),
+                "meet_across_m": float(c.meet_line[1]), "meet_m": c.meet_robot.tolist(),
+                "pick_duration_s": pick.duration, "place_duration_s": place.duration,
+                "t_placed_s": c.t_placed, "t_free_s": c.t_free, "target": c.target, "place_m": c.place_point.tolist(),
+                "waited_for_window": c.waited,
+                "pick_shape": list(pick.solved.move.basis.params), "place_shape": list(place.solved.move.basis.params),
+            })
+        if self.declines:
+            doc["declined"] = dict(self.declines)
+        return doc
+
+
+@dataclass
+class RobotRun:
+    """What one robot did over a run: its legs (in time order) and picks."""
+
+    robot: LineRobot
+    legs: list = field(default_factory=list)
+    picks: int = 0
+
+
+class LineEngine:
+    """The line of ``line`` (a :class:`~pickplace_cli.line.spec.Line`), its robots in upstream order. ``profiles``:
+    robot name → Profile (loaded by the caller: the CLI names the file); ``robots``: use only the first this
+    many robots of the file (a sweep's robot count)."""
+
+    def __init__(self, line: Line, profiles: dict, robots: int | None = None) -> None:
+        from .moves import Shapes
+        from .strategies import Sharing
+
+        specs = list(line.robots) if robots is None else list(line.robots)[:robots]
+        if robots is not None:
+            line = line.model_copy(update={"robots": specs})
+        self.line = line
+        order = upstream_order(line)
+        bands = robot_bands(line)
+        shapes = Shapes.shared()
+        self.robots: list[LineRobot] = []
+        own_bands = []
+        for i in order:
+            spec = line.robots[i]
+            r = LineRobot(spec, line, profiles[spec.name], shapes, line.parts.latency, line.parts.height)
+            self.robots.append(r)
+            own_bands.append(bands[i])
+        strategy = line.strategy
+        half = line.belt.width / 2
+        for r, band in zip(self.robots, own_bands):
+            lo, hi = band if strategy.kind == "bands" else (-half, half)
+            tol = getattr(strategy, "overlap", 0.0) if strategy.kind == "bands" else 0.0
+            check_reach(r, (max(lo - tol, -half), min(hi + tol, half)))
+        self.sharing = Sharing(strategy, len(self.robots), own_bands)
+        self.runs = [RobotRun(r) for r in self.robots]
+        self.n = 0
+        self.t_begin = math.inf
+        self.t_last = -math.inf
+        self.results: list[PartResult] = []
+        self.bad_rows = 0
+        self.warnings: list[str] = []
+        self.finished = None
+
+    # ---------------------------------------------------------------------------------------------- setup
+    def check_speed(self) -> None:
+        """UnreachableError (exit 4) when no robot could take a part even alone and at rest: a part on its band's
+        centre line detected 1 s before it enters the robot's window, the robot free at home. A robot that cannot
+        is named in a warning (``warnings``)."""
+        why = []
+        for r, (lo, hi) in zip(self.robots, self.sharing.bands):
+            across = (lo + hi) / 2 if self.line.strategy.kind == "bands" else 0.0
+            along = r.window[0] - r.speed * 1.0
+            res = r.plan(along, across, 0.0, RobotState(r.home.copy(), np.zeros(3), -math.inf))
+            if isinstance(res, Decline):
+                why.append(res.reason)
+        if len(why) == len(self.robots):
+            raise UnreachableError(f"belt.speed = {self.line.belt.speed:g} m/s: no robot can take a part even alone and "
+                                   f"at rest (a part detected 1 s before its window): {why[0]}"
+                                   + (f" (and {len(why) - 1} more robot{'s' if len(why) > 2 else ''})" if len(why) > 1 else ""))
+        self.warnings += [f"{w} (a part detected 1 s before its window, the robot at rest): it can never take a part "
+                          f"at belt speed {self.line.belt.speed:g} m/s" for w in why]
+        gen = self.line.parts.generate
+        if gen is not None:
+            reach = gen.detect_at + self.line.belt.speed * self.line.parts.latency
+            self.warnings += [f"robot {r.name}: its last meeting point along {r.meet_end:.4g} m is upstream of where the "
+                              f"parts are when a move may start (detected at {gen.detect_at:g} m, then {reach:.4g} m "
+                              "after the latency): it can never take a part" for r in self.robots if r.meet_end < reach]
+
+    # ----------------------------------------------------------------------------------------------- run
+    def offer(self, item: Detection | BadRow) -> PartResult:
+        """Answer one detection (module docstring); a BadRow is answered with its error (code 1)."""
+        if isinstance(item, BadRow):
+            self.bad_rows += 1
+            res = PartResult(None, reason=item.error, code=item.code, row=item.row)
+            self.results.append(res)
+            return res
+        d = item
+        self.n += 1
+        self.t_begin = min(self.t_begin, d.t)
+        self.t_last = max(self.t_last, d.t)
+        t_ready = d.t + self.line.parts.latency
+        for run in self.runs:
+            self._stop_if_due(run, t_ready, d.along, d.t)
+        ask, left_out = self.sharing.order(d.across, self.n)
+        declines = {self.robots[i].name: why for i, why in left_out.items()}
+        for i in ask:
+            r = self.robots[i]
+            res = r.plan(d.along, d.across, d.t)
+            if isinstance(res, Cycle):
+                r.commit(res)
+                self.runs[i].legs += res.legs
+                self.runs[i].picks += 1
+                self.sharing.picked(i)
+                declines = {k: v if isinstance(v, str) else v.short for k, v in declines.items()}
+                out = PartResult(d, r.name, res, row=d.row, declines=declines)
+                self.results.append(out)
+                return out
+            declines[r.name] = res
+        self.sharing.missed(left_out)
+        declines = {k: v if isinstance(v, str) else v.reason for k, v in declines.items()}
+        reason = "; ".join(f"{k}: {v.removeprefix(f'robot {k}: ')}" for k, v in declines.items()) or "no robot"
+        out = PartResult(d, reason=f"missed: {reason}", code=4, row=d.row, declines=declines)
+        self.results.append(out)
+        return out
+
+    def _stop_if_due(self, run: RobotRun, t_ready: float, along: float = math.inf, t_detect: float = 0.0) -> None:
+        leg = run.robot.stop_first(t_ready, along, t_detect)
+        if leg is None:
+            return
+        if isinstance(leg, Decline):
+            raise TaskError(leg.reason)
+        run.robot.commit_stop(leg)
+        run.legs.append(leg)
+
+    def run(self, items: Iterable[Detection | BadRow]) -> Iterator[PartResult]:
+        for item in items:
+            yield self.offer(item)
+
+    def finish(self) -> "LineSummary":
+        """Close the run (robots still moving with an outgoing belt come to rest) and sum it up."""
+        for run in self.runs:
+            self._stop_if_due(run, math.inf)
+        self.finished = summarise(self)
+        return self.finished
+
+
+__all__ = ["LineEngine", "PartResult", "RobotRun", "LineSummary", "PickplaceError", "Leg"]

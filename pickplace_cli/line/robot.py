@@ -1,0 +1,657 @@
+"""One robot of a line: its frame, profile, window and place targets, and the cycle it runs for a part.
+
+**The cycle** (as a belt schedule's, :mod:`~pickplace_cli.pipelines.schedule`, with the robot's state carried
+over): the robot is free from ``t_free`` at ``position`` (at rest, or moving with an outgoing belt after a place
+on it). A part detected at ``t`` may be reached from ``t_ready = t + latency``. The pick move starts at
+``t_start = max(t_free, t_ready)``:
+
+1. **pick**: from the robot's position and velocity to the part, arriving with the belt's velocity at the
+   meeting point, in T by the robot's duration rule (:mod:`~pickplace_cli.line.moves`); the meeting must lie
+   in the window (from its start to ``claim`` into it) with room left for the tracking;
+2. **track**: the profile's dwell with the part at the belt's velocity (the grip);
+3. **place**: to the next place target (a point, a tray slot: arriving at rest; an outgoing belt: arriving with
+   its velocity), leaving with the belt's velocity, duration by the same rule;
+4. **release**: the dwell at the place point (at rest; on an outgoing belt, moving with it).
+
+Then ``t_free = t_start + T_pick + dwell + T_place + dwell``. A robot left moving with an outgoing belt starts
+its next pick from that motion when the part is already waiting; otherwise it first comes to rest by a **stop**
+move to its home point (at once, at ``t_free``). A part the robot cannot take (no meeting in the window, a move
+that breaks a limit or leaves the workspace) is declined with the reason; the robot's state does not change.
+
+**Limits.** Every leg is checked against every limit of the profile except the RMS torque, which is a property
+of the robot's whole sequence (:mod:`~pickplace_cli.line.engine`). The check evaluates the robot model once for
+all legs of the cycle on each leg's grid (:class:`~pickplace_cli.line.moves.ShapeBasis`); a leg whose estimated
+use of every limit is at most ``SCREEN_MARGIN`` is decided by that (the estimates are within 0.3 % of the exact
+peaks, as the batch verdict engine measures); any other leg is checked by the project's exact limit check
+(:func:`~pickplace_cli.limits.check.check_limits`) on its real path.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..model.errors import PickplaceError, TaskError, UnreachableError
+from .frames import Frame
+from .moves import (HORIZON, Move, Shapes, Solved, T_MIN, first_feasible, search_auto, solve_auto, solve_seconds,
+                    verify_auto)
+
+#: a leg is decided by the screening when every estimated limit use is at most this
+SCREEN_MARGIN = 0.9
+#: the capacity rule's durations found on the grid are raised by this fraction before their exact check (the
+#: refined grid peaks are within 1.3e-4 of the exact ones on a 3-robot line's moves, median 1e-5), so the exact
+#: check rarely has to nudge one (which would move the meeting point and so the place move's start)
+GRID_SAFETY = 2e-4
+#: uniform samples of a tracking leg's grid (plus its Gauss–Legendre nodes)
+TRACK_UNIFORM = 9
+#: the quantities a duration changes (the fit rule's); positions, workcell and singularity do not
+TIMED = frozenset({"velocity", "acceleration", "jerk", "motor speed", "motor torque", "motor torque rate"})
+
+
+@dataclass(frozen=True)
+class RobotState:
+    """Where the robot is from ``t_free`` [s] on: ``position`` [m, robot frame], ``velocity`` [m/s] (zero at
+    rest; an outgoing belt's after a place on it)."""
+
+    position: np.ndarray
+    velocity: np.ndarray
+    t_free: float
+
+    @property
+    def moving(self) -> bool:
+        return bool(np.any(self.velocity != 0.0))
+
+
+@dataclass
+class Leg:
+    """One segment of a robot's sequence: ``kind`` (pick, track, place, release, stop), its start ``t0`` [s, line
+    clock] and ``duration`` [s]; ``solved`` (the B-spline move; None for a track/release leg, which is
+    ``point`` + ``velocity``·t); the exact ∫ motor torque² dt per motor over the leg [N²·m²·s]; the use of every
+    limit (in the order of the robot's ``use_keys``: (joint, quantity)); the motor torque at its end [N·m];
+    ``exact``: checked by the exact limit check."""
+
+    kind: str
+    t0: float
+    duration: float
+    solved: Solved | None = None
+    point: np.ndarray | None = None
+    velocity: np.ndarray | None = None
+    integral: np.ndarray | None = None
+    use: np.ndarray | None = None
+    end_torque: np.ndarray | None = None
+    exact: bool = False
+
+    @property
+    def t1(self) -> float:
+        return self.t0 + self.duration
+
+    @property
+    def end(self) -> np.ndarray:
+        if self.solved is not None:
+            return self.solved.end
+        return self.point + self.velocity * self.duration
+
+
+@dataclass
+class Cycle:
+    """A part taken: the legs (a stop first when the robot had to come to rest), the meeting (time, point in
+    the robot's frame and in the line's), the place target, and the robot's state after."""
+
+    legs: list
+    t_start: float
+    t_meet: float
+    meet_robot: np.ndarray
+    meet_line: np.ndarray
+    target: int
+    place_point: np.ndarray
+    state: RobotState
+    waited: bool = False
+
+    @property
+    def pick(self) -> Leg:
+        return next(leg for leg in self.legs if leg.kind == "pick")
+
+    @property
+    def t_placed(self) -> float:
+        return next(leg for leg in self.legs if leg.kind == "place").t1
+
+    @property
+    def t_free(self) -> float:
+        return self.state.t_free
+
+
+@dataclass(frozen=True)
+class Decline:
+    """Why a robot does not take a part: ``reason`` (one line; computed when first read) and the exit code it
+    would be (4: cannot meet it in the window or a point is out of reach; 3: a limit; 1: no plan)."""
+
+    why: object
+    code: int = 4
+
+    @property
+    def reason(self) -> str:
+        return self.why if isinstance(self.why, str) else str(self.why)
+
+    @property
+    def short(self) -> str:
+        """The reason without the costly details (for a part another robot took)."""
+        return self.why if isinstance(self.why, str) else self.why.short()
+
+
+class _Reason:
+    """The reason a part cannot be met in the window, with by how much when the capacity rule says so: worked out
+    only when it is read (a part some other robot takes never needs it)."""
+
+    def __init__(self, robot, moves, a, b, along0, busy) -> None:
+        self.args = (robot, moves, a, b, along0, busy)
+        self.text: str | None = None
+
+    def __str__(self) -> str:
+        if self.text is None:
+            robot, moves, a, b, along0, busy = self.args
+            self.text = robot._missed_reason(moves, a, b, along0, busy, by_how_much=True)
+            self.args = None
+        return self.text
+
+    def short(self) -> str:
+        """The reason without by how much (no search)."""
+        if self.text is not None:
+            return self.text
+        robot, moves, a, b, along0, busy = self.args
+        return robot._missed_reason(moves, a, b, along0, busy, by_how_much=False)
+
+
+class _StandIn:
+    """The path of the robot's stacked model calls: never evaluated (the motion is given to the model)."""
+
+    breakpoints = np.array([0.0, 1.0])
+    jumps = ()
+
+    def __call__(self, tau, order=0):  # pragma: no cover - the model is always given the motion
+        raise RuntimeError("the line's stacked model has no path")
+
+
+class TrackBasis:
+    """The grid of a tracking leg (constant velocity, τ ∈ [0, 1]): uniform samples and Gauss–Legendre nodes."""
+
+    def __init__(self) -> None:
+        from .moves import gauss_legendre
+
+        x, w = gauss_legendre()
+        nodes = 0.5 + 0.5 * x
+        self.tau = np.unique(np.concatenate([np.linspace(0.0, 1.0, TRACK_UNIFORM), nodes]))
+        self.gl_index = np.searchsorted(self.tau, nodes)
+        self.gl_weight = 0.5 * w
+
+
+_TRACK = None
+
+
+def track_basis() -> TrackBasis:
+    global _TRACK
+    if _TRACK is None:
+        _TRACK = TrackBasis()
+    return _TRACK
+
+
+class LineRobot:
+    """A robot of the line (module docstring): set up from its :class:`~pickplace_cli.line.spec.RobotSpec`."""
+
+    def __init__(self, spec, line, profile, shapes: Shapes, latency: float, grip: float) -> None:
+        from ..limits.motion import MotionModel
+        from ..planner import motion_model_static
+        from .spec import time_rule
+
+        self.spec, self.name, self.profile = spec, spec.name, profile
+        self.frame = Frame.of(spec.base, line.belt.direction)
+        self.speed = float(line.belt.speed)
+        self.v_belt = self.frame.velocity(self.speed)
+        self.window = (float(spec.window[0]), float(spec.window[1]))
+        claim = line.strategy.claim
+        self.meet_end = self.window[1] - self.speed * profile.planning.dwell
+        if claim is not None:
+            self.meet_end = min(self.meet_end, self.window[0] + float(claim))
+        self.latency, self.grip = float(latency), float(grip)
+        self.rule = time_rule(spec)
+        self.optimal = spec.shape == "optimal"
+        self.dwell = float(profile.planning.dwell)
+        self.height, self.eta = float(profile.planning.height), float(profile.planning.eta)
+        self.capacity = profile.capacity
+        self.shapes = shapes
+        robot, specs, margin, box, memo = motion_model_static(profile)
+        self.model = MotionModel(_StandIn(), robot, specs, margin, box, memo)
+        self.joint_names = list(robot.joint_names)
+        self.rated = np.array([s.drive.rated_torque if s.drive is not None and s.drive.rated_torque else np.nan
+                               for s in specs])
+        self.has_drives = self.model.has_drives
+        self.targets = _targets(spec.place, self.frame)
+        home = spec.home if spec.home is not None else None
+        self.home = self.frame.to_robot(home) if home is not None else self.targets[0][0].copy()
+        self.next_target = 0
+        self.state = RobotState(self.home.copy(), np.zeros(3), -math.inf)
+        self.last_T = 0.2
+        self.last_place_T = 0.2
+        self._plan = None
+        self.use_keys: list = []
+        self.home_torque = self._holding(self.home)
+
+    # ------------------------------------------------------------------------------------------ geometry
+    def part_at(self, along: float, across: float) -> np.ndarray:
+        """A part's grip point [m, robot frame] at ``along``, ``across`` on the belt."""
+        return self.frame.to_robot(np.array([along, across, self.grip]))
+
+    def _holding(self, point) -> np.ndarray:
+        """The motor torque [N·m] that holds the tool at rest at ``point`` (gravity)."""
+        z = np.zeros((1, 3))
+        parts = self.model.parts(np.zeros(1), derivatives=False, motion=(np.asarray(point, float)[None], z, z, z),
+                                 singularity=False)
+        return parts.Gm[0].copy() if self.has_drives else parts.G[0].copy()
+
+    # --------------------------------------------------------------------------------------- the cycle
+    def stop_first(self, t_ready: float, along: float = math.inf, t_detect: float = 0.0) -> Leg | Decline | None:
+        """The stop leg a robot moving with an outgoing belt needs before the next part (detected at ``t_detect``
+        at ``along``, ready at ``t_ready``): None when it can start that pick from its motion — the part is known and
+        already in its window when the robot is free — or it is at rest. Otherwise it comes to rest at its home
+        point at once (the parts after it come later still)."""
+        st = self.state
+        if not st.moving:
+            return None
+        along_free = along + self.speed * (st.t_free - t_detect)
+        if t_ready <= st.t_free and along_free >= self.window[0]:
+            return None
+        moves = [Move(b, st.position, st.velocity, self.home, np.zeros(3), np.zeros(3), self.height, self.eta)
+                 for b in self._shapes_for(st.position, st.velocity, self.home, np.zeros(3))]
+        solved = self._solve(moves, T_MIN, HORIZON)
+        if solved is None:
+            return Decline(f"robot {self.name}: cannot come to rest at its home point after placing on the outgoing belt", 1)
+        leg = Leg("stop", st.t_free, solved.T, solved)
+        bad = self._check([leg])
+        if bad is not None:
+            return bad
+        return leg
+
+    def commit_stop(self, leg: Leg) -> None:
+        self.state = RobotState(leg.end.copy(), np.zeros(3), leg.t1)
+
+    def plan(self, along: float, across: float, t_detect: float, state: RobotState | None = None) -> Cycle | Decline:
+        """The cycle of a part detected at ``t_detect`` [s] at ``along``, ``across`` [m] from ``state`` (default the
+        robot's), or why it cannot take it (module docstring). Does not change the robot."""
+        st = self.state if state is None else state
+        t_ready = t_detect + self.latency
+        t_start = max(st.t_free, t_ready)
+        along0 = along + self.speed * (t_start - t_detect)  # where the part is when the move starts
+        a = max(T_MIN, (self.window[0] - along0) / self.speed)
+        b = (self.meet_end - along0) / self.speed
+        busy = f"busy until t = {st.t_free:.4f} s, " if st.t_free > t_ready else ""
+        if b < a:
+            where = "its window's end" if self.meet_end < self.window[0] + 1e-12 or along0 > self.window[0] else "it"
+            return Decline(f"robot {self.name}: {busy}the part is at along {along0:.4f} m when a move could start, past "
+                           f"{where} (last meeting point along {self.meet_end:.4f} m)")
+        target, v_out = self.targets[self.next_target % len(self.targets)]
+        solved = None
+        waited = False
+        if along0 < self.window[0] and not st.moving:
+            # the part has not reached the window yet: the robot waits at rest and starts its move so as to meet it
+            # where it enters the window, when the rule's move there fits in the time left
+            entry = self.part_at(self.window[0], across)
+            t_entry = t_detect + (self.window[0] - along) / self.speed
+            wmoves = [Move(bs, st.position, st.velocity, entry, np.zeros(3), self.v_belt, self.height, self.eta)
+                      for bs in self._shapes_for(st.position, st.velocity, entry, self.v_belt)]
+            got = self._pick_and_place(wmoves, T_MIN, t_entry - t_start, target, v_out)
+            if isinstance(got, tuple) and t_entry - got[0].T >= t_start:
+                solved, t_start, waited = got, t_entry - got[0].T, True
+        if solved is None:
+            p0 = self.part_at(along0, across)
+            moves = [Move(bs, st.position, st.velocity, p0, self.v_belt, self.v_belt, self.height, self.eta)
+                     for bs in self._shapes_for(st.position, st.velocity, p0 + self.v_belt * self.last_T, self.v_belt)]
+            solved = self._pick_and_place(moves, a, b, target, v_out)
+            if solved is None:
+                return Decline(_Reason(self, moves, a, b, along0, busy))
+        if isinstance(solved, Decline):
+            return solved
+        pick, place = solved
+        meet = pick.end
+        track = Leg("track", t_start + pick.T, self.dwell, point=meet, velocity=self.v_belt.copy())
+        legs = [Leg("pick", t_start, pick.T, pick), track, Leg("place", track.t1, place.T, place)]
+        legs.append(Leg("release", legs[-1].t1, self.dwell, point=target.copy(), velocity=v_out.copy()))
+        bad = self._check(legs)
+        if bad is not None:
+            return bad
+        end = legs[-1].end
+        state = RobotState(end.copy(), v_out.copy(), legs[-1].t1)
+        meet_line = self.frame.to_line(meet)
+        return Cycle(legs, t_start, t_start + pick.T, meet.copy(), meet_line, self.next_target % len(self.targets),
+                     target.copy(), state, waited=waited)
+
+    def commit(self, cycle: Cycle) -> None:
+        self.state = cycle.state
+        self.next_target += 1
+        self.last_T = cycle.pick.duration
+        self.last_place_T = next(leg.duration for leg in cycle.legs if leg.kind == "place")
+
+    # ------------------------------------------------------------------------------------------ solving
+    def _shapes_for(self, start, v_from, end, v_to) -> list:
+        """The candidate shapes of a move from ``start`` to about ``end`` (its groups estimated at the robot's last
+        pick duration)."""
+        from ..model.task import Task
+
+        T = self.last_T
+        try:
+            task = Task(start, end, self.height, self.eta, v_from, v_to)
+        except TaskError:
+            return [self.shapes.basis(_paper())]
+        return self.shapes.candidates(task, T)
+
+    def _place_moves(self, leave, target, v_out) -> list[Move]:
+        return [Move(bs, leave, self.v_belt, target, np.zeros(3), v_out, self.height, self.eta)
+                for bs in self._shapes_for(leave, self.v_belt, target, v_out)]
+
+    def _pick_and_place(self, moves: list[Move], a: float, b: float, target, v_out):
+        """(pick, place) Solved, None when the pick cannot meet the part in [a, b], or a Decline for the place.
+        The capacity rule: both durations searched on the grid (raised by ``GRID_SAFETY``), then checked on their
+        exact peaks in one batch; a move the exact check nudges is searched again from where it must start."""
+        if self.optimal:
+            from .optimal import pick_and_place
+
+            got = pick_and_place(self, moves[0], a, b, target, v_out)
+            return Decline(got, 1) if isinstance(got, str) else got
+        if self.rule != "auto":
+            pick = self._solve(moves, a, b)
+            if pick is None:
+                return None
+            place = self._solve(self._place_moves(pick.end + self.v_belt * self.dwell, target, v_out), T_MIN, HORIZON)
+            return (pick, place) if place is not None else self._no_place(pick.end + self.v_belt * self.dwell, target)
+        found = search_auto(moves, self.capacity, a, b, guess=self.last_T)
+        if found is None:
+            return None
+        mv, T = found
+        T = min(T * (1 + GRID_SAFETY), b) if T > a else T
+        leave = mv.end(T) + self.v_belt * self.dwell
+        pmoves = self._place_moves(leave, target, v_out)
+        pfound = search_auto(pmoves, self.capacity, T_MIN, HORIZON, guess=self.last_place_T)
+        if pfound is None:
+            return self._no_place(leave, target)
+        pmv, pT = pfound
+        both = verify_auto([(mv, T, b), (pmv, pT * (1 + GRID_SAFETY), HORIZON)], self.capacity)
+        if both is not None and both[0].T == T:
+            return both[0], both[1]
+        pick = verify_auto([(mv, T, b)], self.capacity)  # the pick moved (rare): the place starts elsewhere
+        if pick is None:
+            return None
+        pick = pick[0]
+        place = self._solve(self._place_moves(pick.end + self.v_belt * self.dwell, target, v_out), T_MIN, HORIZON)
+        return (pick, place) if place is not None else self._no_place(pick.end + self.v_belt * self.dwell, target)
+
+    def _no_place(self, leave, target) -> Decline:
+        return Decline(f"robot {self.name}: no place move from {_xyz(leave)} m to {_xyz(target)} m within "
+                       f"{HORIZON:g} s by the rule {self.rule}", 1)
+
+    def _solve(self, moves: list[Move], a: float, b: float) -> Solved | None:
+        if a > b:
+            return None
+        if self.rule == "auto":
+            return solve_auto(moves, self.capacity, a, b)
+        if self.rule == "fit":
+            return self._solve_fit(moves, a, b)
+        return solve_seconds(moves, float(self.rule), a, b)
+
+    def _missed_reason(self, moves: list[Move], a: float, b: float, along0: float, busy: str,
+                       by_how_much: bool = True) -> str:
+        """Why no meeting in [a, b]: by how much the part is missed when the capacity rule says so."""
+        rule = self.rule if isinstance(self.rule, str) else f"{self.rule:g} s"
+        text = (f"robot {self.name}: {busy}cannot meet the part in its window by the rule {rule} (the meeting must lie "
+                f"between along {max(self.window[0], along0):.4f} and {self.meet_end:.4f} m)")
+        if by_how_much and self.rule == "auto" and b < HORIZON:
+            T = first_feasible(moves[0].excess_auto(self.capacity), b, HORIZON, guess=b)
+            if T is not None:
+                text += f"; the earliest meeting is {self.speed * (T - b) * 1e3:.0f} mm past that"
+        return text
+
+    def _solve_fit(self, moves: list[Move], a: float, b: float) -> Solved | None:
+        """The smallest T in [a, b] at which every timed limit holds on the grid, then the exact check at T and
+        nudged up until it holds (as the rendezvous fit does)."""
+        best = None
+        for mv in moves:
+            T = first_feasible(lambda Ts, mv=mv: self._excess_fit(mv, Ts), a, b, scan=8)
+            if T is not None and (best is None or T < best[1]):
+                best = (mv, T)
+        if best is None:
+            return None
+        mv, T = best
+        from ..limits.check import check_limits
+        from ..planner import motion_model
+
+        for _ in range(20):
+            if T > b * (1 + 1e-12):
+                return None
+            try:
+                rep = check_limits(motion_model(mv.path(T), self.profile), T, dwell=0.0)
+            except (UnreachableError, TaskError):
+                return None
+            bad = [r for r in rep.violations if r.quantity in TIMED]
+            if not bad:
+                return Solved(mv, T, mv.exact_peaks(T))
+            T *= max(r.utilisation for r in bad) ** (1 / 3) * (1.0 + 1e-9)
+        return None  # pragma: no cover - converges in one or two steps
+
+    def _excess_fit(self, mv: Move, Ts: np.ndarray) -> np.ndarray:
+        """max over the timed limits of use − 1 on the grid for each trial T (inf where a sample is out of reach)."""
+        Ts = np.asarray(Ts, float)
+        tau = mv.basis.tau
+        G = len(tau)
+        out = np.full(len(Ts), np.inf)
+        motion = [np.concatenate([a + T * b for T in Ts]) for a, b in zip(mv.A, mv.B)]
+        try:
+            parts = self.model.parts(np.tile(tau, len(Ts)), motion=tuple(motion), singularity=False)
+        except UnreachableError:
+            if len(Ts) == 1:
+                return out
+            return np.concatenate([self._excess_fit(mv, np.array([T])) for T in Ts])
+        meta, data = self.model.columns(parts, np.repeat(Ts, G))
+        cols = [c for c, m in enumerate(meta) if m[1] in TIMED]
+        limits = np.array([meta[c][3] for c in cols])
+        for k in range(len(Ts)):
+            block = data[k * G:(k + 1) * G, cols].T
+            out[k] = float(np.max(_peaks(tau, block) / limits)) - 1.0
+        return out
+
+    # ---------------------------------------------------------------------------------------- the check
+    def _check(self, legs: list[Leg]) -> Decline | None:
+        """Check every leg (module docstring); fills each leg's integral, use and end torque. A Decline naming the
+        leg and the limit (or the point out of reach) when one fails."""
+        grids = []
+        for leg in legs:
+            if leg.solved is not None:
+                bs = leg.solved.move.basis
+                grids.append((bs.tau, leg.solved.samples(), bs.gl_index, bs.gl_weight))
+            else:
+                tb = track_basis()
+                d = leg.velocity * leg.duration
+                p = leg.point + np.multiply.outer(tb.tau, d)
+                z = np.zeros_like(p)
+                grids.append((tb.tau, [p, np.broadcast_to(d, p.shape).copy(), z, z], tb.gl_index, tb.gl_weight))
+        tau = np.concatenate([g[0] for g in grids])
+        motion = tuple(np.concatenate([g[1][k] for g in grids]) for k in range(4))
+        Ts = np.concatenate([np.full(len(g[0]), max(leg.duration, 1e-9)) for g, leg in zip(grids, legs)])
+        try:
+            parts = self.model.parts(tau, motion=motion)
+        except UnreachableError as exc:
+            k = _leg_of(exc.index, grids)
+            return Decline(f"robot {self.name}: the {legs[k].kind} move (t = {legs[k].t0:.4f} … {legs[k].t1:.4f} s) "
+                           f"leaves the workspace: {exc}")
+        meta, data = self.model.columns(parts, Ts)
+        plan = self._use_plan(meta)
+        start = 0
+        peaks = np.empty((len(legs), data.shape[1]))
+        for k, (leg, (gtau, _, gl_i, gl_w)) in enumerate(zip(legs, grids)):
+            sl = slice(start, start + len(gtau))
+            start += len(gtau)
+            peaks[k] = _peaks(gtau, data[sl].T)
+            T = max(leg.duration, 1e-9)
+            am, gm = (parts.Am[sl], parts.Gm[sl]) if self.has_drives else (parts.A[sl], parts.G[sl])
+            torque = am / T**2 + gm
+            leg.integral = T * (gl_w[:, None] * torque[gl_i] ** 2).sum(axis=0)
+            leg.end_torque = torque[-1].copy()
+        uses = plan(peaks)
+        for leg, use in zip(legs, uses):
+            leg.use = use
+            if use.max(initial=0.0) > SCREEN_MARGIN:
+                bad = self._exact_check(leg)
+                if bad is not None:
+                    return bad
+        return None
+
+    def _use_plan(self, meta) -> "UsePlan":
+        if self._plan is None or self._plan.meta != meta:  # the same columns every time (a new list each call)
+            self._plan = UsePlan(meta)
+            self.use_keys = self._plan.keys
+        return self._plan
+
+    def _exact_check(self, leg: Leg) -> Decline | None:
+        """The exact limit check of one leg on its real path (RMS aside); the leg's use from it."""
+        from ..limits.check import check_limits
+        from ..pipelines.rendezvous import tracking_path
+        from ..planner import motion_model
+
+        T = leg.duration
+        path = leg.solved.move.path(T) if leg.solved is not None else tracking_path(leg.point, leg.velocity, T)
+        try:
+            rep = check_limits(motion_model(path, self.profile), T, dwell=0.0)
+        except UnreachableError as exc:
+            return Decline(f"robot {self.name}: the {leg.kind} move (t = {leg.t0:.4f} … {leg.t1:.4f} s) leaves the "
+                           f"workspace: {exc}")
+        leg.exact = True
+        use = leg.use.copy()
+        index = {k: i for i, k in enumerate(self.use_keys)}
+        for r in rep.rows:
+            if (r.joint, r.quantity) in index:
+                use[index[(r.joint, r.quantity)]] = r.utilisation
+        leg.use = use
+        bad = [r for r in rep.violations if r.quantity != "rms motor torque"]
+        if not bad:
+            return None
+        from ..pipelines.batch import violation_text
+
+        worst = max(bad, key=lambda r: r.utilisation)
+        code = 4 if worst.kind == "reach" else 3
+        return Decline(f"robot {self.name}: the {leg.kind} move (t = {leg.t0:.4f} … {leg.t1:.4f} s): "
+                       f"{violation_text(worst)}", code)
+
+
+# ------------------------------------------------------------------------------------------------ helpers
+
+
+def _paper():
+    from ..curves.vel_problem import PAPER_INITIAL
+
+    return PAPER_INITIAL
+
+
+def _xyz(p) -> str:
+    return ",".join(f"{c:.4f}" for c in p)
+
+
+def _targets(place, frame: Frame) -> list[tuple[np.ndarray, np.ndarray]]:
+    """(point, arrival velocity) of every place target in turn [m, m/s, robot frame]."""
+    if place.belt is not None:
+        v = frame.velocity(*place.belt.velocity)
+        return [(frame.to_robot(place.belt.point), v)]
+    if place.tray is not None:
+        t = place.tray
+        o = np.asarray(t.origin, float)
+        pts = [o + np.array([i * t.pitch[0], j * t.pitch[1], 0.0]) for i in range(t.rows) for j in range(t.columns)]
+    else:
+        pts = [np.asarray(p, float) for p in place.points]
+    return [(frame.to_robot(p), np.zeros(3)) for p in pts]
+
+
+def _peaks(tau: np.ndarray, block: np.ndarray) -> np.ndarray:
+    """Per row of ``block`` (C, G) its maximum on the sorted grid ``tau``, refined by the parabola (never lower)."""
+    from .moves import _parabolic_max
+
+    return _parabolic_max(tau, block)
+
+
+class UsePlan:
+    """How the columns' peaks (:meth:`~pickplace_cli.limits.motion.MotionModel.columns`) become the use of every limit
+    as the limit report gives it (``keys``: (joint, quantity) per row): peak/limit; the singularity measure
+    limit/minimum; a [min, max] range by the side nearer its bound, |x − mid| / half-range. Built once per robot."""
+
+    def __init__(self, meta: list) -> None:
+        self.meta = meta
+        keys, cols, limits, lower = [], [], [], []
+        ranges: dict = {}
+        for c, (joint, quantity, _unit, limit, _kind, sign) in enumerate(meta):
+            base, _, side = quantity.rpartition(" ")
+            if side in ("max", "min") and base.startswith(("position", "workcell")):
+                ranges.setdefault((joint, base), {})[side] = (c, float(limit))
+            else:
+                keys.append((joint, quantity))
+                cols.append(c)
+                limits.append(float(limit))
+                lower.append(sign < 0)
+        self.cols, self.limits, self.lower = np.array(cols, int), np.array(limits), np.array(lower, bool)
+        rmax, rmin, mid, half = [], [], [], []
+        for key, sides in ranges.items():
+            (cmax, hi), (cmin, lo) = sides["max"], sides["min"]
+            keys.append(key)
+            rmax.append(cmax)
+            rmin.append(cmin)
+            mid.append((lo + hi) / 2)
+            half.append((hi - lo) / 2)
+        self.rmax, self.rmin, self.mid, self.half = np.array(rmax, int), np.array(rmin, int), np.array(mid), np.array(half)
+        self.keys = keys
+
+    def __call__(self, peak: np.ndarray) -> np.ndarray:
+        """(L, C) column peaks (column sign convention) → (L, R) use per row."""
+        v = peak[:, self.cols]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            single = np.where(self.lower, np.where(-v > 0, self.limits / -v, np.inf), v / self.limits)
+        vmax, vmin = peak[:, self.rmax], -peak[:, self.rmin]
+        ranged = np.maximum((vmax - self.mid) / self.half, (self.mid - vmin) / self.half)
+        return np.concatenate([single, ranged], axis=1)
+
+
+def _leg_of(index, grids) -> int:
+    if index is None:
+        return 0
+    start = 0
+    for k, g in enumerate(grids):
+        start += len(g[0])
+        if index < start:
+            return k
+    return len(grids) - 1
+
+
+def check_reach(robot: LineRobot, bands: tuple[float, float], step: float = 5e-3) -> None:
+    """UnreachableError (exit 4) when part of the robot's window — along its window, across its band, at the
+    grip height — or a place target or its home is outside its workspace (reach, joint ranges, workcell box)."""
+    from ..pipelines.rendezvous import workspace_mask
+
+    w0, w1 = robot.window
+    lo, hi = bands
+    al = np.linspace(w0, w1, max(2, int(math.ceil((w1 - w0) / step)) + 1))
+    ac = np.linspace(lo, hi, max(2, int(math.ceil((hi - lo) / step)) + 1))
+    A, C = np.meshgrid(al, ac, indexing="ij")
+    line_pts = np.column_stack([A.ravel(), C.ravel(), np.full(A.size, robot.grip)])
+    ok = workspace_mask(robot.profile, robot.frame.to_robot(line_pts))
+    if not ok.all():
+        k = int(np.argmin(ok))
+        raise UnreachableError(
+            f"robot {robot.name}: window [{w0:g}, {w1:g}] m across [{lo:g}, {hi:g}] m: the point along "
+            f"{line_pts[k, 0]:.4f} m, across {line_pts[k, 1]:.4f} m (grip height {robot.grip:g} m) is outside the "
+            f"workspace of profile {robot.profile.name} (reach, joint range or workcell box); the window must lie "
+            "inside it across the robot's part of the belt"
+        )
+    for what, pts in (("home point", [robot.home]), ("place target", [t[0] for t in robot.targets])):
+        ok = workspace_mask(robot.profile, np.asarray(pts))
+        if not ok.all():
+            k = int(np.argmin(ok))
+            ln = robot.frame.to_line(pts[k])
+            raise UnreachableError(f"robot {robot.name}: {what} [{ln[0]:g}, {ln[1]:g}, {ln[2]:g}] m (line frame) is "
+                                   f"outside the workspace of profile {robot.profile.name}")
+
+
+__all__ = ["LineRobot", "RobotState", "Leg", "Cycle", "Decline", "check_reach", "PickplaceError"]
