@@ -512,7 +512,7 @@ class LineRobot:
     def _exact_check(self, leg: Leg) -> Decline | None:
         """The exact limit check of one leg on its real path (RMS aside); the leg's use from it."""
         from ..limits.check import check_limits
-        from ..pipelines.rendezvous import tracking_path
+        from ..pipelines.tracking import tracking_path
         from ..planner import motion_model
 
         T = leg.duration
