@@ -35,8 +35,8 @@ import numpy as np
 
 from ..model.errors import PickplaceError, TaskError, UnreachableError
 from .frames import Frame
-from .moves import (HORIZON, Move, Shapes, Solved, T_MIN, first_feasible, search_auto, solve_auto, solve_seconds,
-                    verify_auto)
+from .moves import (HORIZON, Move, Shapes, Solved, T_MIN, exact_rule, first_feasible, search_auto, solve_auto,
+                    solve_seconds, verify_auto)
 
 #: a leg is decided by the screening when every estimated limit use is at most this
 SCREEN_MARGIN = 0.9
@@ -201,9 +201,12 @@ class LineRobot:
 
     def __init__(self, spec, line, profile, shapes: Shapes, latency: float, grip: float) -> None:
         from ..limits.motion import MotionModel
+        from ..model.headroom import apply_limit_use, limit_specs
         from ..planner import motion_model_static
         from .spec import time_rule
 
+        profile = apply_limit_use(profile, spec.limit_use)  # every timed limit at its limit-use fraction
+        self.limit_use = profile.limit_use
         self.spec, self.name, self.profile = spec, spec.name, profile
         self.frame = Frame.of(spec.base, line.belt.direction)
         self.speed = float(line.belt.speed)
@@ -224,7 +227,7 @@ class LineRobot:
         self.model = MotionModel(_StandIn(), robot, specs, margin, box, memo)
         self.joint_names = list(robot.joint_names)
         self.rated = np.array([s.drive.rated_torque if s.drive is not None and s.drive.rated_torque else np.nan
-                               for s in specs])
+                               for s in limit_specs(profile.rated)])  # the RMS is reported against the ratings
         self.has_drives = self.model.has_drives
         self.targets = _targets(spec.place, self.frame)
         home = spec.home if spec.home is not None else None
@@ -395,6 +398,8 @@ class LineRobot:
             return solve_auto(moves, self.capacity, a, b)
         if self.rule == "fit":
             return self._solve_fit(moves, a, b)
+        if self.rule == "limits":
+            return self._solve_fit(moves, a, b, capacity=True)
         return solve_seconds(moves, float(self.rule), a, b)
 
     def _missed_reason(self, moves: list[Move], a: float, b: float, along0: float, busy: str,
@@ -409,12 +414,19 @@ class LineRobot:
                 text += f"; the earliest meeting is {self.speed * (T - b) * 1e3:.0f} mm past that"
         return text
 
-    def _solve_fit(self, moves: list[Move], a: float, b: float) -> Solved | None:
+    def _solve_fit(self, moves: list[Move], a: float, b: float, capacity: bool = False) -> Solved | None:
         """The smallest T in [a, b] at which every timed limit holds on the grid, then the exact check at T and
-        nudged up until it holds (as the rendezvous fit does)."""
+        nudged up until it holds (as the rendezvous fit does). ``capacity``: the Cartesian capacity too (the rule
+        limits: the longer of both, each checked exactly)."""
+        def excess(mv):
+            if not capacity:
+                return lambda Ts: self._excess_fit(mv, Ts)
+            auto = mv.excess_auto(self.capacity)
+            return lambda Ts: np.maximum(self._excess_fit(mv, Ts), auto(Ts))
+
         best = None
         for mv in moves:
-            T = first_feasible(lambda Ts, mv=mv: self._excess_fit(mv, Ts), a, b, scan=8)
+            T = first_feasible(excess(mv), a, b, scan=8)
             if T is not None and (best is None or T < best[1]):
                 best = (mv, T)
         if best is None:
@@ -430,10 +442,14 @@ class LineRobot:
                 rep = check_limits(motion_model(mv.path(T), self.profile), T, dwell=0.0)
             except (UnreachableError, TaskError):
                 return None
-            bad = [r for r in rep.violations if r.quantity in TIMED]
+            bad = [r.utilisation ** (1 / 3) for r in rep.violations if r.quantity in TIMED]
+            if capacity:  # the capacity on the exact peaks: T_auto(T)/T > 1 when it is exceeded
+                t_rule = exact_rule([(mv, T)], self.capacity)[1][0]
+                if t_rule > T:
+                    bad.append(t_rule / T)
             if not bad:
                 return Solved(mv, T, mv.exact_peaks(T))
-            T *= max(r.utilisation for r in bad) ** (1 / 3) * (1.0 + 1e-9)
+            T *= max(bad) * (1.0 + 1e-9)
         return None  # pragma: no cover - converges in one or two steps
 
     def _excess_fit(self, mv: Move, Ts: np.ndarray) -> np.ndarray:

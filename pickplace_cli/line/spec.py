@@ -97,9 +97,13 @@ class RobotSpec(_Model):
     place: Place = Field(description="Where it puts the parts")
     home: Optional[Xyz] = Field(default=None, description="Rest point [along, across, height] in m where it starts "
                                                            "(default: its first place point)")
-    time: Union[Literal["auto", "fit"], Num, None] = Field(
-        default=None, description="Duration rule of every move: auto (capacity), fit (every motor limit), or seconds "
-                                  "(default: auto)")
+    time: Union[Literal["limits", "auto", "fit"], Num, None] = Field(
+        default=None, description="Duration rule of every move: limits (every limit of the profile: the motors and the "
+                                  "Cartesian capacity), auto (the capacity alone), fit (the joint and motor limits "
+                                  "alone), or seconds (default: limits)")
+    limit_use: Optional[float] = Field(
+        default=None, gt=0, le=1, description="Headroom: every timed limit planned to at most this fraction of its "
+                                              "rating, in (0, 1] (default: the profile's planning.limit_use)")
     shape: Literal["table", "optimal"] = Field(
         default="table", description="table: each move's shape from the conveyor table, held fixed while its duration "
         "is searched (fast); optimal: re-optimised at every trial duration, as plan --to-belt (about a second a pick)")
@@ -374,8 +378,8 @@ def resolve_relative(name: str, line_path: str | Path | None) -> str:
 
 
 def time_rule(robot: RobotSpec) -> str | float:
-    """The robot's duration rule: "auto", "fit" or seconds (default auto)."""
+    """The robot's duration rule: "limits", "auto", "fit" or seconds (default limits, as plan's)."""
     if robot.time is None:
-        return "auto"
+        return "limits"
     return robot.time if isinstance(robot.time, str) else float(robot.time)
 

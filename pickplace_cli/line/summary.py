@@ -172,6 +172,9 @@ def summarise(engine) -> LineSummary:
         rms = np.sqrt(integral / span) if span > 0 else np.zeros_like(integral)
         uses = [leg.use for leg in run.legs if leg.use is not None and len(leg.use)]
         peak = dict(zip(r.use_keys, np.max(uses, axis=0).tolist())) if uses else {}
+        if r.limit_use != 1.0:  # planned against use × rating: the use of the ratings themselves
+            peak = {k: (v * r.limit_use if not k[1].startswith(("position", "workcell", "singularity")) else v)
+                    for k, v in peak.items()}
         out.robots.append(RobotSummary(r.name, run.picks, busy, span, out.parts_per_minute, parts, peak, r.joint_names,
                                        rms, r.rated,
                                        len(run.legs), sum(1 for leg in run.legs if leg.exact)))

@@ -176,3 +176,31 @@ def test_optimal_shapes_meet_exactly_too():
                    PlanOptions(method="bspline-vel", method_params={"params": list(mv.basis.params)},
                                time=c.pick.duration, fit=False))
         assert np.abs(got.p[-1] - target).max() < 1e-6 and np.abs(got.v[-1] - v_belt).max() < 1e-6
+
+
+def test_default_rule_holds_every_limit_and_headroom_caps_the_use():
+    """The default duration rule of a line robot is plan's (limits: the motors and the Cartesian capacity); a robot
+    with limit_use 0.9 plans every timed limit to at most 90 % of its rating (its reported peak use, against the
+    ratings, stays ≤ 0.9 + the screening's 0.5 %), and its moves are never shorter than without headroom."""
+    from pickplace_cli.line.summary import summarise
+
+    text = LINE.replace("    window: [0.4, 0.8]\n", "    window: [0.4, 0.8]\n    limit_use: 0.9\n")
+    results = {}
+    for name, source in (("plain", LINE), ("headroom", text)):
+        line = parse_line(source, "l.yaml")
+        assert line.robots[0].time is None
+        eng = LineEngine(line, {r.name: PROFILE for r in line.robots})
+        for d in generate(line.parts.generate, line.belt.width):
+            eng.offer(d)
+        eng.finish()
+        run_r1 = next(r for r in eng.runs if r.robot.name == "r1")
+        assert run_r1.robot.rule == "limits"
+        picks = [leg for leg in run_r1.legs if leg.kind == "pick"]
+        results[name] = (run_r1, picks)
+    run_r1, picks = results["headroom"]
+    assert run_r1.robot.limit_use == 0.9 and picks
+    timed = [i for i, k in enumerate(run_r1.robot.use_keys)
+             if not k[1].startswith(("position", "workcell", "singularity"))]
+    for leg in picks:
+        # the use of the scaled limits (≤ 1 + 0.5 % screening), i.e. ≤ 0.9 of the ratings
+        assert max(leg.use[i] for i in timed) <= 1.005
