@@ -20,7 +20,7 @@ import numpy as np
 from ..model.errors import TableError
 from .bspline_optimum import _coarse_for, _optimise_chunk, ALGORITHM_VERSION, optimise_lambda, TableRow, TableSettings
 from .bspline_table import COLUMNS, Table
-from .executors import ignore_sigint
+from .executors import local_pool
 
 if TYPE_CHECKING:  # pragma: no cover
     from concurrent.futures import Executor
@@ -202,9 +202,7 @@ def run_build(
             from concurrent.futures import as_completed
 
             if executor is None:
-                from concurrent.futures import ProcessPoolExecutor
-
-                executor = pool = ProcessPoolExecutor(max_workers=workers, initializer=ignore_sigint)
+                executor = pool = local_pool(workers)
             futures = [executor.submit(_optimise_chunk, chunk, settings) for chunk in chunks]
             for fut in as_completed(futures):
                 rows = fut.result()

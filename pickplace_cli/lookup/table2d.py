@@ -29,7 +29,7 @@ import numpy as np
 
 from ..model.errors import TableError
 from .bspline_build import BuildReport, _drop_cut_line, step_grid
-from .executors import ignore_sigint
+from .executors import local_pool
 from .bspline_optimum import ALGORITHM_VERSION, TableRow, TableSettings, _optimise_chunk
 from .bspline_table import COLUMNS, read_numeric_table, read_table_file, write_meta
 
@@ -385,10 +385,10 @@ def run_build_2d(
     pool, futures = None, []
     try:
         if tasks and parallel:
-            from concurrent.futures import ProcessPoolExecutor, as_completed
+            from concurrent.futures import as_completed
 
             if executor is None:
-                executor = pool = ProcessPoolExecutor(max_workers=workers, initializer=ignore_sigint)
+                executor = pool = local_pool(workers)
             futures = [executor.submit(_optimise_chunk_2d, e, chunk, settings) for e, chunk in tasks]
             for fut in as_completed(futures):
                 finish(*fut.result())

@@ -397,13 +397,11 @@ def run_chunks_in_order(fn, args: list, workers: int, fail_fast: bool) -> Iterat
     """``fn(a)`` → list of RowResult for every ``a`` of ``args`` on a process pool of ``workers``; yields the
     results in the order of ``args`` (and within each list), stops after the first failing row when
     ``fail_fast`` and cancels the chunks not started yet."""
-    from concurrent.futures import ProcessPoolExecutor
-
-    from ..lookup.executors import ignore_sigint
+    from ..lookup.executors import local_pool
 
     # the workers leave Ctrl-C (SIGINT to the terminal's whole process group) to this process: it cancels the chunks
     # not started and waits for the running ones (one chunk: 25 plans, or 500 verdicts) without a traceback from each
-    with ProcessPoolExecutor(max_workers=workers, initializer=ignore_sigint) as pool:
+    with local_pool(workers) as pool:
         futures = [pool.submit(fn, a) for a in args]
         try:
             for fut in futures:

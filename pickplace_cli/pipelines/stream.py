@@ -59,11 +59,9 @@ def plan_stream(
 
     pool = None
     if workers > 1:
-        from concurrent.futures import ProcessPoolExecutor
+        from ..lookup.executors import local_pool
 
-        from ..lookup.executors import ignore_sigint
-
-        pool = ProcessPoolExecutor(max_workers=workers, initializer=ignore_sigint)  # Ctrl-C: this process's
+        pool = local_pool(workers)  # Ctrl-C: this process's
         # fork every worker now, before the reader thread exists: a worker forked while that thread is blocked in
         # a read of stdin inherits stdin's lock held, and hangs closing stdin at start-up (multiprocessing's
         # _close_stdin); with the fork method the first submit starts them all
