@@ -46,6 +46,9 @@ def check(
 
     if not (smoothing >= 0 and smoothing < float("inf")):
         raise TaskError(f"smoothing = {smoothing!r}: must be a finite number >= 0")
+    from .guards import refuse_overwriting_inputs
+
+    refuse_overwriting_inputs([("--report", report)], [("TRAJECTORY", trajectory)], profile)
     prof = load_profile(profile)
     checks = check_file(trajectory, prof, smoothing)
     several = len(checks) > 1 or checks[0].move is not None

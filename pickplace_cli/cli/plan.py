@@ -211,6 +211,9 @@ def plan(
     if a.output is None and not json_summary:
         a.output = "-"
     _check_output_paths(a.output, report)
+    from .guards import refuse_overwriting_inputs
+
+    refuse_overwriting_inputs([("-o", a.output), ("--report", report)], [("--batch", batch), ("--table", table)], profile)
     if batch is not None and to_belt is None and latency is not None:  # a belt schedule's default row latency
         _finite_latency(latency)
     elif to_belt is not None or latency is not None:

@@ -604,6 +604,9 @@ def parse_profile(text: str, source: str = "<profile>") -> Profile:
 def load_profile(name_or_path: str | Path | None = None) -> Profile:
     """Load and validate a profile from a path or a shipped profile name (default: the default profile)."""
     path = resolve_profile_path(name_or_path)
+    from .files import require_regular_file
+
+    require_regular_file(str(path), "profile", ProfileError)  # a named pipe with no writer would block forever
     try:
         with open(path, "rb") as fh:  # bounded: a huge file is refused without reading it all
             raw = fh.read(PROFILE_MAX_BYTES + 1)
