@@ -316,14 +316,14 @@ def choose_duration_for(
     if model_of is None:
         raise TaskError("time = fit: needs the robot model (plan through pickplace_cli.planner.plan)")
     t_fit, fit_binding, path = fit_duration_for(factory, model_of, dwell, start=t_auto)
-    final = getattr(factory, "final", None)
-    if final is not None and not final(t_fit)[1]:
-        t_fit, fit_binding, path = fit_duration_for(factory, model_of, dwell, start=t_auto)
-    if t_fit is None:
+    if t_fit is None:  # (before the final check, which needs a duration)
         raise TaskError(
             "time = fit: the profile sets no velocity, acceleration, jerk or motor limit that depends on the "
             "duration; add joint limits or drives, or use --time auto / seconds"
         )
+    final = getattr(factory, "final", None)
+    if final is not None and not final(t_fit)[1]:
+        t_fit, fit_binding, path = fit_duration_for(factory, model_of, dwell, start=t_auto)
     # tv, ta, tj: the capacity bounds of the path planned for t_auto (so Duration.t_auto is the auto time)
     return Duration(t_fit, "fit", tv, ta, tj, fit_binding, t_fit), path
 
