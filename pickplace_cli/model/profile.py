@@ -335,19 +335,18 @@ def _yaml_with_lines(text: str, source: str) -> tuple[Any, dict[tuple, int]]:
     if len(text) > PROFILE_MAX_BYTES:
         raise ProfileError(f"{source}: {len(text)} characters; a profile may have at most {PROFILE_MAX_BYTES} "
                            "(1 MiB): is this the right file?")
-    loader = _safe_loader(text, source)
+    loader = None
     try:
+        loader = _safe_loader(text, source)  # (its reader refuses control characters at once: inside the try)
         node = loader.get_single_node()
         if node is None:
             return None, {}
         data = loader.construct_document(node)
     except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f"{source}:{mark.line + 1}" if mark else source
-        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
-        raise ProfileError(f"{where}: not valid YAML: {problem}") from None
+        raise ProfileError(_yaml_problem(exc, text, source)) from None
     finally:
-        loader.dispose()
+        if loader is not None:
+            loader.dispose()
     lines: dict[tuple, int] = {}
 
     def walk(n: Any, path: tuple) -> None:
@@ -368,6 +367,24 @@ def _yaml_with_lines(text: str, source: str) -> tuple[Any, dict[tuple, int]]:
 
     walk(node, ())
     return data, lines
+
+
+def _yaml_problem(exc, text: str, source: str) -> str:
+    """One line for a YAML error: ``FILE:LINE: not valid YAML: PROBLEM``; a character YAML does not allow (a control
+    character such as VT, FF or BEL, U+FFFE) is named by its code and line."""
+    mark = getattr(exc, "problem_mark", None)
+    line = mark.line + 1 if mark else None
+    position = getattr(exc, "position", None)  # a ReaderError: the character's offset in the text
+    if line is None and isinstance(position, int):
+        line = text.count("\n", 0, position) + 1
+    where = f"{source}:{line}" if line else source
+    character = getattr(exc, "character", None)
+    if isinstance(character, (str, int)) and position is not None:
+        code = ord(character) if isinstance(character, str) else character
+        return (f"{where}: not valid YAML: the character U+{code:04X} is not allowed in YAML text (a control character "
+                "or a non-character: delete it)")
+    problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+    return f"{where}: not valid YAML: {problem}"
 
 
 _ABSENT = object()  # a key or tuple element the document does not have
