@@ -209,12 +209,44 @@ def _handle_errors(fn: Callable) -> Callable:
             except (OSError, ValueError, AttributeError):
                 sys.stdout = None  # type: ignore[assignment]  # a broken stdout: not flushed again at exit
             raise typer.Exit(1) from None
+        except MemoryError:
+            from ..export import remove_pending
+
+            remove_pending()
+            _fail_json(1, "out of memory; no output file was changed (a lower --rate or a shorter --time needs less)")
+        except Exception as exc:  # noqa: BLE001 - never a traceback: one line naming what failed, exit 1
+            if isinstance(exc, _CLICK_EXCEPTIONS):  # typer's exits and usage errors: click reports them
+                raise
+            from ..export import remove_pending
+
+            remove_pending()
+            detail = " ".join(str(exc).split())[:300]
+            _fail_json(1, f"internal error ({type(exc).__name__}: {detail}); no output file was changed")
         finally:
             warnings.showwarning = shown
             if previous is not None:
                 signal.signal(signal.SIGTERM, previous)
 
     return wrapper
+
+
+#: exceptions typer and click raise through a command on purpose (exit codes, usage errors, an abort)
+_CLICK_EXCEPTIONS = tuple({c for e in (typer.Exit, typer.Abort, typer.BadParameter) for c in e.__mro__
+                           if c.__name__ in ("Exit", "Abort", "ClickException")})
+
+
+def _fail_json(code: int, message: str) -> None:
+    """One error line (and the JSON document of ``--json``), then exit ``code``."""
+    _err(message)
+    if _JSON_ERRORS[0]:
+        import json
+
+        try:
+            sys.stdout.write(json.dumps({"exit_code": code, "error": message}) + "\n")
+            sys.stdout.flush()
+        except (OSError, ValueError, AttributeError):
+            pass
+    raise typer.Exit(code)
 
 
 #: the exit code a command has decided so far (a move's verdict, a batch's rows): when stdout's reader goes away

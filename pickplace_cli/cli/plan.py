@@ -205,7 +205,7 @@ def plan(
 
     a = SimpleNamespace(**{k: v for k, v in locals().items() if k not in ("SimpleNamespace", "load_profile",
                                                                          "PlanOptions")})
-    _JSON_ERRORS[0] = json_summary and batch is None  # a batch prints its own line per row
+    _JSON_ERRORS[0] = json_summary  # (a batch: its rows have their lines; an error that ends it gets one more)
     _check_plan_values(a)
     _check_plan_usage(a)
     if a.output is None and not json_summary:
