@@ -22,3 +22,31 @@ def refuse_overwriting_inputs(outputs: Iterable[tuple[str, Optional[str]]],
         except PickplaceError:
             pass
     refuse_inputs_as_outputs(outputs, inputs)
+
+
+#: an output file's suffix → the trajectory format it names
+SUFFIX_FORMATS = {".csv": "csv", ".tsv": "csv", ".txt": "csv", ".json": "json", ".mcap": "mcap"}
+
+
+def output_format(ctx, fmt, output: Optional[str], option: str = "fmt"):
+    """The trajectory format: ``-f`` when given, else the one ``-o FILE``'s suffix names (``traj.mcap`` → mcap,
+    ``.json`` → json, ``.csv``/``.tsv``/``.txt`` → csv; another suffix or none: csv). Usage errors (exit 2): a ``-f``
+    that contradicts the suffix (``-f mcap -o traj.csv``), and binary MCAP to standard output that is a terminal."""
+    import os
+    import sys
+
+    from .app import OutputFormat, _usage
+
+    source = ctx.get_parameter_source(option)
+    given = source is not None and source.name != "DEFAULT"
+    named = None
+    if output not in (None, "-") and not str(output).startswith("/dev/"):
+        named = SUFFIX_FORMATS.get(os.path.splitext(str(output))[1].lower())
+    if named is not None and given and fmt.value != named:
+        _usage(f"-f {fmt.value} -o {output}: the file's suffix says {named}; give -o with a .{fmt.value} suffix "
+               f"or -f {named}")
+    if named is not None and not given:
+        fmt = OutputFormat(named)
+    if fmt == OutputFormat.mcap and output in (None, "-") and sys.stdout is not None and sys.stdout.isatty():
+        _usage("-f mcap: MCAP is binary; not written to a terminal: give -o FILE.mcap or redirect standard output")
+    return fmt

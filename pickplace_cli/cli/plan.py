@@ -146,7 +146,10 @@ def plan(
     round_trip: bool = typer.Option(
         False, "--round-trip", help="Write there, dwell, back, dwell (the profile's dwell in s) as one trajectory."
     ),
-    fmt: OutputFormat = typer.Option(OutputFormat.csv, "--format", "-f", help="Output format."),
+    fmt: OutputFormat = typer.Option(
+        OutputFormat.csv, "--format", "-f", help="Output format. Without -f: the one -o FILE's suffix names (.csv, "
+        ".tsv, .txt: csv; .json; .mcap), else csv. A -f that contradicts the suffix is refused, and so is MCAP to a "
+        "terminal."),
     csv_dialect: CsvDialectName = typer.Option(
         CsvDialectName.default, "--csv-dialect",
         help="CSV flavour: default (',' LF, header), twincat (';' CRLF, header), tsv (tab, no header).",
@@ -206,6 +209,9 @@ def plan(
     a = SimpleNamespace(**{k: v for k, v in locals().items() if k not in ("SimpleNamespace", "load_profile",
                                                                          "PlanOptions")})
     _JSON_ERRORS[0] = json_summary  # (a batch: its rows have their lines; an error that ends it gets one more)
+    from .guards import output_format
+
+    fmt = a.fmt = output_format(ctx, fmt, output if output is not None or json_summary else "-")
     _check_plan_values(a)
     _check_plan_usage(a)
     if a.output is None and not json_summary:
