@@ -95,7 +95,8 @@ class OptimizeWhat(str, Enum):
 
 
 def _err(message: str) -> None:
-    sys.stderr.write(f"pickplace: error: {message}\n")
+    """``pickplace: error: MESSAGE`` on stderr; a message of several problems (a profile's): one line each."""
+    sys.stderr.write("".join(f"pickplace: error: {line}\n" for line in message.splitlines() or [""]))
 
 
 def _one_warning(state: dict):

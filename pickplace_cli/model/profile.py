@@ -547,7 +547,13 @@ def _describe(err: dict, data: Any, lines: dict[tuple, int], source: str, errors
     kind = err["type"]
     if kind == "extra_forbidden":
         known = f"; fields here: {', '.join(holder.model_fields)}" if holder is not None else ""
-        return (f"{where}: unknown key {field!r}: not a field of this section (check spelling; keys are "
+        guess = ""
+        if holder is not None and real:
+            import difflib
+
+            close = difflib.get_close_matches(str(real[-1]), list(holder.model_fields), n=1, cutoff=0.6)
+            guess = f": did you mean {close[0]!r}?" if close else ""
+        return (f"{where}: unknown key {field!r}{guess or ': not a field of this section'} (check spelling; keys are "
                 f"case-sensitive{known})")
     if kind == "missing" and real and isinstance(real[-1], int):
         # an element of a fixed-length list is absent: the list is too short
@@ -613,9 +619,10 @@ def parse_profile(text: str, source: str = "<profile>") -> Profile:
         return Profile.model_validate(data)
     except ValidationError as exc:
         errors = _prune_union_branches(exc.errors(), data)
-        first = _describe(errors[0], data, lines, source, errors)
-        more = f" (and {len(errors) - 1} more problem{'s' if len(errors) > 2 else ''})" if len(errors) > 1 else ""
-        raise ProfileError(first + more) from None
+        # every problem, one line each: unknown keys first (a misspelt key also makes its field "missing")
+        errors.sort(key=lambda e: 0 if e["type"] == "extra_forbidden" else 1)
+        described = list(dict.fromkeys(_describe(e, data, lines, source, errors) for e in errors))
+        raise ProfileError("\n".join(described)) from None
 
 
 def load_profile(name_or_path: str | Path | None = None) -> Profile:
