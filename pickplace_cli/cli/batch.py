@@ -48,10 +48,10 @@ def _plan_batch(source, prof, options, height, eta, fail_fast, writer, output, r
     sink = _RowSink(writer, output, report, json_summary, report_only)
     progress = bar = None
     if not quiet and len(rows) + len(bad) >= 50 and sys.stderr.isatty():
-        from rich.console import Console
+        from .render import console
         from rich.progress import Progress
 
-        progress = Progress(console=Console(stderr=True), transient=True)
+        progress = Progress(console=console(stderr=True), transient=True)
         progress.start()
         bar = progress.add_task(f"planning {len(rows) + len(bad)} moves", total=len(rows))
     try:

@@ -251,11 +251,11 @@ def _build_vel_table(eta: float, workers: int, output: str, quiet: bool) -> None
     if quiet:
         table = build_vel_table(grid, workers=n_workers)
     else:
-        from rich.console import Console
+        from .render import console
         from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
         with Progress(TextColumn("{task.description}"), BarColumn(), TextColumn("{task.completed}/{task.total}"),
-                      TimeElapsedColumn(), TimeRemainingColumn(), console=Console(stderr=True)) as progress:
+                      TimeElapsedColumn(), TimeRemainingColumn(), console=console(stderr=True)) as progress:
             bar = progress.add_task("solving Yang 2022 optima (one node per symmetry orbit)", total=None)
             table = build_vel_table(grid, workers=n_workers,
                                     progress=lambda done, total: progress.update(bar, completed=done, total=total))
@@ -304,14 +304,14 @@ def _engine(stack: contextlib.ExitStack, scheduler, workers: int, quiet: bool, t
         executor, n_workers = stack.enter_context(dask_executor(scheduler))
     if quiet:
         return executor, n_workers, None
-    from rich.console import Console
+    from .render import console
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
     columns = [TextColumn("[progress.description]{task.description}"), BarColumn(),
                TextColumn("{task.completed}/{task.total} " + unit), TimeElapsedColumn()]
     if not eta:
         columns.append(TimeRemainingColumn())
-    progress = stack.enter_context(Progress(*columns, console=Console(stderr=True), transient=False))
+    progress = stack.enter_context(Progress(*columns, console=console(stderr=True), transient=False))
     engine = f"Dask {scheduler}" if scheduler else f"{n_workers} process{'es' if n_workers > 1 else ''}"
     bar = progress.add_task(f"optimising k1, k2 ({engine})", total=total)
 

@@ -36,7 +36,7 @@ def profile_show(
     z: Optional[float] = typer.Option(None, "--z", help="Working height in m for the workspace extent. [default: middle of the workcell box, or the robot's home height]"),
 ) -> None:
     """Show a profile with its derived values: lumped masses, workspace extent at the working height, limits."""
-    from rich.console import Console
+    from .render import console
     from rich.markup import escape
 
     from ..model.profile import load_profile, resolve_profile_path
@@ -46,7 +46,7 @@ def profile_show(
     prof = load_profile(profile)
     robot = build_robot(prof.robot)
     specs = prof.robot.joint_specs()
-    out = Console(highlight=False, soft_wrap=True)
+    out = console(highlight=False, soft_wrap=True)
     out.print(f"[bold]{escape(prof.name)}[/] ({prof.robot.kind}), from {escape(str(resolve_profile_path(profile)))}")
     for line in model_lines(prof.robot):  # the numbers the model uses, as read (the description is free text)
         out.print(escape(line))
