@@ -108,6 +108,9 @@ def _one_warning(state: dict):
     def show(message, category, filename, lineno, file=None, line=None):  # noqa: ARG001 - the signature
         import os
 
+        if category.__name__ == "UnitWarning":  # a value in a likely wrong unit: every one, in its own words
+            sys.stderr.write(f"pickplace: warning: {message}\n")
+            return
         state["n"] = state.get("n", 0) + 1
         if state["n"] == 1:
             sys.stderr.write(f"pickplace: warning: {category.__name__}: {message} "

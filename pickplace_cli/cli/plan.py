@@ -225,6 +225,9 @@ def plan(
     elif to_belt is not None or latency is not None:
         a.method = _belt_method(ctx, method, to_belt, latency, v_to, batch, round_trip, fit_ws, optimize)
     prof = load_profile(profile)
+    from .units import check_option_units, warn_few_samples
+
+    check_option_units(a, prof)  # --from/--to/--height in mm refused, --time in ms warned (cli/units.py)
     params = _method_params(a)
     writer = _writer(fmt, csv_dialect, mcap_flavor, compression, _columns(columns, prof))
     _check_shape_usage(a)
@@ -253,6 +256,7 @@ def plan(
         from ..model.task import Task
 
         legs.append(_run_plan(Task(task.p_to, task.p_from, task.height, task.eta), prof, options))
+    warn_few_samples(legs, rate)
     code, cycle = _render_legs(a, prof, legs, rendezvous, track)
     note_exit(0 if report_only else code)  # the verdict, should stdout's reader go away before the end
     _write_plan_outputs(a, prof, writer, legs, track, code)

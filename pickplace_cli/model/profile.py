@@ -616,13 +616,17 @@ def parse_profile(text: str, source: str = "<profile>") -> Profile:
         raise ProfileError(f"{source}: a profile must be a YAML mapping of keys (name, robot, capacity, planning)")
     _reject_flags(data, (), data, lines, source)
     try:
-        return Profile.model_validate(data)
+        profile = Profile.model_validate(data)
     except ValidationError as exc:
         errors = _prune_union_branches(exc.errors(), data)
         # every problem, one line each: unknown keys first (a misspelt key also makes its field "missing")
         errors.sort(key=lambda e: 0 if e["type"] == "extra_forbidden" else 1)
         described = list(dict.fromkeys(_describe(e, data, lines, source, errors) for e in errors))
         raise ProfileError("\n".join(described)) from None
+    from .plausible import check_units
+
+    check_units(profile, source)  # numbers in rpm, degrees, millimetres: refused or warned (model/plausible.py)
+    return profile
 
 
 def load_profile(name_or_path: str | Path | None = None) -> Profile:
