@@ -10,7 +10,6 @@ import json
 import math
 import os
 import pty
-import signal
 import subprocess
 import sys
 from pathlib import Path
