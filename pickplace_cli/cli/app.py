@@ -184,13 +184,8 @@ def _handle_errors(fn: Callable) -> Callable:
         warnings.showwarning = _one_warning({})
         try:
             return fn(*args, **kwargs)
-        except PickplaceError as exc:
-            _err(str(exc))
-            if _JSON_ERRORS[0]:  # `plan --json`: stdout still carries one JSON document, like a batch row's
-                import json
-
-                sys.stdout.write(json.dumps({"exit_code": exc.exit_code, "error": str(exc)}) + "\n")
-            raise typer.Exit(exc.exit_code) from None
+        except PickplaceError as exc:  # (`plan --json`: stdout still carries one JSON document, like a batch row's)
+            _fail_json(exc.exit_code, str(exc))
         except KeyboardInterrupt:
             _err("interrupted; no output file was changed")
             raise typer.Exit(130) from None
@@ -248,9 +243,9 @@ def _fail_json(code: int, message: str) -> None:
         try:
             sys.stdout.write(json.dumps({"exit_code": code, "error": message}) + "\n")
             sys.stdout.flush()
-        except (OSError, ValueError, AttributeError):
-            pass
-    raise typer.Exit(code)
+        except (OSError, ValueError, AttributeError):  # stdout itself failed (> /dev/full): the line on stderr says so
+            sys.stdout = None  # type: ignore[assignment]  # (not flushed again at exit)
+    raise typer.Exit(code) from None
 
 
 #: the exit code a command has decided so far (a move's verdict, a batch's rows): when stdout's reader goes away
