@@ -105,7 +105,7 @@ def _si_and_converted(tmp_path: Path, profile: str, units: tuple[str, ...], fact
 @pytest.mark.parametrize("profile, units, factors, move", [
     ("delta-su2018", ("ms", "deg", "deg", "deg"), (1e3, 180 / math.pi, 180 / math.pi, 180 / math.pi), ADEPT),
     ("scara-600", ("ms", "deg", "deg", "mm"), (1e3, 180 / math.pi, 180 / math.pi, 1e3),
-     ["--from", "0.3,-0.2,-0.1", "--to", "0.3,0.2,-0.1"]),
+     ["--from", "0.3,-0.2,-0.1", "--to", "0.3,0.2,-0.1", "--time", "0.8"]),
 ])
 def test_check_honours_the_headers_units(tmp_path, profile, units, factors, move):
     """`t[ms],q1[deg],…` (and a SCARA's q3[mm]) was read as s and rad; it is converted: every limit row's peak agrees
@@ -140,7 +140,7 @@ sys.argv = ["pickplace", "--version"]
 real = builtins.__import__
 sent = []
 def hook(name, *args, **kwargs):
-    if name == {module!r} and not sent:
+    if name == {module!r} and not sent:  # (the CLI's own modules import each other relatively: "app" is cli/app.py)
         sent.append(1)
         os.kill(os.getpid(), signal.{sig})
     return real(name, *args, **kwargs)
@@ -150,7 +150,7 @@ entry.main()
 
 
 @pytest.mark.parametrize("sig, code, line", [("SIGINT", 130, "interrupted"), ("SIGTERM", 143, "terminated (SIGTERM)")])
-@pytest.mark.parametrize("module", ["typer", "pickplace_cli.cli.app"])
+@pytest.mark.parametrize("module", ["typer", "app"])
 def test_a_signal_while_the_cli_is_imported_is_one_line(sig, code, line, module):
     """The signal is sent at the moment the start-up imports ``module`` (typer's 0.1–0.2 s; deterministic: no timing):
     one line, exit 130 or 143 (it was a KeyboardInterrupt traceback, or rc −15)."""
