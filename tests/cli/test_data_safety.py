@@ -231,9 +231,9 @@ def test_compare_on_the_gantry_with_fit_answers_every_method():
     assert r.stderr.count("pickplace: method ") == 6  # every method named with its error
 
 
-def test_an_unforeseen_failure_of_a_row_is_that_row_alone(monkeypatch):
+def test_an_unforeseen_failure_of_a_row_is_that_row_alone(monkeypatch, tmp_path):
     """Whatever a row raises (here a TypeError injected into the planner for one row), the batch answers it as that
-    row's error and plans the others."""
+    row's error and plans the others (--report: every row through plan(), not the verdict engine)."""
     from pickplace_cli import planner
     from pickplace_cli.pipelines import batch as B
 
@@ -246,7 +246,7 @@ def test_an_unforeseen_failure_of_a_row_is_that_row_alone(monkeypatch):
 
     monkeypatch.setattr(planner, "plan", flaky)
     text = HEADER + ROW + "-0.1525,0,-0.8,0.1525,0.1,-0.8\n" + ROW
-    r = run("plan", "--batch", "-", "--json", "-q", "-j", "1", input=text)
+    r = run("plan", "--batch", "-", "--json", "-q", "-j", "1", "--report", str(tmp_path / "r.json"), input=text)
     docs = [json.loads(x) for x in r.stdout.splitlines()]
     assert [d["exit_code"] for d in docs] == [0, 1, 0]
     assert "internal error (TypeError: injected)" in docs[1]["error"]
