@@ -2,14 +2,14 @@
 
     python bench/bench_threads.py                 # 5 repeats in process, 3 batches; idle, then with 10 busy loops
     python bench/bench_threads.py --load 0        # idle only
-    python bench/bench_threads.py --repeats 3 --busy 10
+    python bench/bench_threads.py --repeats 3 --batches 1 --rows 8 --busy 10
 
 Cases, each measured as a median:
 * ``optimal``: ``plan(--time optimal)`` of the Adept cycle in process (the first call, which loads the modules and
   the table, is not counted);
 * ``shape``: ``plan(--time fit --optimize shape)`` of the Adept cycle in process;
-* ``batch -j 2``: wall time of ``pickplace plan --batch ROWS -j 2 --json`` of 16 random Delta moves with
-  ``time = optimal`` (a CLI run: start-up included).
+* ``batch -j 2``: wall time of ``pickplace plan --batch ROWS -j 2 --json`` of ``--rows`` (default 8) random Delta
+  moves with ``time = optimal`` (a CLI run: start-up included).
 
 "default" runs with ``OPENBLAS_NUM_THREADS`` set to the number of cores (what OpenBLAS does when nothing pins it, as
 before this release), "pinned" with ``OPENBLAS_NUM_THREADS=1`` (what the CLI now sets and the library's
@@ -60,7 +60,7 @@ def _env(threads: int) -> dict:
     return env
 
 
-def _rows(path: Path, n: int = 16, seed: int = 7) -> None:
+def _rows(path: Path, n: int = 8, seed: int = 7) -> None:
     import random
 
     rng = random.Random(seed)
@@ -103,11 +103,11 @@ def phase(label: str, busy: int, repeats: int, batches: int, rows: Path) -> dict
         for p in procs:
             p.kill()
             p.wait()
-    print(f"--- {label}: {busy} busy loops, load average {load:.1f} (1 min) ---")
+    print(f"--- {label}: {busy} busy loops, load average {load:.1f} (1 min) ---", flush=True)
     for case in ("optimal", "shape", "batch -j 2"):
         d, p = res["default"][case], res["pinned"][case]
         print(f"{case:12s} default ({cores} threads) {d * 1e3:8.0f} ms   pinned (1 thread) {p * 1e3:8.0f} ms   "
-              f"ratio {d / p:5.2f}")
+              f"ratio {d / p:5.2f}", flush=True)
     return res
 
 
@@ -117,10 +117,11 @@ def main() -> None:
     ap.add_argument("--batches", type=int, default=3, help="CLI batch runs per configuration (median)")
     ap.add_argument("--busy", type=int, default=10, help="busy-loop processes of the loaded phase")
     ap.add_argument("--load", type=int, choices=(0, 1), default=1, help="also run the loaded phase (1) or not (0)")
+    ap.add_argument("--rows", type=int, default=8, help="optimal rows of the -j 2 batch")
     args = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         rows = Path(tmp) / "optimal_rows.csv"
-        _rows(rows)
+        _rows(rows, args.rows)
         results = {"idle": phase("idle", 0, args.repeats, args.batches, rows)}
         if args.load:
             results["loaded"] = phase("loaded", args.busy, args.repeats, args.batches, rows)
