@@ -23,11 +23,11 @@ from pathlib import Path
 import pytest
 
 SEED = 33
-TRIALS = 4
+TRIALS = 6
 CAP = 120.0
 LEFT_AFTER_S = 5.0
 OLD = "the old file\n"
-ROWS = 150  # > 25 rows: -j 2 runs the rows on two worker processes
+ROWS = 400  # > 25 rows: -j 2 runs the rows on two worker processes
 BATCH_ARGS = ["-q", "-j", "2", "--rate", "200"]
 TABLE_GRID = ["--lambda-min", "1", "--lambda-max", "8", "--lambda-step", "0.25", "-q", "-j", "2"]
 
@@ -65,15 +65,22 @@ def _clean(args: list[str], out: Path) -> bytes:
     return out.read_bytes()
 
 
-def _kill_at_random(rng: random.Random, args: list[str], out: Path, cwd: Path) -> tuple[str, int]:
-    """Start the command (its own process group), signal it after a random delay, wait for it to end and for every
-    process of its group to be gone within LEFT_AFTER_S s; → (signal name, exit status)."""
+def _kill_at_random(rng: random.Random, args: list[str], out: Path, cwd: Path, working) -> tuple[str, int]:
+    """Start the command (its own process group) and signal it at a random moment: half the trials a random delay
+    after the start (start-up included), half a random delay after ``working()`` says it is writing (its temporary
+    output or its checkpoint exists: a moment inside the work, whatever the machine's speed). Wait for it to end and
+    for every process of its group to be gone within LEFT_AFTER_S s; → (signal name, exit status)."""
     sig = rng.choice([signal.SIGKILL, signal.SIGTERM])
     to_group = sig == signal.SIGTERM and rng.random() < 0.5  # `kill -- -PGID`, `timeout`: the workers get it too
-    delay = rng.uniform(0.0, 3.0)
+    in_work = rng.random() < 0.5
+    delay = rng.uniform(0.0, 0.5 if in_work else 2.0)
     proc = subprocess.Popen(_cli(*args, "-o", str(out)), stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                             text=True, cwd=cwd, start_new_session=True)
     try:
+        if in_work:
+            deadline = time.monotonic() + CAP
+            while not working() and proc.poll() is None and time.monotonic() < deadline:
+                time.sleep(0.005)
         try:
             proc.wait(delay)  # the fault's moment (the command may finish first: then nothing is killed)
         except subprocess.TimeoutExpired:
@@ -82,6 +89,8 @@ def _kill_at_random(rng: random.Random, args: list[str], out: Path, cwd: Path) -
             else:
                 proc.send_signal(sig)
         code = proc.wait(CAP)
+        print(f"fault: {args[0]} {sig.name}{' (group)' if to_group else ''} {delay:.2f} s after "
+              f"{'the work began' if in_work else 'the start'}: exit {code}")
         deadline = time.monotonic() + LEFT_AFTER_S
         while _group(proc.pid):
             assert time.monotonic() < deadline, f"{sig.name}: processes {_group(proc.pid)} outlived the run"
@@ -106,7 +115,8 @@ def test_plan_batch_killed_at_random_moments(tmp_path):
     for trial in range(TRIALS):
         out = tmp_path / f"out{trial}.csv"
         out.write_text(OLD)
-        sig, code = _kill_at_random(rng, ["plan", "--batch", str(src), *BATCH_ARGS], out, tmp_path)
+        sig, code = _kill_at_random(rng, ["plan", "--batch", str(src), *BATCH_ARGS], out, tmp_path,
+                                    lambda: bool(list(tmp_path.glob(f".{out.name}.*.tmp"))))
         data = out.read_bytes()
         assert data in (OLD.encode(), clean), f"trial {trial} ({sig}, exit {code}): a partial destination"
         if code == 0:
@@ -121,7 +131,9 @@ def test_build_table_killed_at_random_moments_then_resumed(tmp_path):
     for trial in range(TRIALS):
         out = tmp_path / f"t{trial}.csv"
         out.write_text(OLD)
-        sig, code = _kill_at_random(rng, ["build-table", *TABLE_GRID], out, tmp_path)
+        ckpt = tmp_path / f"{out.name}.partial.jsonl"
+        sig, code = _kill_at_random(rng, ["build-table", *TABLE_GRID], out, tmp_path,
+                                    lambda: ckpt.exists() and len(ckpt.read_text().splitlines()) > 1)
         data = out.read_bytes()
         assert data in (OLD.encode(), clean), f"trial {trial} ({sig}, exit {code}): a partial table"
         r = subprocess.run(_cli("build-table", *TABLE_GRID, "--resume", "-o", str(out)), capture_output=True,
