@@ -7,7 +7,8 @@ the same rows streamed, hostile files (profiles, batches, checked trajectories),
 Every run of the CLI is a subprocess with a time cap. Counted, and printed at the end (and written to
 ``bench/results/fuzz.json``):
 
-* ``rows``: batch rows sent (file and stream runs);
+* ``rows``: batch rows sent to file and stream runs (each row is owed an answer); ``rows_signalled``: rows of the
+  batches stopped by a signal;
 * ``tracebacks``: runs whose stderr has a Python traceback;
 * ``hangs``: runs that did not end within their cap (killed);
 * ``rows_without_answer``: rows of a ``--json`` batch with no JSON line of their own (by row number) when the
@@ -51,7 +52,7 @@ CAP_S = 240.0
 
 class Tally:
     def __init__(self) -> None:
-        self.counts = {k: 0 for k in ("runs", "rows", "tracebacks", "hangs", "rows_without_answer",
+        self.counts = {k: 0 for k in ("runs", "rows", "rows_signalled", "tracebacks", "hangs", "rows_without_answer",
                                       "wrong_exit_codes", "left_running", "multi_line_errors")}
         self.examples: list[dict] = []
 
@@ -336,7 +337,7 @@ def signal_runs(rng: random.Random, tally: Tally, tmp: Path) -> None:
     (tmp / "s_out.csv").write_text("old\n")
     res = run(tally, args, stdin=text if streamed else None,
               signal_after=(rng.uniform(0.0, 3.0), sig, rng.random() < 0.5), cwd=tmp)
-    tally.counts["rows"] += n
+    tally.counts["rows_signalled"] += n
     if res is None:
         return
     code, _, err = res
