@@ -14,7 +14,7 @@ Every run of the CLI is a subprocess with a time cap. Counted, and printed at th
 * ``rows_without_answer``: rows of a ``--json`` batch with no JSON line of their own (by row number) when the
   batch itself did not fail as a whole;
 * ``wrong_exit_codes``: an exit status outside the documented set (0, 1, 2, 3, 4, 130, 143), a batch whose status
-  is not the highest of its rows' codes, a row code outside (0, 1, 3, 4), a hostile file that exits 0 or 3/4 where it
+  is not the highest of its rows' codes, a row code outside (0, 1, 2, 3, 4), a hostile file that exits 0 or 3/4 where it
   must be refused, a streamed batch whose row codes differ from the same file's;
 * ``left_running``: processes of a run's group still alive 5 s after its main process ended;
 * ``multi_line_errors``: a refused hostile file with more than one error line (a profile may list several problems:
@@ -46,7 +46,9 @@ REGIONS = {
     "gantry": ((-0.9, -0.9, -0.9), (0.9, 0.9, 0.1)),
 }
 DOCUMENTED = {0, 1, 2, 3, 4, 130, 143}
-ROW_CODES = {0, 1, 3, 4}
+#: a row's codes: those of the same single plan (2: an option the row's method cannot take, e.g. time = optimal with
+#: bspline-vel, as `plan -m bspline-vel -t optimal` exits 2)
+ROW_CODES = {0, 1, 2, 3, 4}
 CAP_S = 240.0
 
 
@@ -58,6 +60,7 @@ class Tally:
 
     def bad(self, kind: str, cmd: list[str], detail: str, n: int = 1) -> None:
         self.counts[kind] += n
+        print(f"PROBLEM {kind}: {' '.join(cmd)}\n    {detail[-600:]}", file=sys.stderr, flush=True)
         if sum(1 for e in self.examples if e["kind"] == kind) < 10:
             self.examples.append({"kind": kind, "cmd": " ".join(cmd), "detail": detail[:800]})
 

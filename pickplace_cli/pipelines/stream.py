@@ -67,6 +67,7 @@ def plan_stream(
         # _close_stdin); with the fork method the first submit starts them all
         pool.submit(int).result()
     threading.Thread(target=reader, daemon=True, name="batch-reader").start()
+    interrupted = False
     try:
         finished = False
         while not finished:
@@ -89,9 +90,14 @@ def plan_stream(
                     return
             if error is not None:
                 raise error
+    except KeyboardInterrupt:
+        interrupted = True
+        raise
     finally:
         if pool is not None:
-            pool.shutdown(wait=False, cancel_futures=True)
+            # waited for (the rows in flight; the rest cancelled) unless Ctrl-C: a pool left to the interpreter's
+            # exit races its manager thread closing the wake-up pipe (Python < 3.12: an OSError traceback at exit)
+            pool.shutdown(wait=not interrupted, cancel_futures=True)
 
 
 def _answer(batch: list, profile, options, height, eta, source, pool, workers, csv_dialect, format_failed,
