@@ -37,6 +37,9 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from tests.procs import group  # noqa: E402 - the process table, as the tests read it
 PROFILES = ("delta-su2018", "scara-600", "gantry")
 METHODS = ("bspline", "ph", "superposition", "lame", "piecewise-poly", "bspline-vel")
 #: the region random points are drawn from, per profile [m]: (min corner, max corner)
@@ -69,20 +72,6 @@ def _cli(*args: str) -> list[str]:
     return [sys.executable, "-m", "pickplace_cli", *args]
 
 
-def _group_alive(pgid: int) -> list[int]:
-    out = []
-    for entry in os.listdir("/proc"):
-        if entry.isdigit():
-            try:
-                with open(f"/proc/{entry}/stat") as fh:
-                    fields = fh.read().rsplit(")", 1)[1].split()
-            except OSError:
-                continue
-            if int(fields[2]) == pgid and fields[0] != "Z":
-                out.append(int(entry))
-    return out
-
-
 def run(tally: Tally, args: list[str], stdin: str | None = None, cap: float = CAP_S, signal_after=None,
         cwd: Path | None = None):
     """Run the CLI; count tracebacks, hangs, undocumented exit codes and processes left running. → (code, out, err)
@@ -93,14 +82,14 @@ def run(tally: Tally, args: list[str], stdin: str | None = None, cap: float = CA
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True, cwd=cwd)
     try:
         if signal_after is not None:
-            delay, sig, group = signal_after
+            delay, sig, to_group = signal_after
             if stdin is not None:
                 proc.stdin.write(stdin.encode("utf-8", "surrogateescape"))
                 proc.stdin.flush()
             try:
                 proc.wait(delay)
             except subprocess.TimeoutExpired:
-                (os.killpg(proc.pid, sig) if group else proc.send_signal(sig))
+                (os.killpg(proc.pid, sig) if to_group else proc.send_signal(sig))
             out, err = proc.communicate(None, timeout=cap)
         else:
             out, err = proc.communicate(stdin.encode("utf-8", "surrogateescape") if stdin is not None else None,
@@ -113,9 +102,9 @@ def run(tally: Tally, args: list[str], stdin: str | None = None, cap: float = CA
     except BrokenPipeError:
         out, err = proc.communicate(timeout=cap)
     deadline = time.monotonic() + 5.0
-    while _group_alive(proc.pid):
+    while group(proc.pid):
         if time.monotonic() > deadline:
-            tally.bad("left_running", cmd, f"processes {_group_alive(proc.pid)}")
+            tally.bad("left_running", cmd, f"processes {group(proc.pid)}")
             os.killpg(proc.pid, signal.SIGKILL)
             break
         time.sleep(0.05)

@@ -19,7 +19,7 @@ import numpy as np
 from ..model.errors import TableError
 from .bspline_optimum import _coarse_for, _optimise_chunk, ALGORITHM_VERSION, optimise_lambda, TableRow, TableSettings
 from .bspline_table import COLUMNS, Table
-from .checkpoint import _drop_cut_line, CheckpointWriter, row_of_other_run  # noqa: F401 - _drop_cut_line: tests
+from .checkpoint import CheckpointWriter, refuse_row_of_other_run
 from .executors import local_pool
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -95,9 +95,7 @@ def read_checkpoint(path: Path, settings: TableSettings) -> dict[float, TableRow
             if lineno == len(lines):
                 break  # cut short by a kill while writing
             raise TableError(f"checkpoint {path}:{lineno}: not a table row; delete the file") from None
-        if row_of_other_run(rec, key):
-            raise TableError(f"checkpoint {path}:{lineno}: a row of another build (settings_key = {rec['key']}, the "
-                             f"header's is {key}): the file mixes two runs; run without --resume to start over")
+        refuse_row_of_other_run(rec, key, path, lineno)
         rows[row.lam] = row
     return rows
 

@@ -104,10 +104,12 @@ class CheckpointWriter:
             pass
 
 
-def row_of_other_run(rec: dict, key: str) -> bool:
-    """Whether checkpoint row ``rec`` was written by a run with other settings (rows of older checkpoints carry no
-    key: they are the header's)."""
-    return "key" in rec and rec["key"] != key
+def refuse_row_of_other_run(rec: dict, key: str, path: Path, lineno: int) -> None:
+    """TableError when checkpoint row ``rec`` (line ``lineno``) was written by a run with other settings than the
+    header's ``key`` (rows of older checkpoints carry no key: they are the header's)."""
+    if "key" in rec and rec["key"] != key:
+        raise TableError(f"checkpoint {path}:{lineno}: a row of another build (settings_key = {rec['key']}, the "
+                         f"header's is {key}): the file mixes two runs; run without --resume to start over")
 
 
 def _drop_cut_line(path: Path) -> None:

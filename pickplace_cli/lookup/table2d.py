@@ -28,7 +28,7 @@ import numpy as np
 
 from ..model.errors import TableError
 from .bspline_build import BuildReport, step_grid
-from .checkpoint import CheckpointWriter, row_of_other_run
+from .checkpoint import CheckpointWriter, refuse_row_of_other_run
 from .executors import local_pool
 from .bspline_optimum import ALGORITHM_VERSION, TableRow, TableSettings, _optimise_chunk
 from .bspline_table import COLUMNS, read_numeric_table, read_table_file, write_meta
@@ -313,9 +313,7 @@ def read_checkpoint_2d(path: Path, settings: TableSettings) -> dict[tuple[float,
             if lineno == len(lines):
                 break
             raise TableError(f"checkpoint {path}:{lineno}: not a table row; delete the file") from None
-        if row_of_other_run(rec, key):
-            raise TableError(f"checkpoint {path}:{lineno}: a row of another build (settings_key = {rec['key']}, the "
-                             f"header's is {key}): the file mixes two runs; run without --resume to start over")
+        refuse_row_of_other_run(rec, key, path, lineno)
     return rows
 
 

@@ -24,6 +24,7 @@ from typer.testing import CliRunner
 
 from pickplace_cli.cli import app
 from pickplace_cli.model.profile import resolve_profile_path
+from tests.procs import alive, children
 
 runner = CliRunner()
 HEADER = "from_x,from_y,from_z,to_x,to_y,to_z\n"
@@ -308,28 +309,6 @@ def test_check_of_a_named_pipe_with_a_writer_reads_it(tmp_path):
 # ------------------------------------------------------------------ 7. workers die with their parent
 
 
-def _alive(pid: int) -> bool:
-    try:
-        with open(f"/proc/{pid}/stat") as fh:
-            return fh.read().rsplit(")", 1)[1].split()[0] != "Z"
-    except OSError:
-        return False
-
-
-def _children(pid: int) -> list[int]:
-    out = []
-    for entry in os.listdir("/proc"):
-        if entry.isdigit():
-            try:
-                with open(f"/proc/{entry}/stat") as fh:
-                    fields = fh.read().rsplit(")", 1)[1].split()
-            except OSError:
-                continue
-            if int(fields[1]) == pid and fields[0] != "Z":
-                out.append(int(entry))
-    return out
-
-
 def _big_batch(tmp_path: Path, n: int = 3000) -> Path:
     src = tmp_path / "big.csv"
     src.write_text(HEADER + "".join(f"{-0.15 + 0.0001 * (i % 50)},0,-0.8,0.15,{0.0002 * (i % 30)},-0.79\n"
@@ -352,13 +331,13 @@ def test_workers_die_with_their_parent(tmp_path, how):
         os.close(r)  # no reader: a write to stderr fails
     try:
         deadline = time.monotonic() + CAP
-        while len(kids := _children(proc.pid)) < 2:
+        while len(kids := children(proc.pid)) < 2:
             assert proc.poll() is None and time.monotonic() < deadline
             time.sleep(0.02)
         proc.send_signal(signal.SIGKILL if how == "SIGKILL" else signal.SIGTERM)
         proc.wait(CAP)
         gone_by = time.monotonic() + 5.0
-        while any(_alive(k) for k in kids):
+        while any(alive(k) for k in kids):
             assert time.monotonic() < gone_by, f"workers {kids} outlived their parent"
             time.sleep(0.02)
         assert not list(tmp_path.glob(".o.csv.*")) or how == "SIGKILL"  # (SIGKILL: no handler can remove it)

@@ -22,6 +22,8 @@ from pathlib import Path
 
 import pytest
 
+from tests.procs import group
+
 SEED = 33
 TRIALS = 6
 CAP = 120.0
@@ -36,20 +38,6 @@ pytestmark = [pytest.mark.slow, pytest.mark.skipif(not os.path.isdir("/proc"), r
 
 def _cli(*args: str) -> list[str]:
     return [sys.executable, "-m", "pickplace_cli", *args]
-
-
-def _group(pgid: int) -> list[int]:
-    out = []
-    for entry in os.listdir("/proc"):
-        if entry.isdigit():
-            try:
-                with open(f"/proc/{entry}/stat") as fh:
-                    fields = fh.read().rsplit(")", 1)[1].split()
-            except OSError:
-                continue
-            if int(fields[2]) == pgid and fields[0] != "Z":
-                out.append(int(entry))
-    return out
 
 
 def _batch(tmp_path: Path) -> Path:
@@ -92,8 +80,8 @@ def _kill_at_random(rng: random.Random, args: list[str], out: Path, cwd: Path, w
         print(f"fault: {args[0]} {sig.name}{' (group)' if to_group else ''} {delay:.2f} s after "
               f"{'the work began' if in_work else 'the start'}: exit {code}")
         deadline = time.monotonic() + LEFT_AFTER_S
-        while _group(proc.pid):
-            assert time.monotonic() < deadline, f"{sig.name}: processes {_group(proc.pid)} outlived the run"
+        while group(proc.pid):
+            assert time.monotonic() < deadline, f"{sig.name}: processes {group(proc.pid)} outlived the run"
             time.sleep(0.02)
         err = proc.stderr.read()
         assert "Traceback" not in err, err
