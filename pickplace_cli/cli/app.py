@@ -129,7 +129,8 @@ class TurnDuring(str, Enum):
 
 
 def _err(message: str) -> None:
-    sys.stderr.write(f"pickplace: error: {message}\n")
+    """``pickplace: error: MESSAGE`` on stderr; a message of several problems (a profile's): one line each."""
+    sys.stderr.write("".join(f"pickplace: error: {line}\n" for line in message.splitlines() or [""]))
 
 
 def _one_warning(state: dict):
@@ -141,6 +142,9 @@ def _one_warning(state: dict):
     def show(message, category, filename, lineno, file=None, line=None):  # noqa: ARG001 - the signature
         import os
 
+        if category.__name__ == "UnitWarning":  # a value in a likely wrong unit: every one, in its own words
+            sys.stderr.write(f"pickplace: warning: {message}\n")
+            return
         state["n"] = state.get("n", 0) + 1
         if state["n"] == 1:
             sys.stderr.write(f"pickplace: warning: {category.__name__}: {message} "
@@ -214,13 +218,8 @@ def _handle_errors(fn: Callable) -> Callable:
         warnings.showwarning = _one_warning({})
         try:
             return fn(*args, **kwargs)
-        except PickplaceError as exc:
-            _err(str(exc))
-            if _JSON_ERRORS[0]:  # `plan --json`: stdout still carries one JSON document, like a batch row's
-                import json
-
-                sys.stdout.write(json.dumps({"exit_code": exc.exit_code, "error": str(exc)}) + "\n")
-            raise typer.Exit(exc.exit_code) from None
+        except PickplaceError as exc:  # (`plan --json`: stdout still carries one JSON document, like a batch row's)
+            _fail_json(exc.exit_code, str(exc))
         except KeyboardInterrupt:
             _err("interrupted; no output file was changed")
             raise typer.Exit(130) from None
@@ -243,12 +242,44 @@ def _handle_errors(fn: Callable) -> Callable:
             except (OSError, ValueError, AttributeError):
                 sys.stdout = None  # type: ignore[assignment]  # a broken stdout: not flushed again at exit
             raise typer.Exit(1) from None
+        except MemoryError:
+            from ..export import remove_pending
+
+            remove_pending()
+            _fail_json(1, "out of memory; no output file was changed (a lower --rate or a shorter --time needs less)")
+        except Exception as exc:  # noqa: BLE001 - never a traceback: one line naming what failed, exit 1
+            if isinstance(exc, _CLICK_EXCEPTIONS):  # typer's exits and usage errors: click reports them
+                raise
+            from ..export import remove_pending
+
+            remove_pending()
+            detail = " ".join(str(exc).split())[:300]
+            _fail_json(1, f"internal error ({type(exc).__name__}: {detail}); no output file was changed")
         finally:
             warnings.showwarning = shown
             if previous is not None:
                 signal.signal(signal.SIGTERM, previous)
 
     return wrapper
+
+
+#: exceptions typer and click raise through a command on purpose (exit codes, usage errors, an abort)
+_CLICK_EXCEPTIONS = tuple({c for e in (typer.Exit, typer.Abort, typer.BadParameter) for c in e.__mro__
+                           if c.__name__ in ("Exit", "Abort", "ClickException")})
+
+
+def _fail_json(code: int, message: str) -> None:
+    """One error line (and the JSON document of ``--json``), then exit ``code``."""
+    _err(message)
+    if _JSON_ERRORS[0]:
+        import json
+
+        try:
+            sys.stdout.write(json.dumps({"exit_code": code, "error": message}) + "\n")
+            sys.stdout.flush()
+        except (OSError, ValueError, AttributeError):  # stdout itself failed (> /dev/full): the line on stderr says so
+            sys.stdout = None  # type: ignore[assignment]  # (not flushed again at exit)
+    raise typer.Exit(code) from None
 
 
 #: the exit code a command has decided so far (a move's verdict, a batch's rows): when stdout's reader goes away

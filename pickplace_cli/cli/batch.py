@@ -17,9 +17,7 @@ def _plan_batch(source, prof, options, height, eta, fail_fast, writer, output, r
     """--batch: plan every row, report failures by row number, write the good ones, exit with the worst code.
     A batch with a t_detect column is a belt schedule (:func:`_plan_schedule`). ``keep_warm`` [s]: a streamed
     batch re-plans its last move after each such idle time (:mod:`~pickplace_cli.pipelines.warm`)."""
-    import os
-
-    from ..pipelines.batch import BatchRow, plan_rows_parallel
+    from ..pipelines.batch import BatchRow
 
     belt = belt or {}
     name = "stdin" if source == "-" else source
@@ -47,73 +45,137 @@ def _plan_batch(source, prof, options, height, eta, fail_fast, writer, output, r
     if fail_fast and first_bad is not None:
         rows = [r for r in rows if r.row < first_bad]
         bad = [b for b in bad if b.row == first_bad]
-    total = len(rows) + len(bad)
-    results: dict = {}
-    pending = sorted(bad, key=lambda b: b.row)  # parse errors, reported in row order as planning passes them
-
-    def flush(upto: float) -> None:
-        while pending and pending[0].row < upto:
-            b = pending.pop(0)
-            results[b.row] = b
-            sys.stderr.write("".join(f"pickplace: {ln}\n" for ln in b.error.splitlines()))
-
-    progress = None
-    if not quiet and total >= 50 and sys.stderr.isatty():
-        from rich.console import Console
+    pending = sorted(bad, key=lambda b: b.row)  # parse errors, answered in row order as planning passes them
+    sink = _RowSink(writer, output, report, json_summary, report_only, options.cycle)
+    progress = bar = None
+    if not quiet and len(rows) + len(bad) >= 50 and sys.stderr.isatty():
+        from .render import console
         from rich.progress import Progress
 
-        progress = Progress(console=Console(stderr=True), transient=True)
+        progress = Progress(console=console(stderr=True), transient=True)
         progress.start()
-        bar = progress.add_task(f"planning {total} moves", total=len(rows))
-    stopped = False
+        bar = progress.add_task(f"planning {len(rows) + len(bad)} moves", total=len(rows))
     try:
-        n_workers = workers or ((os.cpu_count() or 1) if len(rows) >= 100 else 1)
-        csv_dialect = writer.csv_dialect if output is not None else None
-        verdicts_only = json_summary and output is None and report is None
-        if verdicts_only:  # the batched verdict engine decides the rows clearly inside every limit (verdicts.py)
-            from ..pipelines.verdicts import engine_applies, verdict_rows_parallel
-        if verdicts_only and engine_applies(prof, options):
-            outcomes = verdict_rows_parallel(rows, prof, options, height, eta, fail_fast, name, workers=n_workers)
-        else:
-            outcomes = plan_rows_parallel(rows, prof, options, height, eta, fail_fast, name, workers=n_workers,
-                                          csv_dialect=csv_dialect, format_failed=report_only)  # (codes 3 only)
-        for res in outcomes:
-            flush(res.row)
-            results[res.row] = res
-            if progress is not None:
-                progress.advance(bar)
-            if res.error is not None:  # one line per problem (a limit row: one per exceeded limit)
-                sys.stderr.write("".join(f"pickplace: {ln}\n" for ln in res.error.splitlines()))
-                if fail_fast:
-                    stopped = True
+        with sink:
+            for res in _file_outcomes(rows, prof, options, height, eta, fail_fast, name, workers, writer, output,
+                                      report, report_only, json_summary):
+                while pending and pending[0].row < res.row:
+                    sink.add(pending.pop(0))
+                if sink.add(res) and fail_fast:
                     break
+                if progress is not None:
+                    progress.advance(bar)
+            else:
+                while pending:
+                    sink.add(pending.pop(0))
     finally:
         if progress is not None:
             progress.stop()
-    if not stopped:
-        flush(float("inf"))
-    ordered = [results[k] for k in sorted(results)]
-    if fail_fast:
-        stop = next((r.row for r in ordered if r.code), None)
-        if stop is not None:
-            ordered = [r for r in ordered if r.row <= stop]
-    codes = [r.code for r in ordered]
-    planned = [r for r in ordered if r.plan is not None and (r.code == 0 or (report_only and r.code == 3))]
-    code = _batch_exit([(r.code, r.plan is not None) for r in ordered], report_only, fail_fast)
-    note_exit(code)  # should stdout's reader go away while the rows are written
-    if json_summary:
-        for r in ordered:
-            _emit_row_json(r)
-    if report is not None:
-        _write_report([r.plan for r in ordered if r.plan is not None], report, rows=[r.row for r in ordered if r.plan is not None])
-    if not quiet:
-        _batch_line(codes, next((r.row for r in ordered if r.code), None), len(planned) if output is not None else None)
-    if output is not None:
-        from .controller import rounded_dwell
-
-        _write_batch_file(planned, writer, output, rounded_dwell(prof, options.cycle), options.cycle)
+    code = _batch_exit(sink.outcomes, report_only, fail_fast)
+    note_exit(code)
+    sink.finish(prof, quiet)
     if code:
         raise typer.Exit(code)
+
+
+def _file_outcomes(rows, prof, options, height, eta, fail_fast, name, workers, writer, output, report, report_only,
+                   json_summary):
+    """The RowResults of a file batch's good rows, in row order, on ``workers`` processes (0: all cores for 100
+    rows or more): the verdict engine for a verdicts-only batch where it applies, else plan()."""
+    import os
+
+    from ..pipelines.batch import plan_rows_parallel
+
+    n_workers = workers or ((os.cpu_count() or 1) if len(rows) >= 100 else 1)
+    if json_summary and output is None and report is None:
+        from ..pipelines.verdicts import engine_applies, verdict_rows_parallel
+
+        if engine_applies(prof, options):
+            return verdict_rows_parallel(rows, prof, options, height, eta, fail_fast, name, workers=n_workers)
+    csv_dialect = writer.csv_dialect if output is not None else None
+    return plan_rows_parallel(rows, prof, options, height, eta, fail_fast, name, workers=n_workers,
+                              csv_dialect=csv_dialect, format_failed=report_only)
+
+
+class _RowSink:
+    """Where a file batch's answers go, one row at a time and in row order, so that memory holds one row's
+    trajectory (MCAP and JSON trajectories need the whole timeline: those rows are kept): its error lines on
+    stderr, its JSON line (``--json``), its CSV rows into the temporary ``-o`` file, its limit report
+    (``--report``). The ``-o`` file replaces the old one only when the batch ends (atomically); a batch that
+    writes no row leaves it as it was."""
+
+    def __init__(self, writer, output, report, json_summary: bool, report_only: bool, cycle: float | None = None) -> None:
+        self.writer, self.output, self.report, self.cycle = writer, output, report, cycle
+        self.json_summary, self.report_only = json_summary, report_only
+        self.csv_out = output is not None and writer.csv_dialect is not None
+        self.outcomes: list[tuple[int, bool]] = []  # (code, planned) per row answered
+        self.first_failed = None
+        self.written = 0
+        self.kept: list = []  # MCAP / JSON trajectories: (row, PlanRecord)
+        self.reports: list = []  # --report: (row, ReportRecord)
+        self._stack = contextlib.ExitStack()
+        self._out = None
+
+    def __enter__(self) -> "_RowSink":
+        if self.csv_out:
+            from ..export import atomic_output
+
+            self._out = self._stack.enter_context(atomic_output(self.output))
+        return self
+
+    def __exit__(self, kind, exc, tb) -> bool:
+        if kind is None and self._out is not None and self.written == 0:  # nothing to write: the old file stays
+            self._stack.__exit__(_NothingWritten, _NothingWritten(), None)  # (the temporary file is removed)
+            return False
+        self._stack.__exit__(kind, exc, tb)
+        return False
+
+    def add(self, res) -> bool:
+        """Answer one row; whether it failed."""
+        self.outcomes.append((res.code, res.plan is not None))
+        if res.code and self.first_failed is None:
+            self.first_failed = res.row
+        if res.error is not None:  # one line per problem (a limit row: one per exceeded limit)
+            sys.stderr.write("".join(f"pickplace: {ln}\n" for ln in res.error.splitlines()))
+        if self.json_summary:
+            _emit_row_json(res)
+        if res.plan is not None and self.report is not None:
+            from ..pipelines.batch import ReportRecord
+
+            self.reports.append((res.row, ReportRecord.of(res.plan)))
+        if res.plan is not None and self.output is not None and (res.code == 0 or (self.report_only and res.code == 3)):
+            self.written += 1
+            if self._out is not None:
+                from ..export.csv import csv_header, csv_rows
+
+                if self.written == 1:
+                    self._out.write(csv_header(res.plan, self.writer.csv_dialect, move=True))
+                self._out.write(res.text if res.text is not None else csv_rows(res.plan, self.writer.csv_dialect,
+                                                                                move=res.row))
+            else:
+                from ..pipelines.batch import PlanRecord
+
+                self.kept.append((res.row, res.plan if isinstance(res.plan, PlanRecord) else PlanRecord.of(res.plan)))
+        return bool(res.code)
+
+    def finish(self, prof, quiet: bool) -> None:
+        """The report, the closing line, the MCAP/JSON trajectory file (the CSV one is in place already)."""
+        if self.report is not None:
+            _write_report([r for _, r in self.reports], self.report, rows=[n for n, _ in self.reports])
+        if not quiet:
+            _batch_line([c for c, _ in self.outcomes], self.first_failed,
+                        self.written if self.output is not None else None)
+        if self.kept:
+            from ..pipelines.timeline import concatenate
+
+            from ..pipelines.timeline import on_cycle
+            from .controller import rounded_dwell
+
+            samples = concatenate([p for _, p in self.kept], [r for r, _ in self.kept],
+                                  restart_time=not self.writer.one_timeline, gap=rounded_dwell(prof, self.cycle))
+            self.writer(on_cycle(samples, self.cycle), self.output)
+        if self.output is not None and self.written == 0:
+            sys.stderr.write("pickplace: no row could be written\n")
 
 
 def _batch_exit(rows: list[tuple[int, bool]], report_only: bool, fail_fast: bool = False) -> int:
@@ -125,31 +187,6 @@ def _batch_exit(rows: list[tuple[int, bool]], report_only: bool, fail_fast: bool
     if fail_fast and rows and rows[-1][0]:
         return rows[-1][0]
     return max((c for c, planned in rows if c and not (report_only and planned and c == 3)), default=0)
-
-
-def _write_batch_file(planned, writer, output, dwell: float, cycle: float | None = None) -> None:
-    """A file batch's planned rows (RowResults) to ``output`` (atomically), or one line when there is none."""
-    if planned and writer.csv_dialect is not None:
-        # CSV: header, then each plan's rows (formatted by the workers when there are several)
-        from ..export import atomic_output
-        from ..export.csv import csv_header, csv_rows
-
-        with atomic_output(output) as stream:
-            stream.write(csv_header(planned[0].plan, writer.csv_dialect, move=True))
-            for r in planned:
-                stream.write(r.text if r.text is not None else csv_rows(r.plan, writer.csv_dialect, move=r.row))
-    elif planned:
-        from ..pipelines.timeline import concatenate
-
-        # CSV/JSON: each move keeps its own time (the move column tells them apart); MCAP: one timeline,
-        # moves one dwell apart
-        from ..pipelines.timeline import on_cycle
-
-        samples = concatenate([r.plan for r in planned], [r.row for r in planned],
-                              restart_time=not writer.one_timeline, gap=dwell)
-        writer(on_cycle(samples, cycle), output)
-    else:
-        sys.stderr.write("pickplace: no row could be written\n")
 
 
 def _warmer(keep_warm: float, source: str, streamed: bool, prof, options, writer, output):

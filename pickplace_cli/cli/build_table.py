@@ -107,47 +107,47 @@ def build_table_cmd(
                         resume, output, table_format, quiet)
         return
     ckpt = _checkpoint_for(output, resume, workers)
-    _note_checkpoint_on_sigterm(ckpt)
-    with contextlib.ExitStack() as stack:
-        executor, n_workers, tick = _engine(stack, scheduler, workers, quiet, len(lams), "λ", eta=False)
-        try:
-            table, report = run_build(
-                lams, settings, progress=tick, workers=n_workers, executor=executor, checkpoint=ckpt, resume=resume
-            )
-        except KeyboardInterrupt:
-            saved = _checkpointed_rows(ckpt, settings)
-            if saved:
-                sys.stderr.write(
-                    f"pickplace: {saved} of {len(lams)} rows are saved in {ckpt}; "
-                    "run the same command with --resume to continue\n"
-                )
-            raise
-    from ..export import atomic_output
+    from ..lookup.checkpoint import checkpoint_lock
 
-    extra = {
-        "lambda_grid": lam_text,
-        "optimiser": "coarse grid + bounded Nelder-Mead from each grid local optimum within basin_margin (one per basin); exact peaks",
-        "fit_lambda_min": fit_min,
-    }
-    if table_format is TableFormat.json:
-        from ..export.table_json import format_table_json as formatter
-    elif table_format is TableFormat.st:
-        from ..export.table_st import format_table_st as formatter
-    else:
-        formatter = format_table
-    text = (formatter(table, __version__, extra, dialect=_ST_DIALECT[0]) if table_format is TableFormat.st
-            else formatter(table, __version__, extra))
-    with atomic_output(output) as stream:
-        stream.write(text)
-    if ckpt is not None:
-        ckpt.unlink(missing_ok=True)  # the table is in place: the partial results are no longer needed
-    if not quiet:
-        g1, g2, res = table.fit(fit_min)
-        resumed = f"; {report.resumed} rows resumed from {ckpt}, {report.computed} computed" if report.resumed else ""
-        sys.stderr.write(
-            f"{len(lams)} rows{resumed}; cubic fit (Eq. 23) on λ ≥ {fit_min:g}: max |residual| {res:.3g}; "
-            f"k1 = {g1[0]:.4g} + {g1[1]:.4g} λ + {g1[2]:.4g} λ² + {g1[3]:.4g} λ³\n"
-        )
+    with checkpoint_lock(ckpt):  # one run at a time owns OUTPUT.partial.jsonl, from its first read to its removal
+        _note_checkpoint_on_sigterm(ckpt)
+        with contextlib.ExitStack() as stack:
+            executor, n_workers, tick = _engine(stack, scheduler, workers, quiet, len(lams), "λ", eta=False)
+            try:
+                table, report = run_build(
+                    lams, settings, progress=tick, workers=n_workers, executor=executor, checkpoint=ckpt, resume=resume
+                )
+            except KeyboardInterrupt:
+                saved = _checkpointed_rows(ckpt, settings)
+                if saved:
+                    sys.stderr.write(
+                        f"pickplace: {saved} of {len(lams)} rows are saved in {ckpt}; "
+                        "run the same command with --resume to continue\n"
+                    )
+                raise
+        extra = {
+            "lambda_grid": lam_text,
+            "optimiser": "coarse grid + bounded Nelder-Mead from each grid local optimum within basin_margin (one per basin); exact peaks",
+            "fit_lambda_min": fit_min,
+        }
+        if table_format is TableFormat.json:
+            from ..export.table_json import format_table_json as formatter
+        elif table_format is TableFormat.st:
+            from ..export.table_st import format_table_st as formatter
+        else:
+            formatter = format_table
+        text = (formatter(table, __version__, extra, dialect=_ST_DIALECT[0]) if table_format is TableFormat.st
+                else formatter(table, __version__, extra))
+        _write_table(output, text, ckpt, len(lams))
+        if ckpt is not None:
+            ckpt.unlink(missing_ok=True)  # the table is in place: the partial results are no longer needed
+        if not quiet:
+            g1, g2, res = table.fit(fit_min)
+            resumed = f"; {report.resumed} rows resumed from {ckpt}, {report.computed} computed" if report.resumed else ""
+            sys.stderr.write(
+                f"{len(lams)} rows{resumed}; cubic fit (Eq. 23) on λ ≥ {fit_min:g}: max |residual| {res:.3g}; "
+                f"k1 = {g1[0]:.4g} + {g1[1]:.4g} λ + {g1[2]:.4g} λ² + {g1[3]:.4g} λ³\n"
+            )
 
 
 def _lambda_axis(lambda_min: float, lambda_max: float, lambda_step: float, lambda_points: int):
@@ -183,41 +183,57 @@ def _build_table_2d(lams, lam_text, settings, eta_list, eta_min, eta_max, eta_st
         etas = eta_grid(lo, hi, eta_step)
         eta_text = f"{lo:g}..{hi:g} step {eta_step:g}"
     ckpt = _checkpoint_for(output, resume, workers)
-    _note_checkpoint_on_sigterm(ckpt)
-    total = len(lams) * len(etas)
-    t0 = time.perf_counter()
-    with contextlib.ExitStack() as stack:
-        executor, n_workers, tick = _engine(stack, scheduler, workers, quiet, total, "(λ, η)", eta=True)
-        try:
-            table, report = run_build_2d(lams, etas, settings, progress=tick, workers=n_workers, executor=executor,
-                                         checkpoint=ckpt, resume=resume)
-        except KeyboardInterrupt:
-            if ckpt is not None and ckpt.exists():
-                sys.stderr.write(f"pickplace: finished rows are saved in {ckpt}; run the same command with --resume\n")
-            raise
-    seconds = time.perf_counter() - t0
-    extra = {
-        "lambda_grid": lam_text,
-        "eta_grid": f"{eta_text} ({len(etas)} values)",
-        "optimiser": "coarse grid + bounded Nelder-Mead from each grid local optimum within basin_margin (one per basin); exact peaks",
-    }
-    if table_format is TableFormat.st:
-        from ..export.table2d_st import format_table_2d_st
+    from ..lookup.checkpoint import checkpoint_lock
 
-        text = format_table_2d_st(table, __version__, extra, dialect=_ST_DIALECT[0])
-    else:
-        text = format_table_2d(table, __version__, extra)
+    with checkpoint_lock(ckpt):  # one run at a time owns OUTPUT.partial.jsonl, from its first read to its removal
+        _note_checkpoint_on_sigterm(ckpt)
+        total = len(lams) * len(etas)
+        t0 = time.perf_counter()
+        with contextlib.ExitStack() as stack:
+            executor, n_workers, tick = _engine(stack, scheduler, workers, quiet, total, "(λ, η)", eta=True)
+            try:
+                table, report = run_build_2d(lams, etas, settings, progress=tick, workers=n_workers, executor=executor,
+                                             checkpoint=ckpt, resume=resume)
+            except KeyboardInterrupt:
+                if ckpt is not None and ckpt.exists():
+                    sys.stderr.write(f"pickplace: finished rows are saved in {ckpt}; run the same command with --resume\n")
+                raise
+        seconds = time.perf_counter() - t0
+        extra = {
+            "lambda_grid": lam_text,
+            "eta_grid": f"{eta_text} ({len(etas)} values)",
+            "optimiser": "coarse grid + bounded Nelder-Mead from each grid local optimum within basin_margin (one per basin); exact peaks",
+        }
+        if table_format is TableFormat.st:
+            from ..export.table2d_st import format_table_2d_st
+
+            text = format_table_2d_st(table, __version__, extra, dialect=_ST_DIALECT[0])
+        else:
+            text = format_table_2d(table, __version__, extra)
+        _write_table(output, text, ckpt, total)
+        if ckpt is not None:
+            ckpt.unlink(missing_ok=True)
+        if not quiet:
+            resumed = f"; {report.resumed} resumed from {ckpt}, {report.computed} computed" if report.resumed else ""
+            jumps = table.jumps
+            sys.stderr.write(f"{total} rows ({len(etas)} η × {len(lams)} λ){resumed} in {seconds:.1f} s; "
+                             f"{len(jumps)} grid edge(s) with a basin jump (listed in the header)\n")
+
+
+def _write_table(output: str, text: str, ckpt, rows: int) -> None:
+    """The finished table to ``output`` (atomically); when that fails (a full disk) the error also says that the
+    finished rows stay in the checkpoint for a --resume, which then only writes the table."""
     from ..export import atomic_output
+    from ..model.errors import ExportError
 
-    with atomic_output(output) as stream:
-        stream.write(text)
-    if ckpt is not None:
-        ckpt.unlink(missing_ok=True)
-    if not quiet:
-        resumed = f"; {report.resumed} resumed from {ckpt}, {report.computed} computed" if report.resumed else ""
-        jumps = table.jumps
-        sys.stderr.write(f"{total} rows ({len(etas)} η × {len(lams)} λ){resumed} in {seconds:.1f} s; "
-                         f"{len(jumps)} grid edge(s) with a basin jump (listed in the header)\n")
+    try:
+        with atomic_output(output) as stream:
+            stream.write(text)
+    except ExportError as exc:
+        if ckpt is None or not ckpt.exists():
+            raise
+        raise ExportError(f"{exc}; the {rows} finished rows are kept in {ckpt}: run the same command with --resume "
+                          "once the output can be written") from None
 
 
 def _checkpointed_rows(ckpt, settings) -> int:
@@ -247,11 +263,11 @@ def _build_vel_table(eta: float, workers: int, output: str, quiet: bool) -> None
     if quiet:
         table = build_vel_table(grid, workers=n_workers)
     else:
-        from rich.console import Console
+        from .render import console
         from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
         with Progress(TextColumn("{task.description}"), BarColumn(), TextColumn("{task.completed}/{task.total}"),
-                      TimeElapsedColumn(), TimeRemainingColumn(), console=Console(stderr=True)) as progress:
+                      TimeElapsedColumn(), TimeRemainingColumn(), console=console(stderr=True)) as progress:
             bar = progress.add_task("solving Yang 2022 optima (one node per symmetry orbit)", total=None)
             table = build_vel_table(grid, workers=n_workers,
                                     progress=lambda done, total: progress.update(bar, completed=done, total=total))
@@ -302,14 +318,14 @@ def _engine(stack: contextlib.ExitStack, scheduler, workers: int, quiet: bool, t
         executor, n_workers = stack.enter_context(dask_executor(scheduler))
     if quiet:
         return executor, n_workers, None
-    from rich.console import Console
+    from .render import console
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
     columns = [TextColumn("[progress.description]{task.description}"), BarColumn(),
                TextColumn("{task.completed}/{task.total} " + unit), TimeElapsedColumn()]
     if not eta:
         columns.append(TimeRemainingColumn())
-    progress = stack.enter_context(Progress(*columns, console=Console(stderr=True), transient=False))
+    progress = stack.enter_context(Progress(*columns, console=console(stderr=True), transient=False))
     engine = f"Dask {scheduler}" if scheduler else f"{n_workers} process{'es' if n_workers > 1 else ''}"
     bar = progress.add_task(f"{label} ({engine})", total=total)
 

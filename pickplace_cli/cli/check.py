@@ -71,8 +71,12 @@ def check(
         from ..model.headroom import check_limit_use
 
         check_limit_use(limit_use)
+    from .guards import refuse_overwriting_inputs
+
+    refuse_overwriting_inputs([("--report", report)], [("TRAJECTORY", trajectory)], profile)
     prof = load_profile(profile)
-    checks = check_file(trajectory, prof, smooth, limit_use)
+    checks = check_file(trajectory, prof, smooth, limit_use,
+                        notify=lambda text: sys.stderr.write(f"pickplace: {text}\n"))
     several = len(checks) > 1 or checks[0].move is not None
     if report is not None:
         with atomic_output(report) as stream:

@@ -47,6 +47,9 @@ def compare(
     if fmt == CompareFormat.table and output != "-":
         raise ExportError(f"output = {output}: --format table prints to stderr; use --format csv or json to write a file")
     check_writable(output)
+    from .guards import refuse_overwriting_inputs
+
+    refuse_overwriting_inputs([("-o", output)], [], profile)
     prof, task = _task_from_options(from_, to, profile, height, eta)
     result = compare_methods(task, prof, methods, time=time)
     for r in result.rows:

@@ -196,7 +196,9 @@ def plan(
         OutputFormat.csv, "--format", "-f", help="Output format: samples as csv, json or mcap; or a table a motion "
         "kernel interpolates itself: pvt (position, velocity, time per point; cubic Hermite), cam (PLCopen MC_CamIn "
         "points with position, velocity, acceleration: 5th-order segments), cam-table (equidistant positions, linear), "
-        "as CSV or, with -st, IEC 61131-3 Structured Text. Drive names and units from profile controller.joints.",
+        "as CSV or, with -st, IEC 61131-3 Structured Text. Drive names and units from profile controller.joints. "
+        "Without -f: the one -o FILE's suffix names (.csv, .tsv, .txt: csv; .json; .mcap), else csv. A -f that "
+        "contradicts the suffix is refused, and so is MCAP to a terminal.",
     ),
     csv_dialect: CsvDialectName = typer.Option(
         CsvDialectName.default, "--csv-dialect",
@@ -264,12 +266,18 @@ def plan(
         write_anyway = report_only = True
     a = SimpleNamespace(**{k: v for k, v in locals().items() if k not in ("SimpleNamespace", "load_profile",
                                                                          "PlanOptions")})
-    _JSON_ERRORS[0] = json_summary and batch is None  # a batch prints its own line per row
+    _JSON_ERRORS[0] = json_summary  # (a batch: its rows have their lines; an error that ends it gets one more)
+    from .guards import output_format
+
+    fmt = a.fmt = output_format(ctx, fmt, output if output is not None or json_summary else "-")
     _check_plan_values(a)
     _check_plan_usage(a)
     if a.output is None and not json_summary:
         a.output = "-"
     _check_output_paths(a.output, report)
+    from .guards import refuse_overwriting_inputs
+
+    refuse_overwriting_inputs([("-o", a.output), ("--report", report)], [("--batch", batch), ("--table", table)], profile)
     if batch is not None and to_belt is None and latency is not None:  # a belt schedule's default row latency
         _finite_latency(latency)
     elif to_belt is not None or latency is not None:
@@ -277,6 +285,9 @@ def plan(
     from ..model.headroom import apply_limit_use
 
     prof = apply_limit_use(load_profile(profile), limit_use)  # --limit-use, else the profile's planning.limit_use
+    from .units import check_option_units, warn_few_samples
+
+    check_option_units(a, prof)  # --from/--to/--height in mm refused, --time in ms warned (cli/units.py)
     params = _method_params(a)
     from ..export.drive import drive_map
     from .controller import check_cycle_usage, resolve_cycle
@@ -317,6 +328,7 @@ def plan(
         back = Task(task.p_to, task.p_from, task.height, task.eta, theta_from=legs[0].task.theta_to,
                     theta_to=task.theta_from)
         legs.append(_run_plan(back, prof, replace(options, turn=TurnName.as_given.value)))
+    warn_few_samples(legs, rate)
     code, cycle = _render_legs(a, prof, legs, rendezvous, track)
     forgiven = write_anyway and code == 3  # a timed limit only: a position past its range is never written
     note_exit(0 if forgiven else code)  # the verdict, should stdout's reader go away before the end

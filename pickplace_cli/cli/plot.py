@@ -45,6 +45,9 @@ def plot(
     require_matplotlib()
     kind = plot_format(output, fmt)
     check_writable(output)
+    from .guards import refuse_overwriting_inputs
+
+    refuse_overwriting_inputs([("-o", output)], [], profile)
     prof, task = _task_from_options(from_, to, profile, height, eta)
     spec = parse_time(time)
     moves = []

@@ -9,7 +9,7 @@ import typer
 from .app import _finite, _handle_errors, app
 
 
-profile_app = typer.Typer(help="Validate or inspect a robot/workcell profile.", no_args_is_help=True)
+profile_app = typer.Typer(help="Validate, inspect, list or copy robot/workcell profiles.", no_args_is_help=True)
 
 
 app.add_typer(profile_app, name="profile")
@@ -36,18 +36,22 @@ def profile_show(
     z: Optional[float] = typer.Option(None, "--z", help="Working height in m for the workspace extent. [default: middle of the workcell box, or the robot's home height]"),
 ) -> None:
     """Show a profile with its derived values: lumped masses, workspace extent at the working height, limits."""
-    from rich.console import Console
+    from .render import console
     from rich.markup import escape
 
-    from ..model.profile import load_profile
+    from ..model.profile import load_profile, resolve_profile_path
     from ..robots import build_robot
 
     _finite("z", z, "in m (no NaN or inf)")
     prof = load_profile(profile)
     robot = build_robot(prof.robot)
     specs = prof.robot.joint_specs()
-    out = Console(highlight=False, soft_wrap=True)
-    out.print(f"[bold]{escape(prof.name)}[/] ({prof.robot.kind}): {escape(prof.description)}")
+    out = console(highlight=False, soft_wrap=True)
+    out.print(f"[bold]{escape(prof.name)}[/] ({prof.robot.kind}), from {escape(str(resolve_profile_path(profile)))}")
+    for line in model_lines(prof.robot):  # the numbers the model uses, as read (the description is free text)
+        out.print(escape(line))
+    if prof.description:
+        out.print(escape(f"description (free text, not read by the model): {prof.description}"))
     kind = prof.robot.kind
     if kind == "delta":
         out.print(
@@ -98,3 +102,67 @@ def profile_show(
                 f"rated {g(d.rated_torque, ' N·m')}, peak {g(d.peak_torque, ' N·m')}, speed {g(d.max_speed, ' rad/s')}, "
                 f"torque rate {g(d.torque_rate, ' N·m/s')}"
             ))
+
+
+def model_lines(robot) -> list[str]:
+    """The geometry and masses of a profile's robot model, as read from the file (SI units)."""
+    if robot.kind == "delta":
+        g, m = robot.geometry, robot.masses
+        return [f"geometry: R = {g.R:g} m, r = {g.r:g} m, L = {g.L:g} m, l = {g.l:g} m",
+                f"masses: upper arm {m.upper_arm:g} kg (inertia {m.upper_arm_inertia:g} kg·m² about the motor axis, "
+                f"centre of mass {m.upper_arm_com:g} m from it), elbow {m.elbow:g} kg, forearm pair {m.forearm_pair:g} kg, "
+                f"plate {m.plate:g} kg, payload {robot.payload:g} kg"]
+    if robot.kind == "scara":
+        links = [f"link {k} length {ln.length:g} m, mass {ln.mass:g} kg, centre of mass {ln.com:g} m, inertia "
+                 f"{ln.inertia:g} kg·m²" for k, ln in ((1, robot.link1), (2, robot.link2))]
+        return [f"geometry: {links[0]}; {links[1]}; elbow {robot.elbow}; z0 = {robot.z0:g} m",
+                f"masses: z axis {robot.z_mass:g} kg, payload {robot.payload:g} kg"]
+    return ["geometry: " + "; ".join(f"{a.name} travel [{a.travel[0]:g}, {a.travel[1]:g}] m" for a in robot.axes),
+            "masses: " + ", ".join(f"{a.name} axis {a.mass:g} kg" for a in robot.axes) + f", payload {robot.payload:g} kg"]
+
+
+@profile_app.command("list")
+@_handle_errors
+def profile_list() -> None:
+    """List the shipped profiles: name, robot kind and file (copy one with `pickplace profile init NAME FILE`)."""
+    from ..model.profile import load_profile, shipped_profiles
+
+    for name, path in shipped_profiles().items():
+        prof = load_profile(str(path))
+        typer.echo(f"{name}\t{prof.robot.kind}\t{path}")
+
+
+@profile_app.command("path")
+@_handle_errors
+def profile_path(
+    profile: str = typer.Argument(..., help="Shipped profile name (or a file)."),
+) -> None:
+    """Print the file a profile name stands for, e.g. to copy it: cp "$(pickplace profile path gantry)" mine.yaml."""
+    from ..model.profile import resolve_profile_path
+
+    typer.echo(str(resolve_profile_path(profile).resolve()))
+
+
+@profile_app.command("init")
+@_handle_errors
+def profile_init(
+    profile: str = typer.Argument(..., help="Shipped profile name to start from (see `pickplace profile list`)."),
+    output: str = typer.Argument(..., metavar="FILE", help="The new profile file (not overwritten if it exists)."),
+) -> None:
+    """Copy a shipped profile to FILE to edit it (an existing FILE is left as it is: exit 1)."""
+    import os
+
+    from ..export import atomic_output, check_writable
+    from ..model.errors import ExportError
+    from ..model.profile import resolve_profile_path, shipped_profiles
+
+    if profile not in shipped_profiles():
+        resolve_profile_path(profile)  # the usual error for an unknown name
+    if os.path.lexists(output):
+        raise ExportError(f"output {output}: exists; give a new file name (profile init never overwrites)")
+    check_writable(output)
+    text = resolve_profile_path(profile).read_text(encoding="utf-8")
+    with atomic_output(output) as stream:
+        stream.write(text)
+    typer.echo(f"{output}: a copy of the shipped profile {profile}; edit it and check it with "
+               f"`pickplace profile validate {output}`", err=True)

@@ -8,6 +8,18 @@ from typing import Callable, Optional
 from .app import Compression, CsvDialectName, OutputFormat
 
 
+def console(**kwargs):
+    """A rich Console for the commands' output: no ANSI styling at all (colour nor bold) when the environment sets
+    ``NO_COLOR`` to a non-empty value (no-color.org) or ``TERM=dumb``; rich alone drops only the colours."""
+    import os
+
+    from rich.console import Console
+
+    if os.environ.get("NO_COLOR") or os.environ.get("TERM") == "dumb":
+        kwargs.setdefault("color_system", None)
+    return Console(**kwargs)
+
+
 def _print_rendezvous(rv) -> None:
     xyz = ", ".join(f"{c:.4f}" for c in rv.meeting_point)
     wait = "; waits for the window (meets the part where it enters)" if rv.waited else ""
@@ -149,7 +161,6 @@ def _fmt(x: float) -> str:
 
 
 def _print_limit_table(report) -> None:
-    from rich.console import Console
     from rich.markup import escape
     from rich.table import Table
 
@@ -178,7 +189,7 @@ def _print_limit_table(report) -> None:
         table.add_row(*cells, "" if r.t_peak is None else f"{r.t_peak:.4f}", mark)
     # a terminal wraps at its width; a pipe or log file gets whole rows (rich would assume 80 columns)
     width = None if sys.stderr.isatty() else 200
-    Console(stderr=True, highlight=False, soft_wrap=True, width=width).print(table)
+    console(stderr=True, highlight=False, soft_wrap=True, width=width).print(table)
 
 
 def _print_verdict(report, quiet: bool, with_cycle: bool = True) -> None:
@@ -277,7 +288,6 @@ def _opt(x, fmt: str = "{:.4g}", scale: float = 1.0) -> str:
 
 def _print_comparison(comparison) -> None:
     """One column per method, one row per quantity (fits a terminal with every method of the registry)."""
-    from rich.console import Console
     from rich.markup import escape
     from rich.table import Table
 
@@ -325,9 +335,9 @@ def _print_comparison(comparison) -> None:
     # wide enough for every column (a pipe gets rich's 80 columns otherwise, and the names would be cut)
     cells = [[name] + [fn(r) for r in rows] for name, fn in lines]
     need = sum(max(len(c[i]) for c in cells + [["quantity"] + [r.method for r in rows]]) + 2 for i in range(len(rows) + 1))
-    out = Console(stderr=True, highlight=False, soft_wrap=True)
+    out = console(stderr=True, highlight=False, soft_wrap=True)
     if out.width < need:
-        out = Console(stderr=True, highlight=False, soft_wrap=True, width=need)
+        out = console(stderr=True, highlight=False, soft_wrap=True, width=need)
     out.print(escape(
         f"{comparison.profile_name}: b = {t.b:.4g} m, h = {t.height:.4g} m, λ = {t.lam:.4g}, η = {t.eta:g}; "
         f"duration: {comparison.time}"

@@ -129,6 +129,7 @@ def atomic_output(path: str | Path | None, binary: bool = False) -> Iterator[IO]
             fh.flush()
             os.fsync(fh.fileno())
         os.chmod(tmp, _mode_for(target))
+        refuse_protected(target, path)  # (made read-only while this run wrote)
         os.replace(tmp, target)
         PENDING.discard(tmp)
         PROMISED.discard(str(path))
@@ -180,6 +181,20 @@ def _mode_for(target: Path) -> int:
         return 0o666 & ~umask
 
 
+def refuse_protected(target: Path, given: str | Path) -> None:
+    """ExportError when the existing file ``target`` is write-protected: not writable by this user, or with no write
+    permission bit at all (mode 0444, which root could write too). The atomic rename needs only the directory to be
+    writable, so without this check ``-o`` would replace a file the user protected, where a shell redirect is
+    refused."""
+    try:
+        mode = os.stat(target).st_mode
+    except OSError:
+        return
+    if stat.S_ISREG(mode) and (not mode & 0o222 or not os.access(target, os.W_OK)):
+        raise ExportError(f"output {given}: the file is write-protected (mode {stat.S_IMODE(mode):04o}); it is left as "
+                          "it is: make it writable (chmod u+w) or give another file")
+
+
 def check_writable(path: str | Path | None) -> None:
     """Fail early (before anything is computed or written) when ``path`` cannot be an output file: empty,
     a directory, in a directory that does not exist or cannot be written (read-only file system, no
@@ -187,6 +202,8 @@ def check_writable(path: str | Path | None) -> None:
     if path is None or str(path) == "-":
         return
     target, in_place = _output_target(path)
+    if not in_place:
+        refuse_protected(target, path)
     # the temp file is created in the directory (the rename needs it writable); in place, the file itself
     where = target if in_place else (target.parent if str(target.parent) else Path("."))
     if not os.access(where, os.W_OK):

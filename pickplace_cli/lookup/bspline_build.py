@@ -10,7 +10,6 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-import os
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Callable, Sequence
@@ -20,7 +19,8 @@ import numpy as np
 from ..model.errors import TableError
 from .bspline_optimum import _coarse_for, _optimise_chunk, ALGORITHM_VERSION, optimise_lambda, TableRow, TableSettings
 from .bspline_table import COLUMNS, Table
-from .executors import ignore_sigint
+from .checkpoint import CheckpointWriter, refuse_row_of_other_run
+from .executors import local_pool
 
 if TYPE_CHECKING:  # pragma: no cover
     from concurrent.futures import Executor
@@ -95,46 +95,23 @@ def read_checkpoint(path: Path, settings: TableSettings) -> dict[float, TableRow
             if lineno == len(lines):
                 break  # cut short by a kill while writing
             raise TableError(f"checkpoint {path}:{lineno}: not a table row; delete the file") from None
+        refuse_row_of_other_run(rec, key, path, lineno)
         rows[row.lam] = row
     return rows
 
 
-class _Checkpoint:
-    """Appends finished rows to the checkpoint file, flushed and synced per batch of rows."""
+class _Checkpoint(CheckpointWriter):
+    """Appends finished rows to the checkpoint file, flushed and synced per batch of rows (a failed write restores
+    the file and names it: :class:`~pickplace_cli.lookup.checkpoint.CheckpointWriter`)."""
 
     def __init__(self, path: Path, settings: TableSettings, append: bool) -> None:
-        self.path = path
-        try:
-            if append and path.exists():
-                _drop_cut_line(path)
-            self.fh = open(path, "a" if append else "w", encoding="utf-8")
-        except OSError as exc:
-            raise TableError(f"checkpoint {path}: cannot write: {exc.strerror}") from None
-        if not append or self.fh.tell() == 0:
-            head = {"checkpoint": "pickplace build-table", "settings_key": settings_key(settings),
-                    "settings": asdict(settings), "algorithm": ALGORITHM_VERSION}
-            self.fh.write(json.dumps(head, sort_keys=True) + "\n")
-            self._sync()
+        head = {"checkpoint": "pickplace build-table", "settings_key": settings_key(settings),
+                "settings": asdict(settings), "algorithm": ALGORITHM_VERSION}
+        super().__init__(path, head, settings_key(settings), append)
 
-    def add(self, rows: Sequence[TableRow]) -> None:
-        for r in rows:  # floats as repr: they read back bit for bit
-            self.fh.write(json.dumps(dict(zip(COLUMNS, (r.lam, r.k1, r.k2, r.a_max, r.j_max, r.v_max, r.F, r.a_min, r.j_min)))) + "\n")
-        self._sync()
-
-    def _sync(self) -> None:
-        self.fh.flush()
-        os.fsync(self.fh.fileno())
-
-    def close(self) -> None:
-        self.fh.close()
-
-
-def _drop_cut_line(path: Path) -> None:
-    """Truncate a last line cut short by a kill (no newline), so appended rows start on a line of their own."""
-    with open(path, "rb+") as fh:
-        data = fh.read()
-        if data and not data.endswith(b"\n"):
-            fh.truncate(data.rfind(b"\n") + 1)
+    def add(self, rows: Sequence[TableRow]) -> None:  # type: ignore[override]
+        super().add([dict(zip(COLUMNS, (r.lam, r.k1, r.k2, r.a_max, r.j_max, r.v_max, r.F, r.a_min, r.j_min)))
+                     for r in rows])
 
 
 @dataclass(frozen=True)
@@ -202,9 +179,7 @@ def run_build(
             from concurrent.futures import as_completed
 
             if executor is None:
-                from concurrent.futures import ProcessPoolExecutor
-
-                executor = pool = ProcessPoolExecutor(max_workers=workers, initializer=ignore_sigint)
+                executor = pool = local_pool(workers)
             futures = [executor.submit(_optimise_chunk, chunk, settings) for chunk in chunks]
             for fut in as_completed(futures):
                 rows = fut.result()

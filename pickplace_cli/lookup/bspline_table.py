@@ -246,6 +246,9 @@ TABLE_MAX_BYTES = 16 << 20
 def read_table_file(path: Path, parse: Callable[[str, str], object], source: str, build_hint: str):
     """Parse a table file once per (path, mtime, size) (shared by the Li and conveyor tables); TableError
     when it is missing (saying how to build it: ``build_hint``) or unreadable."""
+    from ..model.files import require_regular_file
+
+    require_regular_file(str(path), "table", TableError)  # a named pipe with no writer would block forever
     try:
         st = path.stat()
         key = (st.st_dev, st.st_ino, st.st_mtime_ns, st.st_size, source)  # the file itself, as it is now

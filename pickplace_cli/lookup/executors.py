@@ -10,6 +10,8 @@
 
 from __future__ import annotations
 
+import os
+import sys
 from contextlib import contextmanager
 from typing import TYPE_CHECKING, Iterator
 
@@ -23,12 +25,57 @@ CONNECT_TIMEOUT = 10.0
 
 
 def ignore_sigint() -> None:  # pragma: no cover - runs in the worker processes
-    """The initializer of every local process pool (table builds, ``-j N`` batches and streams): workers leave
-    Ctrl-C (SIGINT to the whole process group) to the parent, which checkpoints or stops in order and prints its
-    one line."""
+    """Workers leave Ctrl-C (SIGINT to the whole process group) to the parent, which checkpoints or stops in order
+    and prints its one line."""
     import signal
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def die_with_parent(parent: int) -> None:  # pragma: no cover - runs in the worker processes
+    """Make this worker die when its parent ``parent`` (a pid) does, however the parent ends (SIGKILL by a
+    supervisor or the OOM killer included): Linux's parent-death signal (``prctl(PR_SET_PDEATHSIG, SIGKILL)``),
+    elsewhere a daemon thread that watches the parent's pid once a second. A parent that is already gone when this
+    runs (it died while the worker started) ends the worker at once. Without it, orphaned workers went on for
+    minutes holding the stderr pipe (``… 2>&1 | tee log`` never ended) and the build's checkpoint open."""
+    import signal
+
+    armed = False
+    if sys.platform.startswith("linux"):
+        try:
+            import ctypes
+
+            libc = ctypes.CDLL(None, use_errno=True)
+            armed = libc.prctl(1, int(signal.SIGKILL), 0, 0, 0) == 0  # 1 = PR_SET_PDEATHSIG
+        except (OSError, AttributeError):
+            armed = False
+    if os.getppid() != parent:  # the parent died before the signal was armed
+        os._exit(1)
+    if not armed:
+        import threading
+        import time
+
+        def watch() -> None:
+            while os.getppid() == parent:
+                time.sleep(1.0)
+            os._exit(1)
+
+        threading.Thread(target=watch, daemon=True, name="parent-watch").start()
+
+
+def worker_init(parent: int) -> None:  # pragma: no cover - runs in the worker processes
+    """The initializer of every local process pool (table builds, ``-j N`` batches and streams, compare):
+    :func:`ignore_sigint` and :func:`die_with_parent`."""
+    ignore_sigint()
+    die_with_parent(parent)
+
+
+def local_pool(workers: int):
+    """A ``ProcessPoolExecutor`` of ``workers`` processes whose workers leave Ctrl-C to this process and die with
+    it (:func:`worker_init`)."""
+    from concurrent.futures import ProcessPoolExecutor
+
+    return ProcessPoolExecutor(max_workers=workers, initializer=worker_init, initargs=(os.getpid(),))
 
 
 @contextmanager

@@ -20,7 +20,6 @@ import hashlib
 import io
 import json
 import math
-import os
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Callable, Sequence
@@ -28,8 +27,9 @@ from typing import TYPE_CHECKING, Callable, Sequence
 import numpy as np
 
 from ..model.errors import TableError
-from .bspline_build import BuildReport, _drop_cut_line, step_grid
-from .executors import ignore_sigint
+from .bspline_build import BuildReport, step_grid
+from .checkpoint import CheckpointWriter, refuse_row_of_other_run
+from .executors import local_pool
 from .bspline_optimum import ALGORITHM_VERSION, TableRow, TableSettings, _optimise_chunk
 from .bspline_table import COLUMNS, read_numeric_table, read_table_file, write_meta
 
@@ -313,21 +313,14 @@ def read_checkpoint_2d(path: Path, settings: TableSettings) -> dict[tuple[float,
             if lineno == len(lines):
                 break
             raise TableError(f"checkpoint {path}:{lineno}: not a table row; delete the file") from None
+        refuse_row_of_other_run(rec, key, path, lineno)
     return rows
 
 
-def _open_checkpoint(path: Path, settings: TableSettings, append: bool):
-    try:
-        if append and path.exists():
-            _drop_cut_line(path)
-        fh = open(path, "a" if append else "w", encoding="utf-8")
-    except OSError as exc:
-        raise TableError(f"checkpoint {path}: cannot write: {exc.strerror}") from None
-    if not append or fh.tell() == 0:
-        head = {"checkpoint": "pickplace build-table 2d", "settings_key": settings_key_2d(settings, ()),
-                "settings": asdict(replace(settings, eta=0.5)), "algorithm": ALGORITHM_VERSION}
-        fh.write(json.dumps(head, sort_keys=True) + "\n")
-    return fh
+def _open_checkpoint(path: Path, settings: TableSettings, append: bool) -> CheckpointWriter:
+    head = {"checkpoint": "pickplace build-table 2d", "settings_key": settings_key_2d(settings, ()),
+            "settings": asdict(replace(settings, eta=0.5)), "algorithm": ALGORITHM_VERSION}
+    return CheckpointWriter(path, head, settings_key_2d(settings, ()), append)
 
 
 def _optimise_chunk_2d(eta: float, lams: Sequence[float], settings: TableSettings) -> tuple[float, list[TableRow]]:
@@ -375,20 +368,18 @@ def run_build_2d(
         for r in rows:
             done[(eta, r.lam)] = r
         if fh is not None:
-            for r in rows:
-                fh.write(json.dumps({"eta": eta, **dict(zip(COLUMNS, (r.lam, r.k1, r.k2, r.a_max, r.j_max, r.v_max, r.F, r.a_min, r.j_min)))}) + "\n")
-            fh.flush()
-            os.fsync(fh.fileno())
+            fh.add([{"eta": eta, **dict(zip(COLUMNS, (r.lam, r.k1, r.k2, r.a_max, r.j_max, r.v_max, r.F, r.a_min, r.j_min)))}
+                    for r in rows])
         if progress:
             progress(len(done), total)
 
     pool, futures = None, []
     try:
         if tasks and parallel:
-            from concurrent.futures import ProcessPoolExecutor, as_completed
+            from concurrent.futures import as_completed
 
             if executor is None:
-                executor = pool = ProcessPoolExecutor(max_workers=workers, initializer=ignore_sigint)
+                executor = pool = local_pool(workers)
             futures = [executor.submit(_optimise_chunk_2d, e, chunk, settings) for e, chunk in tasks]
             for fut in as_completed(futures):
                 finish(*fut.result())

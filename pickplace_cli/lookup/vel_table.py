@@ -328,11 +328,11 @@ def build_vel_table(
     total = len(items)
     done = 0
     if workers > 1:
-        from concurrent.futures import ProcessPoolExecutor, as_completed
+        from concurrent.futures import as_completed
 
-        from .executors import ignore_sigint
+        from .executors import local_pool
 
-        with ProcessPoolExecutor(max_workers=workers, initializer=ignore_sigint) as pool:  # Ctrl-C: the parent's
+        with local_pool(workers) as pool:  # Ctrl-C: the parent's
             futures = [pool.submit(_solve_chunk, c) for c in chunks]
             try:
                 for fut in as_completed(futures):

@@ -388,19 +388,18 @@ def _yaml_with_lines(text: str, source: str, what: str = "profile") -> tuple[Any
     if len(text) > PROFILE_MAX_BYTES:
         raise ProfileError(f"{source}: {len(text)} characters; a {what} may have at most {PROFILE_MAX_BYTES} "
                            "(1 MiB): is this the right file?")
-    loader = _safe_loader(text, source, what)
+    loader = None
     try:
+        loader = _safe_loader(text, source, what)  # (its reader refuses control characters at once: inside the try)
         node = loader.get_single_node()
         if node is None:
             return None, {}
         data = loader.construct_document(node)
     except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f"{source}:{mark.line + 1}" if mark else source
-        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
-        raise ProfileError(f"{where}: not valid YAML: {problem}") from None
+        raise ProfileError(_yaml_problem(exc, text, source)) from None
     finally:
-        loader.dispose()
+        if loader is not None:
+            loader.dispose()
     lines: dict[tuple, int] = {}
 
     def walk(n: Any, path: tuple) -> None:
@@ -421,6 +420,24 @@ def _yaml_with_lines(text: str, source: str, what: str = "profile") -> tuple[Any
 
     walk(node, ())
     return data, lines
+
+
+def _yaml_problem(exc, text: str, source: str) -> str:
+    """One line for a YAML error: ``FILE:LINE: not valid YAML: PROBLEM``; a character YAML does not allow (a control
+    character such as VT, FF or BEL, U+FFFE) is named by its code and line."""
+    mark = getattr(exc, "problem_mark", None)
+    line = mark.line + 1 if mark else None
+    position = getattr(exc, "position", None)  # a ReaderError: the character's offset in the text
+    if line is None and isinstance(position, int):
+        line = text.count("\n", 0, position) + 1
+    where = f"{source}:{line}" if line else source
+    character = getattr(exc, "character", None)
+    if isinstance(character, (str, int)) and position is not None:
+        code = ord(character) if isinstance(character, str) else character
+        return (f"{where}: not valid YAML: the character U+{code:04X} is not allowed in YAML text (a control character "
+                "or a non-character: delete it)")
+    problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+    return f"{where}: not valid YAML: {problem}"
 
 
 _ABSENT = object()  # a key or tuple element the document does not have
@@ -583,7 +600,13 @@ def _describe(err: dict, data: Any, lines: dict[tuple, int], source: str, errors
     kind = err["type"]
     if kind == "extra_forbidden":
         known = f"; fields here: {', '.join(holder.model_fields)}" if holder is not None else ""
-        return (f"{where}: unknown key {field!r}: not a field of this section (check spelling; keys are "
+        guess = ""
+        if holder is not None and real:
+            import difflib
+
+            close = difflib.get_close_matches(str(real[-1]), list(holder.model_fields), n=1, cutoff=0.6)
+            guess = f": did you mean {close[0]!r}?" if close else ""
+        return (f"{where}: unknown key {field!r}{guess or ': not a field of this section'} (check spelling; keys are "
                 f"case-sensitive{known})")
     if kind == "missing" and real and isinstance(real[-1], int):
         # an element of a fixed-length list is absent: the list is too short
@@ -649,9 +672,10 @@ def parse_profile(text: str, source: str = "<profile>") -> Profile:
         profile = Profile.model_validate(data)
     except ValidationError as exc:
         errors = _prune_union_branches(exc.errors(), data)
-        first = _describe(errors[0], data, lines, source, errors)
-        more = f" (and {len(errors) - 1} more problem{'s' if len(errors) > 2 else ''})" if len(errors) > 1 else ""
-        raise ProfileError(first + more) from None
+        # every problem, one line each: unknown keys first (a misspelt key also makes its field "missing")
+        errors.sort(key=lambda e: 0 if e["type"] == "extra_forbidden" else 1)
+        described = list(dict.fromkeys(_describe(e, data, lines, source, errors) for e in errors))
+        raise ProfileError("\n".join(described)) from None
     if profile.controller is not None:  # the drive view against the robot: joint count, kinds, drives
         from .controller import fit_problem
 
@@ -660,12 +684,18 @@ def parse_profile(text: str, source: str = "<profile>") -> Profile:
             path, value, rule = problem
             where = f"{source}:{lines[path]}" if path in lines else source
             raise ProfileError(f"{where}: {'.'.join(str(p) for p in path)} = {_show(value)}: {rule}")
+    from .plausible import check_units
+
+    check_units(profile, source)  # numbers in rpm, degrees, millimetres: refused or warned (model/plausible.py)
     return profile
 
 
 def load_profile(name_or_path: str | Path | None = None) -> Profile:
     """Load and validate a profile from a path or a shipped profile name (default: the default profile)."""
     path = resolve_profile_path(name_or_path)
+    from .files import require_regular_file
+
+    require_regular_file(str(path), "profile", ProfileError)  # a named pipe with no writer would block forever
     try:
         with open(path, "rb") as fh:  # bounded: a huge file is refused without reading it all
             raw = fh.read(PROFILE_MAX_BYTES + 1)

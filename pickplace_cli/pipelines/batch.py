@@ -338,8 +338,25 @@ def plan_rows(
         except PickplaceError as exc:
             yield RowResult(r.row, None, f"row {r.row} ({source}:{r.line}): {exc}", exc.exit_code)
             code = exc.exit_code
+        except Exception as exc:  # noqa: BLE001 - a row's failure is that row's answer, never the batch's end
+            code = 1
+            yield RowResult(r.row, None, f"row {r.row} ({source}:{r.line}): {unexpected_failure(exc, v, options.time, options.rate or profile.planning.rate)}", code)
         if fail_fast and code:
             return
+
+
+def unexpected_failure(exc: Exception, values: dict, time, rate: float) -> str:
+    """The words for a row that failed in a way no check foresaw: out of memory (with the trajectory's size when the
+    row gives its duration), or an internal error named by its type."""
+    if isinstance(exc, MemoryError):
+        t = values.get("time", time)
+        size = ""
+        if isinstance(t, (int, float)) and rate:
+            size = f" ({t:g} s at {rate:g} Hz: {t * rate + 1:,.0f} samples of every column)"
+        return (f"out of memory planning this move{size}; plan it alone, at a lower --rate, or with more memory "
+                "(a batch holds one row's trajectory at a time)")
+    detail = " ".join(str(exc).split())[:200]
+    return f"internal error ({type(exc).__name__}: {detail}); this row was not planned"
 
 
 def _plan_belt_row(r: BatchRow, profile, options, height, eta, source: str):
@@ -433,13 +450,11 @@ def run_chunks_in_order(fn, args: list, workers: int, fail_fast: bool) -> Iterat
     """``fn(a)`` → list of RowResult for every ``a`` of ``args`` on a process pool of ``workers``; yields the
     results in the order of ``args`` (and within each list), stops after the first failing row when
     ``fail_fast`` and cancels the chunks not started yet."""
-    from concurrent.futures import ProcessPoolExecutor
-
-    from ..lookup.executors import ignore_sigint
+    from ..lookup.executors import local_pool
 
     # the workers leave Ctrl-C (SIGINT to the terminal's whole process group) to this process: it cancels the chunks
     # not started and waits for the running ones (one chunk: 25 plans, or 500 verdicts) without a traceback from each
-    with ProcessPoolExecutor(max_workers=workers, initializer=ignore_sigint) as pool:
+    with local_pool(workers) as pool:
         futures = [pool.submit(fn, a) for a in args]
         try:
             for fut in futures:

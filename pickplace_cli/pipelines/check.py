@@ -22,7 +22,7 @@ the same joint mapping, dynamics and limit check as ``plan``.
 from __future__ import annotations
 
 import csv
-import io
+import math
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -96,15 +96,66 @@ def _number(cell: str, name: str, source: str, line: int, column: str) -> float:
     try:
         x = plain_float(cell.strip())
     except ValueError:
-        raise TaskError(f"{source}:{line}: {name} = {cell.strip()!r}: not a number (column {column})") from None
+        shown = cell.strip() if len(cell.strip()) <= 40 else cell.strip()[:40] + "…"
+        raise TaskError(f"{source}:{line}: {name} = {shown!r}: not a number (column {column})") from None
     if not np.isfinite(x):
         raise TaskError(f"{source}:{line}: {name} = {cell.strip()}: must be a finite number (column {column})")
     return x
 
 
-def read_moves(text: str, source: str, joint_names: tuple[str, ...]) -> list[Samples]:
+def _cells(line: str, sep: str, source: str, number: int) -> list[str]:
+    """The cells of one line (quotes as CSV has them, within the line); TaskError naming the line for a quote that is
+    not closed, a field over csv's size limit, and the like (never the rest of the file in the message)."""
+    if '"' not in line:
+        return line.split(sep)
+    try:
+        return next(csv.reader([line], delimiter=sep, strict=True))
+    except csv.Error as exc:
+        raise TaskError(f"{source}:{number}: not a CSV row ({exc}): a quote opened and not closed on this line?") from None
+
+
+#: the units a header may give a checked column in, and the factor to SI: time, an angle, a length
+TIME_UNITS = {"": 1.0, "s": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6}
+JOINT_UNITS = {"rad": {"": 1.0, "rad": 1.0, "deg": math.pi / 180, "°": math.pi / 180},
+               "m": {"": 1.0, "m": 1.0, "mm": 1e-3}}
+
+
+def column_scales(names: list[str], joint_units: tuple[str, ...] | None, source: str, line: int) -> np.ndarray:
+    """Factors from the units in the header cells ``names`` (``t[ms]``, ``q1[deg]``, ``q3[mm]``; no unit: SI) of the
+    columns t, q1 … qn to s, rad or m; TaskError naming the column for a unit that is not one of the column's
+    (``q1[rpm]``, ``q3[deg]`` of a prismatic joint). Derivative columns are not read (check derives them)."""
+    out = np.ones(len(names))
+    for k, cell in enumerate(names):
+        unit = cell.split("[", 1)[1].rstrip("]").strip() if "[" in cell else ""
+        base = cell.split("[")[0].strip()
+        if k == 0:
+            table, kind = TIME_UNITS, "s"
+        else:
+            kind = joint_units[k - 1] if joint_units is not None else "rad"
+            table = JOINT_UNITS.get(kind, {"": 1.0, kind: 1.0})
+        if unit not in table:
+            units = [u for u in table if u]
+            allowed = ", ".join(units[:-1]) + " or " + units[-1] if len(units) > 1 else units[0]
+            raise TaskError(f"{source}:{line}: column {cell!r}: {base} is read in {allowed} (the header's unit "
+                            f"{unit!r} is not one of them)")
+        out[k] = table[unit]
+    return out
+
+
+def _si_tool_unit(cell: str) -> bool:
+    """Whether a tool column's header names the SI unit this tool writes (x [m], vx [m/s], ax [m/s^2], jx [m/s^3]),
+    or none."""
+    name, _, unit = cell.strip().partition("[")
+    unit = unit.rstrip("]").strip().replace("²", "^2").replace("³", "^3")
+    order = {"v": 1, "a": 2, "j": 3}.get(name.strip()[0], 0) if len(name.strip()) == 2 else 0
+    return unit in ("", ("m", "m/s", "m/s^2", "m/s^3")[order])
+
+
+def read_moves(text: str, source: str, joint_names: tuple[str, ...],
+               joint_units: tuple[str, ...] | None = None) -> list[Samples]:
     """The moves of a trajectory CSV (see the module docstring); TaskError naming the file, line, column and
-    value of the first problem."""
+    value of the first problem. Units in the header (``t[ms]``, ``q1[deg]``, ``q3[mm]``, :func:`column_scales`;
+    ``joint_units`` "rad" or "m" per joint, default rad) are converted to s, rad and m."""
     from .batch import sniff_delimiter
 
     numbered = [(n, ln) for n, ln in enumerate(text.removeprefix("\ufeff").splitlines(), start=1)
@@ -114,7 +165,7 @@ def read_moves(text: str, source: str, joint_names: tuple[str, ...]) -> list[Sam
         raise TaskError(f"{source}: empty file (need a header with {', '.join(need)})")
     head_line, head = numbered[0]
     sep = sniff_delimiter(head)
-    rows = list(csv.reader(io.StringIO("\n".join(ln for _, ln in numbered)), delimiter=sep))
+    rows = [_cells(ln, sep, source, n) for n, ln in numbered]  # line by line: an open quote ends with its line
     header = [h.strip().split("[")[0].strip() for h in rows[0]]
     missing = [c for c in need if c not in header]
     if missing:
@@ -125,8 +176,11 @@ def read_moves(text: str, source: str, joint_names: tuple[str, ...]) -> list[Sam
         raise TaskError(f"{source}:{head_line}: a header and no samples (need rows of {', '.join(need)} after it; "
                         f"a move needs at least {MIN_SAMPLES})")
     tool = [c for c in TOOL_COLUMNS if c in header] if all(c in header for c in TOOL_COLUMNS) else []
+    if tool and not all(_si_tool_unit(rows[0][header.index(c)]) for c in tool):
+        tool = []  # the tool columns in other units than this tool writes: the joint positions alone are used
     cols = need + tool + (["move"] if "move" in header else [])
     idx = [header.index(c) for c in cols]
+    scales = column_scales([rows[0][i].strip() for i in idx[: len(need)]], joint_units, source, head_line)
     data = np.empty((len(rows) - 1, len(cols)))
     lines = np.array([n for n, _ in numbered[1:]], dtype=int)
     for k, (r, line) in enumerate(zip(rows[1:], lines)):
@@ -136,6 +190,7 @@ def read_moves(text: str, source: str, joint_names: tuple[str, ...]) -> list[Sam
                     f"{source}:{line}: {name}: no value (the row has {len(r)} cells, the header {len(header)})"
                 )
             data[k, c] = _number(r[i], name, source, int(line), f"{i + 1}, {rows[0][i].strip()!r}")
+    data[:, : len(need)] *= scales  # the header's units (ms, deg, mm) to s, rad, m
     nq = len(joint_names)
     extra = (lambda a, b: data[a:b, 1 + nq:1 + nq + 12]) if tool else (lambda a, b: None)
     if "move" not in header:
@@ -376,11 +431,11 @@ CHECK_MAX_BYTES = 64 << 20
 
 
 def check_file(path: str | Path, profile: Profile, smoothing: float | str = 0.0,
-               limit_use: float | None = None) -> list[MoveCheck]:
+               limit_use: float | None = None, notify=None) -> list[MoveCheck]:
     """Limit report of every move in CSV file ``path`` (``-`` = stdin) on ``profile`` (module docstring).
     ``smoothing``: m² per sample, or "auto" (the noise level of the data, :func:`~pickplace_cli.curves.sampled.
     noise_level`, squared); ``limit_use``: the fraction of every timed limit's rating allowed (default: the
-    profile's planning.limit_use)."""
+    profile's planning.limit_use); ``notify(text)``: told what a named pipe without a writer is waiting for."""
     from ..model.headroom import apply_limit_use
 
     profile = apply_limit_use(profile, limit_use)
@@ -391,8 +446,10 @@ def check_file(path: str | Path, profile: Profile, smoothing: float | str = 0.0,
     try:
         if str(path) == "-":
             raw = sys.stdin.buffer.read(CHECK_MAX_BYTES + 1)
-        else:
-            with open(p, "rb") as fh:
+        else:  # (a named pipe: its writer awaited for a bounded time, saying so through ``notify``)
+            from ..model.files import open_for_reading
+
+            with open(open_for_reading(str(p), "trajectory", TaskError, notify=notify), "rb") as fh:
                 raw = fh.read(CHECK_MAX_BYTES + 1)
     except OSError as exc:
         raise TaskError(f"{p}: cannot read: {exc.strerror}") from None
@@ -409,7 +466,7 @@ def check_file(path: str | Path, profile: Profile, smoothing: float | str = 0.0,
         raise TaskError(f"{source}: not a text (UTF-8) file") from None
     robot = build_robot(profile.robot)
     out = []
-    for s in read_moves(text, source, robot.joint_names):
+    for s in read_moves(text, source, robot.joint_names, robot.joint_units):
         out.append(MoveCheck(s.move, int(s.lines[0]), s.last_line,
                              check_samples(s, profile, smoothing, source).rated(profile.limit_use)))
     return out

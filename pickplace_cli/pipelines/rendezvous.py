@@ -387,15 +387,17 @@ def allowed_interval(part: Part, profile, dwell: float) -> tuple[float, float, s
             )
         a_w, b_w = enter - part.latency, leave - part.latency - dwell
     speed = part.speed
-    dt = min(WORKSPACE_STEP / speed, HORIZON / 200) if speed > 0 else HORIZON
+    # (a part at rest: one position, sampled as a slow belt's; it was sampled once, 20 s after the start, and every
+    # move waited 20 s for it)
+    dt = min(WORKSPACE_STEP / speed, HORIZON / 200) if speed > 0 else HORIZON / 200
     t = np.arange(0.0, HORIZON + dwell + dt, dt)
     inside = workspace_mask(profile, part.at(t))
     m = int(math.ceil(dwell / dt - 1e-9))  # samples the tracking segment spans after the meeting
     cs = np.concatenate([[0], np.cumsum(~inside)])
     n = len(t) - m
-    ok = (cs[m + 1: m + 1 + n] - cs[:n]) == 0  # every sample of [t_k, t_k + dwell] inside
+    inside_k = (cs[m + 1: m + 1 + n] - cs[:n]) == 0  # every sample of [t_k, t_k + dwell] inside
     tk = t[:n]
-    ok &= (tk >= max(T_MIN, a_w) - 1e-12) & (tk <= b_w + 1e-12)
+    ok = inside_k & (tk >= max(T_MIN, a_w) - 1e-12) & (tk <= b_w + 1e-12)
     first = np.flatnonzero(ok)
     if not first.size:
         where = "the belt window and " if window is not None else ""
@@ -407,6 +409,8 @@ def allowed_interval(part: Part, profile, dwell: float) -> tuple[float, float, s
     k = int(first[0])
     end = k + int(np.argmin(ok[k:])) if not ok[k:].all() else n
     a = max(float(tk[k]), a_w, T_MIN)
+    if k > 0 and inside_k[k - 1]:  # inside since the sample before: the stretch starts where T_MIN or the window say
+        a = max(a_w, T_MIN, float(tk[k - 1]))
     if end >= n:
         b, what = min(float(tk[-1]), b_w), "horizon"
     else:

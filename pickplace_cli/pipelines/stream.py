@@ -59,16 +59,15 @@ def plan_stream(
 
     pool = None
     if workers > 1:
-        from concurrent.futures import ProcessPoolExecutor
+        from ..lookup.executors import local_pool
 
-        from ..lookup.executors import ignore_sigint
-
-        pool = ProcessPoolExecutor(max_workers=workers, initializer=ignore_sigint)  # Ctrl-C: this process's
+        pool = local_pool(workers)  # Ctrl-C: this process's
         # fork every worker now, before the reader thread exists: a worker forked while that thread is blocked in
         # a read of stdin inherits stdin's lock held, and hangs closing stdin at start-up (multiprocessing's
         # _close_stdin); with the fork method the first submit starts them all
         pool.submit(int).result()
     threading.Thread(target=reader, daemon=True, name="batch-reader").start()
+    interrupted = False
     try:
         finished = False
         while not finished:
@@ -91,9 +90,14 @@ def plan_stream(
                     return
             if error is not None:
                 raise error
+    except KeyboardInterrupt:
+        interrupted = True
+        raise
     finally:
         if pool is not None:
-            pool.shutdown(wait=False, cancel_futures=True)
+            # waited for (the rows in flight; the rest cancelled) unless Ctrl-C: a pool left to the interpreter's
+            # exit races its manager thread closing the wake-up pipe (Python < 3.12: an OSError traceback at exit)
+            pool.shutdown(wait=not interrupted, cancel_futures=True)
 
 
 def _answer(batch: list, profile, options, height, eta, source, pool, workers, csv_dialect, format_failed,

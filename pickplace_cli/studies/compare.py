@@ -463,6 +463,9 @@ def compare_row(task, profile, method, params: Mapping[str, Any] | None = None, 
             notes.append(f"fit: {exc}")
     except PickplaceError as exc:
         return CompareRow(name, error=str(exc), exit_code=exc.exit_code)
+    except Exception as exc:  # noqa: BLE001 - one method's failure is that method's row, never the comparison's end
+        detail = " ".join(str(exc).split())[:200]
+        return CompareRow(name, error=f"internal error ({type(exc).__name__}: {detail})", exit_code=1)
     path = result.cartesian.path
     T = result.duration.seconds
     grid = _dense_grid(path)

@@ -407,7 +407,7 @@ def choose_duration_for(
         raise TaskError(f"time = {spec}: needs the robot model (plan through pickplace_cli.planner.plan)")
     t_fit, fit_binding, fpath = fit_duration_for(factory, model_of, dwell, start=t_auto)
     final = getattr(factory, "final", None)
-    if final is not None and t_fit is not None and not final(t_fit)[1]:
+    if final is not None and t_fit is not None and not final(t_fit)[1]:  # (a final check needs a duration)
         t_fit, fit_binding, fpath = fit_duration_for(factory, model_of, dwell, start=t_auto)
     if spec == "limits":  # the fit and the capacity: the longer of the two, the capacity confirmed at a longer fit
         if t_fit is None or t_fit <= t_auto:

@@ -31,6 +31,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ..model.threads import single_blas_thread
+
 #: cubic B-spline coefficients of b(τ) of the first solve (uniform knots in τ)
 LAW_COEFFICIENTS = 20
 #: the default (``coefficients=None``, ``--law-coefficients auto``): the first law is refined to this many
@@ -345,6 +347,7 @@ def _solve(prob: _Problem, x: np.ndarray, keep: np.ndarray, t_fit: float) -> tup
     return np.exp(y), nit, message, rounds
 
 
+@single_blas_thread
 def optimal_law(model, dwell: float, t_fit: float, coefficients: int | None = None,
                 capacity=None, start: np.ndarray | None = None, direct: bool = False) -> LawResult:
     """Minimise the duration of ``model``'s path over time laws b(τ) (module docstring), warm-started at the

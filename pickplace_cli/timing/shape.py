@@ -22,6 +22,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..model.threads import single_blas_thread
+
 #: uniform points of the screening grid (plus the knots and the check's points per span)
 SHAPE_SAMPLES = 101
 #: default range searched for η (Li 2018 uses 0.5; the λ × η table covers 0.1 … 0.9); k1, k2 in K_SEARCH
@@ -105,6 +107,7 @@ class ShapeResult:
     note: str
 
 
+@single_blas_thread
 def optimise_shape(task, profile, model_of, eta_fixed: float | None = None,
                    eta_range: tuple[float, float] = ETA_RANGE,
                    table_shape: tuple[float, float, float] | None = None, capacity=None) -> ShapeResult:

@@ -61,7 +61,11 @@ def test_header_only_batch_is_one_line_exit_1_and_writes_nothing(tmp_path, extra
         f"pickplace: error: {src}:1: no moves after the header (need one row per move with from_x, from_y, "
         "from_z, to_x, to_y, to_z)"
     ]
-    assert not out.exists() and r.stdout == ""
+    assert not out.exists()
+    if "--json" in extra:  # the error that ends the batch is also the JSON document on stdout
+        assert json.loads(r.stdout) == {"exit_code": 1, "error": r.stderr.splitlines()[0].removeprefix("pickplace: error: ")}
+    else:
+        assert r.stdout == ""
 
 
 def test_limit_lines_of_a_row_are_the_single_plans_lines_with_row_and_line(tmp_path):

@@ -196,7 +196,9 @@ def test_invalid_utf8_is_named_at_its_line_after_the_rows_before_it(tmp_path):
     r = subprocess.run([sys.executable, "-m", "pickplace_cli", "plan", "--batch", "-", "--json", "-q"],
                        input=payload, capture_output=True, timeout=TIMEOUT)
     assert r.returncode == 1
-    assert [json.loads(x)["row"] for x in r.stdout.decode().splitlines()] == [1]
+    docs = [json.loads(x) for x in r.stdout.decode().splitlines()]
+    assert [d["row"] for d in docs[:-1]] == [1]
+    assert "row" not in docs[-1] and "stdin:3: not UTF-8 text" in docs[-1]["error"]  # the error that ended the stream
     assert "stdin:3: not UTF-8 text" in r.stderr.decode()
     f = tmp_path / "latin.csv"
     f.write_bytes(payload)

@@ -13,6 +13,8 @@ import time
 
 import pytest
 
+from tests.procs import alive, children, group
+
 HEADER = "from_x,from_y,from_z,to_x,to_y,to_z\n"
 ROW = "-0.1525,0,-0.8,0.1525,0,-0.8\n"
 ADEPT = ["--from", "-0.1525,0,-0.8", "--to", "0.1525,0,-0.8"]
@@ -23,36 +25,7 @@ def _cli(*args: str) -> list[str]:
     return [sys.executable, "-m", "pickplace_cli", *args]
 
 
-def _procs(field: int, value: int) -> list[int]:
-    """The live processes whose /proc stat field ``field`` (after the name: 1 = parent, 2 = process group) is
-    ``value`` (no psutil)."""
-    out = []
-    for entry in os.listdir("/proc"):
-        if entry.isdigit():
-            try:
-                with open(f"/proc/{entry}/stat") as fh:
-                    fields = fh.read().rsplit(")", 1)[1].split()
-            except OSError:
-                continue
-            if int(fields[field]) == value and fields[0] != "Z":
-                out.append(int(entry))
-    return out
-
-
-def _children(pid: int) -> list[int]:
-    return _procs(1, pid)
-
-
-def _group(pgid: int) -> list[int]:
-    return _procs(2, pgid)
-
-
-def _alive(pid: int) -> bool:
-    try:
-        with open(f"/proc/{pid}/stat") as fh:
-            return fh.read().rsplit(")", 1)[1].split()[0] != "Z"
-    except OSError:
-        return False
+_children, _group, _alive = children, group, alive
 
 
 @pytest.mark.skipif(not os.path.isdir("/proc"), reason="reads the process table from /proc")

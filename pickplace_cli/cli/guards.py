@@ -1,0 +1,52 @@
+"""Checks every command makes on its files before any work: no output is a file the command reads."""
+
+from __future__ import annotations
+
+from typing import Iterable, Optional
+
+
+def refuse_overwriting_inputs(outputs: Iterable[tuple[str, Optional[str]]],
+                              inputs: Iterable[tuple[str, Optional[str]]], profile: Optional[str] = "") -> None:
+    """ExportError (exit 1, one line) when an output (option, path) is a file the command reads: an input (option,
+    path) or the profile ``profile`` resolves to (a file, or a shipped name; "" when the command reads none). A
+    profile that cannot be resolved is left to the profile's own error."""
+    from ..model.errors import PickplaceError
+    from ..model.files import refuse_inputs_as_outputs
+
+    inputs = list(inputs)
+    if profile != "":
+        from ..model.profile import resolve_profile_path
+
+        try:
+            inputs.append(("-p", str(resolve_profile_path(profile))))
+        except PickplaceError:
+            pass
+    refuse_inputs_as_outputs(outputs, inputs)
+
+
+#: an output file's suffix → the trajectory format it names
+SUFFIX_FORMATS = {".csv": "csv", ".tsv": "csv", ".txt": "csv", ".json": "json", ".mcap": "mcap"}
+
+
+def output_format(ctx, fmt, output: Optional[str], option: str = "fmt"):
+    """The trajectory format: ``-f`` when given, else the one ``-o FILE``'s suffix names (``traj.mcap`` → mcap,
+    ``.json`` → json, ``.csv``/``.tsv``/``.txt`` → csv; another suffix or none: csv). Usage errors (exit 2): a ``-f``
+    that contradicts the suffix (``-f mcap -o traj.csv``), and binary MCAP to standard output that is a terminal."""
+    import os
+    import sys
+
+    from .app import OutputFormat, _usage
+
+    source = ctx.get_parameter_source(option)
+    given = source is not None and source.name != "DEFAULT"
+    named = None
+    if output not in (None, "-") and not str(output).startswith("/dev/"):
+        named = SUFFIX_FORMATS.get(os.path.splitext(str(output))[1].lower())
+    if named is not None and given and fmt.value != named:
+        _usage(f"-f {fmt.value} -o {output}: the file's suffix says {named}; give -o with a .{fmt.value} suffix "
+               f"or -f {named}")
+    if named is not None and not given:
+        fmt = OutputFormat(named)
+    if fmt == OutputFormat.mcap and output in (None, "-") and sys.stdout is not None and sys.stdout.isatty():
+        _usage("-f mcap: MCAP is binary; not written to a terminal: give -o FILE.mcap or redirect standard output")
+    return fmt

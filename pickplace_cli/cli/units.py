@@ -1,0 +1,87 @@
+"""Options in the wrong unit: a value that is a valid number in SI units but was meant in another (ms, mm, kHz).
+
+Rules (each one line on stderr; a refusal exits 1 before any work):
+
+* ``--from``/``--to`` [m]: refused when the point lies outside the profile's workcell box (a gantry: its travel; no
+  box: farther than 10 m) and the same numbers in millimetres lie inside: ``-152.5,0,-800`` (a point that is out
+  of reach either way; the message names the unit and the point in metres).
+* ``--height`` [m]: refused when it is more than the workcell box is tall (a gantry: its z travel; no box: 2 m) and
+  the same number in millimetres is not: ``--height 25`` (the path would leave the box anyway).
+* ``--time`` [s]: a warning from 10 s on (``--time 180``: milliseconds meant? a 180 s move at 1 kHz is 180,001
+  samples): a slow move can be meant (commissioning at low speed) and is planned as asked.
+* ``--rate`` [Hz]: a warning when a move gets fewer than :data:`FEW_SAMPLES` samples (``--rate 10`` for a 0.18 s
+  move: 3): the file is a correct sampling, but a drive that interpolates it follows another motion; a preview at a
+  low rate can be meant.
+"""
+
+from __future__ import annotations
+
+import sys
+
+#: a move sampled with fewer samples than this gets a warning
+FEW_SAMPLES = 10
+#: a given duration from this on [s] gets a warning
+LONG_MOVE_S = 10.0
+#: without a workcell box: a coordinate farther than this [m] is not a pick-and-place point
+FAR_M = 10.0
+#: without a workcell box: a height above this [m] is not a clearance
+TALL_M = 2.0
+
+
+def _box(prof):
+    """(min, max) [m] the tool must stay in: the workcell box, a gantry's travel, or None."""
+    box = prof.workcell.box
+    if box is not None:
+        return tuple(box.min), tuple(box.max)
+    if prof.robot.kind == "gantry":
+        axes = prof.robot.axes
+        return tuple(a.travel[0] for a in axes), tuple(a.travel[1] for a in axes)
+    return None
+
+
+def _inside(p, box) -> bool:
+    if box is None:
+        return max(abs(c) for c in p) <= FAR_M
+    return all(lo <= c <= hi for c, lo, hi in zip(p, *box))
+
+
+def check_option_units(a, prof) -> None:
+    """TaskError (exit 1) for ``--from``/``--to``/``--height`` in millimetres (module docstring); a warning for a
+    ``--time`` of 10 s or more."""
+    from ..model.errors import TaskError
+    from .app import _parse_point
+
+    box = _box(prof)
+    for name, text in (("from", a.from_), ("to", a.to)):
+        if text is None:
+            continue
+        p = _parse_point(name, text)
+        mm = [c / 1000 for c in p]
+        if not _inside(p, box) and _inside(mm, box):
+            where = "outside the workcell box" if box is not None else f"farther than {FAR_M:g} m"
+            raise TaskError(f"{name} = {text}: {where} of profile {prof.name}: millimetres meant? in metres: "
+                            f"--{name} {','.join(f'{c:g}' for c in mm)} (coordinates are in m)")
+    if a.height is not None:
+        tall = (box[1][2] - box[0][2]) if box is not None else TALL_M
+        if a.height > tall and a.height / 1000 <= tall:
+            raise TaskError(f"height = {a.height:g} m: more than the workcell of profile {prof.name} is tall "
+                            f"({tall:g} m): millimetres meant? --height {a.height / 1000:g} (the height is in m)")
+    try:
+        seconds = float(a.time)
+    except (TypeError, ValueError):
+        return
+    if seconds >= LONG_MOVE_S:
+        sys.stderr.write(f"pickplace: warning: --time {a.time}: a {seconds:g} s move; milliseconds meant? "
+                         f"--time {seconds / 1000:g} (the duration is in s)\n")
+
+
+def warn_few_samples(legs, rate) -> None:
+    """A warning when a planned move has fewer than :data:`FEW_SAMPLES` samples (module docstring)."""
+    for leg in legs:
+        n = len(leg.t)
+        if n < FEW_SAMPLES:
+            hz = rate if rate is not None else (n - 1) / max(leg.report.duration, 1e-12)
+            sys.stderr.write(f"pickplace: warning: --rate {hz:g} Hz: {n} samples for a {leg.report.duration:.4g} s "
+                             f"move (a drive interpolating them follows another motion); kHz meant? --rate "
+                             f"{hz * 1000:g} (the rate is in Hz)\n")
+            return

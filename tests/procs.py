@@ -1,0 +1,38 @@
+"""The process table as the tests read it (from /proc, no psutil): a process's parent and group, and whether it
+still runs. Shared by the signal, fault-injection and data-safety tests and by bench/fuzz.py."""
+
+from __future__ import annotations
+
+import os
+
+
+def procs(field: int, value: int) -> list[int]:
+    """The live processes whose /proc stat field ``field`` (after the name: 1 = parent, 2 = process group) is
+    ``value`` (zombies excluded)."""
+    out = []
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            try:
+                with open(f"/proc/{entry}/stat") as fh:
+                    fields = fh.read().rsplit(")", 1)[1].split()
+            except OSError:
+                continue
+            if int(fields[field]) == value and fields[0] != "Z":
+                out.append(int(entry))
+    return out
+
+
+def children(pid: int) -> list[int]:
+    return procs(1, pid)
+
+
+def group(pgid: int) -> list[int]:
+    return procs(2, pgid)
+
+
+def alive(pid: int) -> bool:
+    try:
+        with open(f"/proc/{pid}/stat") as fh:
+            return fh.read().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
