@@ -25,7 +25,10 @@ def refuse_overwriting_inputs(outputs: Iterable[tuple[str, Optional[str]]],
 
 
 #: an output file's suffix → the trajectory format it names
-SUFFIX_FORMATS = {".csv": "csv", ".tsv": "csv", ".txt": "csv", ".json": "json", ".mcap": "mcap"}
+SUFFIX_FORMATS = {".csv": "csv", ".tsv": "csv", ".txt": "csv", ".json": "json", ".mcap": "mcap", ".st": "pvt-st"}
+#: the formats a suffix agrees with when -f names one (a table a motion kernel runs is a CSV or an ST file)
+SUFFIX_AGREES = {"csv": ("csv", "pvt", "cam", "cam-table"), "json": ("json",), "mcap": ("mcap",),
+                 "pvt-st": ("pvt-st", "cam-st", "cam-table-st")}
 
 
 def output_format(ctx, fmt, output: Optional[str], option: str = "fmt"):
@@ -42,10 +45,13 @@ def output_format(ctx, fmt, output: Optional[str], option: str = "fmt"):
     named = None
     if output not in (None, "-") and not str(output).startswith("/dev/"):
         named = SUFFIX_FORMATS.get(os.path.splitext(str(output))[1].lower())
-    if named is not None and given and fmt.value != named:
-        _usage(f"-f {fmt.value} -o {output}: the file's suffix says {named}; give -o with a .{fmt.value} suffix "
-               f"or -f {named}")
-    if named is not None and not given:
+    if named is not None and given and fmt.value not in SUFFIX_AGREES[named]:
+        want = {"pvt-st": "st", "cam-st": "st", "cam-table-st": "st", "pvt": "csv", "cam": "csv",
+                "cam-table": "csv"}.get(fmt.value, fmt.value)
+        said = "Structured Text" if named == "pvt-st" else named
+        _usage(f"-f {fmt.value} -o {output}: the file's suffix says {said}; give -o with a .{want} suffix "
+               f"or a -f that writes {said}")
+    if named is not None and not given and named != "pvt-st":
         fmt = OutputFormat(named)
     if fmt == OutputFormat.mcap and output in (None, "-") and sys.stdout is not None and sys.stdout.isatty():
         _usage("-f mcap: MCAP is binary; not written to a terminal: give -o FILE.mcap or redirect standard output")

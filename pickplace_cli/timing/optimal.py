@@ -500,6 +500,7 @@ def compose(path, b) -> object:
     # t(τ) = ∫ dτ/√b: 4-point Gauss on every interval of a fine table (b is a cubic spline: ~1e-13)
     tab = np.unique(np.concatenate([np.linspace(0.0, 1.0, LAW_TABLE), np.asarray(path.breakpoints, float),
                                     b.t[3:-3]]))
+    tab = tab[np.concatenate([[True], np.diff(tab) > 1e-12])]  # round-off twins would make t(τ) stand still
     xg, wg = np.polynomial.legendre.leggauss(4)
     lo, hi = tab[:-1], tab[1:]
     nodes = (lo[:, None] + (hi - lo)[:, None] * (xg + 1) / 2)

@@ -89,22 +89,27 @@ def _si_and_converted(tmp_path: Path, profile: str, units: tuple[str, ...], fact
                       move: list[str]) -> tuple[Path, Path]:
     import csv
 
-    si = tmp_path / "si.csv"
-    assert run("plan", *move, "-p", profile, "-q", "-o", str(si)).exit_code == 0
-    rows = list(csv.reader(si.open()))
+    full = tmp_path / "full.csv"
+    assert run("plan", *move, "-p", profile, "-q", "-o", str(full)).exit_code == 0
+    rows = list(csv.reader(full.open()))
     head = rows[0]
-    cols = [head.index("t[s]")] + [next(i for i, h in enumerate(head) if h.startswith(f"q{k}[")) for k in (1, 2, 3)]
-    conv = tmp_path / "conv.csv"
-    with conv.open("w") as fh:
-        fh.write(",".join(f"{n}[{u}]" for n, u in zip(("t", "q1", "q2", "q3"), units)) + "\n")
-        for r in rows[1:]:
-            fh.write(",".join(repr(float(r[c]) * f) for c, f in zip(cols, factors)) + "\n")
+    names = ["t"] + [f"q{k}" for k in range(1, len(units))]
+    cols = [next(i for i, h in enumerate(head) if h.split("[")[0] == n) for n in names]
+    # both files hold the time and the joint positions only (the same reconstruction of the motion): SI, converted
+    si, conv = tmp_path / "si.csv", tmp_path / "conv.csv"
+    for path, us, fs in ((si, ["s"] + ["rad"] * (len(units) - 1), [1.0] * len(units)), (conv, units, factors)):
+        if path is si and profile == "scara-600":
+            us[3] = "m"
+        with path.open("w") as fh:
+            fh.write(",".join(f"{n}[{u}]" for n, u in zip(names, us)) + "\n")
+            for r in rows[1:]:
+                fh.write(",".join(repr(float(r[c]) * f) for c, f in zip(cols, fs)) + "\n")
     return si, conv
 
 
 @pytest.mark.parametrize("profile, units, factors, move", [
     ("delta-su2018", ("ms", "deg", "deg", "deg"), (1e3, 180 / math.pi, 180 / math.pi, 180 / math.pi), ADEPT),
-    ("scara-600", ("ms", "deg", "deg", "mm"), (1e3, 180 / math.pi, 180 / math.pi, 1e3),
+    ("scara-600", ("ms", "deg", "deg", "mm", "deg"), (1e3, 180 / math.pi, 180 / math.pi, 1e3, 180 / math.pi),
      ["--from", "0.3,-0.2,-0.1", "--to", "0.3,0.2,-0.1", "--time", "0.8"]),
 ])
 def test_check_honours_the_headers_units(tmp_path, profile, units, factors, move):

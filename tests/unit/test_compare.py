@@ -157,10 +157,10 @@ def test_row_agrees_with_plan(delta):
     (row,) = comp.rows
     ref = plan(ADEPT, delta, PlanOptions())
     assert row.ok and row.method == "bspline"
-    # the fit: solved on the fit grid by compare's plan, on the first samples' grid by the default's (capacity-bound)
-    # plan: the same closed form, 1e-12 apart
+    # the fit: solved and confirmed by compare's plan; where the capacity binds, the default's plan only screens it
+    # (its parabola-vertex estimate on the first samples' grid, documented to ~1e-6)
     assert row.duration == ref.duration.seconds and row.auto == ref.duration.t_auto
-    assert row.fit == pytest.approx(ref.duration.t_fit, rel=1e-12)
+    assert row.fit == pytest.approx(ref.duration.t_fit, rel=1e-6)
     v, a, j = ref.cartesian.peaks()
     # measured peaks vs the method's exact ones: 1e-9 relative (see test_true_peaks_match_exact_values)
     assert row.peak_speed == pytest.approx(v, rel=1e-9) and row.peak_acceleration == pytest.approx(a, rel=1e-9)
