@@ -30,6 +30,8 @@ STENCIL = 6
 #: difference) than the smoother of the one-sided stencils beside it; smooth data gives ratios of order 1 (the
 #: fifth derivative varies over a few samples), a jerk step of size J gives ~J/h² against p⁽⁵⁾
 STEP_RATIO = 20.0
+#: and the smoother one-sided stencils beside a step are this many times smoother than the roughest across it
+SIDE_RATIO = 100.0
 
 
 def _divided5(t: np.ndarray, p: np.ndarray, starts: np.ndarray) -> np.ndarray:
@@ -42,19 +44,45 @@ def _divided5(t: np.ndarray, p: np.ndarray, starts: np.ndarray) -> np.ndarray:
 
 
 def steps_of(t: np.ndarray, p: np.ndarray) -> np.ndarray:
-    """The intervals k (between samples k and k + 1) that hold a jerk step (module docstring), increasing; none
-    with fewer than 12 samples."""
+    """The intervals k (between samples k and k + 1) that hold a jerk step, increasing; none with fewer than 12
+    samples. A step makes every six-sample stencil across it rough (its fifth divided difference ``STEP_RATIO``
+    times the median stencil's or more): a run of two or more consecutive rough stencils starting at s₁ … s₂ holds
+    a step in the samples they share, s₂ … s₁ + 5; of those intervals the one whose one-sided stencils on either
+    side are the smoothest is the step's (a step right next to a sample leaves the stencil that starts or ends
+    there smooth, so the run can be shorter than five)."""
     n = len(t)
     if n < 2 * STENCIL:
         return np.zeros(0, int)
     last = n - STENCIL
     rough = _divided5(t, p, np.arange(last + 1))
-    k = np.arange(STENCIL - 1, n - STENCIL)  # intervals with six samples on either side
-    cand = k[:, None] + np.arange(-(STENCIL - 2), 1)[None, :]  # the stencils over interval k start at k − 4 … k
-    over = rough[cand].min(axis=1)
-    beside = np.minimum(rough[k - (STENCIL - 1)], rough[k + 1])
     level = max(float(np.median(rough)), 1e-300)
-    return k[over > STEP_RATIO * np.maximum(beside, level)]
+    hot = rough > STEP_RATIO * level
+    out = []
+    k = 0
+    while k <= last:
+        if not hot[k]:
+            k += 1
+            continue
+        s1 = k
+        while k + 1 <= last and hot[k + 1]:
+            k += 1
+        s2 = k
+        k += 1
+        if s2 == s1:  # one rough stencil alone: noise, or a step at the ends of the data
+            continue
+        cand = np.arange(max(s2, STENCIL - 1), min(s1 + STENCIL - 1, n - STENCIL - 1) + 1)
+        if not cand.size:
+            continue
+        side = np.maximum(rough[cand - (STENCIL - 1)], rough[cand + 1])
+        best = cand[int(np.argmin(side))]
+        peak = float(rough[s1:s2 + 1].max())
+        # both sides smooth, and far smoother than the run: a step inside this interval (a sharp but smooth feature,
+        # e.g. a time law's quick start, roughens its neighbours too and is left to the interpolating spline)
+        if side.min() <= STEP_RATIO * level and side.min() * SIDE_RATIO <= peak:
+            if out and best - out[-1] < STENCIL:  # two steps closer than a stencil: the stretch between them is
+                continue  # too short for its own spline; the first one is kept
+            out.append(int(best))
+    return np.array(out, int)
 
 
 def reconstruct(t: np.ndarray, p: np.ndarray):
@@ -132,7 +160,8 @@ def hermite(t: np.ndarray, p: np.ndarray, v: np.ndarray, a: np.ndarray, j: np.nd
     left = np.concatenate([[0.0], dj[:-1]])
     right = np.concatenate([dj[1:], [0.0]])
     level = max(float(np.median(dj)), 1e-300)
-    ks = np.flatnonzero(dj > STEP_RATIO * np.maximum(np.maximum(left, right), level))
+    ks = np.union1d(np.flatnonzero(dj > STEP_RATIO * np.maximum(np.maximum(left, right), level)),
+                    _overshooting(pp, t, np.asarray(j, float)))
     if not ks.size:
         return (lambda x, nu=0: pp(np.asarray(x, float), nu)), np.zeros(0)
     x = list(t)
@@ -153,6 +182,32 @@ def hermite(t: np.ndarray, p: np.ndarray, v: np.ndarray, a: np.ndarray, j: np.nd
         cuts.append(t[k] + s)
     split = PPoly(np.stack(cols, axis=1), np.array(x))
     return (lambda xx, nu=0: split(np.asarray(xx, float), nu)), np.array(sorted(cuts))
+
+
+def _overshooting(pp, t: np.ndarray, j: np.ndarray) -> np.ndarray:
+    """The intervals where the Hermite interpolant's jerk leaves the range of the two samples' own jerks by more
+    than a smooth motion can: a smooth extreme between two samples bulges by about |Δ²j|/8 (the jerk's second
+    difference over three samples), so an interval whose bulge is more than 4 × that of the samples on either
+    side (each side's three samples away from the interval, untouched by a step inside it) and more than 0.1 % of
+    the largest jerk holds a jerk step the jump test may miss (a step near a sample, or next to another)."""
+    n = len(t)
+    if n < 8:
+        return np.zeros(0, int)
+    u = np.linspace(0.0, 1.0, 9)[1:-1]
+    x = t[:-1, None] + (t[1:] - t[:-1])[:, None] * u  # (n − 1, 7)
+    jh = pp(x.ravel(), 3).reshape(n - 1, len(u), -1)  # (n − 1, 7, d)
+    hi = np.maximum(j[:-1], j[1:])
+    lo = np.minimum(j[:-1], j[1:])
+    bulge = np.maximum(np.maximum(jh.max(axis=1) - hi, lo - jh.min(axis=1)), 0.0)  # (n − 1, d)
+    d2 = np.abs(j[2:] - 2.0 * j[1:-1] + j[:-2])  # (n − 2, d): centred at samples 1 … n − 2
+    k = np.arange(n - 1)
+    left = np.where((k >= 2)[:, None], d2[np.clip(k - 2, 0, n - 3)], np.inf)  # samples k − 2 … k
+    right = np.where((k + 3 <= n - 1)[:, None], d2[np.clip(k + 1, 0, n - 3)], np.inf)  # samples k + 1 … k + 3
+    smooth = np.minimum(np.maximum(left, right), np.where(np.isinf(left), right, np.where(np.isinf(right), left,
+                                                                                            np.maximum(left, right))))
+    scale = 1e-3 * float(np.abs(j).max())
+    flag = np.any((bulge > 4.0 * smooth / 8.0) & (bulge > scale), axis=1)
+    return np.flatnonzero(flag)
 
 
 def _taylor(row: np.ndarray, d: float) -> np.ndarray:

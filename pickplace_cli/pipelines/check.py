@@ -48,6 +48,9 @@ BRANCH_TOL = 1e-3
 #: carry 12 significant digits, a reconstruction's third derivative amplifies their round-off, and a plan's peak sits at
 #: its limit to ~1e-7; a file run 1 % faster moves every timed peak by 1 % or more
 CHECK_RESOLUTION = 1e-3
+#: the change of a peak when every other sample is dropped, over this, is the septic Hermite's accuracy: (2⁵ − 1)/2,
+#: its third derivative converging as h⁵, with a factor 2 of safety
+HERMITE_DIVISOR = 15.5
 #: fewest samples a move needs: a quintic spline has 6 coefficients
 MIN_SAMPLES = 6
 #: the tool's motion this tool's CSV writes beside the joints (m, m/s, m/s², m/s³): with all of them, and the
@@ -386,10 +389,14 @@ def check_samples(s: Samples, profile: Profile, smoothing: float = 0.0, source: 
     others = []
     half = _half(len(t))
     if len(half) >= 6:
-        others.append(_motion_report(t[half], pos[half], robot, profile, smoothing, source, None,
-                                     None if tool is None else tool[half])[0])
+        # the septic Hermite through positions to jerks converges as h⁵ in the third derivative: its estimate's error
+        # is the change when the rate halves over 2⁵ − 1, taken twice (HERMITE_DIVISOR); the splines of positions
+        # alone are taken at the whole change (a jerk step they do not find rings however fine the samples)
+        share = 1.0 / HERMITE_DIVISOR if tool is not None and not smoothing else 1.0
+        others.append((_motion_report(t[half], pos[half], robot, profile, smoothing, source, None,
+                                      None if tool is None else tool[half])[0], share))
     if smoothing:  # what the smoothing takes away is as uncertain as the rest: the interpolated data's peaks
-        others.append(_motion_report(t, pos, robot, profile, 0.0, source)[0])
+        others.append((_motion_report(t, pos, robot, profile, 0.0, source)[0], 1.0))
     report = _with_accuracy(report, others)
     # the position ranges on the file's own values (the model's inverse kinematics wraps revolute joints)
     specs = limit_specs(profile)
@@ -404,20 +411,20 @@ def check_samples(s: Samples, profile: Profile, smoothing: float = 0.0, source: 
     return replace(report, rows=rows)
 
 
-def _with_accuracy(fine: LimitReport, others: list[LimitReport]) -> LimitReport:
-    """``fine``'s duration-dependent rows with accuracy = the largest |its peak − the same row's peak in ``others``|
-    (other estimates from the same data), at least ``CHECK_RESOLUTION`` of the peak, and the verdict that the data
-    supports: exceeded only when the peak less its accuracy is beyond the allowed value."""
+def _with_accuracy(fine: LimitReport, others: list[tuple[LimitReport, float]]) -> LimitReport:
+    """``fine``'s duration-dependent rows with accuracy = the largest share × |its peak − the same row's peak| over
+    ``others`` ((report, share): other estimates from the same data), at least ``CHECK_RESOLUTION`` of the peak, and
+    the verdict that the data supports: exceeded only when the peak less its accuracy is beyond the allowed value."""
     from ..limits.report import LimitRow
 
     if not others:
         return fine
-    other = [{(r.joint, r.quantity): r for r in o.rows} for o in others]
+    other = [({(r.joint, r.quantity): r for r in o.rows}, share) for o, share in others]
     rows = []
     for r in fine.rows:
-        cs = [o[(r.joint, r.quantity)] for o in other if (r.joint, r.quantity) in o]
+        cs = [(o[(r.joint, r.quantity)], share) for o, share in other if (r.joint, r.quantity) in o]
         if r.kind == "limit" and r.bound == "upper" and cs:
-            acc = max(max(abs(r.peak - c.peak) for c in cs), CHECK_RESOLUTION * abs(r.peak))
+            acc = max(max(share * abs(r.peak - c.peak) for c, share in cs), CHECK_RESOLUTION * abs(r.peak))
             ok = r.peak - acc <= r.allowed
             r = LimitRow(r.joint, r.quantity, r.unit, r.peak, r.limit, r.utilisation, r.t_peak, ok, r.kind, r.bound,
                          r.target, acc)
