@@ -297,10 +297,14 @@ class Profile(_Model):
 
     name: str = Field(min_length=1, description="Short name of the profile")
     description: str = Field(default="", description="Free text: robot, sources of the numbers")
-    robot: RobotModel
-    capacity: Capacity
-    planning: Planning
-    workcell: Workcell = Field(default_factory=Workcell)
+    robot: RobotModel = Field(description="The robot: its kind (delta, scara or gantry), geometry, masses, joints "
+                              "and drives")
+    capacity: Capacity = Field(description="The tool's Cartesian capacity [v] m/s, [a] m/s², [j] m/s³ (Li 2018 "
+                               "Eq. 24-26)")
+    planning: Planning = Field(description="Defaults of a plan: clearance height [m], η, sample rate [Hz], dwell "
+                               "[s], limit use")
+    workcell: Workcell = Field(default_factory=Workcell, description="Where the tool may go (box [m]), conveyor "
+                               "velocities [m/s] and the belt window [m] (optional)")
     vibration: Vibration | None = Field(default=None, description="Flexible modes for the residual-vibration estimate (optional)")
     controller: Controller | None = Field(default=None, description="The controller's cycle [s] and each joint's drive "
                                           "view: name, unit, sign, offset (optional)")
@@ -317,6 +321,28 @@ class Profile(_Model):
     def rated(self) -> "Profile":
         """This profile with its limits as rated (itself when it is not scaled)."""
         return self if self._rated is None else self._rated
+
+
+#: the JSON Schema dialect of :func:`profile_schema`
+SCHEMA_DIALECT = "https://json-schema.org/draft/2020-12/schema"
+#: the file name of the shipped schema, beside the shipped profiles
+SCHEMA_FILE = "profile.schema.json"
+
+
+def profile_schema() -> dict[str, Any]:
+    """The JSON Schema of a profile file, generated from the pydantic models.
+
+    A YAML language server (editors) validates and completes a profile against it: the shipped profiles name the
+    copy shipped beside them, ``profile.schema.json``, in their first line,
+    ``# yaml-language-server: $schema=profile.schema.json``.
+
+    Returns
+    -------
+    dict
+        A JSON Schema (draft 2020-12); every field's description names its unit.
+    """
+    schema = Profile.model_json_schema()
+    return {"$schema": SCHEMA_DIALECT, **schema, "title": "pickplace profile"}
 
 
 # --------------------------------------------------------------------------------------------- loading
