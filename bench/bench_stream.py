@@ -1,4 +1,4 @@
-"""``plan --batch -`` as a pipeline stage (issue 16, part 2): latency per row and throughput.
+"""``plan --batch -`` as a pipeline stage: latency per row and throughput.
 
     python bench/bench_stream.py                      # ~7 min on 2 cores (~9 min with --old)
     python bench/bench_stream.py --old /tmp/oldclone  # also another checkout, side by side
@@ -43,7 +43,7 @@ def _cmd(root: Path, *args: str) -> tuple[list[str], dict]:
 
 
 #: the harness's read buffer, allocated once: reading into it costs no allocation per answer (``os.read(fd, 1 MiB)``
-#: maps and unmaps a fresh 1 MiB buffer each time, ~0.1 ms of the harness's own per row on this VM)
+#: maps and unmaps a fresh 1 MiB buffer each time, ~0.1 ms of the harness's own per row on this machine)
 _BUF = bytearray(8 << 20)
 
 
@@ -213,7 +213,7 @@ def main() -> None:
             variants.append((", other checkout", args.old, []))
         if "--rate" in cli and "--columns" not in cli:
             variants += [(f", --keep-warm {w:g}", ROOT, ["--keep-warm", f"{w:g}"]) for w in warms]
-        rounds = 3 if len(variants) > 1 else 1  # interleaved rounds: the VM's pace shared by every variant
+        rounds = 3 if len(variants) > 1 else 1  # interleaved rounds: the machine's pace shared by every variant
         n_rows = max(args.rows // 3, 30) if long else args.rows  # a long pause: fewer rows, same run time order
         lats: dict = {v[0]: [] for v in variants}
         for k in range(rounds):
