@@ -49,13 +49,13 @@ def check_option_units(a, prof) -> None:
     """TaskError (exit 1) for ``--from``/``--to``/``--height`` in millimetres (module docstring); a warning for a
     ``--time`` of 10 s or more."""
     from ..model.errors import TaskError
-    from .app import _parse_point
+    from .app import _parse_pose
 
     box = _box(prof)
     for name, text in (("from", a.from_), ("to", a.to)):
         if text is None:
             continue
-        p = _parse_point(name, text)
+        p, _ = _parse_pose(name, text)  # X,Y,Z or X,Y,Z,THETA (the tool angle: not a length)
         mm = [c / 1000 for c in p]
         if not _inside(p, box) and _inside(mm, box):
             where = "outside the workcell box" if box is not None else f"farther than {FAR_M:g} m"
