@@ -349,7 +349,13 @@ def profile_schema() -> dict[str, Any]:
 
 
 def shipped_profiles() -> dict[str, Path]:
-    """Names → paths of the profiles shipped with the package (``profiles/*.yaml``)."""
+    """The profiles shipped with the package.
+
+    Returns
+    -------
+    dict of str to pathlib.Path
+        Each shipped profile's name and its file.
+    """
     from .resources import data_dir
 
     root = data_dir("profiles")
@@ -520,7 +526,25 @@ def _reject_flags(node: Any, path: tuple, data: Any, lines: dict[tuple, int], so
 
 
 def parse_profile(text: str, source: str = "<profile>") -> Profile:
-    """Validate profile YAML text (see :func:`load_profile`)."""
+    """Validate a profile's YAML text.
+
+    Parameters
+    ----------
+    text : str
+        The YAML document (SI units).
+    source : str
+        The name the error messages give the text (a file name).
+
+    Returns
+    -------
+    Profile
+        The validated profile.
+
+    Raises
+    ------
+    ProfileError
+        As :func:`load_profile`.
+    """
     data, lines = _yaml_with_lines(text, source)
     if not isinstance(data, dict):
         raise ProfileError(f"{source}: a profile must be a YAML mapping of keys (name, robot, capacity, planning)")
@@ -548,7 +572,24 @@ def parse_profile(text: str, source: str = "<profile>") -> Profile:
 
 
 def load_profile(name_or_path: str | Path | None = None) -> Profile:
-    """Load and validate a profile from a path or a shipped profile name (default: the default profile)."""
+    """Load and validate a profile.
+
+    Parameters
+    ----------
+    name_or_path : str or pathlib.Path or None
+        A YAML file, or the name of a shipped profile (:func:`shipped_profiles`); None: ``delta-su2018``. Every
+        value in the file is in SI units (m, s, rad, kg, N·m).
+
+    Returns
+    -------
+    Profile
+        The validated, immutable profile.
+
+    Raises
+    ------
+    ProfileError
+        A missing, unreadable, unsafe or invalid file: one line per problem, ``FILE:LINE: FIELD = VALUE: RULE``.
+    """
     path = resolve_profile_path(name_or_path)
     from .files import require_regular_file
 
