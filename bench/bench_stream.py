@@ -49,8 +49,8 @@ _BUF = bytearray(8 << 20)
 
 def _read_lines(stream, n: int, timeout: float = 30.0, legacy: bool = False) -> None:
     """Read exactly n lines from a binary stream (raw fd reads, no Python buffering surprises), into a buffer
-    allocated once (``legacy``: ``os.read`` of up to 1 MiB per read, a new bytes object each time, as before
-    session 15)."""
+    allocated once (``legacy``: ``os.read`` of up to 1 MiB per read, a new bytes object each time, as older
+    versions of this harness did)."""
     fd = stream.fileno()
     got = 0
     if legacy:
@@ -168,7 +168,7 @@ def throughput(root: Path, args: list[str], rows: int) -> float:
     try:
         r = subprocess.run(cmd, input=text.encode(), stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env,
                            cwd=root, timeout=120)
-    except subprocess.TimeoutExpired:  # a checkout with the -j N stream hang (fixed in session 13)
+    except subprocess.TimeoutExpired:  # an older checkout with the -j N stream hang
         return float("nan")
     dt = time.perf_counter() - t0
     if r.returncode != 0:
