@@ -30,8 +30,8 @@ import pytest
 ROOT = Path(__file__).resolve().parents[2]
 DOCS = ROOT / "docs"
 PAGES = [ROOT / "README.md", *sorted(p for p in DOCS.rglob("*.md") if "hooks" not in p.parts)]
-#: pages whose examples run for many seconds (a line simulated for a minute, belt schedules)
-SLOW = {"commands/line.md", "pipelines.md"}
+#: pages whose examples run for many seconds (a line simulated for a minute, belt schedules, the production recipe)
+SLOW = {"commands/line.md", "pipelines.md", "getting-started.md"}
 
 FENCE = re.compile(r"^(?P<indent>[ \t]*)```(?P<info>[^\n`]*)\n(?P<body>.*?)^(?P=indent)```[ \t]*$", re.M | re.S)
 SKIP = re.compile(r"<!--\s*example:\s*skip\b[^>]*-->\s*$")
