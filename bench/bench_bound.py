@@ -1,4 +1,4 @@
-"""How close is ``--time optimal`` to the limit? A lower bound from TOPP-RA under motor torque alone (issue 15).
+"""How close is ``--time optimal`` to the limit? A lower bound from TOPP-RA under motor torque alone.
 
     python bench/bench_bound.py                 # Adept cycle + the 61 moves of bench/results/law_multistart.json
     python bench/bench_bound.py --moves 10      # the Adept cycle and the first 10 of them

@@ -3,7 +3,7 @@
 In-process `compare_methods` of every registered method on the Adept cycle, with the robot mapping, the
 limit check, `--time fit` and the residual vibration (the profile's modes), plus one row per method and
 the wall time of the `pickplace compare` command. Prints medians with min–max and writes
-bench/results/compare.json. Target (issue 5): all methods on one move under 1 s in-process.
+bench/results/compare.json. Target: all methods on one move under 1 s in-process.
 Not a test: timings depend on the machine (and on its load).
 """
 

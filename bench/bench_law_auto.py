@@ -1,4 +1,4 @@
-"""``--law-coefficients auto`` against 20 coefficients, side by side on the same moves (issue 15).
+"""``--law-coefficients auto`` against 20 coefficients, side by side on the same moves.
 
     python bench/bench_law_auto.py            # the 120 moves of bench/results/optimal*.json (~1.5 min, 2 cores)
     python bench/bench_law_auto.py --moves 20 # quick look

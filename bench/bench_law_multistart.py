@@ -1,4 +1,4 @@
-"""Is ``--time optimal``'s law an optimum? The shipped solve against two independent, slower ones (issue 15).
+"""Is ``--time optimal``'s law an optimum? The shipped solve against two independent, slower ones.
 
     python bench/bench_law_multistart.py              # 4 random moves per method and robot = 60 (~6 min, 2 cores)
     python bench/bench_law_multistart.py --moves 1    # quick look

@@ -1,9 +1,9 @@
-"""The on-demand solve of Li 2018's (k1, k2) at a (λ, η) no table covers (issue 16: target ≤ 50 ms).
+"""The on-demand solve of Li 2018's (k1, k2) at a (λ, η) no table covers (target ≤ 50 ms).
 
     python bench/bench_on_demand.py                # 60 seeded (λ, η), about a minute
     python bench/bench_on_demand.py --points 20    # quick look
 
-Each point is timed ``--repeat`` times (default 3) and its fastest solve counts: this VM's speed varies by
+Each point is timed ``--repeat`` times (default 3) and its fastest solve counts: this machine's speed varies by
 up to 1.7× between runs, and the minimum is the least disturbed measure of the code's own cost.
 
 Each point is solved cold, as ``plan`` meets it the first time in a process: ``solve_on_demand`` with its
@@ -35,7 +35,7 @@ def main() -> None:
     ap.add_argument("--points", type=int, default=60)
     ap.add_argument("--seed", type=int, default=11)
     ap.add_argument("--repeat", type=int, default=3,
-                    help="cold solves per point; the fastest counts (filters out a noisy VM's stalls)")
+                    help="cold solves per point; the fastest counts (filters out a noisy machine's stalls)")
     ap.add_argument("-o", "--output", default=str(Path(__file__).parent / "results" / "on_demand.json"))
     args = ap.parse_args()
     rng = np.random.default_rng(args.seed)

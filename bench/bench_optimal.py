@@ -1,4 +1,4 @@
-"""``--time optimal`` against ``--time fit`` and against an independent, slower solve (issue 15).
+"""``--time optimal`` against ``--time fit`` and against an independent, slower solve.
 
     python bench/bench_optimal.py --moves 4                      # Adept timing + 60 random moves (~20 min, 2 cores)
     python bench/bench_optimal.py --moves 4 --coefficients 20    # the same for plan --law-coefficients 20

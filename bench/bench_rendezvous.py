@@ -1,4 +1,4 @@
-"""Conveyor rendezvous solve against one bspline-vel exact solve (issue 17: target ≤ 5 × median).
+"""Conveyor rendezvous solve against one bspline-vel exact solve (target ≤ 5 × median).
 
     python bench/bench_rendezvous.py               # 12 random Adept-size moves onto a 0.5 m/s belt, 3 repeats (~1 min)
     python bench/bench_rendezvous.py --moves 4     # quick look

@@ -1,4 +1,4 @@
-"""``--optimize shape`` against the table's shape and against an independent, slower search (issue 15).
+"""``--optimize shape`` against the table's shape and against an independent, slower search.
 
     python bench/bench_shape.py               # Adept timing + 5 random bspline moves per robot (~3 min on 2 cores)
     python bench/bench_shape.py --moves 2     # quick look

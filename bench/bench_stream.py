@@ -1,4 +1,4 @@
-"""``plan --batch -`` as a pipeline stage (issue 16, part 2): latency per row and throughput.
+"""``plan --batch -`` as a pipeline stage: latency per row and throughput.
 
     python bench/bench_stream.py                      # ~7 min on 2 cores (~9 min with --old)
     python bench/bench_stream.py --old /tmp/oldclone  # also another checkout, side by side
@@ -43,14 +43,14 @@ def _cmd(root: Path, *args: str) -> tuple[list[str], dict]:
 
 
 #: the harness's read buffer, allocated once: reading into it costs no allocation per answer (``os.read(fd, 1 MiB)``
-#: maps and unmaps a fresh 1 MiB buffer each time, ~0.1 ms of the harness's own per row on this VM)
+#: maps and unmaps a fresh 1 MiB buffer each time, ~0.1 ms of the harness's own per row on this machine)
 _BUF = bytearray(8 << 20)
 
 
 def _read_lines(stream, n: int, timeout: float = 30.0, legacy: bool = False) -> None:
     """Read exactly n lines from a binary stream (raw fd reads, no Python buffering surprises), into a buffer
-    allocated once (``legacy``: ``os.read`` of up to 1 MiB per read, a new bytes object each time, as before
-    session 15)."""
+    allocated once (``legacy``: ``os.read`` of up to 1 MiB per read, a new bytes object each time, as older
+    versions of this harness did)."""
     fd = stream.fileno()
     got = 0
     if legacy:
@@ -168,7 +168,7 @@ def throughput(root: Path, args: list[str], rows: int) -> float:
     try:
         r = subprocess.run(cmd, input=text.encode(), stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env,
                            cwd=root, timeout=120)
-    except subprocess.TimeoutExpired:  # a checkout with the -j N stream hang (fixed in session 13)
+    except subprocess.TimeoutExpired:  # an older checkout with the -j N stream hang
         return float("nan")
     dt = time.perf_counter() - t0
     if r.returncode != 0:
@@ -213,7 +213,7 @@ def main() -> None:
             variants.append((", other checkout", args.old, []))
         if "--rate" in cli and "--columns" not in cli:
             variants += [(f", --keep-warm {w:g}", ROOT, ["--keep-warm", f"{w:g}"]) for w in warms]
-        rounds = 3 if len(variants) > 1 else 1  # interleaved rounds: the VM's pace shared by every variant
+        rounds = 3 if len(variants) > 1 else 1  # interleaved rounds: the machine's pace shared by every variant
         n_rows = max(args.rows // 3, 30) if long else args.rows  # a long pause: fewer rows, same run time order
         lats: dict = {v[0]: [] for v in variants}
         for k in range(rounds):

@@ -28,7 +28,40 @@ from .model.trajectory import CartesianTrajectory, JointTrajectory
 
 @dataclass(frozen=True)
 class PlanOptions:
-    """What to plan beyond the task: method and its parameters, duration spec, sample rate [Hz]."""
+    """What to plan beyond the task (immutable; every field has a default).
+
+    Attributes
+    ----------
+    method : Method or str
+        The planning method (``bspline``, ``ph``, ``superposition``, ``lame``, ``piecewise-poly``, ``bspline-vel``).
+    method_params : dict
+        The method's parameters by name (``ph``: ``m``, ``r`` [m]; ``lame``: ``m`` [-]; …).
+    time : str or float
+        The duration [s], or a rule: ``limits`` (every limit of the profile), ``auto`` (the Cartesian capacity),
+        ``fit`` (the joint and motor limits) or ``optimal`` (a time-optimal law).
+    rate : float or None
+        Output samples per second [Hz]; None: the profile's ``planning.rate``.
+    fit : bool
+        Also compute the fitted duration [s] next to the chosen one.
+    shape : bool
+        ``bspline``: choose k1, k2 [-] (and η unless ``hold_eta``) for the smallest duration on this robot.
+    hold_eta : bool
+        With ``shape``: keep the task's η [-].
+    hold_capacity : bool
+        ``fit``/``optimal`` also hold the Cartesian capacity [m/s, m/s², m/s³].
+    law_coefficients : int or None
+        ``optimal``: coefficients [-] of the time law's cubic B-spline; None: automatic (20, refined to 40).
+    cycle : float or None
+        The controller's cycle [s]: duration and dwell rounded up to whole cycles, one sample per cycle.
+    limit_use : float or None
+        Headroom: the fraction (0, 1] [-] of every timed limit's rating to plan to; None: the profile's.
+    capacity_rows : bool or None
+        Whether the capacity's rows join the report; None: by the duration rule.
+    turn : str
+        A rotary fourth axis: the way round to the end angle (``shortest``, ``ccw``, ``cw``, ``as-given``).
+    turn_during : str
+        When the tool turns: ``transfer`` (lift-off to set-down) or ``whole`` (the whole move).
+    """
 
     method: Method | str = Method.bspline
     method_params: dict[str, Any] = field(default_factory=dict)
@@ -61,7 +94,33 @@ def holds_capacity(options: PlanOptions) -> bool:
 
 @dataclass(frozen=True)
 class Plan:
-    """Everything one planned move produced (immutable)."""
+    """Everything one planned move produced (immutable).
+
+    Attributes
+    ----------
+    task : Task
+        The move as planned (its shape may be the optimised one).
+    method : str
+        The planning method.
+    parameters : dict
+        The path's parameters (k1, k2 [-], their source, λ [-], η [-], …).
+    duration : Duration
+        The duration T [s] and how it was chosen.
+    cartesian : CartesianTrajectory
+        The tool's continuous motion over T [m, m/s, m/s², m/s³].
+    t : numpy.ndarray
+        Sample times, shape (N,) [s].
+    p, v, a, j : numpy.ndarray
+        The tool's position [m], velocity [m/s], acceleration [m/s²] and jerk [m/s³] at the samples, (N, 3).
+    joint : JointTrajectory
+        The joints' motion, torques [N·m or N] and motors' speed [rad/s] and torque [N·m] at the samples.
+    report : LimitReport
+        Every checked limit, found on the continuous motion, and the verdict.
+    profile_name : str
+        The profile's name.
+    cycle : object or None
+        The controller-cycle rounding when planned on a cycle [s], else None.
+    """
 
     task: Task
     method: str
@@ -202,8 +261,44 @@ class PlanInterrupted(Exception):
 
 def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions(), *,
          interrupt: Callable[[], bool] | None = None) -> Plan:
-    """Plan ``task`` on ``profile``: path, duration, samples, joint motion, limit report.
+    """Plan one move: its path, duration, samples, joint motion and limit report.
 
+    Parameters
+    ----------
+    task : Task
+        The move: end points [m], clearance height [m], lift-off ratio η [-], end velocities [m/s] and tool
+        angles [rad].
+    profile : Profile
+        The robot and its workcell (:func:`load_profile`); its timed limits at the profile's limit use.
+    options : PlanOptions
+        Method, duration rule [s or a rule name], sample rate [Hz], headroom [-] and the rest.
+    interrupt : callable, optional
+        Called between the stages; once it returns True, ``plan`` raises :class:`PlanInterrupted`.
+
+    Returns
+    -------
+    Plan
+        The samples (times [s], tool motion [m, m/s, m/s², m/s³], joint motion, torques [N·m or N]) and the
+        limit report. A limit that is exceeded is a result (``plan.report.ok`` is False), not an exception.
+
+    Raises
+    ------
+    TaskError, ProfileError, TableError
+        Invalid input (exit code 1).
+    UnreachableError
+        A point of the move outside the workspace (exit code 4).
+    NoFeasibleDuration
+        ``time="fit"``: no duration holds every limit (exit code 3).
+
+    Examples
+    --------
+    >>> from pickplace_cli import PlanOptions, Task, load_profile, plan
+    >>> p = plan(Task([-0.1525, 0, -0.8], [0.1525, 0, -0.8], height=0.025), load_profile("delta-su2018"))
+    >>> round(p.duration.seconds, 4), p.report.ok
+    (0.18, True)
+
+    Notes
+    -----
     The pipeline, each stage once, in order: the task (and, with ``--optimize shape``, its shape) → the path
     (:func:`_path_stage`) → the motion model (:func:`motion_model`) → the duration or time law
     (:func:`_duration_stage`; the fit/optimal searches test feasibility through ``model_of``, passed in) →

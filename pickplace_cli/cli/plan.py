@@ -30,7 +30,15 @@ from .app import (
     TurnName,
 )
 from .batch import _plan_batch
-from .plan_checks import _check_plan_usage, _check_shape_usage, _law_coefficients, _parse_params
+from .plan_options import (
+    _check_plan_usage,
+    _check_plan_values,
+    _check_shape_usage,
+    _columns,
+    _finite_latency,
+    _law_coefficients,
+    _method_params,
+)
 from .render import (
     _check_output_paths,
     _emit_json,
@@ -349,82 +357,6 @@ def plan(
 
             sys.stderr.write(f"pickplace: {not_written(legs + ([track] if track is not None else []), prof, options, code)}\n")
         raise typer.Exit(code)
-
-
-def _check_plan_values(a) -> None:
-    """Values (exit 1): the time rule (normalised: any case and spacing), height, rate, k1/k2, η, limit use."""
-    from ..model.errors import TaskError
-    from ..model.headroom import check_limit_use
-    from ..timing import parse_time
-
-    a.time = parse_time(a.time)
-    if not isinstance(a.time, str):
-        a.time = repr(a.time)  # seconds, as the text the options carry
-    if a.limit_use is not None:
-        check_limit_use(a.limit_use)
-
-    _finite("height", a.height)
-    _finite("rate", a.rate)
-    if a.rate is not None and not (0 < a.rate <= 1e6):
-        raise TaskError(f"rate = {a.rate!r} Hz: the output rate must lie in (0, 1e6] Hz (as the profile's planning.rate)")
-    if a.k1 is not None or a.k2 is not None:
-        from ..paths.bspline import check_k
-
-        for name, k in (("k1", a.k1), ("k2", a.k2)):
-            if k is not None:
-                check_k(name, k)
-    if not (a.keep_warm == 0.0 or 0.001 <= a.keep_warm <= 10.0):  # (nan fails both)
-        raise TaskError(f"keep_warm = {a.keep_warm!r} s: must be 0 (off) or in 0.001 ... 10 s (the pause between "
-                        "two warm-ups; below 1 ms they would take the whole core)")
-    if a.eta is not None and not (0 < a.eta < 1):
-        raise TaskError(f"eta = {a.eta!r}: the lift-off/set-down ratio η must lie strictly between 0 and 1")
-
-
-def _columns(text: str | None, prof, drive=None) -> tuple[str, ...] | None:
-    """``--columns`` as names, checked against the profile's CSV columns (usage error, exit 2: no such column,
-    a column twice, none given)."""
-    if text is None:
-        return None
-    from ..export import column_names
-    from ..export.csv import parse_columns, select_columns
-    from ..model.errors import ExportError
-    from ..planner import motion_model_static
-
-    from ..export.drive import expand_columns
-
-    robot, specs = motion_model_static(prof)[:2]
-    drives = all(s.drive is not None for s in specs)  # the motor columns: as the planner's MotionModel.has_drives
-    names = column_names(robot.joint_units, motor_speed=drives, motor_torque=drives)
-    if drive is not None:
-        names += drive.position_names + drive.velocity_names
-    try:
-        cols = parse_columns(text)
-        select_columns(tuple(names), expand_columns(cols, drive, len(robot.joint_units)))
-    except ExportError as exc:
-        _usage(f"--{exc}")
-    return cols
-
-
-def _finite_latency(latency: float) -> None:
-    import math
-
-    from ..model.errors import TaskError
-
-    if not (math.isfinite(latency) and latency >= 0):
-        raise TaskError(f"latency = {latency!r}: must be a finite number of seconds >= 0 (detection to move start)")
-
-
-def _method_params(a) -> dict:
-    """The method's parameters: --param NAME=VALUE, and --k1/--k2/--table where the method takes them."""
-    params: dict = _parse_params(a.param or [])
-    k_given = a.k1 is not None or a.k2 is not None
-    if a.method == MethodName.bspline:
-        params.update({"k1": a.k1, "k2": a.k2, "table": a.table})
-    elif a.method == MethodName.bspline_vel and a.table is not None and not k_given:
-        params.update({"solver": "seeded", "table": a.table})  # that table seeds the exact polish
-    elif k_given or a.table is not None:
-        _usage(f"--k1/--k2/--table belong to --method bspline (--table also to bspline-vel), not {a.method.value}")
-    return params
 
 
 def _single_task(a, prof, params: dict):

@@ -149,7 +149,8 @@ def profile_init(
     profile: str = typer.Argument(..., help="Shipped profile name to start from (see `pickplace profile list`)."),
     output: str = typer.Argument(..., metavar="FILE", help="The new profile file (not overwritten if it exists)."),
 ) -> None:
-    """Copy a shipped profile to FILE to edit it (an existing FILE is left as it is: exit 1)."""
+    """Copy a shipped profile to FILE to edit it (an existing FILE is left as it is: exit 1). The copy's first line
+    points an editor's YAML language server at the shipped JSON Schema, so the editor validates and completes it."""
     import os
 
     from ..export import atomic_output, check_writable
@@ -162,6 +163,13 @@ def profile_init(
         raise ExportError(f"output {output}: exists; give a new file name (profile init never overwrites)")
     check_writable(output)
     text = resolve_profile_path(profile).read_text(encoding="utf-8")
+    from ..model.profile import SCHEMA_FILE
+    from ..model.resources import data_dir
+
+    # the editor's schema line names the shipped schema beside the shipped profile; the copy names it where it is
+    header = f"# yaml-language-server: $schema={SCHEMA_FILE}\n"
+    if text.startswith(header):
+        text = f"# yaml-language-server: $schema={(data_dir('profiles') / SCHEMA_FILE).resolve()}\n" + text[len(header):]
     with atomic_output(output) as stream:
         stream.write(text)
     typer.echo(f"{output}: a copy of the shipped profile {profile}; edit it and check it with "

@@ -55,7 +55,7 @@ def check_option_units(a, prof) -> None:
     for name, text in (("from", a.from_), ("to", a.to)):
         if text is None:
             continue
-        p = _parse_pose(name, text)[0]  # X,Y,Z (a fourth number, the tool angle, aside)
+        p, _ = _parse_pose(name, text)  # X,Y,Z or X,Y,Z,THETA (the tool angle: not a length)
         mm = [c / 1000 for c in p]
         if not _inside(p, box) and _inside(mm, box):
             where = "outside the workcell box" if box is not None else f"farther than {FAR_M:g} m"

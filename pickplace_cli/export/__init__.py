@@ -94,8 +94,22 @@ class _CheckedStdout:
 
 @contextmanager
 def atomic_output(path: str | Path | None, binary: bool = False) -> Iterator[IO]:
-    """Yield a stream: stdout for None or '-'; else a temp file renamed onto ``path`` (onto the file a symbolic
-    link points to) on success; a device or named pipe is written in place (see the module docstring)."""
+    """Write an output atomically: a context manager yielding the stream to write.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path or None
+        The file; None or ``-``: standard output. A regular file is written to a temporary file beside it and
+        renamed onto it (onto the file a symbolic link points to) only when the block ends without an error, so
+        it is complete or unchanged; a device or named pipe is written in place.
+    binary : bool
+        A binary stream (MCAP) instead of a text stream (UTF-8, newlines written unchanged).
+
+    Raises
+    ------
+    ExportError
+        The file cannot be created or written (one line naming it).
+    """
     if path is None or str(path) == "-":
         stream = _CheckedStdout(sys.stdout.buffer if binary else sys.stdout)
         yield stream  # type: ignore[misc]

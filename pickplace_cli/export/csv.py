@@ -220,7 +220,19 @@ def sample_cycle(samples) -> float | None:
 
 
 def write_csv(samples, stream: IO[str], dialect: CsvDialect | str | CsvFormat = CsvDialect.default) -> None:
-    """Write the samples: [move,] t, x, y, z, vx…, ax…, jx…, then q<i>, qd<i>, qdd<i> per joint, torques.
+    """Write the samples as CSV: [move,] t, x, y, z, vx…, ax…, jx…, then q<i>, qd<i>, qdd<i> per joint, torques.
+
+    Parameters
+    ----------
+    samples : Plan or Timeline
+        What to write; every column's unit is in its header (``t[s]``, ``x[m]``, ``q1[rad]``, ``torque1[N*m]`` …).
+    stream : text stream
+        Where to write (opened with ``newline=""``, as :func:`atomic_output` does).
+    dialect : CsvDialect or str or CsvFormat
+        ``default`` (``,`` LF, header), ``twincat`` (``;`` CRLF, header) or ``tsv`` (tab, no header).
+
+    Notes
+    -----
 
     ``stream`` is a text stream opened with ``newline=""`` (as :func:`~pickplace_cli.export.atomic_output`
     does) so that the dialect's line ends are written unchanged. A batch can also be written one plan at a

@@ -9,8 +9,20 @@ from . import plan_columns
 
 
 def write_json(samples, stream: IO[str], drive=None) -> None:
-    """``samples``: a Plan (``summary``: its summary) or a Timeline (``summaries``: one per move, and a
-    ``move[-]`` column). ``drive`` (a :class:`~pickplace_cli.export.drive.DriveMap`): its columns (``<name>[<unit>]``,
+    """Write the samples as one JSON document: the summary and every column (units in the column names).
+
+    Parameters
+    ----------
+    samples : Plan or Timeline
+        A Plan (``summary``: its summary) or a Timeline (``summaries``: one per move, and a ``move[-]`` column).
+    stream : text stream
+        Where to write.
+    drive : DriveMap, optional
+        The drive view of each joint (its units from the profile's ``controller.joints``).
+
+    Notes
+    -----
+    ``drive`` (a :class:`~pickplace_cli.export.drive.DriveMap`): its columns (``<name>[<unit>]``,
     ``<name>_vel[<unit>/s]``) follow the model's, and ``joints`` describes each joint's drive view."""
     names, data = plan_columns(samples)
     if drive is not None:

@@ -10,26 +10,11 @@ time of the trajectory plus a fixed, documented epoch offset (2024-01-01T00:00:0
 so the same plan always gives the same bytes.
 
 ``ros2`` flavour (profile ``ros2``, every channel ``cdr`` with a ``ros2msg`` schema holding the full
-message definition, dependencies included; no JSON channel, which ROS 2 tools reject):
-
-================  ====================================  ===================================================
-topic             type                                  content
-================  ====================================  ===================================================
-/joint_trajectory trajectory_msgs/msg/JointTrajectory   one per move, at the move's first sample: every
-                                                        sample a point (positions q, velocities q̇,
-                                                        accelerations q̈, effort = joint torque,
-                                                        time_from_start from the move's first sample)
-/joint_states     sensor_msgs/msg/JointState            per sample: position q, velocity q̇, effort torque
-/motor_states     sensor_msgs/msg/JointState            per sample, only with drives: velocity = motor
-                                                        speed [rad/s], effort = motor torque [N·m]
-/tool_pose        geometry_msgs/msg/PoseStamped         per sample: tool position (orientation identity, or
-                                                        the turn about z of a rotary fourth axis)
-/tool_twist       geometry_msgs/msg/TwistStamped        per sample: linear = tool velocity, angular = 0 (z:
-                                                        the fourth axis' θ̇)
-/tool_accel       geometry_msgs/msg/AccelStamped        per sample: linear = tool acceleration, angular = 0
-                                                        (z: θ̈)
-/tool_jerk        geometry_msgs/msg/Vector3Stamped      per sample: tool jerk [m/s³]
-================  ====================================  ===================================================
+message definition, dependencies included; no JSON channel, which ROS 2 tools reject): ``/joint_trajectory``
+(trajectory_msgs/JointTrajectory, one per move), ``/joint_states`` and, with drives, ``/motor_states``
+(sensor_msgs/JointState per sample), ``/tool_pose``, ``/tool_twist``, ``/tool_accel`` and ``/tool_jerk``
+(geometry_msgs per sample; the turn of a rotary fourth axis about z in the pose and the angular parts). The
+manual's Outputs page lists every field.
 
 ``foxglove`` flavour (no profile; every channel ``json`` with a ``jsonschema`` schema): ``/tool_pose``
 (``foxglove.PoseInFrame`` per sample), ``/tool_path`` (``foxglove.PosesInFrame``, one per move: the whole
@@ -344,14 +329,28 @@ def write_mcap(
     frame_id: str = FRAME_ID,
     drive=None,
 ) -> None:
-    """Write ``samples`` as MCAP to the binary ``stream`` (a file or a pipe; nothing is seeked).
+    """Write ``samples`` (SI units, REP 103) as MCAP to the binary ``stream`` (a file or a pipe; nothing is seeked).
 
-    ``flavor`` ``ros2`` (CDR channels for ROS 2 tools) or ``foxglove`` (JSON channels with Foxglove schemas);
-    ``compression`` None/"none" (default) or "zstd" (chunks compressed). Times: ``epoch_ns`` + t·1e9 ns.
-    ``drive`` (a :class:`~pickplace_cli.export.drive.DriveMap`): the joints carry its names, and (ros2 flavour) a
-    ``/drive_states`` channel (sensor_msgs/JointState) the drive positions and velocities in the drive's units
-    (``d = sign·k·(q − offset)``; effort empty).
-    Raises ExportError on an unknown flavour/compression or samples that cannot be written.
+    Parameters
+    ----------
+    samples : Plan or Timeline
+    stream : binary stream
+    flavor : McapFlavor or str
+        ``ros2`` (CDR channels for ROS 2 tools) or ``foxglove`` (JSON channels with Foxglove schemas).
+    compression : McapCompression or str or None
+        ``none`` (default) or ``zstd`` chunks.
+    epoch_ns : int
+        The time of t = 0 [ns since the Unix epoch]: every stamp is ``epoch_ns`` + t·1e9 [ns].
+    frame_id : str
+        The frame of the tool's pose.
+    drive : DriveMap, optional
+        The joints carry its names, and (ros2) ``/drive_states`` the drive positions and velocities in the drive's
+        units (``d = sign·k·(q − offset)``).
+
+    Raises
+    ------
+    ExportError
+        An unknown flavour or compression, or samples that cannot be written.
     """
     from mcap.writer import CompressionType, Writer
 

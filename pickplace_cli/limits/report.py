@@ -25,6 +25,35 @@ RESOLVED = 0.01
 class LimitRow:
     """One checked limit: the peak of a quantity over the move, its limit and where the peak is.
 
+    Attributes
+    ----------
+    joint : str
+        ``q1`` … ``qn``, or ``tool`` (the singularity measure, the workcell box, the Cartesian capacity).
+    quantity : str
+        What is checked (``motor torque``, ``position min``, ``capacity speed`` …).
+    unit : str
+        The unit of ``peak`` and ``limit`` (rad, m, rad/s, N·m, N·m/s, m/s, …).
+    peak : float
+        The peak over the continuous move [unit] (signed for ranges and minima, a magnitude otherwise).
+    limit : float
+        The rating [unit].
+    utilisation : float
+        peak / limit [-] (a range: how far toward the bound, 1 at it).
+    t_peak : float or None
+        When the peak happens [s] (None for quantities of the whole cycle, e.g. RMS torque).
+    ok : bool
+        Whether the limit holds (at ``target`` × ``limit``).
+    kind : str
+        ``limit`` (a timed limit: exit code 3) or ``reach`` (position, workcell, singularity: exit code 4).
+    bound : str
+        ``upper`` (peak ≤ limit) or ``lower`` (peak ≥ limit).
+    target : float
+        The fraction [-] of ``limit`` the peak may use (the limit use of a timed limit, else 1).
+    accuracy : float or None
+        ± how far the peak may be off [unit] when estimated from samples (``check``); None on the continuous motion.
+
+    Notes
+    -----
     (A plain slotted record, not a frozen dataclass: a report has ~25 rows per move and a frozen
     dataclass costs 5× as much to build, which the single-plan target of < 1 ms notices.)"""
 
@@ -73,7 +102,23 @@ class LimitRow:
 
 @dataclass(frozen=True)
 class LimitReport:
-    """Every joint × quantity checked for one move of ``duration`` seconds, with the duty cycle."""
+    """Every joint × quantity checked for one move, with the duty cycle.
+
+    Attributes
+    ----------
+    rows : tuple of LimitRow
+        Every checked limit.
+    duration : float
+        The move's duration [s].
+    dwell : float
+        The dwell at each end of the duty cycle [s] (move, dwell, move back, dwell).
+    notes : tuple of str
+        What the check wants said (how a peak was found, what was left out).
+    ok : bool
+        Whether every limit holds; ``violations`` lists the rows that do not.
+    round_trip : float
+        The duty cycle 2·(duration + dwell) [s]; ``picks_per_minute`` is 60 / round_trip [1/min].
+    """
 
     rows: tuple[LimitRow, ...]
     duration: float

@@ -298,7 +298,7 @@ def upstream_order(line: Line) -> list[int]:
 
 def _describe(err: dict, data: Any, lines: dict, source: str, errors: list) -> str:
     """One line ``FILE:LINE: FIELD = VALUE: RULE`` of a pydantic error."""
-    from ..model.profile import _resolve, _show
+    from ..model.yamlsafe import _resolve, _show
 
     real, node, _ = _resolve(tuple(err.get("loc", ())), data, err["type"])
     probe = tuple(real)
@@ -330,7 +330,7 @@ def _describe(err: dict, data: Any, lines: dict, source: str, errors: list) -> s
 
 def parse_line(text: str, source: str = "<line>") -> Line:
     """Validate line-file YAML text (see :func:`load_line`)."""
-    from ..model.profile import _prune_union_branches, _yaml_with_lines
+    from ..model.yamlsafe import _prune_union_branches, _yaml_with_lines
 
     data, lines = _yaml_with_lines(text, source, what="line file")
     if not isinstance(data, dict):

@@ -26,7 +26,28 @@ def check_limit_use(use: float, where: str = "limit-use") -> float:
 
 
 def with_limit_use(profile: Profile, use: float) -> Profile:
-    """The profile whose timed limits are ``use`` × their ratings: the Cartesian capacity, and through
+    """The profile whose timed limits are ``use`` × their ratings.
+
+    Parameters
+    ----------
+    profile : Profile
+        The profile as rated (or already scaled: the ratings are its own).
+    use : float
+        The fraction (0, 1] [-] of every timed limit's rating to plan and check to (0.9 keeps 10 % in reserve).
+
+    Returns
+    -------
+    Profile
+        The scaled profile (the same object for the same profile and fraction).
+
+    Raises
+    ------
+    ProfileError
+        ``use`` outside (0, 1].
+
+    Notes
+    -----
+    Scaled: the Cartesian capacity, and through
     :func:`limit_specs` every joint's velocity, acceleration and jerk and every drive's speed, peak torque, torque
     rate and rated (RMS) torque. Positions, the workcell and the singularity margin stay. Memoised, so the same
     (profile, use) is the same object (the planner keeps its models per profile)."""

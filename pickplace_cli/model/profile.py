@@ -13,6 +13,7 @@ from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationError,
 
 from .controller import Controller
 from .errors import ProfileError
+from .yamlsafe import PROFILE_MAX_BYTES, _prune_union_branches, _resolve, _show, _yaml_with_lines
 
 DEFAULT_PROFILE = "delta-su2018"
 
@@ -296,10 +297,14 @@ class Profile(_Model):
 
     name: str = Field(min_length=1, description="Short name of the profile")
     description: str = Field(default="", description="Free text: robot, sources of the numbers")
-    robot: RobotModel
-    capacity: Capacity
-    planning: Planning
-    workcell: Workcell = Field(default_factory=Workcell)
+    robot: RobotModel = Field(description="The robot: its kind (delta, scara or gantry), geometry, masses, joints "
+                              "and drives")
+    capacity: Capacity = Field(description="The tool's Cartesian capacity [v] m/s, [a] m/s², [j] m/s³ (Li 2018 "
+                               "Eq. 24-26)")
+    planning: Planning = Field(description="Defaults of a plan: clearance height [m], η, sample rate [Hz], dwell "
+                               "[s], limit use")
+    workcell: Workcell = Field(default_factory=Workcell, description="Where the tool may go (box [m]), conveyor "
+                               "velocities [m/s] and the belt window [m] (optional)")
     vibration: Vibration | None = Field(default=None, description="Flexible modes for the residual-vibration estimate (optional)")
     controller: Controller | None = Field(default=None, description="The controller's cycle [s] and each joint's drive "
                                           "view: name, unit, sign, offset (optional)")
@@ -318,11 +323,39 @@ class Profile(_Model):
         return self if self._rated is None else self._rated
 
 
+#: the JSON Schema dialect of :func:`profile_schema`
+SCHEMA_DIALECT = "https://json-schema.org/draft/2020-12/schema"
+#: the file name of the shipped schema, beside the shipped profiles
+SCHEMA_FILE = "profile.schema.json"
+
+
+def profile_schema() -> dict[str, Any]:
+    """The JSON Schema of a profile file, generated from the pydantic models.
+
+    A YAML language server (editors) validates and completes a profile against it: the shipped profiles name the
+    copy shipped beside them, ``profile.schema.json``, in their first line,
+    ``# yaml-language-server: $schema=profile.schema.json``.
+
+    Returns
+    -------
+    dict
+        A JSON Schema (draft 2020-12); every field's description names its unit.
+    """
+    schema = Profile.model_json_schema()
+    return {"$schema": SCHEMA_DIALECT, **schema, "title": "pickplace profile"}
+
+
 # --------------------------------------------------------------------------------------------- loading
 
 
 def shipped_profiles() -> dict[str, Path]:
-    """Names → paths of the profiles shipped with the package (``profiles/*.yaml``)."""
+    """The profiles shipped with the package.
+
+    Returns
+    -------
+    dict of str to pathlib.Path
+        Each shipped profile's name and its file.
+    """
     from .resources import data_dir
 
     root = data_dir("profiles")
@@ -341,61 +374,6 @@ def resolve_profile_path(name_or_path: str | Path | None) -> Path:
         return shipped[str(name_or_path)]
     names = ", ".join(shipped) or "none"
     raise ProfileError(f"profile {str(name_or_path)!r}: no such file, and no shipped profile of that name (shipped: {names})")
-
-
-from .yamlfile import PROFILE_MAX_BYTES, PROFILE_MAX_DEPTH, _safe_loader, _yaml_with_lines  # noqa: E402,F401
-
-_ABSENT = object()  # a key or tuple element the document does not have
-
-
-def _resolve(loc: tuple, data: Any, kind: str = "") -> tuple[list, Any, int | None]:
-    """(real path, the value there or _ABSENT, index in loc of the last (innermost) union tag or None).
-
-    pydantic puts union branch names (``JointSpec``, ``list[JointSpec]``) and the discriminator tag
-    (``scara``) into ``loc``; only parts that are keys or indices of the document are kept. A key missing
-    from a mapping (``kind`` "missing" or "extra_forbidden": the last part of ``loc`` is a key), or an index
-    past the end of a list (a tuple that is too short), ends the path."""
-    names_key = kind in ("missing", "extra_forbidden")
-    real: list = []
-    node: Any = data
-    tag: int | None = None
-    loc = list(loc)
-    for n, part in enumerate(loc):
-        last = n == len(loc) - 1
-        if isinstance(node, dict) and part in node:
-            real.append(part)
-            node = node[part]
-        elif isinstance(node, (list, tuple)) and isinstance(part, int) and 0 <= part < len(node):
-            real.append(part)
-            node = node[part]
-        elif last and names_key and isinstance(node, dict):
-            real.append(part)  # a missing or unknown key: name it
-            node = _ABSENT
-        elif last and names_key and isinstance(node, (list, tuple)) and isinstance(part, int):
-            real.append(part)  # an element a fixed-length list lacks
-            node = _ABSENT
-        else:
-            tag = n  # a union branch / discriminator tag pydantic inserted; not a key of the document
-    return real, node, tag
-
-
-def _prune_union_branches(errors: list[dict], data: Any) -> list[dict]:
-    """Of the errors a union produced (one set per branch it tried), keep the branch that got furthest
-    into the document: for ``joints: [ {...} ]`` the list branch's own problem, not "should be a mapping"
-    from the single-spec branch."""
-    best: dict[tuple, tuple[int, Any]] = {}  # union site → (depth, branch tag)
-    info = []
-    for e in errors:
-        loc = tuple(e.get("loc", ()))
-        _, _, tag = _resolve(loc, data, e["type"])
-        if tag is None:
-            info.append(None)
-            continue
-        site, branch = loc[:tag], loc[tag]
-        info.append((site, branch))
-        if site not in best or len(loc) > best[site][0]:
-            best[site] = (len(loc), branch)
-    return [e for e, i in zip(errors, info) if i is None or best[i[0]][1] == i[1]]
 
 
 def _unwrap(ann: Any, node: Any) -> Any:
@@ -458,26 +436,6 @@ def _has(node: Any, part: Any) -> bool:
     if isinstance(node, dict):
         return part in node
     return isinstance(part, int) and 0 <= part < len(node)
-
-
-def _show(value: Any, limit: int = 60) -> str:
-    """A value as the YAML it came from, shortened to ``limit`` characters."""
-
-    def fmt(v: Any) -> str:
-        if isinstance(v, bool):
-            return "true" if v else "false"
-        if v is None:
-            return "null"
-        if isinstance(v, str):
-            return repr(v)
-        if isinstance(v, dict):
-            return "{" + ", ".join(f"{k}: {fmt(x)}" for k, x in v.items()) + "}"
-        if isinstance(v, (list, tuple)):
-            return "[" + ", ".join(fmt(x) for x in v) + "]"
-        return repr(v)
-
-    text = fmt(value)
-    return text if len(text) <= limit else text[: limit - 1] + "…"
 
 
 #: what a pydantic type error expects, in words
@@ -568,7 +526,25 @@ def _reject_flags(node: Any, path: tuple, data: Any, lines: dict[tuple, int], so
 
 
 def parse_profile(text: str, source: str = "<profile>") -> Profile:
-    """Validate profile YAML text (see :func:`load_profile`)."""
+    """Validate a profile's YAML text.
+
+    Parameters
+    ----------
+    text : str
+        The YAML document (SI units).
+    source : str
+        The name the error messages give the text (a file name).
+
+    Returns
+    -------
+    Profile
+        The validated profile.
+
+    Raises
+    ------
+    ProfileError
+        As :func:`load_profile`.
+    """
     data, lines = _yaml_with_lines(text, source)
     if not isinstance(data, dict):
         raise ProfileError(f"{source}: a profile must be a YAML mapping of keys (name, robot, capacity, planning)")
@@ -596,7 +572,24 @@ def parse_profile(text: str, source: str = "<profile>") -> Profile:
 
 
 def load_profile(name_or_path: str | Path | None = None) -> Profile:
-    """Load and validate a profile from a path or a shipped profile name (default: the default profile)."""
+    """Load and validate a profile.
+
+    Parameters
+    ----------
+    name_or_path : str or pathlib.Path or None
+        A YAML file, or the name of a shipped profile (:func:`shipped_profiles`); None: ``delta-su2018``. Every
+        value in the file is in SI units (m, s, rad, kg, N·m).
+
+    Returns
+    -------
+    Profile
+        The validated, immutable profile.
+
+    Raises
+    ------
+    ProfileError
+        A missing, unreadable, unsafe or invalid file: one line per problem, ``FILE:LINE: FIELD = VALUE: RULE``.
+    """
     path = resolve_profile_path(name_or_path)
     from .files import require_regular_file
 

@@ -61,6 +61,26 @@ def _vec3(name: str, value, limit: float = MAX_METRES, unit: str = "m") -> np.nd
 class Task:
     """A pick-and-place move from ``p_from`` to ``p_to`` (base frame, m).
 
+    Parameters
+    ----------
+    p_from, p_to : array_like
+        The pick and place points x, y, z [m], base frame.
+    height : float
+        Clearance h [m] of the path's midpoint above the higher end point.
+    eta : float
+        Lift-off/set-down ratio η [-], 0 < η < 1 [Li2018, Eq. (11)].
+    v_from, v_to : array_like
+        Tool velocity [m/s] leaving the pick and reaching the place point (zero: from rest to rest).
+    theta_from, theta_to : float or None
+        Tool angle [rad] about the base z axis at the ends (a rotary fourth axis; both or neither).
+
+    Raises
+    ------
+    TaskError
+        A value that is not finite or outside its range, equal end points, an angle at one end only.
+
+    Notes
+    -----
     ``height`` [m] is the clearance of the path's midpoint P3 above the *higher* of the two end points;
     ``eta`` is the lift-off/set-down ratio η of [Li2018, Eq. (11)]; ``v_from``/``v_to`` [m/s] are the tool
     velocities at the ends (zero for a move from rest to rest). ``theta_from``/``theta_to`` [rad] are the tool's

@@ -76,7 +76,20 @@ class CartesianPath:
 
 @dataclass(frozen=True)
 class CartesianTrajectory:
-    """A CartesianPath run in ``duration`` seconds: ``traj(t, order)`` in m, m/s, m/s², m/s³."""
+    """A CartesianPath run in ``duration`` seconds.
+
+    Attributes
+    ----------
+    path : CartesianPath
+        The path, a function of τ ∈ [0, 1] [m].
+    duration : float
+        T [s].
+
+    Notes
+    -----
+    ``traj(t, order)`` evaluates the motion at times ``t`` [s], shape (N, 3): position [m] (order 0), velocity
+    [m/s], acceleration [m/s²], jerk [m/s³].
+    """
 
     path: CartesianPath
     duration: float
@@ -121,6 +134,21 @@ class CartesianTrajectory:
 @dataclass(frozen=True)
 class JointTrajectory:
     """Sampled joint motion: every array is (N, n_joints) with axis 0 = samples at times ``t`` (N,).
+
+    Attributes
+    ----------
+    t : numpy.ndarray
+        Sample times [s], (N,).
+    q, qd, qdd, qddd : numpy.ndarray
+        Joint position [rad or m], velocity [/s], acceleration [/s²] and jerk [/s³].
+    names, units : tuple of str
+        Each joint's name and unit (``rad`` or ``m``).
+    torque : numpy.ndarray or None
+        Joint-side torque [N·m] or force [N], gravity included.
+    motor_speed, motor_torque : numpy.ndarray or None
+        Each motor's speed [rad/s] and torque [N·m].
+    angle_weights : tuple of float or None
+        A rotary fourth axis: the tool angle is θ = q · angle_weights [rad].
 
     Units are per joint (``units``: "m" for prismatic, "rad" for revolute); derivatives are per second.
     ``torque`` is joint-side force/torque [N or N·m] (inverse dynamics, gravity included);

@@ -11,7 +11,8 @@ from ..model.trajectory import CartesianPath
 
 
 class Method(str, Enum):
-    """Names accepted by ``--method``."""
+    """The planning methods (``--method``): ``bspline`` [Li2018], ``ph`` and ``superposition`` [Su2018], ``lame`` and
+    ``piecewise-poly`` (Li 2018's baselines), ``bspline-vel`` [Yang2022]."""
 
     bspline = "bspline"
     ph = "ph"

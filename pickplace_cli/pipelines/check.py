@@ -84,7 +84,17 @@ class Samples:
 
 @dataclass(frozen=True)
 class MoveCheck:
-    """The limit report of one move of a checked file (``move`` None for a file without a move column)."""
+    """The limit report of one move of a checked file.
+
+    Attributes
+    ----------
+    move : int or None
+        The move's number (None for a file without a ``move`` column).
+    first_line, last_line : int
+        The move's lines in the file.
+    report : LimitReport
+        Its limit report (durations [s], peaks in each quantity's unit).
+    """
 
     move: int | None
     first_line: int
@@ -439,10 +449,33 @@ CHECK_MAX_BYTES = 64 << 20
 
 def check_file(path: str | Path, profile: Profile, smoothing: float | str = 0.0,
                limit_use: float | None = None, notify=None) -> list[MoveCheck]:
-    """Limit report of every move in CSV file ``path`` (``-`` = stdin) on ``profile`` (module docstring).
-    ``smoothing``: m² per sample, or "auto" (the noise level of the data, :func:`~pickplace_cli.curves.sampled.
-    noise_level`, squared); ``limit_use``: the fraction of every timed limit's rating allowed (default: the
-    profile's planning.limit_use); ``notify(text)``: told what a named pipe without a writer is waiting for."""
+    """Check every move of a trajectory file against a profile's limits.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        A CSV file with a header holding ``t`` [s] and ``q1 … qn`` [rad or m] (units in the header are honoured);
+        ``-`` reads standard input. A ``move`` column splits it into moves.
+    profile : Profile
+        The robot and its limits.
+    smoothing : float or str
+        Smoothing factor per sample [m²] of the tool position (0: interpolate exactly), or ``"auto"``: the square
+        of the noise level estimated from the samples.
+    limit_use : float or None
+        The fraction (0, 1] [-] of every timed limit's rating allowed; None: the profile's ``planning.limit_use``.
+    notify : callable, optional
+        Told (one text argument) what a named pipe without a writer is waiting for.
+
+    Returns
+    -------
+    list of MoveCheck
+        One limit report per move, each peak with its accuracy from the samples.
+
+    Raises
+    ------
+    TaskError
+        An unreadable, binary, oversized or malformed file, or positions the profile's model cannot have.
+    """
     from ..model.headroom import apply_limit_use
 
     profile = apply_limit_use(profile, limit_use)

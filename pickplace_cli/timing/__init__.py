@@ -15,6 +15,25 @@ from ..model.trajectory import CartesianPath
 class Duration:
     """The chosen duration T [s] and how it was chosen.
 
+    Attributes
+    ----------
+    seconds : float
+        The duration T [s].
+    mode : str
+        The rule that chose it: ``limits``, ``auto``, ``fit``, ``optimal`` or ``given``.
+    t_velocity, t_acceleration, t_jerk : float
+        The three bounds of Eq. (26) [s] (``t_jerk`` None without a jerk capacity); ``t_auto`` is their maximum.
+    binding : str
+        What set T (a capacity, or a joint's quantity).
+    t_fit : float or None
+        The smallest duration at which every joint and motor limit holds [s], when computed.
+    t_optimal : float or None
+        ``optimal``: the duration of the non-uniform time law [s].
+    law : str or None
+        ``optimal``: what the optimiser said.
+    t_bound : float or None
+        ``optimal``: the lower bound under peak motor torque and speed alone [s].
+
     ``auto`` is Eq. (26) extended by jerk: T = max(v̂/[v], √(â/[a]), ∛(ĵ/[j])) where v̂, â, ĵ are the exact
     peaks of ‖d^k p/dτ^k‖ of the path with T = 1 (for a symmetric move v̂ = b·v_max etc.). ``binding`` names
     the capacity that sets T. ``t_velocity``, ``t_acceleration``, ``t_jerk`` are the three bounds (s).

@@ -39,7 +39,8 @@ def test_profile_validate_names_a_short_range(tmp_path):
     prof.write_text(resolve_profile_path("delta-su2018").read_text().replace("position: [-0.6981317, 1.5707963]", "position: [-0.6981317]"))
     r = run("profile", "validate", str(prof))
     assert r.exit_code == 1 and len(r.stderr.strip().splitlines()) == 1
-    assert f"{prof}:28: robot.joints.limits.position = [-0.6981317]: needs 2 values, got 1" in r.stderr
+    line = next(n for n, row in enumerate(prof.read_text().splitlines(), 1) if "position: [-0.6981317]" in row)
+    assert f"{prof}:{line}: robot.joints.limits.position = [-0.6981317]: needs 2 values, got 1" in r.stderr
 
 
 def _batch(tmp_path, second_time: str = "") -> tuple:

@@ -380,7 +380,8 @@ def test_a_profile_with_a_control_character_is_one_line_and_one_json_document(tm
     r = run("plan", *ADEPT, "-p", str(prof), "--json")
     assert r.exit_code == 1
     line = _one_error_line(r.stderr)
-    assert f"{prof}:4: not valid YAML: the character U+{ord(char):04X} is not allowed" in line
+    at = next(n for n, row in enumerate(text.splitlines(), 1) if row.startswith("name: delta"))
+    assert f"{prof}:{at}: not valid YAML: the character U+{ord(char):04X} is not allowed" in line
     doc = json.loads(r.stdout)
     assert doc["exit_code"] == 1 and "U+" in doc["error"]
 

@@ -3,7 +3,7 @@
 `import pickplace_cli.cli`, `pickplace --help` and `pickplace --version` must not import numpy, scipy,
 pydantic, yaml, mcap, matplotlib, rich or dask (each costs 50–400 ms of a cold start); a subcommand's
 --help must not import scipy, mcap, matplotlib or dask either. Each check runs in a fresh interpreter.
-(Wall-clock targets — --help < 0.3 s, plan of the Adept cycle < 0.8 s — are measured by bench/run.py,
+(Wall-clock targets — --help < 0.3 s, plan of the Adept cycle < 0.8 s — are measured by bench/bench_core.py,
 not asserted here: timings depend on the machine and its load.)
 """
 

@@ -45,7 +45,7 @@ MODULES = _modules()
 
 def _stage(module: str) -> int:
     if module == "":
-        return 0  # pickplace_cli/__init__.py: the version only
+        return 0  # pickplace_cli/__init__.py as imported: the version only (its public names load lazily, below)
     return STAGES[module.split(".")[0]]
 
 
@@ -88,8 +88,9 @@ def test_every_module_has_a_stage():
 
 
 def test_stages_import_downward_only():
+    """(The package root re-exports the public API from every stage, lazily: :func:`test_package_root_is_lazy`.)"""
     upward = [f"{m} (stage {_stage(m)}) imports {t} (stage {_stage(t)})"
-              for m, targets in sorted(GRAPH.items()) for t in sorted(targets) if _stage(t) > _stage(m)]
+              for m, targets in sorted(GRAPH.items()) if m for t in sorted(targets) if _stage(t) > _stage(m)]
     assert not upward, "imports from a higher stage:\n" + "\n".join(upward)
 
 
@@ -178,3 +179,32 @@ def test_cli_enums_mirror_the_library():
 
     assert [m.value for m in MethodName] == [m.value for m in Method]
     assert [d.value for d in CsvDialectName] == [d.value for d in CsvDialect]
+
+
+def test_package_root_is_lazy():
+    """The package root is the public API's facade: at import it runs no import of the package (its names load on
+    first use through PEP 562's ``__getattr__``; the ``if TYPE_CHECKING:`` block, for type checkers and the API
+    reference, names the same objects), and a module of the package takes nothing from it but ``__version__``."""
+    import pickplace_cli
+
+    tree = ast.parse((PKG / "__init__.py").read_text(encoding="utf-8"))
+    eager = [ast.unparse(n) for n in tree.body if isinstance(n, (ast.Import, ast.ImportFrom))
+             and not (isinstance(n, ast.ImportFrom) and n.module == "__future__")
+             and not (isinstance(n, ast.ImportFrom) and n.module == "typing")]
+    assert not eager, f"the package root imports at import time: {eager}"
+    guarded = next(n for n in tree.body if isinstance(n, ast.If) and ast.unparse(n.test) == "TYPE_CHECKING")
+    typed = {a.asname or a.name: (n.module or "") for n in guarded.body for a in n.names}
+    assert typed == pickplace_cli._PUBLIC, \
+        "the TYPE_CHECKING imports and _PUBLIC name different objects"
+    assert set(pickplace_cli.__all__) == {"__version__", *pickplace_cli._PUBLIC}
+    takers = []
+    for m, p in MODULES.items():
+        for node in ast.walk(ast.parse(p.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.ImportFrom) and m:
+                package = m if p.name == "__init__.py" else m.rpartition(".")[0]
+                depth = len(package.split(".")) if package else 0
+                root = (node.level and not node.module and node.level == depth + 1) or node.module == "pickplace_cli"
+                if root and any(a.name != "__version__" for a in node.names):
+                    takers.append(f"{m}: {ast.unparse(node)}")
+    assert not takers, "modules that import public names from the package root (import them from their modules):\n" \
+        + "\n".join(takers)

@@ -142,7 +142,7 @@ def test_model_inertia_along_matches_the_model():
 def test_hold_capacity_fit_and_optimal_keep_the_cartesian_capacity():
     """--hold-capacity: fit = max(motor fit, Eq. 26 auto) (the capacity binds on the Adept cycle), and the optimal
     law holds |v| ≤ [v] and |a| ≤ [a] on the written samples while beating Eq. 26 — but never the independent
-    floor of TOPP-RA under the same |v|, |a| alone on this path, 0.1383 s (bench/run.py; our law also holds
+    floor of TOPP-RA under the same |v|, |a| alone on this path, 0.1383 s (bench/bench_core.py; our law also holds
     jerk-boundedness and every motor limit, so it must be slower)."""
     prof = load_profile("delta-su2018")
     cap = prof.capacity

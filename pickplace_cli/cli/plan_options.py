@@ -1,0 +1,194 @@
+"""`pickplace plan`'s options read and checked before anything is planned: values (exit 1), usage (exit 2), the
+method's parameters, the columns and the time law's coefficients."""
+
+from __future__ import annotations
+
+from .app import (
+    MAX_SHIFT,
+    Compression,
+    CsvDialectName,
+    McapFlavor,
+    MethodName,
+    OptimizeWhat,
+    OutputFormat,
+    TurnDuring,
+    TurnName,
+    _finite,
+    _usage,
+)
+
+
+def _check_plan_values(a) -> None:
+    """Values (exit 1): the time rule (normalised: any case and spacing), height, rate, k1/k2, η, limit use."""
+    from ..model.errors import TaskError
+    from ..model.headroom import check_limit_use
+    from ..timing import parse_time
+
+    a.time = parse_time(a.time)
+    if not isinstance(a.time, str):
+        a.time = repr(a.time)  # seconds, as the text the options carry
+    if a.limit_use is not None:
+        check_limit_use(a.limit_use)
+
+    _finite("height", a.height)
+    _finite("rate", a.rate)
+    if a.rate is not None and not (0 < a.rate <= 1e6):
+        raise TaskError(f"rate = {a.rate!r} Hz: the output rate must lie in (0, 1e6] Hz (as the profile's planning.rate)")
+    if a.k1 is not None or a.k2 is not None:
+        from ..paths.bspline import check_k
+
+        for name, k in (("k1", a.k1), ("k2", a.k2)):
+            if k is not None:
+                check_k(name, k)
+    if not (a.keep_warm == 0.0 or 0.001 <= a.keep_warm <= 10.0):  # (nan fails both)
+        raise TaskError(f"keep_warm = {a.keep_warm!r} s: must be 0 (off) or in 0.001 ... 10 s (the pause between "
+                        "two warm-ups; below 1 ms they would take the whole core)")
+    if a.eta is not None and not (0 < a.eta < 1):
+        raise TaskError(f"eta = {a.eta!r}: the lift-off/set-down ratio η must lie strictly between 0 and 1")
+
+
+def _law_coefficients(text: str) -> int | None:
+    """--law-coefficients: None for auto, else an integer in 8 ... 80 (exit 2 otherwise)."""
+    if text.strip().lower() == "auto":
+        return None
+    try:
+        n = int(text)
+    except ValueError:
+        n = None
+    if n is None or not 8 <= n <= 80:
+        _usage(f"--law-coefficients = {text!r}: must be auto or a whole number in 8 ... 80")
+    return n
+
+
+def _columns(text: str | None, prof, drive=None) -> tuple[str, ...] | None:
+    """``--columns`` as names, checked against the profile's CSV columns (usage error, exit 2: no such column,
+    a column twice, none given)."""
+    if text is None:
+        return None
+    from ..export import column_names
+    from ..export.csv import parse_columns, select_columns
+    from ..model.errors import ExportError
+    from ..planner import motion_model_static
+
+    from ..export.drive import expand_columns
+
+    robot, specs = motion_model_static(prof)[:2]
+    drives = all(s.drive is not None for s in specs)  # the motor columns: as the planner's MotionModel.has_drives
+    names = column_names(robot.joint_units, motor_speed=drives, motor_torque=drives)
+    if drive is not None:
+        names += drive.position_names + drive.velocity_names
+    try:
+        cols = parse_columns(text)
+        select_columns(tuple(names), expand_columns(cols, drive, len(robot.joint_units)))
+    except ExportError as exc:
+        _usage(f"--{exc}")
+    return cols
+
+
+def _check_plan_usage(a) -> None:
+    """Usage (exit 2): options that contradict each other, or are set where they have no effect (refused, not
+    ignored)."""
+    batch, fmt = a.batch, a.fmt
+    if batch is not None and (a.from_ is not None or a.to is not None):
+        _usage("--batch takes the moves from the file; do not also give --from/--to")
+    if batch is None and (a.from_ is None or a.to is None):
+        _usage(f"missing --{'to' if a.from_ is not None else 'from'}: give both --from X,Y,Z and --to X,Y,Z in m (or --batch FILE)")
+    if batch is not None and a.round_trip:
+        _usage("--round-trip is not available with --batch (give each leg as a row)")
+    if batch is None and (a.fail_fast or a.workers != 0):
+        _usage(f"{'--fail-fast' if a.fail_fast else '-j/--workers'} only applies to --batch")
+    if a.keep_warm != 0.0:
+        if batch is None:
+            _usage("--keep-warm only applies to a streamed --batch (- or a named pipe)")
+        if a.workers > 1:
+            _usage(f"--keep-warm plans the rows in this process, one at a time: give -j 1 (not -j {a.workers})")
+    if batch is not None and (a.v_from is not None or a.v_to is not None):
+        _usage("--v-from/--v-to: with --batch give the velocities of each row as columns v_from_x … v_to_z")
+    if fmt != OutputFormat.mcap and (a.mcap_flavor != McapFlavor.ros2 or a.compression != Compression.none):
+        what = f"--mcap-flavor {a.mcap_flavor.value}" if a.mcap_flavor != McapFlavor.ros2 else f"--compression {a.compression.value}"
+        _usage(f"{what} only applies to --format mcap (the format is {fmt.value})")
+    if fmt != OutputFormat.csv and a.csv_dialect != CsvDialectName.default:
+        _usage(f"--csv-dialect {a.csv_dialect.value} only applies to --format csv (the format is {fmt.value})")
+    if fmt != OutputFormat.csv and a.columns is not None:
+        _usage(f"--columns only applies to --format csv (the format is {fmt.value}: its schema is fixed)")
+    if a.json_summary and a.output is None and (fmt != OutputFormat.csv or a.csv_dialect != CsvDialectName.default):
+        _usage("--format/--csv-dialect: with --json and no -o FILE no trajectory is written (stdout carries the summary)")
+    if a.json_summary and a.output is None and a.columns is not None:
+        _usage("--columns: with --json and no -o FILE no trajectory is written (stdout carries the summary)")
+    angles = batch is not None or any(len((x or "").split(",")) == 4 for x in (a.from_, a.to))
+    if not angles and (a.turn != TurnName.shortest or a.turn_during != TurnDuring.transfer):
+        what = f"--turn {a.turn.value}" if a.turn != TurnName.shortest else f"--turn-during {a.turn_during.value}"
+        _usage(f"{what} only applies with tool angles: --from/--to X,Y,Z,THETA (or batch columns from_theta, to_theta)")
+    if a.adjust_points and not a.fit_ws:
+        _usage("--adjust-points only applies with --fit-workspace")
+    if a.max_shift != MAX_SHIFT and not a.adjust_points:
+        _usage("--max-shift only applies with --adjust-points")
+    if a.json_summary and a.report == "-":
+        _usage("--report -: with --json stdout carries the summary; give --report a file")
+    if a.json_summary and a.output == "-":
+        _usage("-o -: with --json stdout carries the summary; give -o a file for the trajectory")
+
+
+def _finite_latency(latency: float) -> None:
+    import math
+
+    from ..model.errors import TaskError
+
+    if not (math.isfinite(latency) and latency >= 0):
+        raise TaskError(f"latency = {latency!r}: must be a finite number of seconds >= 0 (detection to move start)")
+
+
+def _method_params(a) -> dict:
+    """The method's parameters: --param NAME=VALUE, and --k1/--k2/--table where the method takes them."""
+    params: dict = _parse_params(a.param or [])
+    k_given = a.k1 is not None or a.k2 is not None
+    if a.method == MethodName.bspline:
+        params.update({"k1": a.k1, "k2": a.k2, "table": a.table})
+    elif a.method == MethodName.bspline_vel and a.table is not None and not k_given:
+        params.update({"solver": "seeded", "table": a.table})  # that table seeds the exact polish
+    elif k_given or a.table is not None:
+        _usage(f"--k1/--k2/--table belong to --method bspline (--table also to bspline-vel), not {a.method.value}")
+    return params
+
+
+def _check_shape_usage(a) -> None:
+    """Usage (exit 2) of --fit-workspace with --batch, --optimize shape and --hold-capacity."""
+    if a.batch is not None and a.fit_ws:
+        _usage("--fit-workspace is not available with --batch")
+    shape = a.optimize == OptimizeWhat.shape
+    if shape and a.method != MethodName.bspline:
+        _usage(f"--optimize shape chooses k1, k2, η of --method bspline; method {a.method.value} has no such shape")
+    if shape and a.time not in ("fit", "optimal", "limits"):
+        _usage(f"--optimize shape minimises the fitted duration on the robot's limits: use it with --time limits "
+               f"(the default), fit or optimal (not --time {a.time})")
+    if _law_coefficients(a.law_coefficients) is not None and a.time != "optimal":
+        _usage(f"--law-coefficients shapes the time law of --time optimal (--time {a.time} scales the path uniformly)")
+    if a.hold_capacity and a.time not in ("fit", "optimal"):
+        _usage(f"--hold-capacity applies to --time fit or optimal (--time {a.time} "
+               f"{'holds the capacity already' if a.time in ('auto', 'limits') else 'is given'})")
+    if shape and (a.k1 is not None or a.k2 is not None):
+        _usage("--optimize shape chooses k1 and k2 itself: drop --k1/--k2 (or drop --optimize)")
+
+
+def _parse_params(items: list[str]) -> dict:
+    """--param NAME=VALUE items → {name: float}; one-line TaskError for a malformed item."""
+    import math
+
+    from ..model.errors import TaskError
+
+    out: dict = {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        name = name.strip()
+        if not sep or not name:
+            raise TaskError(f"param = {item!r}: write NAME=VALUE, e.g. --param m=0.025")
+        try:
+            x = float(value)
+        except ValueError:
+            raise TaskError(f"param {name} = {value!r}: not a number") from None
+        if not math.isfinite(x):
+            raise TaskError(f"param {name} = {value!r}: must be finite")
+        if name in out:
+            raise TaskError(f"param {name}: given twice")
+        out[name] = x
+    return out
