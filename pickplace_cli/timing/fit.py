@@ -184,3 +184,173 @@ def screened_fit(model, parts, dwell: float = 0.0) -> tuple[float, str] | None:
         return None
     name, t = max(found, key=lambda f: f[1])
     return t, name
+
+
+# ------------------------------------------------------------------------- the same fit for many moves at once
+#
+# The batch verdict engine (:mod:`pickplace_cli.pipelines.verdicts`) evaluates the model of P moves in one call,
+# their samples one move after the other (move k in rows starts[k]:starts[k + 1], sorted in τ within a move).
+# The functions below give, for every move, the very numbers :func:`fit_thresholds`, :func:`screened_fit` and
+# :func:`~pickplace_cli.timing.fit_screen` give for that move alone: the same operations sample by sample, and
+# maxima, minima and arg-maxima per move (exact whatever the order). Where the scalar functions raise
+# NoFeasibleDuration they give inf; where a number is NaN the move's result is NaN (the scalar functions' Python
+# ``max`` skips a NaN that is not first: such a move is not comparable and is left to the scalar path).
+
+
+def _segment_reduce(ufunc, x: np.ndarray, starts: np.ndarray) -> np.ndarray:
+    """``ufunc.reduce`` of every move's rows of ``x`` (axis 0); every move has at least one row."""
+    return ufunc.reduceat(x, starts[:-1], axis=0)
+
+
+def _batch_torque_threshold(A: np.ndarray, G: np.ndarray, limit: float, starts: np.ndarray) -> np.ndarray:
+    """:func:`_torque_threshold` per move (inf where the holding torque alone exceeds ``limit``)."""
+    absA = np.abs(A)
+    moving = absA > 0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        s_max = np.where(moving, (limit - np.sign(A) * G) / absA, np.inf)
+        smin = _segment_reduce(np.minimum, s_max, starts)
+        t = np.where(smin <= 0, np.inf, 1.0 / np.sqrt(smin))
+    t = np.where(_segment_reduce(np.logical_or, moving, starts), t, 0.0)
+    return np.where(_segment_reduce(np.logical_or, np.abs(G) > limit, starts), np.inf, t)
+
+
+def batch_fit_thresholds(model, parts, starts: np.ndarray, rms: tuple | None = None,
+                         dwell: float = 0.0) -> tuple[list[str], np.ndarray]:
+    """:func:`fit_thresholds` of P moves at once: ``parts`` holds their samples one move after the other, move k in
+    rows ``starts[k]:starts[k + 1]`` (at least one each); ``rms`` = (I (P, 3, n), G_end (P, 2, n)), every move's
+    :meth:`~pickplace_cli.limits.motion.MotionModel.rms_integrals`, or None to leave the RMS out (``rms=False``).
+    → (names "joint quantity" in fit_thresholds' order, thresholds (P, len(names)) [s]), bitwise fit_thresholds'
+    numbers for each move; inf where it raises NoFeasibleDuration."""
+    starts = np.asarray(starts, dtype=np.intp)
+    P = len(starts) - 1
+    meta = model._column_plan(parts.dAm is not None, parts.singularity is not None)[0]
+    index = {name: i for i, name in enumerate(model.robot.joint_names)}
+    names: list[str] = []
+    cols: list[np.ndarray] = []
+    rates: list[tuple[str, int, float]] = []
+    peak = lambda x: _segment_reduce(np.maximum, x, starts)  # noqa: E731
+    for joint, quantity, _unit, limit, kind, _sign in meta:
+        if kind != "limit":
+            continue
+        i = index[joint]
+        name = f"{joint} {quantity}"
+        if quantity == "velocity":
+            t = peak(np.abs(parts.qd1[:, i])) / limit
+        elif quantity == "motor speed":
+            t = peak(np.abs(model.gear[i] * parts.qd1[:, i])) / limit
+        elif quantity == "acceleration":
+            t = np.sqrt(peak(np.abs(parts.qdd1[:, i])) / limit)
+        elif quantity == "jerk":  # math.cbrt as the scalar fit takes it (numpy's cbrt may round differently)
+            t = np.array([math.cbrt(x) for x in (peak(np.abs(parts.qddd1[:, i])) / limit).tolist()])
+        elif quantity == "motor torque":
+            t = _batch_torque_threshold(parts.Am[:, i], parts.Gm[:, i], limit, starts)
+        elif quantity == "motor torque rate":
+            rates.append((name, i, float(limit)))
+            continue
+        else:  # pragma: no cover - a new timed quantity must be added to the table above
+            raise ValueError(f"fit: no closed form for {quantity}")
+        names.append(name)
+        cols.append(t)
+    if rates and len(parts.tau):
+        c = [i for _, i, _ in rates]
+        u = torque_rate_threshold(parts.dAm[:, c], parts.dGm[:, c], np.array([lim for *_, lim in rates]))
+        first = _segment_reduce(np.minimum, u, starts)  # (P, len(rates))
+        with np.errstate(divide="ignore"):
+            t = np.where(np.isfinite(first) & (first > 0), 1.0 / first, 0.0)
+        names += [name for name, _, _ in rates]
+        cols += list(t.T)
+    rated = [s.drive.rated_torque if s.drive is not None and s.drive.rated_torque else None for s in model.specs]
+    has = [i for i, r in enumerate(rated) if r is not None]
+    if rms is not None and has:
+        integrals, ends = (np.asarray(x, float) for x in rms)
+        hold = ends[:, 0] ** 2 + ends[:, 1] ** 2  # (P, n)
+        flat = lambda x: x[:, has].ravel()  # noqa: E731
+        ts = rms_thresholds(flat(integrals[:, 0]), flat(integrals[:, 1]), flat(integrals[:, 2]), flat(hold), dwell,
+                            np.tile([rated[i] for i in has], P)).reshape(P, len(has))
+        names += [f"{model.robot.joint_names[i]} rms motor torque" for i in has]
+        cols += list(ts.T)
+    return names, (np.column_stack(cols) if cols else np.zeros((P, 0)))
+
+
+def segment_parabolic_peak(x: np.ndarray, y: np.ndarray, starts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per move (rows ``starts[k]:starts[k + 1]`` of the sorted τ ``x`` (M,) and the columns ``y`` (M, C)):
+    :func:`~pickplace_cli.limits.check._parabolic_peak` at every column's top sample (its first maximum, as
+    ``np.argmax``), on a path without jumps. → (peak, τ of the peak), each (P, C), bitwise the function's."""
+    starts = np.asarray(starts, dtype=np.intp)
+    n = np.diff(starts)
+    P, C = len(n), y.shape[1]
+    move = np.repeat(np.arange(P), n)
+    pos = np.arange(len(x)) - starts[move]
+    Y = np.full((P, int(n.max()) if P else 0, C), -np.inf)
+    Y[move, pos] = y
+    X = np.zeros(Y.shape[:2])
+    X[move, pos] = x
+    i = np.argmax(Y, axis=1)  # (P, C): the first maximum (a NaN is the maximum, as np.argmax takes it)
+    take_y = lambda j: np.take_along_axis(Y, j[:, None, :], axis=1)[:, 0]  # noqa: E731
+    take_x = lambda j: np.take_along_axis(X, j, axis=1)  # noqa: E731
+    top, at_top = take_y(i), take_x(i)
+    k = np.minimum(np.maximum(i, 1), np.maximum(n[:, None] - 2, 1))
+    (x0, x1, x2), (y0, y1, y2) = (take_x(k + d) for d in (-1, 0, 1)), (take_y(k + d) for d in (-1, 0, 1))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        d1 = (y1 - y0) / (x1 - x0)
+        d2 = (y2 - y1) / (x2 - x1)
+        curv = (d2 - d1) / (x2 - x0)
+        ok = (curv < 0) & (k == i) & (n[:, None] >= 3)
+        slope = d1 + curv * (x1 - x0)
+        safe = np.where(ok, curv, -1.0)
+        xv = np.minimum(np.maximum(x1 - slope / (2 * safe), x0), x2)
+        yv = y1 - slope**2 / (4 * safe)
+    use = ok & (yv >= top)
+    return np.where(use, yv, top), np.where(use, xv, at_top)
+
+
+def _timed_columns(model, parts, T: np.ndarray, lengths: np.ndarray) -> np.ndarray:
+    """The duration-dependent columns of :meth:`~pickplace_cli.limits.motion.MotionModel.columns` (kind "limit", in
+    its order) with move k at duration T[k] [s]: the powers of T taken as the scalar columns take them (Python
+    floats), so every value is bitwise the one of that move alone."""
+    meta = model._column_plan(parts.dAm is not None, parts.singularity is not None)[0]
+    index = {name: i for i, name in enumerate(model.robot.joint_names)}
+    Ts = T.tolist()
+    t1 = np.repeat(T, lengths)
+    t2, t3 = (np.repeat(np.array([t**e for t in Ts]), lengths) for e in (2, 3))
+    out = []
+    for joint, quantity, _unit, _limit, kind, _sign in meta:
+        if kind != "limit":
+            continue
+        i = index[joint]
+        out.append({
+            "velocity": lambda: np.abs(parts.qd1[:, i]) / t1,
+            "acceleration": lambda: np.abs(parts.qdd1[:, i]) / t2,
+            "jerk": lambda: np.abs(parts.qddd1[:, i]) / t3,
+            "motor speed": lambda: np.abs(model.gear[i] * parts.qd1[:, i]) / t1,
+            "motor torque": lambda: np.abs(parts.Am[:, i] / t2 + parts.Gm[:, i]),
+            "motor torque rate": lambda: np.abs(parts.dAm[:, i] / t3 + parts.dGm[:, i] / t1),
+        }[quantity]())
+    return np.column_stack(out) if out else np.zeros((len(parts.tau), 0))
+
+
+def batch_fit_screen(model, parts, starts: np.ndarray, rms: tuple | None, dwell: float, evaluate) -> np.ndarray | None:
+    """:func:`~pickplace_cli.timing.fit_screen`'s duration for P moves at once (``parts``, ``starts``, ``rms`` as in
+    :func:`batch_fit_thresholds`, every move's samples sorted in τ; paths without jumps): the closed-form fit on the
+    samples raised to the closed form at the parabola vertices of the timed columns' top samples. ``evaluate(tau,
+    move)`` → the model's Parts at the points ``tau`` (M,) of the moves ``move`` (M,), one after the other (NaN rows
+    for a move it cannot evaluate). → (P,) [s], bitwise fit_screen's T for each move; NaN where fit_screen raises or
+    a number is NaN; None when no limit depends on the duration (fit_screen's None)."""
+    names, th = batch_fit_thresholds(model, parts, starts, rms, dwell)
+    if not names:
+        return None
+    T = th.max(axis=1)  # the value of screened_fit's first maximum
+    bad = ~(np.isfinite(T) & (T <= 1e4))
+    T = np.where(bad, 1.0, np.maximum(T, 1e-4))  # (a placeholder where fit_screen raises: NaN below)
+    lengths = np.diff(starts)
+    d = _timed_columns(model, parts, T, lengths)
+    if d.shape[1]:  # _at_peaks: the closed form at the vertices (_solve_at)
+        _, at = segment_parabolic_peak(parts.tau, d, starts)
+        P, C = at.shape
+        more = evaluate(np.clip(at.ravel(), 0.0, 1.0), np.repeat(np.arange(P), C))
+        found, th2 = batch_fit_thresholds(model, more, np.arange(0, P * C + 1, C), None, dwell)
+        if found:
+            at_vertices = th2.max(axis=1)
+            bad |= np.isinf(at_vertices)  # a holding torque over its limit at a vertex: _solve_at raises
+            T = np.maximum(T, at_vertices)
+    return np.where(bad, np.nan, T)
