@@ -61,16 +61,17 @@ class Pieces:
 
     def all_orders(self, tau: np.ndarray, move: np.ndarray) -> list[np.ndarray]:
         """[p, p′, p″, p‴] (each (M, 3), m/1^k) of the moves ``move`` (M,) at their τ (M,)."""
+        P, m = self.by_piece.shape[:2]
         b = self.breaks[move]
-        m = self.by_piece.shape[1]
-        i = np.minimum(np.maximum(np.sum(b <= tau[:, None], axis=1) - 1, 0), m - 1)  # searchsorted(right) − 1
-        dx = np.repeat((tau - np.take_along_axis(b, i[:, None], axis=1)[:, 0])[:, None], 12, axis=1)
-        c = self.by_piece[move, i]  # (M, 6, 12)
-        acc = c[:, 0] * dx
-        acc += c[:, 1]
+        i = np.minimum(np.maximum((b <= tau[:, None]).sum(axis=1) - 1, 0), m - 1)  # searchsorted(right) − 1
+        dx = (tau - self.breaks.ravel()[move * (m + 1) + i])[:, None]  # (the same products as the (M, 12) copies)
+        c = self.by_piece.reshape(P * m, DEGREE + 1, 12)
+        piece = move * m + i
+        acc = c[piece, 0] * dx
+        acc += c[piece, 1]
         for col in range(2, DEGREE + 1):
             acc *= dx
-            acc += c[:, col]
+            acc += c[piece, col]
         lo, hi = tau <= 0.0, tau >= 1.0
         acc[lo] = self.ends[move[lo], 0]
         acc[hi] = self.ends[move[hi], 1]
@@ -129,20 +130,48 @@ def _padded(parts, keep: np.ndarray, lengths: np.ndarray):
     return Parts(**fields)
 
 
-def rms_integrals(model_of, parts, starts: np.ndarray, moves: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Every move's :meth:`~pickplace_cli.limits.motion.MotionModel.rms_integrals` on its rows of ``parts`` (its
-    first round read off them, as plan() reads it off its first samples): (I (P, 3, n), G_end (P, 2, n)).
-    ``model_of(k)`` → move ``moves[k]``'s MotionModel."""
+def rms_integrals(first: "FirstSamples", moves: np.ndarray, parts, starts: np.ndarray, model_of) -> tuple[np.ndarray, np.ndarray]:
+    """Every move's :meth:`~pickplace_cli.limits.motion.MotionModel.rms_integrals` (I (P, 3, n), G_end (P, 2, n)):
+    ``parts`` holds the moves ``moves`` (indices in ``first``) on their first samples, one after the other from
+    ``starts``. The adaptive Gauss–Kronrod quadrature's first round read off the samples as plan() reads it
+    (:func:`~pickplace_cli.limits.grid.adaptive_gk15`: the same sums in the same order), for all moves at once; a
+    move whose first round does not converge everywhere (or whose nodes are not on its grid) is integrated by its
+    own model, ``model_of(j)`` → the MotionModel of the j-th of ``moves``, exactly as plan() integrates it."""
+    from ..limits.grid import GK_GAUSS, GK_NODES, GK_WEIGHTS, RMS_MIN_WIDTH, RMS_RTOL
     from ..limits.motion import Parts
 
-    out_i, out_g = [], []
-    for k in range(len(starts) - 1):
-        s, e = starts[k], starts[k + 1]
-        one = Parts(**{f: (None if getattr(parts, f) is None else getattr(parts, f)[s:e]) for f in _FIELDS})
-        i, g = model_of(int(moves[k])).rms_integrals(one)
-        out_i.append(i)
-        out_g.append(g)
-    return np.array(out_i), np.array(out_g)
+    n = parts.Am.shape[1]
+    P = len(moves)
+    pos = np.full(len(first.lengths), -1)
+    pos[moves] = np.arange(P)
+    sel = pos[first.span_owner] >= 0
+    a, b, so = first.a[sel], first.b[sel], pos[first.span_owner[sel]]
+    rows = (first.node_at.reshape(-1, len(GK_NODES))[sel] + starts[so][:, None]).ravel()
+    Am, Gm = parts.Am[rows], parts.Gm[rows]
+    f = np.concatenate([Am * Am, Am * Gm, Gm * Gm], axis=1).reshape(len(a), len(GK_NODES), 3 * n)
+    h = 0.5 * (b - a)
+    k = h[:, None] * np.einsum("j,mjc->mc", GK_WEIGHTS, f)
+    g = h[:, None] * np.einsum("j,mjc->mc", GK_GAUSS, f)
+    # each move's sum over its spans in span order (as k.sum(axis=0): one span after the other)
+    count = np.bincount(so, minlength=P)
+    at = np.arange(len(so)) - np.concatenate([[0], np.cumsum(count)])[so]
+    K = np.zeros((P, int(count.max()) if P else 0, 3 * n))
+    K[so, at] = k
+    est = np.zeros((P, 3 * n))
+    for s in range(K.shape[1]):
+        est = est + K[:, s]
+    aa, gg = np.abs(est[:, :n]), np.abs(est[:, 2 * n :])
+    scale = np.concatenate([aa, np.sqrt(aa * gg), gg], axis=1)
+    tol = RMS_RTOL * (scale + 1e-13 * scale.max(axis=1, keepdims=True)) + 1e-300
+    ok = np.all(np.abs(k - g) <= tol[so] * (b - a)[:, None], axis=1) | (b - a < RMS_MIN_WIDTH)
+    done = (np.bincount(so, weights=~ok, minlength=P) == 0) & first.nodes_ok[moves]
+    integrals = est.reshape(P, 3, n)
+    ends = np.stack([parts.Gm[starts[:-1]], parts.Gm[starts[1:] - 1]], axis=1)
+    for j in np.flatnonzero(~done):  # (never seen on the shipped profiles: the first round converges)
+        one = Parts(**{name: (None if getattr(parts, name) is None else getattr(parts, name)[starts[j] : starts[j + 1]])
+                       for name in _FIELDS})
+        integrals[j], ends[j] = model_of(int(j)).rms_integrals(one)
+    return integrals, ends
 
 
 def limits_fit(model, pieces: Pieces, parts, starts: np.ndarray, moves: np.ndarray, T: np.ndarray,
@@ -176,3 +205,98 @@ def _nan_parts(parts, n: int):
 
     return Parts(**{f: (None if getattr(parts, f) is None else np.full((n, *getattr(parts, f).shape[1:]), np.nan))
                     for f in _FIELDS})
+
+
+# ------------------------------------------------------- plan()'s first samples and RMS start, for many moves
+
+
+def _rows(values: np.ndarray, owner: np.ndarray, P: int) -> tuple[np.ndarray, np.ndarray]:
+    """Ragged ``values`` grouped by ``owner`` (non-decreasing) as rows (P, longest) padded with +inf, and each
+    value's column."""
+    count = np.bincount(owner, minlength=P)
+    col = np.arange(len(values)) - np.concatenate([[0], np.cumsum(count)])[owner]
+    out = np.full((P, int(count.max()) if len(values) else 0), np.inf)
+    out[owner, col] = values
+    return out, col
+
+
+def _merge(first: np.ndarray, second: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Every row of ``first`` (P, a) and ``second`` (P, b) (sorted rows) merged in order, an element of ``first``
+    before an equal one of ``second``: (the merged values (P, a + b), from_second (P, a + b) bool, seen (P, a + b):
+    how many of ``first`` come at or before each place), and the permutation (P, a + b)."""
+    both = np.concatenate([first, second], axis=1)
+    o = np.argsort(both, axis=1, kind="stable")
+    from_second = o >= first.shape[1]
+    return np.take_along_axis(both, o, axis=1), from_second, np.cumsum(~from_second, axis=1), o
+
+
+class FirstSamples:
+    """plan()'s check grid at the auto duration (:func:`~pickplace_cli.limits.grid.check_grid_order` of the output
+    samples ``taus`` (P lists of τ) on paths with breakpoints ``breaks`` (P, m + 1), 0 < … < 1, and no jumps), sorted,
+    for P moves at once (the same values: the same arithmetic, every set operation on exact values), and the start
+    of each move's RMS quadrature (:func:`~pickplace_cli.limits.grid.span_nodes`): the spans and, for every
+    Gauss–Kronrod node, its nearest grid point as the model's first round takes it
+    (:meth:`~pickplace_cli.limits.motion.MotionModel._first_round`).
+
+    ``grid`` (M,), ``lengths`` (P,); ``a``, ``b`` (S,) the spans, ``span_owner`` (S,); ``node_at`` (S·15,) the
+    index of each node's grid point within its move's grid; ``nodes_ok`` (P,): every node within 1e-9 of it."""
+
+    def __init__(self, taus: list[np.ndarray], breaks: np.ndarray) -> None:
+        with np.errstate(invalid="ignore"):  # (inf − inf in the padding)
+            self._build(taus, breaks)
+
+    def _build(self, taus: list[np.ndarray], breaks: np.ndarray) -> None:
+        from ..limits.grid import CHECK_SAMPLES, GK_NODES, RMS_START_WIDTH
+
+        P = breaks.shape[0]
+        # rms_edges: every span between breakpoints cut into k equal parts (np.linspace's arithmetic), then 1
+        lo, hi = breaks[:, :-1], breaks[:, 1:]
+        k = np.maximum(1, np.ceil((hi - lo) / RMS_START_WIDTH - 1e-9)).astype(np.intp)
+        j = np.arange(k.max(), dtype=float)
+        pts = j * ((hi - lo) / k)[..., None] + lo[..., None]
+        inside = j < k[..., None]
+        counts = inside.sum(axis=(1, 2))
+        edges = np.insert(pts[inside], np.cumsum(counts), 1.0)
+        edge_owner = np.repeat(np.arange(P), counts + 1)
+        same = edge_owner[1:] == edge_owner[:-1]
+        self.a, self.b = edges[:-1][same], edges[1:][same]
+        self.span_owner = edge_owner[:-1][same]
+        nodes = (0.5 * (self.b + self.a))[:, None] + (0.5 * (self.b - self.a))[:, None] * GK_NODES  # span_nodes
+        node_rows, node_col = _rows(nodes.ravel(), np.repeat(self.span_owner, len(GK_NODES)), P)
+        # the output samples; dense when they cover [0, 1] as densely as the check's uniform grid
+        n_tau = np.array([len(t) for t in taus])
+        tau = np.full((P, int(n_tau.max())), np.inf)
+        for r, t in enumerate(taus):
+            tau[r, : len(t)] = t
+        gaps = np.where(np.isfinite(tau[:, 1:]), np.diff(tau, axis=1), -np.inf)
+        dense = (n_tau >= CHECK_SAMPLES) & (tau[:, 0] <= 0.0) & (np.take_along_axis(tau, n_tau[:, None] - 1, 1)[:, 0]
+                                                                 >= 1.0) & (gaps.max(axis=1) <= 1.0 / (CHECK_SAMPLES - 1))
+        # _extra_points: breakpoints ∪ nodes (∪ the uniform grid), sorted; duplicates and round-off twins (within
+        # 1e-9 of the value before) dropped
+        uniform = np.where(dense[:, None], np.inf, np.linspace(0.0, 1.0, CHECK_SAMPLES))
+        cand = np.sort(np.concatenate([breaks, node_rows, uniform], axis=1), axis=1)
+        keep = np.isfinite(cand) & np.c_[np.ones(P, bool), cand[:, 1:] - cand[:, :-1] > 1e-9]
+        extra = np.where(keep, cand, np.inf)
+        # check_grid_order: the extra points farther than 1e-9 from the nearest output samples (below, above)
+        merged, is_extra, seen, _ = _merge(tau, extra)
+        below = np.maximum(seen - 1, 0)
+        above = np.minimum(seen, n_tau[:, None] - 1)
+        near = np.minimum(np.abs(merged - np.take_along_axis(tau, below, 1)),
+                          np.abs(merged - np.take_along_axis(tau, above, 1)))
+        in_grid = np.isfinite(merged) & (~is_extra | (near > 1e-9))
+        self.grid = merged[in_grid]
+        self.lengths = in_grid.sum(axis=1)
+        # each node's nearest grid point, as _first_round takes it (searchsorted, then the nearer neighbour)
+        grid_rows = np.where(in_grid, merged, np.inf)  # (the grid's values in order, then padding)
+        grid_rows = np.take_along_axis(grid_rows, np.argsort(~in_grid, axis=1, kind="stable"), 1)
+        merged, is_node, seen, o = _merge(grid_rows, node_rows)
+        lo_i = np.maximum(seen - 1, 0)
+        hi_i = np.minimum(seen, self.lengths[:, None] - 1)
+        g_lo, g_hi = np.take_along_axis(grid_rows, lo_i, 1), np.take_along_axis(grid_rows, hi_i, 1)
+        pick = np.where(np.abs(g_lo - merged) < np.abs(g_hi - merged), lo_i, hi_i)
+        far = np.abs(np.take_along_axis(grid_rows, pick, 1) - merged) > 1e-9
+        at = np.zeros(node_rows.shape, np.intp)
+        rows = np.nonzero(is_node)
+        at[rows[0], o[is_node] - grid_rows.shape[1]] = pick[is_node]
+        self.node_at = at[np.repeat(self.span_owner, len(GK_NODES)), node_col]
+        self.nodes_ok = ~np.any(far & is_node & np.isfinite(merged), axis=1)

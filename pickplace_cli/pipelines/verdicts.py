@@ -438,12 +438,11 @@ def _limits_block(model, profile, pieces, items: list, margin: float = SCREEN_MA
     [s])) that the engine decides: {index: fit_s [s] or None}, as plan() computes them on its first samples
     (:mod:`~pickplace_cli.pipelines.verdict_fit`); a row is decided when every limit is clearly held at T (the
     screening's contract) and the capacity binds (the fit is clearly shorter)."""
-    from ..limits.grid import check_grid_order
     from ..limits.motion import MotionModel
     from ..model.trajectory import CartesianPath
     from ..planner import motion_model_static
     from ..timing.fit import segment_parabolic_peak
-    from .verdict_fit import limits_fit, model_at, rms_integrals, take_moves
+    from .verdict_fit import FirstSamples, limits_fit, model_at, rms_integrals, take_moves
 
     static = motion_model_static(profile)
     dwell = profile.planning.dwell
@@ -453,18 +452,20 @@ def _limits_block(model, profile, pieces, items: list, margin: float = SCREEN_MA
         return MotionModel(CartesianPath(_no_evaluation, "bspline", {}, (0.0, 0.0, 0.0), pieces.breaks[k], jumps=(),
                                          evaluate_all=pieces.evaluator(k)), *static)
 
-    # plan()'s first samples: the check grid of the output samples at T, sorted
-    grids = [g[o] for g, o in (check_grid_order(t / T, pieces.breaks[k], ()) for k, T, t in items)]
+    # the grids below assume breakpoints 0 < … < 1 (always so for the B-spline; any other move: plan())
+    br = pieces.breaks
+    items = [it for it in items if br[it[0], 0] == 0.0 and br[it[0], -1] == 1.0 and np.all(np.diff(br[it[0]]) > 0)]
     out: dict[int, float | None] = {}
-    for chunk in _sample_blocks([len(g) for g in grids]):
+    for chunk in _sample_blocks([len(t) + 200 for _, _, t in items]):
         idx = np.array([items[c][0] for c in chunk])
         T = np.array([items[c][1] for c in chunk])
-        lengths = np.array([len(grids[c]) for c in chunk])
-        parts, keep = model_at(model, pieces, np.concatenate([grids[c] for c in chunk]), np.repeat(idx, lengths),
-                               lengths)
+        first = FirstSamples([items[c][2] / items[c][1] for c in chunk], br[idx])  # plan()'s first samples, sorted
+        parts, keep = model_at(model, pieces, first.grid, np.repeat(idx, first.lengths), first.lengths)
         if parts is None:
             continue
-        idx, T, lengths = idx[keep], T[keep], lengths[keep]
+        local = np.flatnonzero(keep)
+        idx, T = idx[keep], T[keep]
+        lengths = first.lengths[keep]
         starts = np.concatenate([[0], np.cumsum(lengths)])
         meta, data = model.columns(parts, np.repeat(T, lengths))
         est, _ = segment_parabolic_peak(parts.tau, data, starts)
@@ -473,8 +474,8 @@ def _limits_block(model, profile, pieces, items: list, margin: float = SCREEN_MA
             continue
         if len(clear) < len(idx):
             parts, starts = take_moves(parts, starts, clear)
-            idx, T = idx[clear], T[clear]
-        rms = rms_integrals(model_of, parts, starts, idx)
+            idx, T, local = idx[clear], T[clear], local[clear]
+        rms = rms_integrals(first, local, parts, starts, lambda j: model_of(int(idx[j])))
         fits = limits_fit(model, pieces, parts, starts, idx, T, rms, dwell)
         held = np.all(_rms_at(rms, T, dwell) / rated <= margin, axis=1)
         for k, fit, ok in zip(idx.tolist(), fits, held):
