@@ -11,7 +11,9 @@ default Delta profile ``delta-su2018``, output at 1 kHz):
 * batch throughput in moves/s through ``pickplace_cli.pipelines.batch.plan_rows`` (full plans; and verdicts only,
   i.e. output rate 1 Hz — duration and verdict are the same, since the check grid does not depend on it);
   the batched verdict engine (``pickplace_cli.pipelines.verdicts``) in-process and through the CLI
-  (``plan --batch F --json -q``, fresh process, -j 1 and -j 2) for 1,000 and 10,000 moves;
+  (``plan --batch F --json -q``, fresh process, -j 1 and -j 2) for 1,000 and 10,000 moves, under the default
+  duration rule (``--time limits``) and under ``--time auto``, interleaved (bench/bench_default_batch.py: the same
+  comparison alone);
 * CLI cold start, wall time of a fresh process: ``--help``, ``--version``, one ``plan`` to a CSV file;
 * ``build-table`` wall time for the default grid (79 λ), sequential (``-j 1``) and on all cores;
 * the conveyor method ``bspline-vel``: exact solve and table lookup (when the module is there);
@@ -242,8 +244,10 @@ def bench_batch(n: int, repeat: int, engine_sizes: tuple[int, ...] = (1000, 1000
 
 
 def _bench_verdict_engine(prof, sizes: tuple[int, ...], repeat: int) -> dict:
-    """The batched verdict engine (``plan --batch F --json`` without -o): in-process moves/s through
-    ``pickplace_cli.pipelines.verdicts.verdict_rows``, and the CLI's wall time (fresh process) with -j 1 and -j 2."""
+    """The batched verdict engine (``plan --batch F --json`` without -o) under the default duration rule (limits) and
+    under ``--time auto``, interleaved: in-process moves/s through ``pickplace_cli.pipelines.verdicts.verdict_rows``,
+    and the CLI's wall time (fresh process) with -j 1 and -j 2. (bench/bench_default_batch.py: the same comparison
+    alone, with plan() on every row for reference.)"""
     try:
         from pickplace_cli.pipelines.verdicts import Verdict, verdict_rows
     except ImportError:
@@ -252,28 +256,44 @@ def _bench_verdict_engine(prof, sizes: tuple[int, ...], repeat: int) -> dict:
     from pickplace_cli.pipelines.batch import read_batch_text
     from pickplace_cli.planner import PlanOptions
 
+    rules = ("auto", "limits")
     res: dict = {}
     cmd = cli_command()
     with tempfile.TemporaryDirectory() as d:
         for m in sizes:
             text = _batch_rows(m)
             rows, _ = read_batch_text(text, "bench")
-            outcome: list = []
-            s = timeit(lambda: outcome.__setitem__(slice(None), list(verdict_rows(rows, prof, PlanOptions(fit=False)))),
-                       repeat)
-            decided = sum(1 for r in outcome if isinstance(r.plan, Verdict))
-            rate = {"median": m / s["median"], "min": m / s["max"], "max": m / s["min"]}
-            entry = {"in_process": {"seconds": s, "moves_per_s": rate, "decided_by_engine": decided}}
-            show(f"verdict engine, in-process ({m} moves)", {**rate, "n": s["n"]}, "mv/s", 1.0, target="> 1000 mv/s")
-            note("", f"({decided} of {m} rows decided by the engine, the rest by plan())")
+            opts = {r: PlanOptions(fit=False, time=r) for r in rules}
+            decided = {r: sum(isinstance(x.plan, Verdict) for x in verdict_rows(rows, prof, opts[r])) for r in rules}
+            times: dict = {r: [] for r in rules}
+            for _ in range(repeat):
+                for r in rules:
+                    t0 = time.perf_counter()
+                    list(verdict_rows(rows, prof, opts[r]))
+                    times[r].append(time.perf_counter() - t0)
+            entry: dict = {}
+            for r in rules:
+                s = stats(times[r])
+                rate = {"median": m / s["median"], "min": m / s["max"], "max": m / s["min"]}
+                entry[r] = {"in_process": {"seconds": s, "moves_per_s": rate, "decided_by_engine": decided[r]}}
+                show(f"verdict engine, --time {r}, in-process ({m} moves)", {**rate, "n": s["n"]}, "mv/s", 1.0,
+                     target="> 1000 mv/s")
+                note("", f"({decided[r]} of {m} rows decided by the engine, the rest by plan())")
             path = os.path.join(d, f"b{m}.csv")
             Path(path).write_text(text)
             for j in (1, 2):
-                w = wall(cmd + ["plan", "--batch", path, "--json", "-q", "-j", str(j)], repeat)
-                wrate = {"median": m / w["median"], "min": m / w["max"], "max": m / w["min"]}
-                entry[f"cli_j{j}"] = {"seconds": w, "moves_per_s": wrate}
-                show(f"pickplace plan --batch ({m} moves) --json -q -j {j}", w, "s", 1.0)
-                note("", f"= {wrate['median']:.0f} moves/s ({wrate['min']:.0f}–{wrate['max']:.0f}) including start-up")
+                walls: dict = {r: [] for r in rules}
+                for _ in range(repeat):
+                    for r in rules:
+                        extra = ["-t", "auto"] if r == "auto" else []
+                        walls[r].append(wall(cmd + ["plan", "--batch", path, "--json", "-q", "-j", str(j), *extra], 1)["median"])
+                for r in rules:
+                    w = stats(walls[r])
+                    wrate = {"median": m / w["median"], "min": m / w["max"], "max": m / w["min"]}
+                    entry[r][f"cli_j{j}"] = {"seconds": w, "moves_per_s": wrate}
+                    show(f"pickplace plan --batch ({m} moves) --json -q -j {j}, --time {r}", w, "s", 1.0,
+                         target="> 1000 mv/s" if (j == 2 and m == 1000) else "")
+                    note("", f"= {wrate['median']:.0f} moves/s ({wrate['min']:.0f}–{wrate['max']:.0f}) including start-up")
             res[str(m)] = entry
     return res
 

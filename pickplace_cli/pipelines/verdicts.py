@@ -23,15 +23,26 @@ the SCARA, |sin q2| = 0 at full stretch, so no unreachable point hides between s
 every value finite. That is stricter than plan()'s own 5 % exact-refinement band (``limits.EXACT_BAND``):
 at ≤ 0.9 plan() never refines and never finds a violation (the screening estimate is within ~0.3 % of
 plan()'s peaks; tests/unit/test_verdicts.py measures it). Every other row (near or over a limit,
-unreachable, a parse/task/table error, ``time = fit``, moving ends, anything unusual) is planned by
+unreachable, a parse/task/table error, ``time = fit``, moving ends, the motors binding the default rule's duration,
+anything unusual) is planned by
 :func:`~pickplace_cli.pipelines.batch.plan_rows`, i.e. by ``plan()`` itself, so its verdict, violation rows and
 messages are exactly the existing ones. A decided row's summary is built by ``Plan.summary`` from the same
 numbers ``plan()`` computes (the same arithmetic on stacked arrays: bitwise equal, tested).
 
-Scope: method ``bspline`` only, rest-to-rest, ``time`` auto or seconds, no ``--show-fit`` (``options.fit``),
-robots with an analytic ``torque_rate``, a ``reachable`` mask and a ``singularity_measure`` (Delta, SCARA;
-the gantry goes through ``plan()``). ``PICKPLACE_NO_VERDICT_ENGINE=1`` switches the engine off (debugging aid:
-the output must not change).
+**The default rule** (``time = limits``: the longer of the capacity's duration and the joints' and motors' fit).
+For these rows plan() evaluates the model on its first samples (the check grid of the output samples at the auto
+duration) and screens the closed-form fit there; when the capacity binds (the fit is clearly shorter) the duration
+is the auto one and ``fit_s`` that screened fit. The engine replays exactly that (:mod:`.verdict_fit`): the same
+grid, the same model numbers (the path's own evaluator replayed on stacked samples), the vectorised closed-form
+fit (:func:`~pickplace_cli.timing.fit.batch_fit_screen`, bitwise the scalar one), and decides a row when the
+screening above holds on those samples and the capacity binds. A row whose joints or motors set the duration
+(plan() confirms that fit by its exact check, refining peaks at their limits) is left to plan().
+
+Scope: method ``bspline`` only, rest-to-rest, ``time`` limits, auto or seconds, no ``--show-fit``
+(``options.fit``), robots with an analytic ``torque_rate``, a ``reachable`` mask and a ``singularity_measure``
+(Delta, SCARA; the gantry goes through ``plan()``). A row's ``limit_use`` plans it on the profile at that use, as
+plan() does (the rows are grouped by profile). ``PICKPLACE_NO_VERDICT_ENGINE=1`` switches the engine off
+(debugging aid: the output must not change).
 """
 
 from __future__ import annotations

@@ -214,13 +214,19 @@ def _batch_torque_threshold(A: np.ndarray, G: np.ndarray, limit: float, starts: 
     return np.where(_segment_reduce(np.logical_or, np.abs(G) > limit, starts), np.inf, t)
 
 
-def batch_fit_thresholds(model, parts, starts: np.ndarray, rms: tuple | None = None,
-                         dwell: float = 0.0) -> tuple[list[str], np.ndarray]:
+def batch_fit_thresholds(model, parts, starts: np.ndarray, rms: tuple | None = None, dwell: float = 0.0,
+                         only_max: bool = False) -> tuple[list[str], np.ndarray]:
     """:func:`fit_thresholds` of P moves at once: ``parts`` holds their samples one move after the other, move k in
     rows ``starts[k]:starts[k + 1]`` (at least one each); ``rms`` = (I (P, 3, n), G_end (P, 2, n)), every move's
     :meth:`~pickplace_cli.limits.motion.MotionModel.rms_integrals`, or None to leave the RMS out (``rms=False``).
     → (names "joint quantity" in fit_thresholds' order, thresholds (P, len(names)) [s]), bitwise fit_thresholds'
-    numbers for each move; inf where it raises NoFeasibleDuration."""
+    numbers for each move; inf where it raises NoFeasibleDuration.
+
+    ``only_max``: only each move's largest threshold is needed (the fit), so the costly closed forms are skipped
+    where a bound shows them below the move's largest cheap threshold (velocity, acceleration, jerk, motor speed
+    and torque): a sample's torque rate threshold is at most max(∛(2|a|/L), 2|b|/L) (below it |a·u³ + b·u| < L),
+    an RMS threshold at most Fujiwara's bound on the roots of its quartic. A skipped quantity reads 0; the largest
+    threshold of every move is unchanged, bit for bit."""
     starts = np.asarray(starts, dtype=np.intp)
     P = len(starts) - 1
     meta = model._column_plan(parts.dAm is not None, parts.singularity is not None)[0]
@@ -251,25 +257,70 @@ def batch_fit_thresholds(model, parts, starts: np.ndarray, rms: tuple | None = N
             raise ValueError(f"fit: no closed form for {quantity}")
         names.append(name)
         cols.append(t)
+    floor = (np.column_stack(cols).max(axis=1) if cols else np.zeros(P)) if only_max else None
     if rates and len(parts.tau):
         c = [i for _, i, _ in rates]
-        u = torque_rate_threshold(parts.dAm[:, c], parts.dGm[:, c], np.array([lim for *_, lim in rates]))
-        first = _segment_reduce(np.minimum, u, starts)  # (P, len(rates))
-        with np.errstate(divide="ignore"):
-            t = np.where(np.isfinite(first) & (first > 0), 1.0 / first, 0.0)
+        t = _batch_rate_thresholds(parts.dAm[:, c], parts.dGm[:, c], np.array([lim for *_, lim in rates]), starts,
+                                   floor)
         names += [name for name, _, _ in rates]
         cols += list(t.T)
+        if only_max:
+            floor = np.maximum(floor, t.max(axis=1))
     rated = [s.drive.rated_torque if s.drive is not None and s.drive.rated_torque else None for s in model.specs]
     has = [i for i, r in enumerate(rated) if r is not None]
     if rms is not None and has:
         integrals, ends = (np.asarray(x, float) for x in rms)
         hold = ends[:, 0] ** 2 + ends[:, 1] ** 2  # (P, n)
         flat = lambda x: x[:, has].ravel()  # noqa: E731
-        ts = rms_thresholds(flat(integrals[:, 0]), flat(integrals[:, 1]), flat(integrals[:, 2]), flat(hold), dwell,
-                            np.tile([rated[i] for i in has], P)).reshape(P, len(has))
+        ts = _batch_rms_thresholds(flat(integrals[:, 0]), flat(integrals[:, 1]), flat(integrals[:, 2]), flat(hold),
+                                   dwell, np.tile([rated[i] for i in has], P),
+                                   None if floor is None else np.repeat(floor, len(has))).reshape(P, len(has))
         names += [f"{model.robot.joint_names[i]} rms motor torque" for i in has]
         cols += list(ts.T)
     return names, (np.column_stack(cols) if cols else np.zeros((P, 0)))
+
+
+#: relative safety of the bounds that skip a closed form (far above the bounds' round-off)
+_BOUND_SAFETY = 1e-9
+
+
+def _batch_rate_thresholds(a: np.ndarray, b: np.ndarray, limits: np.ndarray, starts: np.ndarray,
+                           floor: np.ndarray | None) -> np.ndarray:
+    """Per move and torque-rate column, the smallest T [s] from which |a/T³ + b/T| ≤ limit at all its samples
+    (:func:`torque_rate_threshold`, the first crossing per sample, the latest over samples); with ``floor`` (P,) the
+    samples whose bound (batch_fit_thresholds) lies below their move's floor are skipped."""
+    if floor is None:
+        u = torque_rate_threshold(a, b, limits)
+    else:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            bound = np.maximum(np.cbrt(2.0 * np.abs(a) / limits), 2.0 * np.abs(b) / limits) * (1.0 + _BOUND_SAFETY)
+        need = ~(bound < np.repeat(floor, np.diff(starts))[:, None])  # (NaN: computed, and NaN it stays)
+        u = np.full(a.shape, np.inf)
+        u[need] = torque_rate_threshold(a[need], b[need], np.broadcast_to(limits, a.shape)[need])
+    first = _segment_reduce(np.minimum, u, starts)  # (P, columns)
+    with np.errstate(divide="ignore"):
+        return np.where(np.isfinite(first) & (first > 0), 1.0 / first, 0.0)
+
+
+def _batch_rms_thresholds(iaa, iag, igg, hold, dwell: float, rated, floor: np.ndarray | None) -> np.ndarray:
+    """:func:`rms_thresholds` of flat (move, joint) entries; with ``floor`` the entries whose quartic T⁴ + c3·T³ +
+    c2·T² + c0 has no real root above it read 0 without a solve. The bound: with c3 ≥ 0 the quartic is at least
+    T⁴ + c2·T² + c0 for T ≥ 0, whose largest root is √((−c2 + √(c2² − 4·c0))/2) (c0 ≤ 0); else Fujiwara's bound
+    on every root, 2·max(|c3|, |c2|^½, |c0/2|^¼)."""
+    if floor is None:
+        return rms_thresholds(iaa, iag, igg, hold, dwell, rated)
+    r2 = np.square(rated)
+    lead = 2.0 * (r2 - igg)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        c3, c2, c0 = dwell * (2.0 * r2 - hold) / lead, -4.0 * iag / lead, -2.0 * iaa / lead
+        biquadratic = np.sqrt((-c2 + np.sqrt(c2 * c2 - 4.0 * c0)) / 2.0)
+        fujiwara = 2.0 * np.maximum(np.maximum(np.abs(c3), np.sqrt(np.abs(c2))), np.sqrt(np.sqrt(np.abs(c0) / 2.0)))
+        bound = np.where((c3 >= 0) & (c0 <= 0), biquadratic, fujiwara)
+    skip = (lead > 0) & (bound * (1.0 + _BOUND_SAFETY) < floor)
+    out = np.zeros(len(lead))
+    keep = ~skip
+    out[keep] = rms_thresholds(iaa[keep], iag[keep], igg[keep], hold[keep], dwell, np.asarray(rated)[keep])
+    return out
 
 
 def segment_parabolic_peak(x: np.ndarray, y: np.ndarray, starts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -335,7 +386,7 @@ def batch_fit_screen(model, parts, starts: np.ndarray, rms: tuple | None, dwell:
     move)`` → the model's Parts at the points ``tau`` (M,) of the moves ``move`` (M,), one after the other (NaN rows
     for a move it cannot evaluate). → (P,) [s], bitwise fit_screen's T for each move; NaN where fit_screen raises or
     a number is NaN; None when no limit depends on the duration (fit_screen's None)."""
-    names, th = batch_fit_thresholds(model, parts, starts, rms, dwell)
+    names, th = batch_fit_thresholds(model, parts, starts, rms, dwell, only_max=True)
     if not names:
         return None
     T = th.max(axis=1)  # the value of screened_fit's first maximum
@@ -347,7 +398,7 @@ def batch_fit_screen(model, parts, starts: np.ndarray, rms: tuple | None, dwell:
         _, at = segment_parabolic_peak(parts.tau, d, starts)
         P, C = at.shape
         more = evaluate(np.clip(at.ravel(), 0.0, 1.0), np.repeat(np.arange(P), C))
-        found, th2 = batch_fit_thresholds(model, more, np.arange(0, P * C + 1, C), None, dwell)
+        found, th2 = batch_fit_thresholds(model, more, np.arange(0, P * C + 1, C), None, dwell, only_max=True)
         if found:
             at_vertices = th2.max(axis=1)
             bad |= np.isinf(at_vertices)  # a holding torque over its limit at a vertex: _solve_at raises
