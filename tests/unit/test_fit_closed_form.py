@@ -188,14 +188,14 @@ def test_batch_fit_thresholds_are_the_scalar_thresholds_bitwise(which):
     # without the RMS (``rms=False``)
     names2, got2 = batch_fit_thresholds(cases[0][0], stacked, starts, None, dwell)
     assert names2 == [n for n in names if "rms" not in n] and np.array_equal(got2, got[:, : len(names2)])
-    # only_max: the torque rates and RMS whose bounds lie below the largest cheap threshold are skipped (read 0);
-    # every move's largest threshold is the same number
+    # only_max: the torque rates and RMS whose bounds lie below the move's largest known threshold are skipped (a
+    # quantity below the largest may read lower); every move's largest threshold is the same number
     rms_all = (np.array([r[0] for r in rms]), np.array([r[1] for r in rms]))
     _, fast = batch_fit_thresholds(cases[0][0], stacked, starts, rms_all, dwell, only_max=True)
     assert np.array_equal(fast.max(axis=1), got.max(axis=1))
-    assert np.all((fast == got) | ((fast == 0.0) & (got < fast.max(axis=1, keepdims=True))))
+    assert np.all((fast == got) | ((fast < got) & (got < got.max(axis=1, keepdims=True))))
     if which == "delta":
-        assert (fast == 0.0).sum() > (got == 0.0).sum()  # (something was skipped)
+        assert (fast < got).sum() > 0  # (something was skipped)
 
 
 def test_segment_parabolic_peak_is_the_check_s_parabola_per_move():
