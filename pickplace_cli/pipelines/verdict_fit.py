@@ -83,9 +83,10 @@ class Pieces:
         return lambda tau: self.all_orders(tau, np.full(len(tau), k))
 
 
-def model_at(model, pieces: Pieces, tau: np.ndarray, move: np.ndarray, lengths: np.ndarray):
+def model_at(model, pieces: Pieces, tau: np.ndarray, move: np.ndarray, lengths: np.ndarray, **options):
     """The model at the points ``tau`` of the moves ``move`` (``lengths`` points each, one move after the other):
-    (Parts of the moves that are reachable at every point, or None; keep (len(lengths),) bool)."""
+    (Parts of the moves that are reachable at every point, or None; keep (len(lengths),) bool). ``options`` go to
+    :meth:`~pickplace_cli.limits.motion.MotionModel.parts`."""
     owner = np.repeat(np.arange(len(lengths)), lengths)
     motion = pieces.all_orders(tau, move)
     keep = np.ones(len(lengths), bool)
@@ -95,7 +96,7 @@ def model_at(model, pieces: Pieces, tau: np.ndarray, move: np.ndarray, lengths: 
         if not rows.all():  # the motion of the rest, laid out as for all (views of one array)
             motion = pieces.all_orders(tau[rows], move[rows])
         try:
-            return model.parts(tau[rows], motion=tuple(motion)), keep
+            return model.parts(tau[rows], motion=tuple(motion), **options), keep
         except UnreachableError as exc:  # not caught by the reach mask
             if exc.index is None:
                 break
@@ -130,44 +131,96 @@ def _padded(parts, keep: np.ndarray, lengths: np.ndarray):
     return Parts(**fields)
 
 
-def rms_integrals(first: "FirstSamples", moves: np.ndarray, parts, starts: np.ndarray, model_of) -> tuple[np.ndarray, np.ndarray]:
-    """Every move's :meth:`~pickplace_cli.limits.motion.MotionModel.rms_integrals` (I (P, 3, n), G_end (P, 2, n)):
-    ``parts`` holds the moves ``moves`` (indices in ``first``) on their first samples, one after the other from
-    ``starts``. The adaptive Gauss–Kronrod quadrature's first round read off the samples as plan() reads it
-    (:func:`~pickplace_cli.limits.grid.adaptive_gk15`: the same sums in the same order), for all moves at once; a
-    move whose first round does not converge everywhere (or whose nodes are not on its grid) is integrated by its
-    own model, ``model_of(j)`` → the MotionModel of the j-th of ``moves``, exactly as plan() integrates it."""
+def _sums(values: np.ndarray, owner: np.ndarray, P: int) -> np.ndarray:
+    """Per move, the sum of its rows of ``values`` in row order, one after the other (as ``values[rows].sum(axis=0)``
+    adds them; from 0)."""
+    count = np.bincount(owner, minlength=P)
+    at = np.arange(len(owner)) - np.concatenate([[0], np.cumsum(count)])[owner]
+    padded = np.zeros((P, int(count.max()) if len(owner) else 0, values.shape[1]))
+    padded[owner, at] = values
+    out = np.zeros((P, values.shape[1]))
+    for s in range(padded.shape[1]):
+        out = out + padded[:, s]
+    return out
+
+
+def _round(got, keep: np.ndarray, lengths: np.ndarray, h: np.ndarray, so: np.ndarray, n: int):
+    """(K15, G7) of every span of a further round of the RMS quadrature from the model ``got`` at its nodes (the kept
+    moves': ``lengths`` nodes each), move by move as the model's integrand gives them (the robot's arrays as they
+    come, their products and their Gauss–Kronrod sums in its memory order: the sums' order follows it); NaN for
+    the moves not kept."""
+    from ..limits.grid import GK_GAUSS, GK_WEIGHTS
+
+    k = np.full((len(h), 3 * n), np.nan)
+    g = np.full((len(h), 3 * n), np.nan)
+    at = 0
+    for j in np.flatnonzero(keep & (lengths > 0)):
+        rows = slice(at, at + lengths[j])
+        at += lengths[j]
+        Am, Gm = got.Am[rows], got.Gm[rows]
+        f = np.concatenate([Am * Am, Am * Gm, Gm * Gm], axis=1).reshape(-1, 15, 3 * n)
+        spans = so == j
+        k[spans] = h[spans, None] * np.einsum("j,mjc->mc", GK_WEIGHTS, f)
+        g[spans] = h[spans, None] * np.einsum("j,mjc->mc", GK_GAUSS, f)
+    return k, g
+
+
+def rms_integrals(first: "FirstSamples", moves: np.ndarray, parts, starts: np.ndarray, model, pieces: Pieces,
+                  piece_of: np.ndarray, model_of) -> tuple[np.ndarray, np.ndarray]:
+    """Every move's :meth:`~pickplace_cli.limits.motion.MotionModel.rms_integrals` (I (P, 3, n), G_end (P, 2, n)),
+    bitwise: ``parts`` holds the moves ``moves`` (indices in ``first``; ``piece_of``: in ``pieces``) on their first
+    samples, one after the other from ``starts``. The adaptive Gauss–Kronrod quadrature
+    (:func:`~pickplace_cli.limits.grid.adaptive_gk15`) for all moves at once, round by round: the first read off
+    the samples as plan() reads it, every further one evaluating the bisected spans' nodes of all moves in one model
+    call (``model``, the motion by ``pieces``); the same sums in the same order, span by span. A move whose nodes
+    are not on its grid is integrated by its own model (``model_of(j)``: the j-th of ``moves``); NaN for a move
+    with an unreachable node (plan() raises there)."""
     from ..limits.grid import GK_GAUSS, GK_NODES, GK_WEIGHTS, RMS_MIN_WIDTH, RMS_RTOL
     from ..limits.motion import Parts
 
-    n = parts.Am.shape[1]
-    P = len(moves)
+    n, P, G = parts.Am.shape[1], len(moves), len(GK_NODES)
     pos = np.full(len(first.lengths), -1)
     pos[moves] = np.arange(P)
     sel = pos[first.span_owner] >= 0
     a, b, so = first.a[sel], first.b[sel], pos[first.span_owner[sel]]
-    rows = (first.node_at.reshape(-1, len(GK_NODES))[sel] + starts[so][:, None]).ravel()
-    Am, Gm = parts.Am[rows], parts.Gm[rows]
-    f = np.concatenate([Am * Am, Am * Gm, Gm * Gm], axis=1).reshape(len(a), len(GK_NODES), 3 * n)
-    h = 0.5 * (b - a)
-    k = h[:, None] * np.einsum("j,mjc->mc", GK_WEIGHTS, f)
-    g = h[:, None] * np.einsum("j,mjc->mc", GK_GAUSS, f)
-    # each move's sum over its spans in span order (as k.sum(axis=0): one span after the other)
-    count = np.bincount(so, minlength=P)
-    at = np.arange(len(so)) - np.concatenate([[0], np.cumsum(count)])[so]
-    K = np.zeros((P, int(count.max()) if P else 0, 3 * n))
-    K[so, at] = k
-    est = np.zeros((P, 3 * n))
-    for s in range(K.shape[1]):
-        est = est + K[:, s]
-    aa, gg = np.abs(est[:, :n]), np.abs(est[:, 2 * n :])
-    scale = np.concatenate([aa, np.sqrt(aa * gg), gg], axis=1)
-    tol = RMS_RTOL * (scale + 1e-13 * scale.max(axis=1, keepdims=True)) + 1e-300
-    ok = np.all(np.abs(k - g) <= tol[so] * (b - a)[:, None], axis=1) | (b - a < RMS_MIN_WIDTH)
-    done = (np.bincount(so, weights=~ok, minlength=P) == 0) & first.nodes_ok[moves]
-    integrals = est.reshape(P, 3, n)
+    rows = (first.node_at.reshape(-1, G)[sel] + starts[so][:, None]).ravel()
+    Am, Gm = parts.Am[rows], parts.Gm[rows]  # (gathered, as _first_round gathers them)
+    f = np.concatenate([Am * Am, Am * Gm, Gm * Gm], axis=1).reshape(len(a), G, 3 * n)
+    done = np.zeros((P, 3 * n))
+    open_ = np.ones(P, bool)  # moves still integrating
+    for _ in range(40):  # adaptive_gk15's max_rounds
+        h = 0.5 * (b - a)
+        if f is not None:
+            k = h[:, None] * np.einsum("j,mjc->mc", GK_WEIGHTS, f)
+            g = h[:, None] * np.einsum("j,mjc->mc", GK_GAUSS, f)
+        est = done + _sums(k, so, P)
+        aa, gg = np.abs(est[:, :n]), np.abs(est[:, 2 * n :])
+        scale = np.concatenate([aa, np.sqrt(aa * gg), gg], axis=1)
+        tol = RMS_RTOL * (scale + 1e-13 * scale.max(axis=1, keepdims=True)) + 1e-300
+        ok = np.all(np.abs(k - g) <= tol[so] * (b - a)[:, None], axis=1) | (b - a < RMS_MIN_WIDTH)
+        ok |= np.isnan(done[so, 0])  # (a move with an unreachable node: no further rounds)
+        done = done + _sums(np.where(ok[:, None], k, 0.0), so, P)
+        open_ &= np.bincount(so, weights=~ok, minlength=P) > 0
+        if not open_.any():
+            break
+        # every move's unfinished spans bisected: their left halves in order, then their right halves
+        a, b, so = a[~ok], b[~ok], so[~ok]
+        m = 0.5 * (a + b)
+        o = np.argsort(np.concatenate([so, so]), kind="stable")
+        a, b, so = np.concatenate([a, m])[o], np.concatenate([m, b])[o], np.concatenate([so, so])[o]
+        c, h = 0.5 * (a + b), 0.5 * (b - a)
+        x = (c[:, None] + h[:, None] * GK_NODES).ravel()
+        lengths = np.bincount(so, minlength=P) * G
+        got, keep = model_at(model, pieces, x, np.repeat(piece_of[so], G), lengths, derivatives=False,
+                             singularity=False)
+        done[~keep] = np.nan  # (an unreachable node: not decided)
+        k, g = _round(got, keep, lengths, h, so, n)
+        f = None
+    else:
+        done = done + _sums(np.where(ok[:, None], 0.0, k), so, P)  # not converged in 40 rounds: the last estimate
+    integrals = done.reshape(P, 3, n)
     ends = np.stack([parts.Gm[starts[:-1]], parts.Gm[starts[1:] - 1]], axis=1)
-    for j in np.flatnonzero(~done):  # (never seen on the shipped profiles: the first round converges)
+    for j in np.flatnonzero(~first.nodes_ok[moves]):  # (never seen: the grids hold the nodes)
         one = Parts(**{name: (None if getattr(parts, name) is None else getattr(parts, name)[starts[j] : starts[j + 1]])
                        for name in _FIELDS})
         integrals[j], ends[j] = model_of(int(j)).rms_integrals(one)

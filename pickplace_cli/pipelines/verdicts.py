@@ -486,7 +486,7 @@ def _limits_block(model, profile, pieces, items: list, margin: float = SCREEN_MA
         if len(clear) < len(idx):
             parts, starts = take_moves(parts, starts, clear)
             idx, T, local = idx[clear], T[clear], local[clear]
-        rms = rms_integrals(first, local, parts, starts, lambda j: model_of(int(idx[j])))
+        rms = rms_integrals(first, local, parts, starts, model, pieces, idx, lambda j: model_of(int(idx[j])))
         fits = limits_fit(model, pieces, parts, starts, idx, T, rms, dwell)
         held = np.all(_rms_at(rms, T, dwell) / rated <= margin, axis=1)
         for k, fit, ok in zip(idx.tolist(), fits, held):

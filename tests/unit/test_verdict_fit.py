@@ -122,15 +122,21 @@ def test_model_and_rms_integrals_on_the_first_samples_are_plan_s(which):
     parts, keep = model_at(model, pieces, first.grid, np.repeat(idx, first.lengths), first.lengths)
     assert keep.all()
     starts = np.concatenate([[0], np.cumsum(first.lengths)])
-    integrals, ends = rms_integrals(first, idx, parts, starts, lambda j: motion_model(paths[j], prof))
+    integrals, ends = rms_integrals(first, idx, parts, starts, model, pieces, idx, lambda j: motion_model(paths[j], prof))
+    more_rounds = 0
     for k, (p, tau) in enumerate(zip(paths, taus)):
         own = motion_model(p, prof)
         grid, order = check_grid_order(tau, p.breakpoints, p.jumps)
         ref = own.parts(grid, order=order).sorted()  # plan()'s first samples, sorted as its fit screens them
         for name in ("tau", "p", "q", "qd1", "qdd1", "qddd1", "A", "G", "Am", "Gm", "dAm", "dGm", "singularity"):
             assert np.array_equal(getattr(parts, name)[starts[k] : starts[k + 1]], getattr(ref, name)), name
+        calls = []
+        torques = own._torques
+        own._torques = lambda *a, **kw: calls.append(1) or torques(*a, **kw)  # the quadrature's further rounds
         i_ref, g_ref = own.rms_integrals(ref)
+        more_rounds += bool(calls)
         assert np.array_equal(integrals[k], i_ref) and np.array_equal(ends[k], g_ref)
+    assert more_rounds >= 2  # (moves whose quadrature needs more than the first round are among them)
     # a subset of the moves (as the engine keeps those clear of every limit)
     sub, sub_starts = take_moves(parts, starts, np.array([1, 4, 7]))
     assert np.array_equal(sub.Am, np.concatenate([parts.Am[starts[k] : starts[k + 1]] for k in (1, 4, 7)]))
