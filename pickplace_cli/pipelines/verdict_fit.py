@@ -8,19 +8,22 @@ t·(1 + 1e-7), and the limit check runs on the very same samples. This module gi
 moves at once, bitwise:
 
 1. every move's check grid exactly as plan() builds it (:func:`~pickplace_cli.limits.grid.check_grid_order` of
-   its output samples at T_auto), sorted;
+   its output samples at T_auto), sorted, for all moves at once (:class:`FirstSamples`);
 2. the Cartesian motion on all grids by :class:`Pieces`, the path evaluator of
    :func:`~pickplace_cli.paths.bspline.plan_bspline` replayed on stacked samples (the same Horner steps on the
    same numbers, sample by sample), and ONE model evaluation ``model.parts(τ, motion=…)`` for the block: the robot
    models work sample by sample, so every number is the one plan() computes (tested bitwise);
 3. the verdict: every limit's parabolic estimate on that grid at T_auto (plan()'s check sees the same samples)
    and the RMS motor torque within ``margin`` of its limit (see :mod:`~pickplace_cli.pipelines.verdicts`);
-4. the RMS integrals per move by the model's own adaptive quadrature (its first round read off the grid, as
-   plan() reads it), and the fit by :func:`~pickplace_cli.timing.fit.batch_fit_screen`, the vectorised form of
-   fit_screen (bitwise, tested), its vertex points evaluated by the same stacked model.
+4. the RMS integrals by the model's own adaptive quadrature, for all moves at once (:func:`rms_integrals`: its
+   first round read off the grid, as plan() reads it, every further round one model call), and the fit by
+   :func:`~pickplace_cli.timing.fit.batch_fit_screen`, the vectorised form of fit_screen (bitwise, tested), its
+   vertex points evaluated by the same stacked model.
 
-A move whose screened fit is not clearly below T_auto (the joints or motors bind: plan() then confirms the fit by
-the exact check), or whose numbers are not all finite, is not decided here.
+Bitwise means the same operations on the same numbers in the same order, and where numpy's order follows the
+memory layout (the Gauss–Kronrod sums of ``numpy.einsum``) the same layout: the tests compare every number with
+the functions replayed. A move whose screened fit is not clearly below T_auto (the joints or motors bind: plan()
+then confirms the fit by the exact check), or whose numbers are not all finite, is not decided here.
 """
 
 from __future__ import annotations
@@ -228,7 +231,7 @@ def rms_integrals(first: "FirstSamples", moves: np.ndarray, parts, starts: np.nd
 
 
 def limits_fit(model, pieces: Pieces, parts, starts: np.ndarray, moves: np.ndarray, T: np.ndarray,
-               rms: tuple, dwell: float) -> list[float | None] | None:
+               rms: tuple, dwell: float) -> list[float | None]:
     """The ``fit_s`` of plan()'s ``time = limits`` for P moves whose capacity binds (``parts``: their model on their
     first samples, stacked and sorted; ``moves``: their indices in ``pieces``; ``T`` (P,) their auto durations
     [s]; ``rms`` their RMS integrals): per move the float plan() writes (None where no limit depends on the

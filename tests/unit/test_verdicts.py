@@ -66,14 +66,17 @@ def line(res) -> str:
     return json.dumps(doc)
 
 
+def planned_both_ways(text: str, options):
+    """(rows, plan()'s RowResults, the engine's RowResults) of a batch text on the Delta."""
+    rows, bad = read_batch_text(text, "rand")
+    assert not bad
+    return rows, list(plan_rows(rows, DELTA, options, source="rand")), list(verdict_rows(rows, DELTA, options, source="rand"))
+
+
 @pytest.fixture(scope="module")
 def agreement():
     invalid = "0,0,-0.8,0,0,-0.8,,\n0,0,-0.8,0.3,0,-0.8,0.002,\n0,0,-0.8,0.1,0,-0.8,,-1\n"  # from = to, λ = 150, T < 0
-    rows, bad = read_batch_text(random_batch(240, seed=7) + invalid, "rand")
-    assert not bad
-    ref = list(plan_rows(rows, DELTA, OPTS, source="rand"))
-    got = list(verdict_rows(rows, DELTA, OPTS, source="rand"))
-    return rows, ref, got
+    return planned_both_ways(random_batch(240, seed=7) + invalid, OPTS)
 
 
 def test_engine_lines_equal_plan_lines_on_240_random_rows(agreement):
@@ -294,11 +297,7 @@ def rules_batch(n: int, seed: int) -> str:
 def default_agreement():
     # from = to, λ = 150 (solved on demand), T < 0, time = fit (plan())
     invalid = "0,0,-0.8,0,0,-0.8,,\n0,0,-0.8,0.3,0,-0.8,0.002,\n0,0,-0.8,0.1,0,-0.8,,-1\n0,0,-0.8,0.1,0,-0.8,,fit\n"
-    rows, bad = read_batch_text(rules_batch(240, seed=17) + invalid, "rand")
-    assert not bad
-    ref = list(plan_rows(rows, DELTA, DEFAULT, source="rand"))
-    got = list(verdict_rows(rows, DELTA, DEFAULT, source="rand"))
-    return rows, ref, got
+    return planned_both_ways(rules_batch(240, seed=17) + invalid, DEFAULT)
 
 
 def test_default_rule_lines_equal_plan_lines_on_240_random_rows(default_agreement):
