@@ -276,10 +276,11 @@ def _rows(values: np.ndarray, owner: np.ndarray, P: int) -> tuple[np.ndarray, np
     return out, col
 
 
-def _merge(first: np.ndarray, second: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Every row of ``first`` (P, a) and ``second`` (P, b) (sorted rows) merged in order, an element of ``first``
-    before an equal one of ``second``: (the merged values (P, a + b), from_second (P, a + b) bool, seen (P, a + b):
-    how many of ``first`` come at or before each place), and the permutation (P, a + b)."""
+def _merge(first: np.ndarray, second: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Every row of ``first`` (P, a) and ``second`` (P, b) merged in order: (the merged values (P, a + b),
+    from_second (P, a + b) bool, seen (P, a + b): how many of ``first`` come at or before each place, the
+    permutation (P, a + b)). An element of ``first`` comes before an equal one of ``second`` (a stable sort: two
+    sorted runs, which it merges in linear time)."""
     both = np.concatenate([first, second], axis=1)
     o = np.argsort(both, axis=1, kind="stable")
     from_second = o >= first.shape[1]
@@ -343,8 +344,7 @@ class FirstSamples:
         self.grid = merged[in_grid]
         self.lengths = in_grid.sum(axis=1)
         # each node's nearest grid point, as _first_round takes it (searchsorted, then the nearer neighbour)
-        grid_rows = np.where(in_grid, merged, np.inf)  # (the grid's values in order, then padding)
-        grid_rows = np.take_along_axis(grid_rows, np.argsort(~in_grid, axis=1, kind="stable"), 1)
+        grid_rows = np.sort(np.where(in_grid, merged, np.inf), axis=1, kind="stable")  # the grid in order, then inf
         merged, is_node, seen, o = _merge(grid_rows, node_rows)
         lo_i = np.maximum(seen - 1, 0)
         hi_i = np.minimum(seen, self.lengths[:, None] - 1)

@@ -225,10 +225,10 @@ def batch_fit_thresholds(model, parts, starts: np.ndarray, rms: tuple | None = N
     ``only_max``: only each move's largest threshold is needed (the fit), so the costly closed forms are skipped
     where a bound shows them below the move's largest cheap threshold (velocity, acceleration, jerk, motor speed
     and torque, and the exact torque rate threshold of the sample of largest bound): a sample's torque rate
-    threshold is at most max(∛(2|a|/L), 2|b|/L) (below it |a·u³ + b·u| < L), an RMS threshold at most a bound on the
-    roots of its quartic (:func:`_batch_rms_thresholds`). A quantity below the move's largest may then read lower
-    than its own threshold (0 when all its samples are skipped); the largest threshold of every move is unchanged,
-    bit for bit."""
+    threshold is at most max(∛(2|a|/L), 2|b|/L) (below it |a·u³ + b·u| < L; compared cubed), an RMS threshold at
+    most a bound on the roots of its quartic (:func:`_batch_rms_thresholds`). A quantity below the move's largest
+    may then read lower than its own threshold (0 when all its samples are skipped); the largest threshold of every
+    move is unchanged, bit for bit."""
     starts = np.asarray(starts, dtype=np.intp)
     P = len(starts) - 1
     meta = model._column_plan(parts.dAm is not None, parts.singularity is not None)[0]
@@ -294,16 +294,17 @@ def _batch_rate_thresholds(a: np.ndarray, b: np.ndarray, limits: np.ndarray, sta
     if floor is None:
         u = torque_rate_threshold(a, b, limits)
     else:
-        with np.errstate(divide="ignore", invalid="ignore"):
-            bound = np.maximum(np.cbrt(2.0 * np.abs(a) / limits), 2.0 * np.abs(b) / limits) * (1.0 + _BOUND_SAFETY)
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            y = 2.0 * np.abs(b) / limits
+            cube = np.maximum(2.0 * np.abs(a) / limits, y * y * y)  # the bound cubed (no cube root needed)
             # the floor raised to the exact threshold of each column's sample of largest bound (a value the answer
             # reaches at least), so that only the samples that may reach the answer are solved
-            top = np.array([np.argmax(bound[s:e], axis=0) + s for s, e in zip(starts[:-1].tolist(), starts[1:].tolist())])
+            top = np.array([np.argmax(cube[s:e], axis=0) + s for s, e in zip(starts[:-1].tolist(), starts[1:].tolist())])
             cols = np.arange(a.shape[1])
             first = torque_rate_threshold(a[top, cols], b[top, cols], np.broadcast_to(limits, top.shape))
             exact = np.where(np.isfinite(first) & (first > 0), 1.0 / first, 0.0)
-            floor = np.maximum(floor, exact.max(axis=1))
-        need = ~(bound < np.repeat(floor, np.diff(starts))[:, None])  # (NaN: computed, and NaN it stays)
+            floor = np.maximum(floor, exact.max(axis=1)) / (1.0 + _BOUND_SAFETY)
+            need = ~(cube < np.repeat(floor * floor * floor, np.diff(starts))[:, None])  # (NaN: computed, stays NaN)
         u = np.full(a.shape, np.inf)
         u[need] = torque_rate_threshold(a[need], b[need], np.broadcast_to(limits, a.shape)[need])
     first = _segment_reduce(np.minimum, u, starts)  # (P, columns)
