@@ -8,7 +8,8 @@ both alike.
   it leaves) with each rule, N times, medians; and, for reference, :func:`~pickplace_cli.pipelines.batch.plan_rows`
   (every row through plan(), as without the engine) under the default rule (``--no-plan`` skips it);
 * through the CLI: a fresh ``pickplace plan --batch F --json -q [-t auto] -j J`` process for J = 1 and 2, wall time
-  including start-up, medians; the outputs of the two rules are checked to hold the same rows.
+  including start-up, medians (and the CPU time of the process and its workers: on a shared machine the wall time
+  of -j 2 shows whether a second core was free); every row is answered and within its limits.
 
 The moves are those of bench/run.py (the Delta ``delta-su2018``, widths 0.1–0.32 m in every direction, output at
 1 kHz): the Cartesian capacity sets the duration of each. Every section prints the machine's speed at that moment,
@@ -22,6 +23,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import statistics
 import subprocess
 import sys
@@ -88,21 +90,26 @@ def through_cli(n: int, starts: int) -> dict:
         Path(src).write_text(_batch_rows(n))
         for j in (1, 2):
             times: dict[str, list[float]] = {r: [] for r in RULES}
+            cpu: dict[str, list[float]] = {r: [] for r in RULES}  # CPU seconds of the process and its workers
             lines: dict[str, list[str]] = {}
             for _ in range(starts):
                 for r in RULES:
                     cmd = exe + ["plan", "--batch", src, "--json", "-q", "-j", str(j)] + (["-t", "auto"] if r == "auto" else [])
+                    c0 = resource.getrusage(resource.RUSAGE_CHILDREN)
                     t0 = time.perf_counter()
                     done = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, check=False)
                     times[r].append(time.perf_counter() - t0)
+                    c1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+                    cpu[r].append(c1.ru_utime - c0.ru_utime + c1.ru_stime - c0.ru_stime)
                     lines[r] = done.stdout.decode().splitlines()
             assert len(lines["auto"]) == len(lines["limits"]) == n, "every row answered"
             assert all(json.loads(x)["exit_code"] == 0 for x in lines["limits"]), "the bench's moves are all within limits"
             for r in RULES:
-                out[f"j{j}_{r}"] = _rate(n, times[r])
+                out[f"j{j}_{r}"] = {**_rate(n, times[r]), "median_cpu_s": statistics.median(cpu[r])}
                 print(f"CLI -j {j}, --time {r:<7} {out[f'j{j}_{r}']['median_moves_per_s']:7.0f} moves/s including start-up "
                       f"({out[f'j{j}_{r}']['median_s']:.3f} s; {out[f'j{j}_{r}']['min_moves_per_s']:.0f}–"
-                      f"{out[f'j{j}_{r}']['max_moves_per_s']:.0f}; median of {starts})", flush=True)
+                      f"{out[f'j{j}_{r}']['max_moves_per_s']:.0f}; CPU {statistics.median(cpu[r]):.3f} s; median of {starts})",
+                      flush=True)
     return out
 
 
