@@ -97,6 +97,10 @@ LINE = ("3 Deltas, {d[seconds]:.0f} s simulated: {d[median][ratio_cpu]:.1f} × r
         "yardstick (`plan()` of the Adept cycle) {d[yardstick_ms][0]:.2f} ms",)
 TURN_EXAMPLE = ("delta-4axis, half a turn: `fit` {d[6][T_s]:.4f} s ({d[6][binding]}), `optimal` {d[7][T_s]:.4f} s; "
                 "without a turn {d[0][T_s]:.4f} s",)
+DEFAULT_BATCH = ("1,000 verdicts-only rows in process: {d[in_process][limits][median_moves_per_s]:,.0f} moves/s under the "
+                 "default rule against {d[in_process][auto][median_moves_per_s]:,.0f}/s under `auto` "
+                 "({d[in_process][ratio_limits_to_auto_time]:.2f} × the time); CLI `-j 1`: "
+                 "{d[cli][j1_limits][median_moves_per_s]:,.0f}/s against {d[cli][j1_auto][median_moves_per_s]:,.0f}/s",)
 FUZZ = ("{d[totals][runs]} runs, {d[totals][rows]} rows: {d[totals][tracebacks]} tracebacks, {d[totals][hangs]} "
         "hangs, {d[totals][wrong_exit_codes]} wrong exit codes, {d[totals][left_running]} processes left running",)
 TEXT = ("{text}",)
@@ -121,6 +125,8 @@ BENCHMARKS = (
           quick=()),
     Bench("default", "bench_default.py", (), "default.json", "the default duration rule against auto", DEFAULT,
           quick=()),
+    Bench("default_batch", "bench_default_batch.py", (), "default_batch.json", "a verdicts-only batch under the default "
+          "rule against auto", DEFAULT_BATCH),
     Bench("compare", "bench_compare.py", (), "compare.json", "compare of all methods", COMPARE, quick=()),
     Bench("optimal", "bench_optimal.py", ("--moves", "4"), "optimal.json", "--time optimal against fit and an "
           "80-coefficient solve", OPTIMAL),

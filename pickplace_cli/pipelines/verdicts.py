@@ -23,22 +23,33 @@ the SCARA, |sin q2| = 0 at full stretch, so no unreachable point hides between s
 every value finite. That is stricter than plan()'s own 5 % exact-refinement band (``limits.EXACT_BAND``):
 at ≤ 0.9 plan() never refines and never finds a violation (the screening estimate is within ~0.3 % of
 plan()'s peaks; tests/unit/test_verdicts.py measures it). Every other row (near or over a limit,
-unreachable, a parse/task/table error, ``time = fit``, moving ends, anything unusual) is planned by
+unreachable, a parse/task/table error, ``time = fit``, moving ends, the motors binding the default rule's duration,
+anything unusual) is planned by
 :func:`~pickplace_cli.pipelines.batch.plan_rows`, i.e. by ``plan()`` itself, so its verdict, violation rows and
 messages are exactly the existing ones. A decided row's summary is built by ``Plan.summary`` from the same
 numbers ``plan()`` computes (the same arithmetic on stacked arrays: bitwise equal, tested).
 
-Scope: method ``bspline`` only, rest-to-rest, ``time`` auto or seconds, no ``--show-fit`` (``options.fit``),
-robots with an analytic ``torque_rate``, a ``reachable`` mask and a ``singularity_measure`` (Delta, SCARA;
-the gantry goes through ``plan()``). ``PICKPLACE_NO_VERDICT_ENGINE=1`` switches the engine off (debugging aid:
-the output must not change).
+**The default rule** (``time = limits``: the longer of the capacity's duration and the joints' and motors' fit).
+For these rows plan() evaluates the model on its first samples (the check grid of the output samples at the auto
+duration) and screens the closed-form fit there; when the capacity binds (the fit is clearly shorter) the duration
+is the auto one and ``fit_s`` that screened fit. The engine replays exactly that (:mod:`.verdict_fit`): the same
+grid, the same model numbers (the path's own evaluator replayed on stacked samples), the vectorised closed-form
+fit (:func:`~pickplace_cli.timing.fit.batch_fit_screen`, bitwise the scalar one), and decides a row when the
+screening above holds on those samples and the capacity binds. A row whose joints or motors set the duration
+(plan() confirms that fit by its exact check, refining peaks at their limits) is left to plan().
+
+Scope: method ``bspline`` only, rest-to-rest, ``time`` limits, auto or seconds, no ``--show-fit``
+(``options.fit``), robots with an analytic ``torque_rate``, a ``reachable`` mask and a ``singularity_measure``
+(Delta, SCARA; the gantry goes through ``plan()``). A row's ``limit_use`` plans it on the profile at that use, as
+plan() does (the rows are grouped by profile). ``PICKPLACE_NO_VERDICT_ENGINE=1`` switches the engine off
+(debugging aid: the output must not change).
 """
 
 from __future__ import annotations
 
 import os
 from collections.abc import Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -61,6 +72,8 @@ SCREEN_MARGIN = 0.9
 REACH_GUARD = 0.05
 #: moves per model call (B·G samples ≈ 8–9k keep the model's arrays in cache: ~1 µs per sample, ×4 beyond)
 BLOCK_MOVES = 64
+#: samples per model call for the rows of ``time = limits`` (their check grids: ~300–450 samples a move)
+BLOCK_SAMPLES = 8192
 #: env var that switches the engine off (debugging aid; the output must not change)
 OFF_SWITCH = "PICKPLACE_NO_VERDICT_ENGINE"
 
@@ -118,9 +131,7 @@ def engine_applies(profile, options) -> bool:
     params = _given(options.method_params)
     if getattr(options, "cycle", None) is not None:  # the controller's cycle: each row rounded and checked again
         return False
-    # the default rule (limits) fits every move to its motors: plan() decides those rows (the engine decides the rows
-    # of auto and given seconds)
-    if options.fit or options.shape or options.time in ("fit", "optimal", "limits") or not set(params) <= _PARAMS or ("k1" in params) != ("k2" in params):
+    if options.fit or options.shape or options.time in ("fit", "optimal") or not set(params) <= _PARAMS or ("k1" in params) != ("k2" in params):
         return False
     try:
         robot = build_robot(profile.robot)
@@ -211,6 +222,19 @@ def _thresholds(meta: list, margin: float) -> tuple[np.ndarray, np.ndarray, np.n
     return mid, scale, kind
 
 
+def _utilisation(meta: list, est: np.ndarray, margin: float) -> tuple[np.ndarray, np.ndarray]:
+    """(peaks in plan()'s sign convention (the value the limit row shows), utilisations) of estimated column
+    peaks ``est`` (P, n_cols) in the column sign convention of ``MotionModel.columns`` (``meta``)."""
+    mid, scale, kind = _thresholds(meta, margin)
+    sign = np.array([m[5] for m in meta])
+    value = sign * est
+    with np.errstate(divide="ignore", invalid="ignore"):
+        u = np.where(kind == 0, value / scale, 0.0)
+        u = np.where(kind == 1, np.where(value > 0, scale / value, np.inf), u)
+        u = np.where(kind == 2, sign * (value - mid) / scale, u)
+    return value, u
+
+
 def screen_block(model, breaks: np.ndarray, coef: np.ndarray, origin: np.ndarray, T: np.ndarray, dwell: float,
                  samples: int = SCREEN_SAMPLES, margin: float = SCREEN_MARGIN) -> Screen:
     """Screen B moves (their piece polynomials ``breaks`` (B, 7), ``coef`` (B, 6, 3, 6) [displacement from
@@ -246,14 +270,7 @@ def screen_block(model, breaks: np.ndarray, coef: np.ndarray, origin: np.ndarray
         meta, data = model.columns(parts, Tn)  # every column is per sample: T may be per sample
         n_cols = data.shape[1]
         b = len(use)
-        est = _batched_parabolic_peak(tau[use], data.reshape(b, G, n_cols))
-        mid, scale, kind = _thresholds(meta, margin)
-        sign = np.array([m[5] for m in meta])
-        value = sign * est  # plan()'s sign convention (the limit row's peak)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            u = np.where(kind == 0, value / scale, 0.0)
-            u = np.where(kind == 1, np.where(value > 0, scale / value, np.inf), u)
-            u = np.where(kind == 2, sign * (value - mid) / scale, u)
+        value, u = _utilisation(meta, _batched_parabolic_peak(tau[use], data.reshape(b, G, n_cols)), margin)
         # RMS motor torque over the duty cycle move–dwell–back–dwell (limits module docstring), per move
         tm = parts.Am.reshape(b, G, -1) / T[use, None, None] ** 2 + parts.Gm.reshape(b, G, -1)
         integral = T[use, None] * np.trapezoid(tm**2, tau[use][:, :, None], axis=1)
@@ -302,56 +319,73 @@ def _k_source(options) -> tuple[Any, tuple[float, float] | None, str] | None:
     return tab, None, f"table {tab.source}"
 
 
+def _candidates(rows: list[BatchRow], profile, options, height, eta) -> dict[int, tuple[Any, list]]:
+    """The rows in the engine's scope with their tasks (built as plan_rows builds them: same validation, same numbers)
+    and duration rules, grouped by the profile plan() plans them on (a row's ``limit_use`` scales its limits):
+    {id(profile): (profile, [(row, task, rule)])}."""
+    from ..model.headroom import apply_limit_use
+    from ..timing import parse_time
+
+    groups: dict[int, tuple[Any, list]] = {}
+    for r in rows:
+        v = r.values
+        if any(v.get(f"v_{e}_{c}", 0.0) for e in ("from", "to") for c in "xyz") or any(c in v for c in BELT + ANGLES):
+            continue  # moving ends, belt rows and turns of the tool: plan()
+        try:
+            spec = parse_time(v.get("time", options.time))
+            if spec in ("fit", "optimal"):
+                continue
+            prof = apply_limit_use(profile, v.get("limit_use", options.limit_use))
+            task = row_task(v, profile, height, eta)
+        except PickplaceError:
+            continue
+        groups.setdefault(id(prof), (prof, []))[1].append((r, task, spec))
+    return groups
+
+
+def _k_values(cand: list, tab, k_given) -> tuple[np.ndarray, np.ndarray, list]:
+    """k1, k2 of every candidate: Table.lookup's interpolation, vectorised; the candidates it would refuse are
+    dropped (plan() plans them). → (k1, k2, the candidates kept)."""
+    if tab is None:
+        return np.full(len(cand), k_given[0]), np.full(len(cand), k_given[1]), cand
+    lam = np.array([t.lam for _, t, _ in cand])
+    b = np.array([t.b for _, t, _ in cand])
+    etas = np.array([t.eta for _, t, _ in cand])
+    lo, hi = float(tab.lam[0]), float(tab.lam[-1])
+    keep = (b != 0) & np.isfinite(lam) & (lo - 1e-9 <= lam) & (lam <= hi + 1e-9)
+    if tab.eta is not None:
+        keep &= np.abs(etas - tab.eta) <= 1e-9
+    k1 = np.interp(lam, tab.lam, tab.column("k1"))
+    k2 = np.interp(lam, tab.lam, tab.column("k2"))
+    keep &= np.isfinite(k1) & np.isfinite(k2) & (k1 > 0) & (k1 < 1) & (k2 > 0) & (k2 < 1)
+    idx = np.flatnonzero(keep)
+    return k1[idx], k2[idx], [cand[i] for i in idx]
+
+
 def decide(rows: list[BatchRow], profile, options, height: float | None = None, eta: float | None = None,
            block: int = BLOCK_MOVES) -> dict[int, Verdict]:
     """The rows the engine decides: {row number: Verdict}. Every row not in the answer must be planned by
     plan() (it is near or over a limit, unreachable, invalid or out of the engine's scope)."""
-    from types import SimpleNamespace
-
-    from ..planner import Plan, motion_model
-    from ..timing import choose_duration
-    from ..model.trajectory import CartesianPath, CartesianTrajectory
-
     ks = _k_source(options)
     if ks is None:
         return {}
+    out: dict[int, Verdict] = {}
+    for prof, cand in _candidates(rows, profile, options, height, eta).values():
+        out.update(_decide_group(cand, prof, options, ks, block))
+    return out
+
+
+def _decide_group(cand: list, profile, options, ks: tuple, block: int) -> dict[int, Verdict]:
+    """:func:`decide` for candidates planned on one profile."""
+    from ..planner import motion_model
+    from ..timing import choose_duration
+    from ..model.trajectory import CartesianPath, CartesianTrajectory
+    from .verdict_fit import Pieces
+
     tab, k_given, source = ks
     rate = options.rate if options.rate is not None else profile.planning.rate
     dwell = profile.planning.dwell
-
-    # rows in scope, their tasks (built as plan_rows builds them: same validation, same numbers)
-    cand: list[tuple[BatchRow, Any, Any]] = []
-    for r in rows:
-        v = r.values
-        spec = v.get("time", options.time)
-        if spec in ("fit", "optimal", "limits") or any(v.get(f"v_{e}_{c}", 0.0) for e in ("from", "to") for c in "xyz") or any(
-                c in v for c in BELT + ANGLES):  # moving ends, belt rows and turns of the tool: plan()
-            continue
-        try:
-            task = row_task(v, profile, height, eta)
-        except PickplaceError:
-            continue
-        cand.append((r, task, spec))
-    if not cand:
-        return {}
-    # k1, k2 of every move: Table.lookup's interpolation, vectorised (rows it would refuse go to plan())
-    if tab is None:
-        k1 = np.full(len(cand), k_given[0])
-        k2 = np.full(len(cand), k_given[1])
-    else:
-        lam = np.array([t.lam for _, t, _ in cand])
-        b = np.array([t.b for _, t, _ in cand])
-        etas = np.array([t.eta for _, t, _ in cand])
-        lo, hi = float(tab.lam[0]), float(tab.lam[-1])
-        keep = (b != 0) & np.isfinite(lam) & (lo - 1e-9 <= lam) & (lam <= hi + 1e-9)
-        if tab.eta is not None:
-            keep &= np.abs(etas - tab.eta) <= 1e-9
-        k1 = np.interp(lam, tab.lam, tab.column("k1"))
-        k2 = np.interp(lam, tab.lam, tab.column("k2"))
-        keep &= np.isfinite(k1) & np.isfinite(k2) & (k1 > 0) & (k1 < 1) & (k2 > 0) & (k2 < 1)
-        idx = np.flatnonzero(keep)
-        cand = [cand[i] for i in idx]
-        k1, k2 = k1[idx], k2[idx]
+    k1, k2, cand = _k_values(cand, tab, k_given)
     model = None
     out: dict[int, Verdict] = {}
     for s in range(0, len(cand), block):
@@ -359,7 +393,7 @@ def decide(rows: list[BatchRow], profile, options, height: float | None = None, 
         kb1, kb2 = k1[s : s + block], k2[s : s + block]
         via = np.stack([t.via_points() - t.p_from for _, t, _ in part])
         breaks, coef, peaks = batch_paths(kb1, kb2, via)
-        # the duration of each move exactly as plan() chooses it (auto, Eq. 26, or the row's seconds)
+        # the (first) duration of each move exactly as plan() chooses it (auto, Eq. 26, or the row's seconds)
         done = []
         for i, (r, task, spec) in enumerate(part):
             parameters = {"k1": float(kb1[i]), "k2": float(kb2[i]), "k_source": source, "lambda": task.lam,
@@ -367,34 +401,121 @@ def decide(rows: list[BatchRow], profile, options, height: float | None = None, 
             path = CartesianPath(_no_evaluation, "bspline", parameters, tuple(float(x) for x in peaks[i]), breaks[i],
                                  jumps=())
             try:
-                duration = choose_duration(path, profile.capacity, spec)
+                duration = choose_duration(path, profile.capacity, "auto" if spec == "limits" else spec)
                 traj = CartesianTrajectory(path, duration.seconds)
-            except (PickplaceError, ValueError):
+                t = traj.sample_times(rate)
+            except (PickplaceError, ValueError):  # e.g. too many samples (a time in ms): plan() says so, for the row
                 continue
             if not all(c.ok for c in capacity_rows(path, duration.seconds, profile.capacity)):
                 continue  # a given duration past the Cartesian capacity: plan() says which (exit 3)
-            done.append((i, r, task, path, duration, traj))
+            done.append((i, r, task, path, duration, traj, t, spec == "limits"))
         if not done:
             continue
         if model is None:
             model = motion_model(done[0][3], profile)
-        sel = np.array([d[0] for d in done])
-        T = np.array([d[4].seconds for d in done])
-        origin = np.stack([d[2].p_from for d in done])
-        screen = screen_block(model, breaks[sel], coef[sel], origin, T, dwell)
-        for ok, (i, r, task, path, duration, traj) in zip(screen.decided, done):
-            if not ok:
-                continue
-            try:
-                t = traj.sample_times(rate)
-            except (PickplaceError, ValueError):  # e.g. too many samples (a time in ms): plan() says so, for the row
-                continue
-            stand_in = SimpleNamespace(
-                task=task, method=path.method, parameters=path.parameters, duration=duration, cartesian=traj, t=t,
-                report=LimitReport((), duration.seconds, dwell), profile_name=profile.name,
-            )
-            out[r.row] = Verdict(Plan.summary(stand_in), stand_in.report)  # type: ignore[arg-type]
+        given = [d for d in done if not d[7]]
+        if given:
+            sel = np.array([d[0] for d in given])
+            screen = screen_block(model, breaks[sel], coef[sel], np.stack([d[2].p_from for d in given]),
+                                  np.array([d[4].seconds for d in given]), dwell)
+            for ok, d in zip(screen.decided, given):
+                if ok:
+                    out[d[1].row] = _verdict(d[2], d[3], d[4], d[5], d[6], profile)
+        rule = [d for d in done if d[7]]
+        if rule:
+            pieces = Pieces(breaks, coef, via, np.stack([t.p_from for _, t, _ in part]))
+            fits = _limits_block(model, profile, pieces, [(d[0], d[4].seconds, d[6]) for d in rule])
+            for i, r, task, path, duration, traj, t, _ in rule:
+                if i in fits:
+                    duration = replace(duration, mode="limits", binding=f"capacity {duration.binding}", t_fit=fits[i])
+                    out[r.row] = _verdict(task, path, duration, traj, t, profile)
     return out
+
+
+def _verdict(task, path, duration, traj, t, profile) -> Verdict:
+    """The Verdict of a decided row: ``Plan.summary`` of the numbers plan() computes, every limit clearly held."""
+    from types import SimpleNamespace
+
+    from ..planner import Plan
+
+    report = LimitReport((), duration.seconds, profile.planning.dwell)
+    stand_in = SimpleNamespace(task=task, method=path.method, parameters=path.parameters, duration=duration,
+                               cartesian=traj, t=t, report=report, profile_name=profile.name)
+    return Verdict(Plan.summary(stand_in), report)  # type: ignore[arg-type]
+
+
+def _limits_block(model, profile, pieces, items: list, margin: float = SCREEN_MARGIN) -> dict[int, float | None]:
+    """The rows of ``time = limits`` (``items``: (index in ``pieces``, auto duration T [s], output sample times
+    [s])) that the engine decides: {index: fit_s [s] or None}, as plan() computes them on its first samples
+    (:mod:`~pickplace_cli.pipelines.verdict_fit`); a row is decided when every limit is clearly held at T (the
+    screening's contract) and the capacity binds (the fit is clearly shorter)."""
+    from ..limits.motion import MotionModel
+    from ..model.trajectory import CartesianPath
+    from ..planner import motion_model_static
+    from ..timing.fit import segment_parabolic_peak
+    from .verdict_fit import FirstSamples, limits_fit, model_at, rms_integrals, take_moves
+
+    static = motion_model_static(profile)
+    dwell = profile.planning.dwell
+    rated = np.array([s.drive.rated_torque if s.drive and s.drive.rated_torque else np.inf for s in model.specs])
+
+    def model_of(k: int):  # one move's model: its RMS quadrature evaluates the path where it refines
+        return MotionModel(CartesianPath(_no_evaluation, "bspline", {}, (0.0, 0.0, 0.0), pieces.breaks[k], jumps=(),
+                                         evaluate_all=pieces.evaluator(k)), *static)
+
+    # the grids below assume breakpoints 0 < … < 1 (always so for the B-spline; any other move: plan())
+    br = pieces.breaks
+    items = [it for it in items if br[it[0], 0] == 0.0 and br[it[0], -1] == 1.0 and np.all(np.diff(br[it[0]]) > 0)]
+    out: dict[int, float | None] = {}
+    for chunk in _sample_blocks([len(t) + 200 for _, _, t in items]):
+        idx = np.array([items[c][0] for c in chunk])
+        T = np.array([items[c][1] for c in chunk])
+        first = FirstSamples([items[c][2] / items[c][1] for c in chunk], br[idx])  # plan()'s first samples, sorted
+        parts, keep = model_at(model, pieces, first.grid, np.repeat(idx, first.lengths), first.lengths)
+        if parts is None:
+            continue
+        local = np.flatnonzero(keep)
+        idx, T = idx[keep], T[keep]
+        lengths = first.lengths[keep]
+        starts = np.concatenate([[0], np.cumsum(lengths)])
+        meta, data = model.columns(parts, np.repeat(T, lengths))
+        est, _ = segment_parabolic_peak(parts.tau, data, starts)
+        clear = np.flatnonzero(np.all(_utilisation(meta, est, margin)[1] <= margin, axis=1))
+        if not clear.size:
+            continue
+        if len(clear) < len(idx):
+            parts, starts = take_moves(parts, starts, clear)
+            idx, T, local = idx[clear], T[clear], local[clear]
+        rms = rms_integrals(first, local, parts, starts, model, pieces, idx, lambda j: model_of(int(idx[j])))
+        fits = limits_fit(model, parts, starts, T, rms, dwell)
+        held = np.all(_rms_at(rms, T, dwell) / rated <= margin, axis=1)
+        for k, fit, ok in zip(idx.tolist(), fits, held):
+            if ok and (fit is None or fit == fit):
+                out[k] = fit
+    return out
+
+
+def _sample_blocks(lengths: list[int]) -> list[list[int]]:
+    """Consecutive groups of moves of about ``BLOCK_SAMPLES`` samples in all (at least one move each)."""
+    groups: list[list[int]] = [[]]
+    total = 0
+    for i, n in enumerate(lengths):
+        if groups[-1] and total + n > BLOCK_SAMPLES:
+            groups.append([])
+            total = 0
+        groups[-1].append(i)
+        total += n
+    return groups if groups[0] else []
+
+
+def _rms_at(rms: tuple, T: np.ndarray, dwell: float) -> np.ndarray:
+    """RMS motor torque [N·m] (P, n) over the duty cycle at the durations T (P,) [s] from the RMS integrals
+    (:meth:`~pickplace_cli.limits.motion.MotionModel.rms_motor_torque`'s formula)."""
+    (integrals, ends), T = rms, T[:, None]
+    iaa, iag, igg = integrals[:, 0], integrals[:, 1], integrals[:, 2]
+    move = T * (iaa / T**4 + 2.0 * iag / T**2 + igg)
+    hold = ends[:, 0] ** 2 + ends[:, 1] ** 2
+    return np.sqrt(np.maximum(2.0 * move + dwell * hold, 0.0) / (2.0 * T + 2.0 * dwell))
 
 
 def verdict_rows(

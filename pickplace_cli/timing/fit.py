@@ -104,20 +104,16 @@ def rms_thresholds(iaa, iag, igg, hold, dwell: float, rated) -> np.ndarray:
     return out
 
 
-def fit_thresholds(model, parts, dwell: float = 0.0, rms: bool = True, seg=None,
-                   refine: bool = False, vertices: list | None = None) -> list[tuple[str, float]]:
-    """[(name "joint quantity", the smallest T [s] from which it holds at every sample of ``parts``)] for every
-    limit of ``model`` that depends on the duration (the module's table); an empty list when none does.
-    Raises NoFeasibleDuration naming the quantity when no duration holds it (the holding torque alone exceeds it).
-    ``rms=False`` leaves the RMS out (it does not depend on the samples). ``refine``: each quantity's threshold is
-    a smooth function of τ, so its largest sample is replaced by the vertex of the parabola through it and its
-    neighbours (never across a jump: ``seg``, :func:`~pickplace_cli.limits.grid.segment_ids` of sorted ``parts``):
-    the continuous maximum to ~1e-6 on the fit grid. ``vertices``: a list that receives the τ of each quantity's
-    maximum (sampled or refined), the RMS aside."""
-    meta, _ = model.columns(parts, 1.0)
+def threshold_columns(model, parts) -> tuple[list[str], np.ndarray | None, list[tuple[str, float, np.ndarray]]]:
+    """Every duration-dependent limit's threshold at every sample of ``parts`` (the module's table): (names "joint
+    quantity", thresholds (samples, quantities) [s] or None when no limit depends on the duration, and for each
+    motor torque (name, limit, the samples where the holding torque alone exceeds it)). Element by element: the
+    samples of many moves stacked give each move's own numbers (the batch functions below)."""
+    meta = model._column_plan(parts.dAm is not None, parts.singularity is not None)[0]
     index = {name: i for i, name in enumerate(model.robot.joint_names)}
     names, cols = [], []
     rates: list[tuple[int, float]] = []
+    overloads: list[tuple[str, float, np.ndarray]] = []
     with np.errstate(divide="ignore", invalid="ignore"):
         for joint, quantity, _unit, limit, kind, _sign in meta:
             if kind != "limit":
@@ -133,7 +129,11 @@ def fit_thresholds(model, parts, dwell: float = 0.0, rms: bool = True, seg=None,
             elif quantity == "jerk":
                 col = np.cbrt(np.abs(parts.qddd1[:, i]) / limit)
             elif quantity == "motor torque":
-                col = _torque_thresholds(parts.Am[:, i], parts.Gm[:, i], limit, name)
+                A, G = parts.Am[:, i], parts.Gm[:, i]
+                overloads.append((name, float(limit), np.abs(G) > limit))
+                absA = np.abs(A)
+                s_max = (limit - np.sign(A) * G) / absA  # inf where A = 0
+                col = np.where(absA > 0, 1.0 / np.sqrt(np.maximum(s_max, 0.0)), 0.0)
             elif quantity == "motor torque rate":  # solved below, every joint in one call
                 rates.append((i, float(limit)))
                 col = None
@@ -146,9 +146,33 @@ def fit_thresholds(model, parts, dwell: float = 0.0, rms: bool = True, seg=None,
             u = torque_rate_threshold(parts.dAm[:, idx], parts.dGm[:, idx], np.array([lim for _, lim in rates]))
             per = iter(np.where(np.isfinite(u) & (u > 0), 1.0 / u, 0.0).T)
             cols = [next(per) if c is None else c for c in cols]
+    data = np.column_stack(cols) if cols else None
+    return names, data, overloads
+
+
+def _rated(model) -> tuple[list, list[int]]:
+    """Each joint's rated torque [N·m] or None, and the joints that have one."""
+    rated = [s.drive.rated_torque if s.drive is not None and s.drive.rated_torque else None for s in model.specs]
+    return rated, [i for i, r in enumerate(rated) if r is not None]
+
+
+def fit_thresholds(model, parts, dwell: float = 0.0, rms: bool = True, seg=None,
+                   refine: bool = False, vertices: list | None = None) -> list[tuple[str, float]]:
+    """[(name "joint quantity", the smallest T [s] from which it holds at every sample of ``parts``)] for every
+    limit of ``model`` that depends on the duration (the module's table); an empty list when none does.
+    Raises NoFeasibleDuration naming the quantity when no duration holds it (the holding torque alone exceeds it).
+    ``rms=False`` leaves the RMS out (it does not depend on the samples). ``refine``: each quantity's threshold is
+    a smooth function of τ, so its largest sample is replaced by the vertex of the parabola through it and its
+    neighbours (never across a jump: ``seg``, :func:`~pickplace_cli.limits.grid.segment_ids` of sorted ``parts``):
+    the continuous maximum to ~1e-6 on the fit grid. ``vertices``: a list that receives the τ of each quantity's
+    maximum (sampled or refined), the RMS aside."""
+    names, data, overloads = threshold_columns(model, parts)
+    for name, limit, over in overloads:
+        if over.any():
+            raise NoFeasibleDuration(f"time = fit: no duration satisfies {name} (the holding torque alone exceeds "
+                                     f"{limit:g} N·m)")
     out: list[tuple[str, float]] = []
-    if cols and len(parts.tau):
-        data = np.column_stack(cols)
+    if data is not None and len(parts.tau):
         top = np.argmax(data, axis=0)
         if refine:
             from ..limits.check import _parabolic_peak
@@ -159,8 +183,7 @@ def fit_thresholds(model, parts, dwell: float = 0.0, rms: bool = True, seg=None,
         out = [(n, float(v)) for n, v in zip(names, peak)]
         if vertices is not None:
             vertices.extend(float(x) for x in where)
-    rated = [s.drive.rated_torque if s.drive is not None and s.drive.rated_torque else None for s in model.specs]
-    has = [i for i, r in enumerate(rated) if r is not None]
+    rated, has = _rated(model)
     if rms and has:
         (iaa, iag, igg), g = model.rms_integrals(parts)
         hold = g[0] ** 2 + g[1] ** 2
@@ -172,17 +195,6 @@ def fit_thresholds(model, parts, dwell: float = 0.0, rms: bool = True, seg=None,
                                          f"exceeds the rated {rated[i]:g} N·m)")
             out.append((name, float(t)))
     return out
-
-
-def _torque_thresholds(A: np.ndarray, G: np.ndarray, limit: float, name: str) -> np.ndarray:
-    """Per sample, the smallest T with |A/T² + G| ≤ limit from then on (module table): 1/√s_max with
-    s_max = (limit − sgn(A)·G)/|A| (0 where A = 0)."""
-    if np.any(np.abs(G) > limit):
-        raise NoFeasibleDuration(f"time = fit: no duration satisfies {name} (the holding torque alone exceeds "
-                                 f"{limit:g} N·m)")
-    absA = np.abs(A)
-    s_max = (limit - np.sign(A) * G) / absA  # inf where A = 0
-    return np.where(absA > 0, 1.0 / np.sqrt(np.maximum(s_max, 0.0)), 0.0)
 
 
 def screened_fit(model, parts, dwell: float = 0.0, seg=None, refine: bool = False) -> tuple[float, str] | None:
@@ -199,3 +211,103 @@ def screened_fit(model, parts, dwell: float = 0.0, seg=None, refine: bool = Fals
 def rms_threshold(model, parts, dwell: float = 0.0) -> float:
     """The largest RMS threshold of :func:`fit_thresholds` [s] (0 without a rated torque): exact, sample-free."""
     return max((t for n, t in fit_thresholds(model, parts, dwell) if n.endswith("rms motor torque")), default=0.0)
+
+
+# ------------------------------------------------------------------------- the same fit for many moves at once
+#
+# The batch verdict engine (:mod:`pickplace_cli.pipelines.verdicts`) evaluates the model of P moves in one call,
+# their samples one move after the other (move k in rows starts[k]:starts[k + 1], sorted in τ within a move).
+# The functions below give, for every move, the very numbers :func:`fit_thresholds` and
+# :func:`~pickplace_cli.timing.fit_screen` give for that move alone: :func:`threshold_columns` element by element,
+# then maxima and arg-maxima per move (exact whatever the order). Where the scalar functions raise
+# NoFeasibleDuration they give inf (fit_screen's T: NaN); where a number is NaN the move's result is NaN (the scalar
+# functions' Python ``max`` skips a NaN that is not first: such a move is not comparable and is left to the scalar
+# path).
+
+
+def _segment_reduce(ufunc, x: np.ndarray, starts: np.ndarray) -> np.ndarray:
+    """``ufunc.reduce`` of every move's rows of ``x`` (axis 0); every move has at least one row."""
+    return ufunc.reduceat(x, starts[:-1], axis=0)
+
+
+def _batch_columns(model, parts, starts: np.ndarray, rms: tuple | None, dwell: float, refine: bool):
+    """(names, thresholds (P, quantities) [s]) of every move: its columns' largest sample (``refine``: the parabola
+    vertex at it, the move's path without jumps), inf where the holding torque alone exceeds a motor torque, and
+    the RMS thresholds from ``rms`` = (I (P, 3, n), G_end (P, 2, n)), or none when ``rms`` is None."""
+    starts = np.asarray(starts, dtype=np.intp)
+    P = len(starts) - 1
+    names, data, overloads = threshold_columns(model, parts)
+    if data is None or not len(parts.tau):
+        out = np.zeros((P, 0))
+    elif refine:
+        out = segment_parabolic_peak(parts.tau, data, starts)[0]
+    else:
+        out = _segment_reduce(np.maximum, data, starts)
+    for name, _limit, over in overloads:
+        c = names.index(name)
+        out[:, c] = np.where(_segment_reduce(np.logical_or, over, starts), np.inf, out[:, c])
+    rated, has = _rated(model)
+    if rms is not None and has:
+        integrals, ends = (np.asarray(x, float) for x in rms)
+        hold = ends[:, 0] ** 2 + ends[:, 1] ** 2  # (P, n)
+        flat = lambda x: x[:, has].ravel()  # noqa: E731
+        ts = rms_thresholds(flat(integrals[:, 0]), flat(integrals[:, 1]), flat(integrals[:, 2]), flat(hold), dwell,
+                            np.tile([rated[i] for i in has], P)).reshape(P, len(has))
+        names = names + [f"{model.robot.joint_names[i]} rms motor torque" for i in has]
+        out = np.concatenate([out, ts], axis=1)
+    return names, out
+
+
+def batch_fit_thresholds(model, parts, starts: np.ndarray, rms: tuple | None = None,
+                         dwell: float = 0.0) -> tuple[list[str], np.ndarray]:
+    """:func:`fit_thresholds` of P moves at once: ``parts`` holds their samples one move after the other, move k in
+    rows ``starts[k]:starts[k + 1]`` (at least one each); ``rms`` = (I (P, 3, n), G_end (P, 2, n)), every move's
+    :meth:`~pickplace_cli.limits.motion.MotionModel.rms_integrals`, or None to leave the RMS out (``rms=False``).
+    → (names "joint quantity" in fit_thresholds' order, thresholds (P, len(names)) [s]), bitwise fit_thresholds'
+    numbers for each move; inf where it raises NoFeasibleDuration."""
+    return _batch_columns(model, parts, starts, rms, dwell, refine=False)
+
+
+def segment_parabolic_peak(x: np.ndarray, y: np.ndarray, starts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per move (rows ``starts[k]:starts[k + 1]`` of the sorted τ ``x`` (M,) and the columns ``y`` (M, C)):
+    :func:`~pickplace_cli.limits.check._parabolic_peak` at every column's top sample (its first maximum, as
+    ``np.argmax``), on a path without jumps. → (peak, τ of the peak), each (P, C), bitwise the function's."""
+    starts = np.asarray(starts, dtype=np.intp)
+    n = np.diff(starts)
+    P, C = len(n), y.shape[1]
+    if P == 0:
+        return np.zeros((0, C)), np.zeros((0, C))
+    # the first maximum of every move's column (np.argmax per move: faster than one call on padded arrays)
+    i = np.array([np.argmax(y[s:e], axis=0) for s, e in zip(starts[:-1].tolist(), starts[1:].tolist())])
+    first = starts[:-1, None]
+    k = np.minimum(np.maximum(i, 1), np.maximum(n[:, None] - 2, 1)) + first
+    i = i + first
+    cols = np.arange(C)
+    top, at_top = y[i, cols], x[i]
+    near = [np.minimum(np.maximum(k + d, 0), len(x) - 1) for d in (-1, 0, 1)]  # (a move of < 3 samples: unused)
+    (x0, x1, x2), (y0, y1, y2) = (x[j] for j in near), (y[j, cols] for j in near)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        d1 = (y1 - y0) / (x1 - x0)
+        d2 = (y2 - y1) / (x2 - x1)
+        curv = (d2 - d1) / (x2 - x0)
+        ok = (curv < 0) & (k == i) & (n[:, None] >= 3)
+        slope = d1 + curv * (x1 - x0)
+        safe = np.where(ok, curv, -1.0)
+        xv = np.minimum(np.maximum(x1 - slope / (2 * safe), x0), x2)
+        yv = y1 - slope**2 / (4 * safe)
+    use = ok & (yv >= top)
+    return np.where(use, yv, top), np.where(use, xv, at_top)
+
+
+def batch_fit_screen(model, parts, starts: np.ndarray, rms: tuple | None, dwell: float) -> np.ndarray | None:
+    """:func:`~pickplace_cli.timing.fit_screen`'s duration for P moves at once (``parts``, ``starts``, ``rms`` as in
+    :func:`batch_fit_thresholds`, every move's samples sorted in τ; paths without jumps): every quantity's
+    per-sample thresholds refined at the parabola vertex of its largest sample, the largest over quantities and
+    the RMS. → (P,) [s], bitwise fit_screen's T for each move; NaN where fit_screen raises or a number is NaN; None
+    when no limit depends on the duration (fit_screen's None)."""
+    names, th = _batch_columns(model, parts, starts, rms, dwell, refine=True)
+    if not names:
+        return None
+    T = th.max(axis=1)
+    bad = ~(np.isfinite(T) & (T <= 1e4))
+    return np.where(bad, np.nan, np.maximum(T, 1e-4))

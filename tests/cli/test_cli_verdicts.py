@@ -119,3 +119,31 @@ def test_engine_not_used_with_an_output_file_or_another_method(monkeypatch, tmp_
     r3 = runner.invoke(app, ["plan", "--batch", "-", "--json", "-q", "--show-fit"], input=MIXED)
     assert r.exit_code == r2.exit_code == r3.exit_code == 4
     assert seen == []
+
+
+@pytest.mark.parametrize("extra", [[], ["--fail-fast"], ["--rate", "250", "--height", "0.03"], ["--limit-use", "0.8"]])
+def test_default_rule_batch_identical_with_and_without_the_engine(monkeypatch, extra):
+    """The default duration rule (no -t): the engine decides the rows where the capacity binds, with plan()'s fit_s."""
+    seen = spy(monkeypatch)
+    on, off = both(["plan", "--batch", "-", "--json", "-j", "1", *extra], MIXED, monkeypatch)
+    assert seen and seen[0] >= 2  # the engine ran and decided rows 1, 2 (and 7) itself
+    assert on.stdout == off.stdout and on.stderr == off.stderr
+    assert on.exit_code == off.exit_code == (1 if extra == ["--fail-fast"] else 4)
+    if not extra:
+        docs = [json.loads(x) for x in on.stdout.splitlines()]
+        assert [d["exit_code"] for d in docs] == [0, 0, 1, 3, 1, 4, 0, 0]
+        assert docs[0]["mode"] == "limits" and docs[0]["binding"].startswith("capacity") and docs[0]["fit_s"] > 0
+
+
+def test_default_rule_random_batch_identical_on_two_workers(monkeypatch, tmp_path):
+    from functools import partial
+
+    monkeypatch.setattr(verdicts, "verdict_rows_parallel", partial(verdicts.verdict_rows_parallel, chunk=100))
+    src = tmp_path / "moves.csv"
+    src.write_text(random_rows(300, seed=2))
+    seen = spy(monkeypatch)
+    on, off = both(["plan", "--batch", str(src), "--json", "-q", "-j", "2"], None, monkeypatch)
+    assert on.stdout == off.stdout and on.stderr == off.stderr and on.exit_code == off.exit_code
+    assert seen  # (the parent's warm-up; the workers' decisions are their own)
+    docs = [json.loads(x) for x in on.stdout.splitlines()]
+    assert {d["exit_code"] for d in docs} >= {0, 3} and any(d.get("mode") == "limits" for d in docs)

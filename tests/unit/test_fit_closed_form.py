@@ -127,3 +127,109 @@ def test_screened_fit_matches_the_bracketing_search(profile, method):
         T, _ = fit_duration(model, dwell)
         assert t_ref * (1 - 1e-4) <= T <= t_ref * (1 + 1e-7)
         assert not [r for r in check_limits(model, T, parts=parts, dwell=dwell).violations if r.kind != "reach"]
+
+
+# ------------------------------------------------------------ the vectorised fit against the scalar one, move by move
+
+
+def _stacked(models_parts):
+    """The Parts of several moves one after the other, and their starts."""
+    from pickplace_cli.limits.motion import Parts
+
+    fields = ("tau", "p", "v1", "a1", "j1", "q", "qd1", "qdd1", "qddd1", "A", "G", "Am", "Gm", "dAm", "dGm", "singularity")
+    parts = [p for _, p in models_parts]
+    stacked = Parts(**{f: np.concatenate([getattr(p, f) for p in parts]) for f in fields})
+    return stacked, np.concatenate([[0], np.cumsum([len(p.tau) for p in parts])])
+
+
+def _fit_cases(which: str, n: int, seed: int):
+    """(profile, [(model, parts on the fit grid)]) of n random B-spline moves (PH too for the thresholds)."""
+    from pickplace_cli.model.headroom import with_limit_use
+
+    from .test_verdict_fit import scara
+
+    rng = np.random.default_rng(seed)
+    prof = {"delta": load_profile("delta-su2018"), "scara": scara(),
+            "delta-tight": with_limit_use(load_profile("delta-su2018"), 0.03)}[which]
+    out = []
+    for i in range(n):
+        task = _move("scara-600" if which == "scara" else "delta-su2018", rng)
+        path = plan_path(task, "ph" if i % 4 == 3 else "bspline")
+        model = motion_model(path, prof)
+        out.append((model, model.parts(fit_grid(path.breakpoints, path.jumps))))
+    return prof, out
+
+
+@pytest.mark.parametrize("which", ["delta", "scara", "delta-tight"])
+def test_batch_fit_thresholds_are_the_scalar_thresholds_bitwise(which):
+    """batch_fit_thresholds on the stacked samples of many moves = fit_thresholds of each move alone, bit for bit
+    (the engine's fit_s must be plan()'s byte for byte); inf where the scalar raises NoFeasibleDuration (``delta-tight``:
+    3 % of every rating, where the holding torque alone exceeds the motor torque and the RMS limits)."""
+    from pickplace_cli.model.errors import NoFeasibleDuration
+    from pickplace_cli.timing.fit import batch_fit_thresholds
+
+    prof, cases = _fit_cases(which, 16, seed=11)
+    dwell = prof.planning.dwell
+    stacked, starts = _stacked(cases)
+    rms = [m.rms_integrals(p) for m, p in cases]
+    names, got = batch_fit_thresholds(cases[0][0], stacked, starts, (np.array([r[0] for r in rms]),
+                                                                      np.array([r[1] for r in rms])), dwell)
+    infeasible = 0
+    for k, (model, parts) in enumerate(cases):
+        try:
+            ref = fit_thresholds(model, parts, dwell)
+        except NoFeasibleDuration:
+            infeasible += 1
+            assert np.isinf(got[k]).any()
+            continue
+        assert names == [name for name, _ in ref]
+        assert np.array_equal(got[k], np.array([t for _, t in ref]))
+    assert (infeasible > 0) == (which == "delta-tight")
+    # without the RMS (``rms=False``)
+    names2, got2 = batch_fit_thresholds(cases[0][0], stacked, starts, None, dwell)
+    assert names2 == [n for n in names if "rms" not in n] and np.array_equal(got2, got[:, : len(names2)])
+
+
+def test_segment_parabolic_peak_is_the_check_s_parabola_per_move():
+    from pickplace_cli.limits.check import _parabolic_peak
+    from pickplace_cli.timing.fit import segment_parabolic_peak
+
+    rng = np.random.default_rng(5)
+    xs, ys = [], []
+    for n in rng.integers(3, 60, 40):
+        x = np.sort(rng.uniform(0, 1, n))
+        y = np.sin(rng.uniform(1, 20) * x[:, None] + rng.uniform(0, 6, 4)) + rng.normal(0, 0.01, (n, 4))
+        y[rng.integers(0, n), 0] = y[:, 0].max()  # a tie: the first maximum counts, as np.argmax takes it
+        xs.append(x)
+        ys.append(y)
+    starts = np.concatenate([[0], np.cumsum([len(x) for x in xs])])
+    peak, at = segment_parabolic_peak(np.concatenate(xs), np.concatenate(ys), starts)
+    for k, (x, y) in enumerate(zip(xs, ys)):
+        ref_peak, ref_at = _parabolic_peak(x, y, np.argmax(y, axis=0), None)
+        assert np.array_equal(peak[k], ref_peak) and np.array_equal(at[k], ref_at)
+
+
+@pytest.mark.parametrize("which", ["delta", "scara", "delta-tight"])
+def test_batch_fit_screen_is_fit_screen_bitwise(which):
+    """batch_fit_screen = fit_screen's T for each B-spline move (no jumps), bit for bit; NaN where it raises."""
+    from pickplace_cli.model.errors import NoFeasibleDuration
+    from pickplace_cli.timing.fit import batch_fit_screen
+
+    prof, cases = _fit_cases(which, 12, seed=12)
+    cases = [c for c in cases if c[0].path.method == "bspline"]
+    dwell = prof.planning.dwell
+    stacked, starts = _stacked(cases)
+    rms = [m.rms_integrals(p) for m, p in cases]
+
+    got = batch_fit_screen(cases[0][0], stacked, starts, (np.array([r[0] for r in rms]), np.array([r[1] for r in rms])),
+                           dwell)
+    raised = 0
+    for k, (model, _) in enumerate(cases):
+        try:
+            ref = fit_screen(model, dwell)[0]
+        except NoFeasibleDuration:
+            raised += 1
+            assert np.isnan(got[k])
+            continue
+        assert got[k] == ref, (k, got[k], ref)
+    assert (raised > 0) == (which == "delta-tight")

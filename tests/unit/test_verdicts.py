@@ -33,6 +33,8 @@ from pickplace_cli.pipelines.verdicts import (
     verdict_rows_parallel,
 )
 
+from .test_verdict_fit import scara
+
 DELTA = load_profile("delta-su2018")
 OPTS = PlanOptions(fit=False, time="auto")  # the engine decides the rows of auto and given seconds
 HEADER = "from_x,from_y,from_z,to_x,to_y,to_z,height,time"
@@ -64,14 +66,17 @@ def line(res) -> str:
     return json.dumps(doc)
 
 
+def planned_both_ways(text: str, options):
+    """(rows, plan()'s RowResults, the engine's RowResults) of a batch text on the Delta."""
+    rows, bad = read_batch_text(text, "rand")
+    assert not bad
+    return rows, list(plan_rows(rows, DELTA, options, source="rand")), list(verdict_rows(rows, DELTA, options, source="rand"))
+
+
 @pytest.fixture(scope="module")
 def agreement():
     invalid = "0,0,-0.8,0,0,-0.8,,\n0,0,-0.8,0.3,0,-0.8,0.002,\n0,0,-0.8,0.1,0,-0.8,,-1\n"  # from = to, λ = 150, T < 0
-    rows, bad = read_batch_text(random_batch(240, seed=7) + invalid, "rand")
-    assert not bad
-    ref = list(plan_rows(rows, DELTA, OPTS, source="rand"))
-    got = list(verdict_rows(rows, DELTA, OPTS, source="rand"))
-    return rows, ref, got
+    return planned_both_ways(random_batch(240, seed=7) + invalid, OPTS)
 
 
 def test_engine_lines_equal_plan_lines_on_240_random_rows(agreement):
@@ -228,18 +233,17 @@ def test_given_k_and_table_parameters_agree_with_plan():
 def test_engine_scope(monkeypatch):
     assert engine_applies(DELTA, OPTS)
     assert not engine_applies(DELTA, PlanOptions(fit=True, time="auto"))  # --show-fit: fit_s needs the fit
-    assert not engine_applies(DELTA, PlanOptions(fit=False))  # the default rule fits every move: plan() decides
+    assert engine_applies(DELTA, PlanOptions(fit=False))  # the default rule: the rows where the capacity binds
     assert not engine_applies(DELTA, PlanOptions(fit=False, time="fit"))
     assert not engine_applies(DELTA, PlanOptions(fit=False, method="ph"))
     assert not engine_applies(DELTA, PlanOptions(fit=False, method_params={"k1": 0.4}))
     assert not engine_applies(load_profile("gantry"), OPTS)  # no reach guard (singularity measure)
-    assert engine_applies(load_profile("scara-600"), OPTS)
+    assert engine_applies(scara(), OPTS)
     monkeypatch.setenv(OFF_SWITCH, "1")
     assert not engine_applies(DELTA, OPTS)
 
 
 def test_scara_rows_agree_with_plan():
-    scara = load_profile("scara-600")
     rng = np.random.default_rng(4)
     lines = [HEADER]
     for _ in range(60):
@@ -248,8 +252,8 @@ def test_scara_rows_agree_with_plan():
         t = rng.choice(["", f"{rng.uniform(0.1, 0.5):.3f}"])
         lines.append(f"{r0 * np.cos(a0):.4f},{r0 * np.sin(a0):.4f},-0.15,{r1 * np.cos(a1):.4f},{r1 * np.sin(a1):.4f},-0.15,,{t}")
     rows, _ = read_batch_text("\n".join(lines) + "\n")
-    ref = [line(r) for r in plan_rows(rows, scara, OPTS)]
-    got = list(verdict_rows(rows, scara, OPTS))
+    ref = [line(r) for r in plan_rows(rows, scara(), OPTS)]
+    got = list(verdict_rows(rows, scara(), OPTS))
     assert [line(r) for r in got] == ref
     assert any(isinstance(g.plan, Verdict) for g in got)
 
@@ -270,3 +274,133 @@ def test_property_engine_never_changes_a_line(moves, k):
     rows, _ = read_batch_text(text)
     opts = PlanOptions(fit=False, time="auto", method_params={} if k is None else {"k1": k[0], "k2": k[1]})
     assert [line(r) for r in verdict_rows(rows, DELTA, opts)] == [line(r) for r in plan_rows(rows, DELTA, opts)]
+
+
+# ------------------------------------------------------------------ the default rule (time = limits)
+
+DEFAULT = PlanOptions(fit=False)  # the default rule: the shortest duration at which every limit holds
+
+
+def rules_batch(n: int, seed: int) -> str:
+    """random_batch's moves with every kind of time cell: empty (the default rule), limits in any case, auto, seconds."""
+    rng = np.random.default_rng(seed)
+    out = []
+    for i, row in enumerate(random_batch(n, seed).splitlines()):
+        if i == 0 or not row.endswith(","):
+            out.append(row)
+            continue
+        out.append(row + rng.choice(["", "", "", "limits", "LIMITS ", "auto"]))
+    return "\n".join(out) + "\n"
+
+
+@pytest.fixture(scope="module")
+def default_agreement():
+    # from = to, λ = 150 (solved on demand), T < 0, time = fit (plan())
+    invalid = "0,0,-0.8,0,0,-0.8,,\n0,0,-0.8,0.3,0,-0.8,0.002,\n0,0,-0.8,0.1,0,-0.8,,-1\n0,0,-0.8,0.1,0,-0.8,,fit\n"
+    return planned_both_ways(rules_batch(240, seed=17) + invalid, DEFAULT)
+
+
+def test_default_rule_lines_equal_plan_lines_on_240_random_rows(default_agreement):
+    rows, ref, got = default_agreement
+    assert [r.row for r in got] == [r.row for r in ref] == [r.row for r in rows]
+    for a, b in zip(ref, got):  # every key and value, fit_s included (floats bitwise: shortest round-trip repr)
+        assert line(a) == line(b), a.row
+    codes = [r.code for r in ref]
+    assert codes.count(3) >= 10 and codes.count(4) >= 10 and codes.count(1) >= 2
+    by_mode = {}
+    for b in got:
+        if isinstance(b.plan, Verdict):
+            by_mode[b.plan.summary()["mode"]] = by_mode.get(b.plan.summary()["mode"], 0) + 1
+    assert by_mode.get("limits", 0) >= 60 and by_mode.get("auto", 0) >= 10 and by_mode.get("given", 0) >= 5
+
+
+def test_default_rule_decided_rows_are_capacity_bound_and_clear_of_the_margin(default_agreement):
+    _, ref, got = default_agreement
+    for a, b in zip(ref, got):
+        if isinstance(b.plan, Verdict) and b.plan.summary()["mode"] == "limits":
+            s = a.plan.summary()
+            assert a.code == 0 and s["binding"].startswith("capacity") and s["duration_s"] == s["auto_s"]
+            # plan()'s own rule for "the capacity binds" (fit_s = the screened fit · (1 + 1e-7): inside it too)
+            assert s["fit_s"] is not None and s["fit_s"] * (1 + 1e-6) < s["auto_s"]
+            # plan()'s utilisation of every limit stays under the screening margin + 1 %: the engine estimates on
+            # plan()'s own samples, and plan()'s zoom and refinement move a peak by well under 1 %
+            assert max(r.utilisation for r in a.plan.report.rows
+                       if not r.quantity.startswith("capacity")) <= SCREEN_MARGIN + 0.01
+
+
+def test_default_rule_rows_where_the_motors_bind_go_to_plan():
+    """On the SCARA the joints and motors set the duration of many moves (plan() confirms that fit by its exact
+    check): none of those is decided by the engine, and every line is plan()'s."""
+    rng = np.random.default_rng(8)
+    lines = [HEADER]
+    for _ in range(60):
+        r0, r1 = rng.uniform(0.2, 0.58, 2)
+        a0, a1 = rng.uniform(-1.2, 1.2, 2)
+        lines.append(f"{r0 * np.cos(a0):.4f},{r0 * np.sin(a0):.4f},-0.15,{r1 * np.cos(a1):.4f},{r1 * np.sin(a1):.4f},"
+                     f"{rng.uniform(-0.19, -0.01):.4f},,")
+    rows, _ = read_batch_text("\n".join(lines) + "\n")
+    ref = list(plan_rows(rows, scara(), DEFAULT))
+    got = list(verdict_rows(rows, scara(), DEFAULT))
+    assert [line(r) for r in got] == [line(r) for r in ref]
+    motors = [a.row for a in ref if a.plan is not None and not a.plan.summary()["binding"].startswith("capacity")]
+    decided = [b.row for b in got if isinstance(b.plan, Verdict)]
+    assert motors and decided and not set(motors) & set(decided)
+
+
+def test_default_rule_on_the_four_axis_delta():
+    prof = load_profile("delta-4axis")
+    rows, _ = read_batch_text(random_batch(60, seed=21))
+    ref = [line(r) for r in plan_rows(rows, prof, DEFAULT)]
+    got = list(verdict_rows(rows, prof, DEFAULT))
+    assert [line(r) for r in got] == ref
+    assert sum(isinstance(g.plan, Verdict) for g in got) >= 15
+
+
+def test_a_row_s_limit_use_scales_the_limits_the_engine_checks():
+    """A row's limit_use column plans that row at that fraction of every rating: the engine checks the same scaled
+    limits (it once checked the full ratings, and answered exit 0 for row 1, which exceeds its RMS limits at 5 %)."""
+    text = ("from_x,from_y,from_z,to_x,to_y,to_z,time,limit_use\n"
+            "-0.1525,0,-0.8,0.1525,0,-0.8,3.5,0.05\n"   # 1: RMS motor torque over 5 % of its rating: exit 3
+            "-0.1525,0,-0.8,0.1525,0,-0.8,,0.8\n"      # 2: the default rule at 80 %: decided, T = auto at 80 %
+            "-0.1525,0,-0.8,0.1525,0,-0.8,auto,0.5\n"  # 3: auto at 50 %
+            "-0.1525,0,-0.8,0.1525,0,-0.8,,\n"         # 4: the profile's own use
+            "0.1,0.1,-0.8,-0.1,-0.1,-0.8,,0.9\n")
+    rows, _ = read_batch_text(text)
+    for opts in (PlanOptions(fit=False, limit_use=0.7), DEFAULT):
+        ref = list(plan_rows(rows, DELTA, opts))
+        got = list(verdict_rows(rows, DELTA, opts))
+        assert [line(r) for r in got] == [line(r) for r in ref]
+        assert ref[0].code == 3 and not isinstance(got[0].plan, Verdict)
+        assert all(isinstance(g.plan, Verdict) for g in got[1:])
+    # the capacity binds (acceleration): T = √(â / (use·[a])), so 80 % of the capacity takes 1/√0.8 of the full
+    # rating's time (rtol 1e-14: two roundings of the same closed form)
+    at_80, at_full = (got[i].plan.summary() for i in (1, 3))
+    assert at_80["binding"] == at_full["binding"] == "capacity acceleration"
+    assert at_80["duration_s"] == pytest.approx(at_full["duration_s"] / np.sqrt(0.8), rel=1e-14)
+
+
+def test_default_rule_parallel_equals_serial():
+    rows, _ = read_batch_text(rules_batch(120, seed=5))
+    serial = [line(r) for r in verdict_rows(rows, DELTA, DEFAULT)]
+    parallel = [line(r) for r in verdict_rows_parallel(rows, DELTA, DEFAULT, workers=2, chunk=40)]
+    assert serial == parallel
+
+
+def test_default_rule_with_given_k_agrees_with_plan():
+    rows, _ = read_batch_text(rules_batch(40, seed=9))
+    # (k2 = 0.999: a middle piece shorter than the closed forms take: the de Boor route)
+    for params in ({"k1": 0.4, "k2": 0.13, "table": None}, {"k1": 0.3, "k2": 0.999, "table": None}):
+        opts = PlanOptions(fit=False, method_params=params)
+        got = list(verdict_rows(rows, DELTA, opts))
+        assert [line(r) for r in got] == [line(r) for r in plan_rows(rows, DELTA, opts)]
+        assert any(isinstance(g.plan, Verdict) for g in got)
+
+
+@settings(max_examples=20, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.lists(_row, min_size=1, max_size=4), st.sampled_from(["", "limits", "auto"]))
+def test_property_default_rule_never_changes_a_line(moves, rule):
+    """Any rows over and beyond the Delta's workspace under the default rule (and rows of other rules): the engine's
+    lines are plan()'s lines."""
+    text = HEADER + "\n" + "\n".join(",".join(str(c) for c in m[:-1]) + "," + (m[-1] or rule) for m in moves) + "\n"
+    rows, _ = read_batch_text(text)
+    assert [line(r) for r in verdict_rows(rows, DELTA, DEFAULT)] == [line(r) for r in plan_rows(rows, DELTA, DEFAULT)]
