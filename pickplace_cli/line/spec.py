@@ -298,15 +298,9 @@ def upstream_order(line: Line) -> list[int]:
 
 def _describe(err: dict, data: Any, lines: dict, source: str, errors: list) -> str:
     """One line ``FILE:LINE: FIELD = VALUE: RULE`` of a pydantic error."""
-    from ..model.yamlsafe import _resolve, _show
+    from ..model.yamlsafe import _show, locate
 
-    real, node, _ = _resolve(tuple(err.get("loc", ())), data, err["type"])
-    probe = tuple(real)
-    while probe not in lines and probe:
-        probe = probe[:-1]
-    line = lines.get(probe)
-    where = f"{source}:{line}" if line else source
-    field = ".".join(str(p) for p in real) or "(top level)"
+    real, node, where, field = locate(err, data, lines, source)
     kind = err["type"]
     if kind == "extra_forbidden":
         return f"{where}: unknown key {field!r}: not a field of this section (check spelling; keys are case-sensitive)"

@@ -13,7 +13,7 @@ from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationError,
 
 from .controller import Controller
 from .errors import ProfileError
-from .yamlsafe import PROFILE_MAX_BYTES, _prune_union_branches, _resolve, _show, _yaml_with_lines
+from .yamlsafe import PROFILE_MAX_BYTES, _prune_union_branches, _show, _yaml_with_lines, locate
 
 DEFAULT_PROFILE = "delta-su2018"
 
@@ -448,13 +448,7 @@ _EXPECTED = {
 
 def _describe(err: dict, data: Any, lines: dict[tuple, int], source: str, errors: list[dict]) -> str:
     """One line: ``FILE:LINE: FIELD = VALUE: RULE`` (FIELD a dotted path, list indices as numbers)."""
-    real, node, _ = _resolve(tuple(err.get("loc", ())), data, err["type"])
-    probe = tuple(real)
-    while probe not in lines and probe:
-        probe = probe[:-1]
-    line = lines.get(probe)
-    where = f"{source}:{line}" if line else source
-    field = ".".join(str(p) for p in real) or "(top level)"
+    real, node, where, field = locate(err, data, lines, source)
     info, holder = _field_of(real, data)
     about = ""
     if info is not None and info.description:
@@ -497,8 +491,8 @@ def _describe(err: dict, data: Any, lines: dict[tuple, int], source: str, errors
             rule = f"must be {what}"
         return f"{where}: {field} = {_show(value)}: {rule}{about}"
     if kind == "union_tag_invalid":
-        line = lines.get(probe + ("kind",), line)
-        where = f"{source}:{line}" if line else source
+        kind_line = lines.get(tuple(real) + ("kind",))  # the kind's own line where the document has one
+        where = f"{source}:{kind_line}" if kind_line else where
         return f"{where}: {field}.kind = {_show(ctx.get('tag'))}: must be one of {ctx.get('expected_tags')}"
     msg = err["msg"].removeprefix("Value error, ")
     if kind == "value_error":

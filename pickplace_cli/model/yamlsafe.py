@@ -179,3 +179,15 @@ def _show(value: Any, limit: int = 60) -> str:
 
     text = fmt(value)
     return text if len(text) <= limit else text[: limit - 1] + "…"
+
+
+def locate(err: dict, data: Any, lines: dict[tuple, int], source: str) -> tuple[list, Any, str, str]:
+    """Where a pydantic error ``err`` points in the document ``data``: (its real path, the value there or _ABSENT,
+    ``FILE:LINE`` (the line of the deepest part of the path the document has), the dotted FIELD)."""
+    real, node, _ = _resolve(tuple(err.get("loc", ())), data, err["type"])
+    probe = tuple(real)
+    while probe not in lines and probe:
+        probe = probe[:-1]
+    line = lines.get(probe)
+    where = f"{source}:{line}" if line else source
+    return real, node, where, ".".join(str(p) for p in real) or "(top level)"
