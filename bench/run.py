@@ -101,6 +101,9 @@ DEFAULT_BATCH = ("1,000 verdicts-only rows in process: {d[in_process][limits][me
                  "default rule against {d[in_process][auto][median_moves_per_s]:,.0f}/s under `auto` "
                  "({d[in_process][ratio_limits_to_auto_time]:.2f} × the time); CLI `-j 1`: "
                  "{d[cli][j1_limits][median_moves_per_s]:,.0f}/s against {d[cli][j1_auto][median_moves_per_s]:,.0f}/s",)
+FIT_GAP = ("{d[moves]} random moves, both profiles, every fixed-path method: the closed-form fit against a bracketing "
+           "search with the exact check, gap min {d[gap_min]:.1e}, median {d[gap_median]:.1e}, max {d[gap_max]:.1e}; "
+           "{d[median_ms][closed_form]:.1f} ms against {d[median_ms][search]:.1f} ms",)
 FUZZ = ("{d[totals][runs]} runs, {d[totals][rows]} rows: {d[totals][tracebacks]} tracebacks, {d[totals][hangs]} "
         "hangs, {d[totals][wrong_exit_codes]} wrong exit codes, {d[totals][left_running]} processes left running",)
 TEXT = ("{text}",)
@@ -127,6 +130,8 @@ BENCHMARKS = (
           quick=()),
     Bench("default_batch", "bench_default_batch.py", (), "default_batch.json", "a verdicts-only batch under the default "
           "rule against auto", DEFAULT_BATCH),
+    Bench("fit_gap", "bench_fit_gap.py", (), "fit_gap.json", "the closed-form fit against an independent search",
+          FIT_GAP),
     Bench("compare", "bench_compare.py", (), "compare.json", "compare of all methods", COMPARE, quick=()),
     Bench("optimal", "bench_optimal.py", ("--moves", "4"), "optimal.json", "--time optimal against fit and an "
           "80-coefficient solve", OPTIMAL),
