@@ -94,7 +94,9 @@ THREADS = ("idle (load {d[idle][load_1min]:.1f}): `--time optimal` {d[idle][defa
            "{d[loaded][pinned][optimal]:.2f} s")
 LINE = ("3 Deltas, {d[seconds]:.0f} s simulated: {d[median][ratio_cpu]:.1f} × real time on one core (CPU), "
         "{d[median][ratio_wall]:.1f} × by the wall clock; {d[median][ms_per_part_cpu]:.2f} ms CPU per part; "
-        "yardstick (`plan()` of the Adept cycle) {d[yardstick_ms][0]:.2f} ms",)
+        "yardstick (`plan()` of the Adept cycle) {d[yardstick_ms][0]:.2f} ms",
+        "sweep of {d[sweep][cases]} cases: 2 processes {d[sweep][wall_s_2]:.2f} s against 1 process "
+        "{d[sweep][wall_s_1]:.2f} s ({d[sweep][speedup]:.2f} ×; {d[sweep][cores_used_2]:.2f} cores busy)",)
 TURN_EXAMPLE = ("delta-4axis, half a turn: `fit` {d[6][T_s]:.4f} s ({d[6][binding]}), `optimal` {d[7][T_s]:.4f} s; "
                 "without a turn {d[0][T_s]:.4f} s",)
 DEFAULT_BATCH = ("1,000 verdicts-only rows in process: {d[in_process][limits][median_moves_per_s]:,.0f} moves/s under the "

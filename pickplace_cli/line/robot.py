@@ -44,6 +44,9 @@ SCREEN_MARGIN = 0.9
 #: refined grid peaks are within 1.3e-4 of the exact ones on a 3-robot line's moves, median 1e-5), so the exact
 #: check rarely has to nudge one (which would move the meeting point and so the place move's start)
 GRID_SAFETY = 2e-4
+#: under the rule ``limits`` the capacity's durations stand when no joint or motor limit is used beyond this on the
+#: grid (its estimates are within 0.3 % of the exact peaks; a leg above SCREEN_MARGIN is still checked exactly)
+LIMITS_SCREEN = 0.95
 #: uniform samples of a tracking leg's grid (plus its Gauss–Legendre nodes)
 TRACK_UNIFORM = 9
 #: the quantities a duration changes (the fit rule's); positions, workcell and singularity do not
@@ -360,12 +363,27 @@ class LineRobot:
 
             got = pick_and_place(self, moves[0], a, b, target, v_out)
             return Decline(got, 1) if isinstance(got, str) else got
+        if self.rule == "limits":
+            # the capacity's durations first (cheap): where every joint and motor limit holds there with room to
+            # spare (LIMITS_SCREEN), they are the rule's answer (no shorter move holds the capacity, and these hold
+            # the motors: the cycle's check then decides the legs as for any rule)
+            got = self._capacity_pick_and_place(moves, a, b, target, v_out)
+            if not isinstance(got, tuple) or all(self._motors_clear(s) for s in got):
+                return got  # (None or a Decline: no move holds the capacity, so none holds every limit)
         if self.rule != "auto":
             pick = self._solve(moves, a, b)
             if pick is None:
                 return None
             place = self._solve(self._place_moves(pick.end + self.v_belt * self.dwell, target, v_out), T_MIN, HORIZON)
             return (pick, place) if place is not None else self._no_place(pick.end + self.v_belt * self.dwell, target)
+        return self._capacity_pick_and_place(moves, a, b, target, v_out)
+
+    def _motors_clear(self, solved: Solved) -> bool:
+        """Every timed joint and motor limit used at most ``LIMITS_SCREEN`` on the move's grid at its duration."""
+        return bool(self._excess_fit(solved.move, np.array([solved.T]))[0] <= LIMITS_SCREEN - 1.0)
+
+    def _capacity_pick_and_place(self, moves: list[Move], a: float, b: float, target, v_out):
+        """(pick, place) by the Cartesian capacity (the rule ``auto``), None, or a Decline for the place."""
         found = search_auto(moves, self.capacity, a, b, guess=self.last_T)
         if found is None:
             return None
