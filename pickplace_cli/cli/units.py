@@ -22,48 +22,25 @@ import sys
 FEW_SAMPLES = 10
 #: a given duration from this on [s] gets a warning
 LONG_MOVE_S = 10.0
-#: without a workcell box: a coordinate farther than this [m] is not a pick-and-place point
-FAR_M = 10.0
-#: without a workcell box: a height above this [m] is not a clearance
-TALL_M = 2.0
-
-
-def _box(prof):
-    """(min, max) [m] the tool must stay in: the workcell box, a gantry's travel, or None."""
-    box = prof.workcell.box
-    if box is not None:
-        return tuple(box.min), tuple(box.max)
-    if prof.robot.kind == "gantry":
-        axes = prof.robot.axes
-        return tuple(a.travel[0] for a in axes), tuple(a.travel[1] for a in axes)
-    return None
-
-
-def _inside(p, box) -> bool:
-    if box is None:
-        return max(abs(c) for c in p) <= FAR_M
-    return all(lo <= c <= hi for c, lo, hi in zip(p, *box))
-
-
 def check_option_units(a, prof) -> None:
     """TaskError (exit 1) for ``--from``/``--to``/``--height`` in millimetres (module docstring); a warning for a
     ``--time`` of 10 s or more."""
     from ..model.errors import TaskError
+    from ..model.plausible import millimetre_height, millimetre_point
     from .app import _parse_pose
 
-    box = _box(prof)
     for name, text in (("from", a.from_), ("to", a.to)):
         if text is None:
             continue
         p, _ = _parse_pose(name, text)  # X,Y,Z or X,Y,Z,THETA (the tool angle: not a length)
-        mm = [c / 1000 for c in p]
-        if not _inside(p, box) and _inside(mm, box):
-            where = "outside the workcell box" if box is not None else f"farther than {FAR_M:g} m"
+        found = millimetre_point(p, prof)
+        if found is not None:
+            mm, where = found
             raise TaskError(f"{name} = {text}: {where} of profile {prof.name}: millimetres meant? in metres: "
                             f"--{name} {','.join(f'{c:g}' for c in mm)} (coordinates are in m)")
     if a.height is not None:
-        tall = (box[1][2] - box[0][2]) if box is not None else TALL_M
-        if a.height > tall and a.height / 1000 <= tall:
+        tall = millimetre_height(a.height, prof)
+        if tall is not None:
             raise TaskError(f"height = {a.height:g} m: more than the workcell of profile {prof.name} is tall "
                             f"({tall:g} m): millimetres meant? --height {a.height / 1000:g} (the height is in m)")
     try:

@@ -92,3 +92,45 @@ def check_units(profile, source: str) -> None:
         raise ProfileError("\n".join(bad))
     for line in warn:
         warnings.warn(line, UnitWarning, stacklevel=3)
+
+
+# ------------------------------------------------------------------------------ points and heights of a move
+
+#: without a workcell box: a coordinate farther than this [m] is not a pick-and-place point
+FAR_M = 10.0
+#: without a workcell box: a height above this [m] is not a clearance
+TALL_M = 2.0
+
+
+def workcell_box(prof):
+    """(min, max) [m] the tool must stay in: the workcell box, a gantry's travel, or None."""
+    box = prof.workcell.box
+    if box is not None:
+        return tuple(box.min), tuple(box.max)
+    if prof.robot.kind == "gantry":
+        axes = prof.robot.axes
+        return tuple(a.travel[0] for a in axes), tuple(a.travel[1] for a in axes)
+    return None
+
+
+def _inside(p, box) -> bool:
+    if box is None:
+        return max(abs(c) for c in p) <= FAR_M
+    return all(lo <= c <= hi for c, lo, hi in zip(p, *box))
+
+
+def millimetre_point(p, prof) -> tuple[list[float], str] | None:
+    """(the point in metres, where it lies) when the point ``p`` [m] lies outside the profile's workcell box (a
+    gantry: its travel; no box: farther than :data:`FAR_M`) and the same numbers in millimetres lie inside; else None."""
+    box = workcell_box(prof)
+    mm = [c / 1000 for c in p]
+    if not _inside(p, box) and _inside(mm, box):
+        return mm, ("outside the workcell box" if box is not None else f"farther than {FAR_M:g} m")
+    return None
+
+
+def millimetre_height(h: float, prof) -> float | None:
+    """How tall the workcell is [m] when the clearance ``h`` [m] is taller and ``h`` in millimetres is not; else None."""
+    box = workcell_box(prof)
+    tall = (box[1][2] - box[0][2]) if box is not None else TALL_M
+    return tall if h > tall and h / 1000 <= tall else None

@@ -297,6 +297,7 @@ def row_task(values: dict, profile, height: float | None = None, eta: float | No
     from ..model.task import Task
 
     v = values
+    _check_row_units(v, profile)
     return Task(
         [v["from_x"], v["from_y"], v["from_z"]],
         [v["to_x"], v["to_y"], v["to_z"]],
@@ -306,6 +307,26 @@ def row_task(values: dict, profile, height: float | None = None, eta: float | No
         v_to=[v.get("v_to_x", 0.0), v.get("v_to_y", 0.0), v.get("v_to_z", 0.0)],
         theta_from=v.get("from_theta"), theta_to=v.get("to_theta"),
     )
+
+
+def _check_row_units(v: dict, profile) -> None:
+    """TaskError for a row's point or height in millimetres (the rules of ``plan``'s options,
+    :mod:`pickplace_cli.model.plausible`): the cells named, with the values in metres."""
+    from ..model.plausible import millimetre_height, millimetre_point
+
+    for end in ("from", "to"):
+        p = [v[f"{end}_x"], v[f"{end}_y"], v[f"{end}_z"]]
+        found = millimetre_point(p, profile)
+        if found is not None:
+            mm, where = found
+            raise TaskError(f"{end}_x,{end}_y,{end}_z = {','.join(f'{c:g}' for c in p)}: {where} of profile "
+                            f"{profile.name}: millimetres meant? in metres: {','.join(f'{c:g}' for c in mm)} "
+                            "(coordinates are in m)")
+    if "height" in v:
+        tall = millimetre_height(v["height"], profile)
+        if tall is not None:
+            raise TaskError(f"height = {v['height']:g} m: more than the workcell of profile {profile.name} is tall "
+                            f"({tall:g} m): millimetres meant? {v['height'] / 1000:g} (the height is in m)")
 
 
 def plan_rows(

@@ -228,6 +228,21 @@ def test_points_and_height_in_millimetres_are_refused(tmp_path, args, word):
     assert not (tmp_path / "t.csv").exists()
 
 
+@pytest.mark.parametrize("engine", [True, False])
+def test_batch_cells_in_millimetres_are_that_row_s_error(tmp_path, engine):
+    """The same rules for a batch row's cells (the verdict engine's rows too): that row's one line, exit 1, naming
+    the cells and the values in metres; the other rows are answered."""
+    src = tmp_path / "b.csv"
+    src.write_text("from_x,from_y,from_z,to_x,to_y,to_z,height\n-0.1525,0,-0.8,0.1525,0,-0.8,\n"
+                   "-152.5,0,-800,152.5,0,-800,\n-0.1525,0,-0.8,0.1525,0,-0.8,25\n")
+    env = None if engine else {"PICKPLACE_NO_VERDICT_ENGINE": "1"}
+    r = run("plan", "--batch", str(src), "--json", "-q", env=env)
+    rows = [json.loads(line) for line in r.stdout.splitlines()]
+    assert [x["exit_code"] for x in rows] == [0, 1, 1]
+    assert "from_x,from_y,from_z = -152.5,0,-800" in rows[1]["error"] and "in metres: -0.1525,0,-0.8" in rows[1]["error"]
+    assert "height = 25 m" in rows[2]["error"] and "millimetres meant? 0.025" in rows[2]["error"]
+
+
 def test_a_real_far_point_is_not_called_millimetres(tmp_path):
     """A point merely outside the workspace (not a millimetre value) keeps its own error: exit 4, no unit hint."""
     r = run("plan", "--from", "-0.5,0,-0.9", "--to", "0.5,0,-0.9", "-q", "-o", str(tmp_path / "t.csv"))
