@@ -35,6 +35,7 @@ class TableFormat(str, Enum):
 @app.command("build-table")
 @_handle_errors
 def build_table_cmd(
+    ctx: typer.Context,
     lambda_min: float = typer.Option(1.0, "--lambda-min", help="Smallest width/height ratio λ = b/h."),
     lambda_max: float = typer.Option(40.0, "--lambda-max", help="Largest λ."),
     lambda_step: float = typer.Option(0.5, "--lambda-step", help="Step of the λ grid."),
@@ -63,7 +64,8 @@ def build_table_cmd(
     output: str = typer.Option("-", "--output", "-o", help="Output file ('-' = stdout). Written atomically."),
     table_format: TableFormat = typer.Option(
         TableFormat.csv, "--format", "-f",
-        help="csv (the table file plan --table reads), json, or st (IEC 61131-3 Structured Text with a look-up function).",
+        help="csv (the table file plan --table reads), json, or st (IEC 61131-3 Structured Text with a look-up "
+        "function). [default: from -o's suffix (.csv, .json, .st), else csv]",
     ),
     st_dialect: StDialect = typer.Option(
         StDialect.strict, "--st-dialect", help="With --format st: strict (IEC 61131-3: the table is a constant block "
@@ -87,6 +89,10 @@ def build_table_cmd(
     from ..lookup.bspline_optimum import TableSettings
     from ..lookup.bspline_table import format_table
 
+    from .guards import suffix_format
+
+    table_format = suffix_format(ctx, table_format, output, {".csv": "csv", ".json": "json", ".st": "st"},
+                                 "table_format")
     if st_dialect != StDialect.strict and table_format != TableFormat.st:
         _usage(f"--st-dialect applies to --format st, not {table_format.value}")
     _ST_DIALECT[0] = st_dialect.value

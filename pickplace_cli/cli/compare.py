@@ -21,6 +21,7 @@ class CompareFormat(str, Enum):
 @app.command()
 @_handle_errors
 def compare(
+    ctx: typer.Context,
     from_: str = typer.Option(..., "--from", help="Pick point X,Y,Z in m (base frame)."),
     to: str = typer.Option(..., "--to", help="Place point X,Y,Z in m (base frame)."),
     methods: str = typer.Option("all", "--methods", "-m", help="'all' or method names separated by commas."),
@@ -31,7 +32,7 @@ def compare(
                              "of the profile holds: joint and motor limits and the Cartesian capacity), 'auto' (the "
                              "capacity alone, Li 2018 Eq. 26), 'fit' (joint and motor limits alone), 'optimal' "
                              "(non-uniform time law) or seconds."),
-    fmt: CompareFormat = typer.Option(CompareFormat.table, "--format", "-f", help="table (stderr only), csv or json (stdout or -o)."),
+    fmt: CompareFormat = typer.Option(CompareFormat.table, "--format", "-f", help="table (stderr only), csv or json (stdout or -o). [default: from -o's suffix (.csv, .json), else table]"),
     output: str = typer.Option("-", "--output", "-o", help="Output file for csv/json ('-' = stdout). Written atomically."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No table on stderr with csv/json (errors still print)."),
 ) -> None:
@@ -44,6 +45,9 @@ def compare(
     from ..model.errors import ExportError
     from ..export import atomic_output, check_writable
 
+    from .guards import suffix_format
+
+    fmt = suffix_format(ctx, fmt, output, {".csv": "csv", ".json": "json"}, "fmt")
     if fmt == CompareFormat.table and output != "-":
         raise ExportError(f"output = {output}: --format table prints to stderr; use --format csv or json to write a file")
     check_writable(output)

@@ -56,3 +56,24 @@ def output_format(ctx, fmt, output: Optional[str], option: str = "fmt"):
     if fmt == OutputFormat.mcap and output in (None, "-") and sys.stdout is not None and sys.stdout.isatty():
         _usage("-f mcap: MCAP is binary; not written to a terminal: give -o FILE.mcap or redirect standard output")
     return fmt
+
+
+def suffix_format(ctx, fmt, output: Optional[str], suffixes: dict[str, str], option: str):
+    """The format of a command with its own ``-f`` choices (``build-table``, ``compare``): ``-f`` when given, else the
+    one ``-o FILE``'s suffix names in ``suffixes`` (``.json`` → json); a ``-f`` that contradicts a suffix of
+    ``suffixes`` is a usage error (exit 2). Another suffix, or none, keeps ``-f``'s default."""
+    import os
+
+    from .app import _usage
+
+    source = ctx.get_parameter_source(option)
+    given = source is not None and source.name != "DEFAULT"
+    named = None
+    if output not in (None, "-") and not str(output).startswith("/dev/"):
+        named = suffixes.get(os.path.splitext(str(output))[1].lower())
+    if named is None:
+        return fmt
+    if given and fmt.value != named:
+        _usage(f"-f {fmt.value} -o {output}: the file's suffix says {named}; give -o with a suffix of "
+               f"{fmt.value} or -f {named}")
+    return type(fmt)(named)

@@ -55,7 +55,7 @@ def test_one_row_grid_builds_and_plans(tmp_path):
     (["--lambda-points", "1"], "lambda-points = 1: need 1 for lambda-min = lambda-max, else at least 2"),
 ])
 def test_build_table_2d_bad_input(tmp_path, args, msg):
-    out = tmp_path / "t.csv"
+    out = tmp_path / "t.out"  # (a suffix that names no format: -f decides)
     r = run("build-table", *args, "-o", str(out), "-q")
     assert r.exit_code == 1 and msg in r.stderr and len(r.stderr.strip().splitlines()) == 1 and not out.exists()
 

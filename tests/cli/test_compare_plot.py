@@ -77,7 +77,7 @@ def test_compare_csv_stdout_and_json_file(tmp_path):
         (["-m", ""], 1, "methods = '': empty"),
         (["-m", "bspline", "--eta", "1.5"], 1, "eta = 1.5"),
         (["-m", "bspline", "--time", "soon"], 1, "time = 'soon'"),
-        (["-m", "bspline", "-o", "x.csv"], 1, "--format table prints to stderr"),
+        (["-m", "bspline", "-o", "x.out"], 1, "--format table prints to stderr"),
         (["-m", "bspline", "-f", "csv", "-o", "/no/such/dir/x.csv"], 1, "does not exist"),
         (["-m", "bspline", "-p", "nope"], 1, "profile 'nope'"),
     ],

@@ -70,6 +70,27 @@ def test_an_unknown_suffix_keeps_csv(tmp_path):
     assert (tmp_path / "t.dat").read_text().startswith("t[s],")
 
 
+@pytest.mark.parametrize("suffix,first", [(".json", "{"), (".st", "(*"), (".csv", "# pickplace")])
+def test_build_table_takes_the_format_from_the_suffix(tmp_path, suffix, first):
+    out = tmp_path / f"t{suffix}"
+    r = run("build-table", "--lambda-min", "10", "--lambda-max", "11", "--lambda-step", "1", "-q", "-o", str(out))
+    assert r.exit_code == 0, r.stderr
+    text = out.read_text()
+    assert text.startswith(first), text[:80]
+    if suffix == ".json":
+        assert json.loads(text)["eta"] == 0.5
+
+
+def test_compare_takes_the_format_from_the_suffix_and_refuses_a_contradiction(tmp_path):
+    out = tmp_path / "c.json"
+    r = run("compare", *ADEPT, "-m", "bspline", "-q", "-o", str(out))
+    assert r.exit_code == 0 and json.loads(out.read_text())["profile"] == "delta-su2018"
+    r = run("compare", *ADEPT, "-m", "bspline", "-f", "csv", "-o", str(tmp_path / "d.json"))
+    assert r.exit_code == 2 and "suffix says json" in r.stderr and not (tmp_path / "d.json").exists()
+    r = run("build-table", "-f", "json", "-o", str(tmp_path / "t.csv"))
+    assert r.exit_code == 2 and "suffix says csv" in r.stderr and not (tmp_path / "t.csv").exists()
+
+
 def test_binary_mcap_is_not_written_to_a_terminal():
     """stdout a terminal (a pseudo-terminal here): refused, exit 2, nothing written to it but the error's absence."""
     leader, follower = pty.openpty()
