@@ -203,7 +203,7 @@ def _single(line_file, detections, belt_speed, robots, strategy, seed, output, a
     from ..export import atomic_output
     from ..line.engine import LineEngine
     from ..line.parts import generate, in_time_order, read_detections
-    from ..line.report import PartsCsv, part_json, print_table, summary_json
+    from ..line.report import PartsCsv, part_json, summary_json
     from ..line.spec import resolve_relative
     from ..model.errors import TaskError
 

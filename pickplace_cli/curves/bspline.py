@@ -19,8 +19,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from .peaks import ppoly_norm_peak
-
 DEGREE = 5
 
 

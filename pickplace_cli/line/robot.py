@@ -29,7 +29,7 @@ peaks, as the batch verdict engine measures); any other leg is checked by the pr
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
