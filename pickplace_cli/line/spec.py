@@ -352,15 +352,9 @@ def load_line(path: str | Path) -> Line:
     if len(raw) > LINE_MAX_BYTES:
         raise ProfileError(f"{p}: larger than {LINE_MAX_BYTES} bytes (1 MiB); a line file is a few kB: is this the "
                            "right file?")
-    if b"\0" in raw:
-        from ..model.text import utf16_hint
+    from ..model.text import decode_text
 
-        raise ProfileError(f"{p}: a binary file (NUL bytes), not a YAML line file{utf16_hint(raw, csv=False)}")
-    try:
-        text = raw.decode("utf-8")
-    except UnicodeDecodeError:
-        raise ProfileError(f"{p}: not a text (UTF-8) file") from None
-    return parse_line(text, str(p))
+    return parse_line(decode_text(raw, str(p), "a YAML line file", ProfileError, csv=False), str(p))
 
 
 def resolve_relative(name: str, line_path: str | Path | None) -> str:

@@ -29,3 +29,14 @@ def utf16_hint(head: bytes | str, csv: bool = True) -> str:
     if not halves:
         return ""
     return " (UTF-16 text, e.g. Excel's \"Unicode Text\"? save it as \"CSV UTF-8\")" if csv else " (UTF-16 text? save it as UTF-8)"
+
+
+def decode_text(raw: bytes, source: str, kind: str, error: type, csv: bool = True) -> str:
+    """The UTF-8 text of a file's bytes ``raw``, or ``error`` in one line: NUL bytes ("a binary file …, not
+    ``kind``", with a hint when it looks like UTF-16) or bytes that are not UTF-8."""
+    if b"\0" in raw:
+        raise error(f"{source}: a binary file (NUL bytes), not {kind}{utf16_hint(raw, csv=csv)}")
+    try:
+        return raw.decode("utf-8")
+    except UnicodeDecodeError:
+        raise error(f"{source}: not a text (UTF-8) file") from None

@@ -496,14 +496,9 @@ def check_file(path: str | Path, profile: Profile, smoothing: float | str = 0.0,
     if len(raw) > CHECK_MAX_BYTES:
         raise TaskError(f"{source}: larger than {CHECK_MAX_BYTES} bytes ({CHECK_MAX_BYTES >> 20} MiB), the most check "
                         "reads at once; split the file by move (e.g. one file per move column value)")
-    if b"\0" in raw:
-        from ..model.text import utf16_hint
+    from ..model.text import decode_text
 
-        raise TaskError(f"{source}: a binary file (NUL bytes), not a CSV trajectory{utf16_hint(raw)}")
-    try:
-        text = raw.decode("utf-8")
-    except UnicodeDecodeError:
-        raise TaskError(f"{source}: not a text (UTF-8) file") from None
+    text = decode_text(raw, source, "a CSV trajectory", TaskError)
     robot = build_robot(profile.robot)
     out = []
     for s in read_moves(text, source, robot.joint_names, robot.joint_units):
