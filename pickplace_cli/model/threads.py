@@ -26,6 +26,10 @@ _CONTROLLER: list = []  # the threadpoolctl controller, made once (finding the l
 def _controller():
     if not _CONTROLLER:
         try:
+            # the solvers' BLAS is scipy's own (its wheels bundle an OpenBLAS of their own, loaded with
+            # scipy.linalg): load it first, or the controller would see numpy's alone and leave scipy's on every core
+            import scipy.linalg  # noqa: F401
+            import scipy.optimize  # noqa: F401
             from threadpoolctl import ThreadpoolController
 
             _CONTROLLER.append(ThreadpoolController())

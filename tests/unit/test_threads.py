@@ -66,3 +66,31 @@ def test_the_cli_sets_one_thread_before_numpy_loads():
                                                                "OMP_NUM_THREADS", "BLIS_NUM_THREADS")}
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True).stdout
     assert out.strip().splitlines()[-1] in ("[1]", "[]")
+
+
+def test_scipys_own_blas_is_held_too_when_it_loads_with_the_solver():
+    """A library user's first ``--time optimal`` loads scipy.optimize (and scipy's own OpenBLAS) inside the decorated
+    call: every BLAS library threadpoolctl then reports, scipy's included, runs one thread inside the call."""
+    code = r"""
+import json
+import numpy
+from threadpoolctl import threadpool_info
+from pickplace_cli.model.threads import single_blas_thread
+
+@single_blas_thread
+def solve():
+    import scipy.optimize  # the solver's first use, as timing/optimal.py does
+    return [(i["filepath"], i["num_threads"]) for i in threadpool_info() if i["user_api"] == "blas"]
+
+print(json.dumps({"inside": solve(), "cores": len(__import__("os").sched_getaffinity(0))}))
+"""
+    import json
+    import os
+
+    env = {k: v for k, v in os.environ.items() if k not in ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
+                                                               "OMP_NUM_THREADS", "BLIS_NUM_THREADS")}
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True).stdout
+    res = json.loads(out.strip().splitlines()[-1])
+    if not res["inside"]:
+        pytest.skip("no BLAS library found by threadpoolctl")
+    assert all(n == 1 for _, n in res["inside"]), res["inside"]
