@@ -8,6 +8,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+#: rounds of adding points where the rebuilt table exceeds a limit before the table is re-timed
+REFINE_ROUNDS = 24
+#: times the table may be re-timed (slowed) before it counts as not holding
+RETIMES = 6
+
 
 @dataclass(frozen=True)
 class Piece:
@@ -82,3 +87,156 @@ def table_of(kind: str, grid: np.ndarray, timeline: Motion, tolerance: float):
         return fit_equidistant(timeline.duration, timeline, tolerance, len(grid))
     breaks = [int(np.argmin(np.abs(grid - b))) for b in timeline.breaks]
     return fit_knots(kind, grid, np.array(breaks), timeline, tolerance)
+
+
+def stretched(timeline: Motion, k: float, cycle: float | None, step: float) -> tuple[Motion, np.ndarray]:
+    """``timeline`` with every move ``k`` times longer (rounded up to whole ``cycle``s [s] when one is set; holds
+    unchanged) and its grid: every ``step`` [s] from each piece's start, and the pieces' ends."""
+    pieces: list[Piece] = []
+    t0 = 0.0
+    for p in timeline.pieces:
+        length = p.length
+        if p.plan is not None:
+            length = k * p.length
+            if cycle is not None:
+                length = np.ceil(length / cycle - 1e-9) * cycle
+        pieces.append(Piece(t0, float(length), p.plan, p.hold))
+        t0 += float(length)
+    out = Motion.__new__(Motion)
+    out.pieces, out.models = pieces, timeline.models
+    out.starts = np.array([p.t0 for p in pieces])
+    out.duration = t0
+    out.breaks = np.array([p.t0 for p in pieces] + [t0])
+    grid = np.concatenate([p.t0 + np.arange(0.0, p.length - 1e-9 * step, step) for p in pieces] + [[t0]])
+    return out, grid
+
+
+@dataclass(frozen=True)
+class JudgedTable:
+    """A table fitted to a tolerance and then made to hold every limit as the drive rebuilds it: ``table`` (a
+    KnotTable), ``report`` (the LimitReport of the rebuilt motion), ``stretch`` (the moves' durations over the
+    planned ones: 1 unless re-timed), ``tolerance_points`` (what the tolerance alone needed), ``duration`` [s] of the
+    table's timeline and ``step`` [s] (the cycle the per-cycle steps are bounded by)."""
+
+    table: object
+    report: object
+    stretch: float
+    tolerance_points: int
+    duration: float
+    step: float
+
+
+def _segments_at(t: np.ndarray, times: list[float]) -> set[int]:
+    """The segments of points ``t`` holding (or ending at) each time."""
+    out: set[int] = set()
+    for x in times:
+        i = int(np.clip(np.searchsorted(t, x, side="right") - 1, 0, len(t) - 2))
+        out.add(i)
+        if i > 0 and abs(x - t[i]) <= 1e-9 * max(1.0, abs(x)):
+            out.add(i - 1)
+        if i + 1 < len(t) - 1 and abs(x - t[i + 1]) <= 1e-9 * max(1.0, abs(x)):
+            out.add(i + 1)
+    return out
+
+
+def _refine_knots(kind, grid, timeline, table, report, judge, tolerance):
+    """Split the segments where the rebuilt ``table`` exceeds a limit (at its grid midpoint) until it holds or
+    ``REFINE_ROUNDS`` pass (or no segment can be split) → (table, report)."""
+    from ..export.knots import knot_table
+
+    for _ in range(REFINE_ROUNDS):
+        bad = [r.t_peak for r in report.violations if r.t_peak is not None]
+        if not bad:
+            break
+        idx = np.searchsorted(grid, table.t - 1e-12)
+        new = set(idx.tolist())
+        for s in _segments_at(table.t, bad):
+            a, b = int(idx[s]), int(idx[s + 1])
+            if b - a > 1:
+                new.add((a + b) // 2)
+        if len(new) == len(idx):
+            break
+        table = knot_table(kind, grid, np.array(sorted(new)), timeline, tolerance)
+        report = judge(table)
+    return table, report
+
+
+def _refine_count(timeline, table, report, judge, tolerance, blend):
+    """The fewest equidistant points (up to one per ``blend`` [s]) from ``table``'s on whose rebuilt motion every
+    limit holds (doubling, then bisection) → (table, report); the densest when none holds."""
+    from ..export.knots import equidistant_table
+
+    if report.ok:
+        return table, report
+    most = max(int(np.ceil(timeline.duration / blend - 1e-9)) + 1, len(table.t))
+
+    def make(n: int):
+        tab = equidistant_table(timeline.duration, n, timeline, tolerance, table.samples)
+        return tab, judge(tab)
+
+    bad, good = len(table.t), None
+    n = bad
+    while n < most:
+        n = min(2 * n, most)
+        tab, rep = make(n)
+        if rep.ok:
+            good = (n, tab, rep)
+            break
+        bad, table, report = n, tab, rep
+    if good is None:
+        return table, report
+    while good[0] - bad > 1:
+        mid = (good[0] + bad) // 2
+        tab, rep = make(mid)
+        if rep.ok:
+            good = (mid, tab, rep)
+        else:
+            bad = mid
+    return good[1], good[2]
+
+
+def judged_table(kind: str, grid: np.ndarray, timeline: Motion, tolerance: float, profile, dwell: float,
+                 cycle: float | None, retime: bool = True, capacity: bool = False) -> JudgedTable:
+    """The ``kind`` table of ``timeline`` (:func:`table_of`: its points from ``grid`` [s] within ``tolerance``)
+    made to hold every limit of ``profile`` (at its limit use) as the drive rebuilds it
+    (:func:`~pickplace_cli.limits.table.check_table`; per-cycle steps bounded over ``cycle`` [s], else over the
+    grid's step): points are added where the rebuilt motion exceeds a limit, then, when ``retime`` (not for a
+    conveyor move) and that is not enough, every move is slowed (``stretch``) and the table fitted again. The
+    report says whether it holds; a table that cannot be made to is returned with its violations. ``capacity``: the
+    profile's Cartesian capacity is checked too (when the plan's duration rule holds it)."""
+    from ..export.interpolate import rebuild
+    from ..limits.table import check_table
+    from ..planner import motion_model_static
+
+    robot, specs, margin, box = motion_model_static(profile)[:4]
+    grid = np.asarray(grid, float)
+    step = float(cycle) if cycle is not None else float(np.median(np.diff(grid)))
+
+    def judge_on(g):
+        def judge(table):
+            return check_table(rebuild(table, step), robot, specs, step, dwell, margin, box, samples=g,
+                               capacity=profile.capacity if capacity else None).rated(profile.limit_use)
+        return judge
+
+    k = 1.0
+    line, g = timeline, grid
+    first = None
+    used = 1.0
+    for attempt in range(RETIMES + 1):
+        used = k
+        if attempt:
+            line, g = stretched(timeline, k, cycle, step)
+        judge = judge_on(g)
+        table = table_of(kind, g, line, tolerance)
+        first = len(table.t) if first is None else first
+        report = judge(table)
+        if kind == "cam-table":
+            table, report = _refine_count(line, table, report, judge, tolerance, step)
+        else:
+            table, report = _refine_knots(kind, g, line, table, report, judge, tolerance)
+        failing = report.violations
+        if not failing or not retime or any(r.kind != "limit" for r in failing):
+            break
+        worst = max(r.utilisation / r.target for r in failing)
+        k *= max(worst, 1.0 + 1e-4) ** 0.5 * (1.0 + 1e-4)
+    return JudgedTable(table, report, used, first, line.duration, step)
