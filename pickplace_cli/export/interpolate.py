@@ -5,10 +5,11 @@
   sub-mode −2); its acceleration steps at every point.
 * **cam**: the quintic through (p, v, a) at both ends of each segment (PLCopen XYVA cam points, TwinCAT
   ``POLYNOM5_MM``); acceleration continuous, jerk steps at the points.
-* **cam-table**: straight lines between equidistant positions. The velocity steps at every point; a kernel reads
-  the table once per controller cycle, so the step is taken within one cycle: here a parabolic blend one cycle
-  (``blend`` [s]) long centred on the point (at the first and last point from and to rest), so the motion starts
-  half a cycle before the first point and ends half a cycle after the last.
+* **cam-table**: straight lines between equidistant positions, which a kernel reads once per controller cycle
+  (``blend`` [s]): its setpoints are the lines' positions at every cycle from the first point (the last point held
+  beyond the end), and the velocity steps at every setpoint within its cycle: here a parabolic blend one cycle long
+  centred on the setpoint (at the first and last from and to rest), so the motion starts half a cycle before the
+  first point and ends half a cycle after the last.
 
 The motion is piecewise polynomial: ``breaks`` (P + 1,) [s] and power-basis coefficients in (t − breaks[k]); it is
 right-continuous at a break (``side="left"`` evaluates the piece that ends there), and holds its end values
@@ -131,8 +132,8 @@ def _linear_blended(t, q, blend: float) -> tuple[np.ndarray, np.ndarray]:
 
 def rebuild(table, blend: float | None = None) -> TableMotion:
     """The motion a drive runs from ``table`` (a KnotTable): cubic Hermite (pvt), quintic (cam), or straight lines
-    with each velocity step blended over ``blend`` [s] (cam-table: the controller cycle; required, at most the
-    points' spacing, which it is cut to)."""
+    read every ``blend`` [s] with each velocity step blended over that cycle (cam-table: the controller cycle,
+    required)."""
     t = np.asarray(table.t, float)
     if table.kind == "pvt":
         return TableMotion("pvt", t, _pvt(t, table.q, table.qd), t)
@@ -141,7 +142,10 @@ def rebuild(table, blend: float | None = None) -> TableMotion:
     if table.kind == "cam-table":
         if blend is None or not blend > 0:
             raise ValueError("cam-table: the blend (the controller cycle [s]) must be > 0")
-        w = min(float(blend), float(np.min(np.diff(t))))
-        breaks, coef = _linear_blended(t, np.asarray(table.q, float), w)
+        c = float(blend)
+        ts = np.arange(int(np.ceil((t[-1] - t[0]) / c - 1e-9)) + 1) * c + t[0]  # the cycles the drive reads at
+        q = np.asarray(table.q, float)
+        setpoints = np.column_stack([np.interp(ts, t, q[:, i]) for i in range(q.shape[1])])
+        breaks, coef = _linear_blended(ts, setpoints, c)
         return TableMotion("cam-table", breaks, coef, t)
     raise ValueError(f"kind = {table.kind!r}: not a table format (pvt, cam, cam-table)")
