@@ -161,38 +161,28 @@ def _refine_knots(kind, grid, timeline, table, report, judge, tolerance):
     return table, report
 
 
-def _refine_count(timeline, table, report, judge, tolerance, blend):
-    """The fewest equidistant points (up to one per ``blend`` [s]) from ``table``'s on whose rebuilt motion every
-    limit holds (doubling, then bisection) → (table, report); the densest when none holds."""
-    from ..export.knots import equidistant_table
+def _refine_count(timeline, table, report, judge, tolerance, read):
+    """An equidistant table whose points the drive reads exactly: ``read`` [s] divides the duration into K whole
+    steps (the controller cycle), and the counts tried are m·K + 1 (m = 1, 2, 4, 8, the first at least the
+    tolerance's count), whose points lie on every read setpoint — between points the drive's setpoints would be
+    off the trajectory by up to the tolerance, and their differences over a cycle magnify that into acceleration
+    (4·tolerance / cycle²). → (table, report), the last tried when none holds."""
+    from ..export.knots import MAX_TABLE_POINTS, equidistant_table
 
     if report.ok:
         return table, report
-    most = max(int(np.ceil(timeline.duration / blend - 1e-9)) + 1, len(table.t))
-
-    def make(n: int):
-        tab = equidistant_table(timeline.duration, n, timeline, tolerance, table.samples)
-        return tab, judge(tab)
-
-    bad, good = len(table.t), None
-    n = bad
-    while n < most:
-        n = min(2 * n, most)
-        tab, rep = make(n)
-        if rep.ok:
-            good = (n, tab, rep)
+    K = max(1, int(round(timeline.duration / read)))
+    m = max(1, int(np.ceil((len(table.t) - 1) / K)))
+    for _ in range(4):
+        n = m * K + 1
+        if n > MAX_TABLE_POINTS:
             break
-        bad, table, report = n, tab, rep
-    if good is None:
-        return table, report
-    while good[0] - bad > 1:
-        mid = (good[0] + bad) // 2
-        tab, rep = make(mid)
-        if rep.ok:
-            good = (mid, tab, rep)
-        else:
-            bad = mid
-    return good[1], good[2]
+        table = equidistant_table(timeline.duration, n, timeline, tolerance, table.samples)
+        report = judge(table)
+        if report.ok:
+            break
+        m *= 2
+    return table, report
 
 
 def judged_table(kind: str, grid: np.ndarray, timeline: Motion, tolerance: float, profile, dwell: float,
@@ -212,9 +202,9 @@ def judged_table(kind: str, grid: np.ndarray, timeline: Motion, tolerance: float
     grid = np.asarray(grid, float)
     step = float(cycle) if cycle is not None else float(np.median(np.diff(grid)))
 
-    def judge_on(g):
+    def judge_on(g, read):
         def judge(table):
-            return check_table(rebuild(table, step), robot, specs, step, dwell, margin, box, samples=g,
+            return check_table(rebuild(table, read), robot, specs, read, dwell, margin, box, samples=g,
                                capacity=profile.capacity if capacity else None).rated(profile.limit_use)
         return judge
 
@@ -226,12 +216,15 @@ def judged_table(kind: str, grid: np.ndarray, timeline: Motion, tolerance: float
         used = k
         if attempt:
             line, g = stretched(timeline, k, cycle, step)
-        judge = judge_on(g)
+        # an equidistant table is read every cycle: whole cycles of the duration (without a cycle, whole steps of
+        # about the sample period)
+        read = line.duration / max(1, round(line.duration / step)) if kind == "cam-table" else step
+        judge = judge_on(g, read)
         table = table_of(kind, g, line, tolerance)
         first = len(table.t) if first is None else first
         report = judge(table)
         if kind == "cam-table":
-            table, report = _refine_count(line, table, report, judge, tolerance, step)
+            table, report = _refine_count(line, table, report, judge, tolerance, read)
         else:
             table, report = _refine_knots(kind, g, line, table, report, judge, tolerance)
         failing = report.violations
@@ -239,4 +232,4 @@ def judged_table(kind: str, grid: np.ndarray, timeline: Motion, tolerance: float
             break
         worst = max(r.utilisation / r.target for r in failing)
         k *= max(worst, 1.0 + 1e-4) ** 0.5 * (1.0 + 1e-4)
-    return JudgedTable(table, report, used, first, line.duration, step)
+    return JudgedTable(table, report, used, first, line.duration, read)
