@@ -163,7 +163,8 @@ def plan(
     tolerance: Optional[float] = typer.Option(
         None, "--tolerance", help="pvt, cam, cam-table: the largest deviation in rad (revolute joint) or m (linear) of "
         "the controller's interpolation of the table from the planned trajectory; the table has the fewest points that "
-        "hold it (the achieved error is reported). [default: 1e-6]",
+        "hold it and, as the drive interpolates it, every limit (more points, else a slower table; exit 3 when it "
+        "cannot; PVT steps bounded by the torque rate over one cycle). The achieved error is reported. [default: 1e-6]",
     ),
     st_dialect: StDialect = typer.Option(
         StDialect.strict, "--st-dialect", help="pvt-st, cam-st, cam-table-st: strict (IEC 61131-3: a FUNCTION_BLOCK "
