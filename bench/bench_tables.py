@@ -61,7 +61,11 @@ def main() -> None:
                     print(f"{case} | {0 if cycle is None else cycle * 1e3:g} | {kind} | {tol:g} | "
                           f"{row['points_before']} -> {row['points_after']} | {out.stretch:.5f} | {100 * use:.2f} "
                           f"({row['table_limiting']}) | {100 * traj:.2f} | {took:.2f}", flush=True)
-    doc = {"rows": rows, "all_ok": all(r["ok"] for r in rows), "load_average": os.getloadavg()[0],
+    doc = {"rows": rows, "cases": len(rows), "all_ok": all(r["ok"] for r in rows),
+           "more_points": sum(r["points_after"] > r["points_before"] for r in rows),
+           "retimed": sum(r["stretch"] > 1.0 for r in rows), "max_stretch": max(r["stretch"] for r in rows),
+           "worst_table_use": max(r["table_use"] for r in rows),
+           "max_seconds": max(r["seconds"] for r in rows), "load_average": os.getloadavg()[0],
            "command": "python bench/bench_tables.py"}
     with open(args.output, "w") as fh:
         json.dump(doc, fh, indent=1)
