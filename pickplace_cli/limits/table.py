@@ -17,10 +17,6 @@ import numpy as np
 from ..model.trajectory import CartesianPath
 from .report import LimitReport, LimitRow
 
-#: the quantities of the per-cycle step rows: (row name, the limit they are bounded by, column it is read from)
-STEP_ROWS = (("motor torque step", "torque_rate", "motor torque"), ("acceleration step", "jerk", "acceleration"))
-
-
 def tool_motion(robot, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, qddd: np.ndarray) -> tuple:
     """The tool's (p, v, a, j) (each (N, 3) [m, m/s, m/s², m/s³]) — and, with a rotary fourth axis, the tool angle's
     θ … θ⃛ (4, N) as a fifth entry — whose joint motion is (q, q̇, q̈, q⃛) (each (N, n)): p = FK(q); the joint mapping
@@ -103,49 +99,42 @@ def table_path(motion, robot) -> CartesianPath:
                          angle=_TableAngle(src) if getattr(robot, "rotary", False) else None)
 
 
-def _step_values(model, motion, quantity: str) -> tuple[np.ndarray, np.ndarray]:
-    """|right − left| of the column ``quantity`` (per joint) at every interior break and at both ends (the ends
-    against the same position and velocity with no acceleration: from and to rest) → (values (B, n), times (B,))."""
+def _steps(model, motion) -> tuple[dict[str, np.ndarray], np.ndarray, np.ndarray]:
+    """The steps of the motion at every break (the ends against the same position and velocity at rest: no
+    acceleration): ({joint: |Δ motor torque| (B,)} for the joints whose motor torque is limited, |Δq̈| (B, n),
+    the breaks' times (B,) [s] from the motion's start)."""
     t = np.asarray(motion.breaks, float)
     left = motion.all_orders(t, side="left")
     right = motion.all_orders(t, side="right")
-    # before the start and after the end: the same position and velocity, no acceleration or jerk
-    for side, k in ((left, 0), (right, len(t) - 1)):
+    for side, k in ((left, 0), (right, len(t) - 1)):  # before the start, after the end: at rest
         side[2][k] = 0.0
         side[3][k] = 0.0
-    vals = []
+    torque = []
     for q, qd, qdd, qddd in (left, right):
         parts = model.parts(np.zeros(len(t)), derivatives=False, singularity=False,
                             motion=tool_motion(model.robot, q, qd, qdd, qddd))
         meta, data = model.columns(parts, 1.0)
-        cols = [c for c, m in enumerate(meta) if m[1] == quantity]
-        vals.append(data[:, cols] if cols else np.zeros((len(t), 0)))
-    return np.abs(vals[1] - vals[0]), t - motion.start
+        torque.append({m[0]: data[:, c] for c, m in enumerate(meta) if m[1] == "motor torque"})
+    dtorque = {name: np.abs(torque[1][name] - torque[0][name]) for name in torque[0]}
+    return dtorque, np.abs(right[2] - left[2]), t - motion.start
 
 
 def step_rows(model, motion, cycle: float) -> tuple[LimitRow, ...]:
     """The per-cycle step rows (module docstring) of a rebuilt ``motion`` on ``model`` (a MotionModel whose specs
-    carry the limits at the plan's limit use): per joint the largest step and its bound, ``cycle`` [s]."""
+    carry the limits at the plan's limit use), ``cycle`` [s]: per joint with a torque rate (jerk) limit, the largest
+    motor torque (acceleration) step against torque rate (jerk) × cycle."""
+    dtorque, dacc, times = _steps(model, motion)
     rows = []
-    names = model.robot.joint_names
-    for name, limit_attr, column in STEP_ROWS:
-        holders = [(i, s) for i, s in enumerate(model.specs)
-                   if (s.drive if limit_attr == "torque_rate" else s.limits) is not None
-                   and getattr(s.drive if limit_attr == "torque_rate" else s.limits, limit_attr, None) is not None
-                   and (column != "motor torque" or s.drive.peak_torque is not None)
-                   and (column != "acceleration" or s.limits.acceleration is not None)]
-        if not holders:
-            continue
-        values, times = _step_values(model, motion, column)
-        if values.shape[1] != len(holders):  # a column without a bound (or the reverse): nothing comparable
-            continue
-        for c, (i, spec) in enumerate(holders):
-            rate = getattr(spec.drive if limit_attr == "torque_rate" else spec.limits, limit_attr)
-            bound = float(rate) * cycle
-            k = int(np.argmax(values[:, c]))
-            peak = float(values[k, c])
-            unit = "N·m" if column == "motor torque" else f"{model.robot.joint_units[i]}/s^2"
-            rows.append(LimitRow(names[i], name, unit, peak, bound, peak / bound, float(times[k]), peak <= bound))
+    for i, (name, unit, spec) in enumerate(zip(model.robot.joint_names, model.robot.joint_units, model.specs)):
+        rate = None if spec.drive is None else spec.drive.torque_rate
+        for quantity, values, limit, u in (("motor torque step", dtorque.get(name), rate, "N·m"),
+                                           ("acceleration step", dacc[:, i], spec.limits.jerk, f"{unit}/s^2")):
+            if limit is None or values is None:
+                continue
+            bound = float(limit) * cycle
+            k = int(np.argmax(values))
+            peak = float(values[k])
+            rows.append(LimitRow(name, quantity, u, peak, bound, peak / bound, float(times[k]), peak <= bound))
     return tuple(rows)
 
 

@@ -28,11 +28,12 @@ class Piece:
 class Motion:
     """q(t), q̇(t), q̈(t) of the pieces one after another (right-continuous at a piece's start)."""
 
-    def __init__(self, pieces: list[Piece], profile) -> None:
+    def __init__(self, pieces: list[Piece], profile, models: list | None = None) -> None:
         from ..planner import motion_model
 
         self.pieces = pieces
-        self.models = [None if p.plan is None else motion_model(p.plan.cartesian.path, profile) for p in pieces]
+        self.models = models if models is not None else [
+            None if p.plan is None else motion_model(p.plan.cartesian.path, profile) for p in pieces]
         self.starts = np.array([p.t0 for p in pieces])
         self.duration = pieces[-1].t0 + pieces[-1].length
         self.breaks = np.array([p.t0 for p in pieces] + [self.duration])
@@ -102,11 +103,7 @@ def stretched(timeline: Motion, k: float, cycle: float | None, step: float) -> t
                 length = np.ceil(length / cycle - 1e-9) * cycle
         pieces.append(Piece(t0, float(length), p.plan, p.hold))
         t0 += float(length)
-    out = Motion.__new__(Motion)
-    out.pieces, out.models = pieces, timeline.models
-    out.starts = np.array([p.t0 for p in pieces])
-    out.duration = t0
-    out.breaks = np.array([p.t0 for p in pieces] + [t0])
+    out = Motion(pieces, None, timeline.models)
     grid = np.concatenate([p.t0 + np.arange(0.0, p.length - 1e-9 * step, step) for p in pieces] + [[t0]])
     return out, grid
 
