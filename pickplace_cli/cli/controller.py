@@ -96,7 +96,8 @@ def table_format(fmt: OutputFormat) -> bool:
 DEFAULT_TOLERANCE = 1e-6
 
 
-#: a table row is shown beside the trajectory's when it uses at least this fraction of its limit (or fails)
+#: a table row is shown beside the trajectory's when it uses at least this fraction of its limit (or fails, or is the
+#: table's limiting row, or a per-cycle step)
 SHOWN_USE = 0.9
 
 
@@ -140,9 +141,11 @@ def _print_table_verdict(a, judged, plans: list, planned: float, retime: bool) -
                 key = (r.joint, r.quantity)
                 if key not in traj or r.utilisation > traj[key].utilisation:
                     traj[key] = r
-        for r in report.rows:
+        timed = [r for r in report.rows if r.kind == "limit"]
+        limiting = max(timed, key=lambda r: r.utilisation / r.target) if timed else None
+        for r in timed:
             step = r.quantity.endswith("step")
-            if r.kind != "limit" or (r.ok and not step and r.utilisation < SHOWN_USE * r.target):
+            if r.ok and not step and r is not limiting and r.utilisation < SHOWN_USE * r.target:
                 continue
             mine = traj.get((r.joint, r.quantity))
             beside = f"; trajectory {percent(mine.utilisation)} %" if mine is not None else ""

@@ -26,7 +26,8 @@ class Piece:
 
 
 class Motion:
-    """q(t), q̇(t), q̈(t) of the pieces one after another (right-continuous at a piece's start)."""
+    """q(t), q̇(t), q̈(t) of the pieces one after another (right-continuous at a piece's start); ``models``: the
+    pieces' motion models when they are known already (the same moves re-timed), else built from ``profile``."""
 
     def __init__(self, pieces: list[Piece], profile, models: list | None = None) -> None:
         from ..planner import motion_model

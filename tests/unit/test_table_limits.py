@@ -303,3 +303,27 @@ def test_a_table_that_cannot_hold_is_exit_3_and_not_written(tmp_path, monkeypatc
     doc = json.loads(res.stdout)
     assert doc["limits_ok"] is False and doc["table"]["limits_ok"] is False
     assert doc["table"]["violations"][0]["quantity"] == "motor torque rate"
+
+
+def test_report_and_summary_carry_the_table_verdict(tmp_path):
+    """--report has the table's verdict and rows beside the trajectory's; the summary shows the table's limiting row
+    beside the trajectory's use and, for PVT, every per-cycle step row with its bound."""
+    import json
+
+    from tests.unit.test_controller_tables import run
+
+    out, report = tmp_path / "pvt.csv", tmp_path / "report.json"
+    res = run("plan", "--from", "-0.1525,0,-0.8", "--to", "0.1525,0,-0.8", "--time", "fit", "--format", "pvt",
+              "--cycle", "0.001", "-o", str(out), "--report", str(report))
+    assert res.exit_code == 0, res.stderr
+    doc = json.loads(report.read_text())
+    table = doc["table"]
+    assert table["limits_ok"] is True and table["violations"] == [] and table["step_cycle_s"] == pytest.approx(1e-3)
+    steps = [r for r in table["rows"] if r["quantity"] == "motor torque step"]
+    assert [r["joint"] for r in steps] == ["q1", "q2", "q3"]
+    rates = [s.drive.torque_rate for s in load_profile("delta-su2018").robot.joint_specs()]
+    for r, rate in zip(steps, rates):  # the bound: the profile's torque rate over one cycle (to round-off: 1e-12)
+        assert r["limit"] == pytest.approx(rate * 1e-3, rel=1e-12) and r["peak"] <= r["limit"]
+    assert doc["limits"]["ok"] is True and table["points"] == len(out.read_text().splitlines()) - 1
+    assert "table q1 motor torque step" in res.stderr and "trajectory" in res.stderr
+    assert "table verdict: all limits hold as the drive interpolates the table (cubic Hermite)" in res.stderr
