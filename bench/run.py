@@ -108,6 +108,10 @@ FIT_GAP = ("{d[moves]} random moves, both profiles, every fixed-path method: the
            "{d[median_ms][closed_form]:.1f} ms against {d[median_ms][search]:.1f} ms",)
 FUZZ = ("{d[totals][runs]} runs, {d[totals][rows]} rows: {d[totals][tracebacks]} tracebacks, {d[totals][hangs]} "
         "hangs, {d[totals][wrong_exit_codes]} wrong exit codes, {d[totals][left_running]} processes left running",)
+TABLES = ("{d[cases]} controller tables (pvt, cam, cam-table; 4 moves, 3 tolerances, 3 cycles) judged as the drive "
+          "rebuilds them: every limit holds: {d[all_ok]} (worst use {d[worst_table_use]:.4%}); {d[more_points]} needed "
+          "more points than the tolerance, {d[retimed]} a slower table (at most x{d[max_stretch]:.4f}); slowest "
+          "{d[max_seconds]:.2f} s",)
 TEXT = ("{text}",)
 
 
@@ -146,6 +150,8 @@ BENCHMARKS = (
     Bench("shape", "bench_shape.py", (), "shape.json", "--optimize shape against a dense search", SHAPE),
     Bench("bound", "bench_bound.py", (), "bound.json", "the torque-only lower bound (TOPP-RA) against --time optimal",
           BOUND),
+    Bench("tables", "bench_tables.py", (), "tables.json", "controller tables: points before and after they hold "
+          "every limit as the drive rebuilds them", TABLES, quick=()),
     Bench("on_demand", "bench_on_demand.py", (), "on_demand.json", "the (k1, k2) solve off the tables", ON_DEMAND,
           quick=("--points", "12")),
     Bench("table2d", "bench_table2d.py", ("--points", "240", "--workers", "2"), "table2d.json", "the λ × η table "

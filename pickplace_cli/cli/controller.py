@@ -96,18 +96,97 @@ def table_format(fmt: OutputFormat) -> bool:
 DEFAULT_TOLERANCE = 1e-6
 
 
-def write_table(a, prof, legs: list, track, grid) -> dict:
-    """``--format pvt|cam|cam-table[-st]``: fit the table to the continuous trajectory that would be written (points
-    from ``grid``, the written samples' times [s]), write it atomically to ``a.output`` as CSV or Structured Text, say
-    how many points it has and how close it is; → what the --json summary reports of it."""
+#: a table row is shown beside the trajectory's when it uses at least this fraction of its limit (or fails, or is the
+#: table's limiting row, or a per-cycle step)
+SHOWN_USE = 0.9
+
+
+def judge_table(a, prof, legs: list, track, grid):
+    """``--format pvt|cam|cam-table[-st]``: the table fitted to the continuous trajectory that would be written
+    (points from ``grid``, the written samples' times [s]) and made to hold every limit as the drive rebuilds it
+    (:func:`~pickplace_cli.pipelines.controller.judged_table`: more points, or — not for a conveyor move — a slower
+    table); its verdict on stderr. → (JudgedTable, exit code of the table: 0, or 3 when it cannot be made to hold)."""
+    from ..pipelines.controller import judged_table, timeline_of
+
+    kind, _ = TABLE_FORMATS[a.fmt.value]
+    dwell = legs[0].report.dwell
+    motion = timeline_of(legs, prof, dwell, a.round_trip, track)
+    tolerance = DEFAULT_TOLERANCE if a.tolerance is None else a.tolerance
+    capacity = any(r.quantity.startswith("capacity") for leg in legs for r in leg.report.rows)
+    retime = track is None and a.cam_master.value == "time"
+    judged = judged_table(kind, grid, motion, tolerance, prof, 0.0 if a.round_trip else dwell, a.cycle_s,
+                          retime=retime, capacity=capacity)
+    code = judged.report.exit_code()
+    _print_table_verdict(a, judged, legs + ([track] if track is not None else []), motion.duration, retime)
+    return judged, code
+
+
+def _print_table_verdict(a, judged, plans: list, planned: float, retime: bool) -> None:
+    """The table's points, its limiting rows beside the trajectory's, the re-timing and the verdict (stderr; the
+    verdict also with --quiet when the table fails)."""
+    from ..limits.report import percent
+
+    table, report = judged.table, judged.report
+    name = a.fmt.value
+    failed = not report.ok
+    if not a.quiet:
+        err = max(table.max_error)
+        sys.stderr.write(f"{name} table: {len(table.t)} points for {table.samples} samples "
+                         f"({table.samples / len(table.t):.1f} x fewer; the tolerance alone needed "
+                         f"{judged.tolerance_points}); max deviation {err:.3g} (rad or m) within --tolerance "
+                         f"{table.tolerance:g}\n")
+        traj = {}
+        for p in plans:
+            for r in p.report.rows:
+                key = (r.joint, r.quantity)
+                if key not in traj or r.utilisation > traj[key].utilisation:
+                    traj[key] = r
+        timed = [r for r in report.rows if r.kind == "limit"]
+        limiting = max(timed, key=lambda r: r.utilisation / r.target) if timed else None
+        for r in timed:
+            step = r.quantity.endswith("step")
+            if r.ok and not step and r is not limiting and r.utilisation < SHOWN_USE * r.target:
+                continue
+            mine = traj.get((r.joint, r.quantity))
+            beside = f"; trajectory {percent(mine.utilisation)} %" if mine is not None else ""
+            if step:
+                beside = f" (bound: one cycle of {judged.step * 1e3:g} ms at the {'torque rate' if 'torque' in r.quantity else 'jerk'} limit)"
+            sys.stderr.write(f"  table {r.joint} {r.quantity}: {r.peak:.4g} {r.unit}, {percent(r.utilisation)} % of "
+                             f"{r.limit:.4g}{beside}{'' if r.ok else '  EXCEEDED'}\n")
+        if judged.stretch != 1.0 and not failed:
+            cycles = ", on whole cycles" if a.cycle_s is not None else ""
+            sys.stderr.write(f"  re-timed: the table runs {judged.duration:.6g} s where the trajectory runs "
+                             f"{planned:.6g} s (every move x{judged.stretch:.6g}{cycles}) so that every limit holds as "
+                             "the drive interpolates it\n")
+    how = {"pvt": "cubic Hermite", "cam": "5th-order segments",
+           "cam-table": "linear, each step over one cycle"}[table.kind]
+    if failed:
+        worst = max(report.violations, key=lambda r: r.utilisation)
+        sys.stderr.write(f"table verdict: LIMITS EXCEEDED as the drive interpolates the table ({how}): {worst.joint} "
+                         f"{worst.quantity} {percent(worst.utilisation)} % of {worst.limit:.4g} {worst.unit}; more "
+                         f"points{' and a slower table' if retime else ' (a conveyor move is not re-timed)'} did not "
+                         "make it hold; plan a longer --time or a lower --limit-use\n")
+    elif not a.quiet:
+        sys.stderr.write(f"table verdict: all limits hold as the drive interpolates the table ({how})\n")
+
+
+def table_info(a, judged) -> dict:
+    """What the --json summary and --report say of the table: points, tolerance, errors, re-timing and verdict."""
+    t = judged.table
+    return {"format": a.fmt.value, **t.as_dict(), "master": a.cam_master.value,
+            "tolerance_points": judged.tolerance_points, "duration_s": judged.duration, "stretch": judged.stretch,
+            "step_cycle_s": judged.step, "limits_ok": judged.report.ok,
+            "violations": [r.as_dict() for r in judged.report.violations],
+            "rows": [r.as_dict() for r in judged.report.rows]}
+
+
+def write_table(a, legs: list, judged) -> dict:
+    """Write the judged table atomically to ``a.output`` as CSV or Structured Text; → :func:`table_info`."""
     from ..export import atomic_output
     from ..export.tables import Master, format_table_csv, format_table_st, table_columns, table_header
-    from ..pipelines.controller import table_of, timeline_of
 
-    kind, st = TABLE_FORMATS[a.fmt.value]
-    motion = timeline_of(legs, prof, legs[0].report.dwell, a.round_trip, track)
-    tolerance = DEFAULT_TOLERANCE if a.tolerance is None else a.tolerance
-    table = table_of(kind, grid, motion, tolerance)
+    _, st = TABLE_FORMATS[a.fmt.value]
+    table = judged.table
     master = Master()
     if a.cam_master.value == "belt":
         part = a.rendezvous.part
@@ -117,10 +196,4 @@ def write_table(a, prof, legs: list, track, grid) -> dict:
             else format_table_csv(cols))
     with atomic_output(a.output) as stream:
         stream.write(text)
-    info = {"format": a.fmt.value, **table.as_dict(), "master": master.kind}
-    if not a.quiet:
-        err = max(table.max_error)
-        sys.stderr.write(f"{a.fmt.value} table: {len(table.t)} points for {table.samples} samples "
-                         f"({table.samples / len(table.t):.1f} x fewer); max deviation {err:.3g} (rad or m) within "
-                         f"--tolerance {table.tolerance:g}\n")
-    return info
+    return table_info(a, judged)

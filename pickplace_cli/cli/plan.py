@@ -163,7 +163,8 @@ def plan(
     tolerance: Optional[float] = typer.Option(
         None, "--tolerance", help="pvt, cam, cam-table: the largest deviation in rad (revolute joint) or m (linear) of "
         "the controller's interpolation of the table from the planned trajectory; the table has the fewest points that "
-        "hold it (the achieved error is reported). [default: 1e-6]",
+        "hold it and, as the drive interpolates it, every limit (more points, else a slower table; exit 3 when it "
+        "cannot; PVT steps bounded by the torque rate over one cycle). The achieved error is reported. [default: 1e-6]",
     ),
     st_dialect: StDialect = typer.Option(
         StDialect.strict, "--st-dialect", help="pvt-st, cam-st, cam-table-st: strict (IEC 61131-3: a FUNCTION_BLOCK "
@@ -341,7 +342,9 @@ def plan(
     code, cycle = _render_legs(a, prof, legs, rendezvous, track)
     forgiven = write_anyway and code == 3  # a timed limit only: a position past its range is never written
     note_exit(0 if forgiven else code)  # the verdict, should stdout's reader go away before the end
-    _write_plan_outputs(a, prof, writer, legs, track, code)
+    code = _write_plan_outputs(a, prof, writer, legs, track, code)  # a table's own verdict may raise it
+    forgiven = write_anyway and code == 3
+    note_exit(0 if forgiven else code)
     if json_summary:
         doc = _plan_json(legs, cycle, code, forgiven, workspace_fit, rendezvous, track)
         if a.cycle_s is not None:
@@ -434,23 +437,31 @@ def _render_legs(a, prof, legs: list, rendezvous, track) -> tuple[int, float]:
     return code, cycle
 
 
-def _write_plan_outputs(a, prof, writer, legs: list, track, code: int) -> None:
-    """--report, then the trajectory (before the JSON summary: a failed write is then the one JSON document on
-    stdout): the move, the round trip, or the move with its tracking segment; not written when a limit is
-    exceeded unless --report-only."""
+def _write_plan_outputs(a, prof, writer, legs: list, track, code: int) -> int:
+    """The table's verdict (a table format), --report, then the trajectory or table (before the JSON summary: a
+    failed write is then the one JSON document on stdout): the move, the round trip, or the move with its tracking
+    segment; not written when a limit is exceeded — by the trajectory, or by the table as the drive interpolates
+    it — unless --write-anyway. → the exit code with the table's verdict."""
+    from .controller import judge_table, table_format, table_info, write_table
+
+    judged = None
+    if table_format(a.fmt) and a.output is not None and (code == 0 or (a.write_anyway and code == 3)):
+        judged, table_code = judge_table(a, prof, legs, track, _written_times(a, prof, legs, track))
+        code = max(code, table_code)
+        a.table_info = table_info(a, judged)
     if a.report is not None:
-        _write_report(legs + ([track] if track is not None else []), a.report)
+        _write_report(legs + ([track] if track is not None else []), a.report,
+                      extra=None if judged is None else {"table": a.table_info})
     if a.output is None or not (code == 0 or (a.write_anyway and code == 3)):
         from ..export import unpromise
 
         unpromise(a.output)  # not written on purpose: a broken stdout later must not call it lost
-        return
+        return code
     from ..pipelines.timeline import on_cycle
-    from .controller import table_format, write_table
 
-    if table_format(a.fmt):  # a table the controller interpolates itself
-        a.table_info = write_table(a, prof, legs, track, _written_times(a, prof, legs, track))
-        return
+    if judged is not None:  # a table the controller interpolates itself
+        a.table_info = write_table(a, legs, judged)
+        return code
     if a.round_trip:
         from ..pipelines.timeline import round_trip as make_round_trip
 
@@ -465,6 +476,7 @@ def _write_plan_outputs(a, prof, writer, legs: list, track, code: int) -> None:
     else:
         samples = legs[0]
     writer(samples, a.output)
+    return code
 
 
 def _written_times(a, prof, legs: list, track):

@@ -139,8 +139,9 @@ def _check_output_paths(output: Optional[str], report: Optional[str]) -> None:
             raise ExportError(f"report = {report}: the same file as --output; give them different paths")
 
 
-def _write_report(results, path: str, rows: Optional[list] = None) -> None:
-    """--report: summary and limit rows of one plan, or of every move (a round trip, a batch)."""
+def _write_report(results, path: str, rows: Optional[list] = None, extra: Optional[dict] = None) -> None:
+    """--report: summary and limit rows of one plan, or of every move (a round trip, a batch); ``extra``: more keys
+    of the document (a table's verdict)."""
     import json
 
     from ..export import atomic_output
@@ -151,6 +152,8 @@ def _write_report(results, path: str, rows: Optional[list] = None) -> None:
         for d, n in zip(docs, rows):
             d["row"] = n
     doc = docs[0] if len(docs) == 1 and rows is None else {"moves": docs}
+    if extra:
+        doc = {**doc, **extra}
     with atomic_output(path) as stream:
         json.dump(doc, stream, indent=2, allow_nan=False, default=float)
         stream.write("\n")

@@ -148,11 +148,19 @@ def fit_knots(kind: str, grid: np.ndarray, breaks: np.ndarray, evaluate: Evaluat
                     bad = mid
             knots.append(good)
             a = good
-    idx = np.array(knots)
-    fine_idx = idx * FINE
-    table_q, table_qd, table_qdd = fq[fine_idx], fqd[fine_idx], fqdd[fine_idx]
-    error = achieved_error(kind, grid[idx], table_q, table_qd, table_qdd if kind == "cam" else None, evaluate)
-    return KnotTable(kind, grid[idx], table_q, table_qd, table_qdd if kind == "cam" else None, tol, error, len(grid))
+    return knot_table(kind, grid, np.array(knots), evaluate, tol)
+
+
+def knot_table(kind: str, grid: np.ndarray, idx: np.ndarray, evaluate: Evaluator, tolerance: float) -> KnotTable:
+    """The ``kind`` (pvt, cam) table whose points are ``grid[idx]`` [s] (``idx`` increasing, the ends included),
+    with the trajectory's values there and the achieved error (:func:`achieved_error`)."""
+    grid = np.asarray(grid, float)
+    idx = np.asarray(idx, int)
+    t = grid[idx]
+    q, qd, qdd = evaluate(t)
+    acc = qdd if kind == "cam" else None
+    error = achieved_error(kind, t, q, qd, acc, evaluate)
+    return KnotTable(kind, t, q, qd, acc, float(tolerance), error, len(grid))
 
 
 def achieved_error(kind: str, t: np.ndarray, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray | None,
@@ -218,7 +226,13 @@ def fit_equidistant(duration: float, evaluate: Evaluator, tolerance: float, samp
             good = mid
         else:
             bad = mid
-    t, nodes, _ = _linear_error(duration, good, evaluate)
+    return equidistant_table(duration, good, evaluate, tol, samples)
+
+
+def equidistant_table(duration: float, n: int, evaluate: Evaluator, tolerance: float, samples: int) -> KnotTable:
+    """The cam-table of ``n`` equidistant points on [0, ``duration``] [s] with the achieved error."""
+    t = np.linspace(0.0, duration, int(n))
+    nodes = evaluate(t)[0]
     zero = np.zeros_like(nodes)
     error = achieved_error("cam-table", t, nodes, zero, None, evaluate)
-    return KnotTable("cam-table", t, nodes, zero, None, tol, error, samples)
+    return KnotTable("cam-table", t, nodes, zero, None, float(tolerance), error, samples)

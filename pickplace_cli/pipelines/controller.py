@@ -8,6 +8,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+#: rounds of adding points where the rebuilt table exceeds a limit before the table is re-timed
+REFINE_ROUNDS = 24
+#: times the table may be re-timed (slowed) before it counts as not holding
+RETIMES = 6
+
 
 @dataclass(frozen=True)
 class Piece:
@@ -21,13 +26,15 @@ class Piece:
 
 
 class Motion:
-    """q(t), q̇(t), q̈(t) of the pieces one after another (right-continuous at a piece's start)."""
+    """q(t), q̇(t), q̈(t) of the pieces one after another (right-continuous at a piece's start); ``models``: the
+    pieces' motion models when they are known already (the same moves re-timed), else built from ``profile``."""
 
-    def __init__(self, pieces: list[Piece], profile) -> None:
+    def __init__(self, pieces: list[Piece], profile, models: list | None = None) -> None:
         from ..planner import motion_model
 
         self.pieces = pieces
-        self.models = [None if p.plan is None else motion_model(p.plan.cartesian.path, profile) for p in pieces]
+        self.models = models if models is not None else [
+            None if p.plan is None else motion_model(p.plan.cartesian.path, profile) for p in pieces]
         self.starts = np.array([p.t0 for p in pieces])
         self.duration = pieces[-1].t0 + pieces[-1].length
         self.breaks = np.array([p.t0 for p in pieces] + [self.duration])
@@ -82,3 +89,145 @@ def table_of(kind: str, grid: np.ndarray, timeline: Motion, tolerance: float):
         return fit_equidistant(timeline.duration, timeline, tolerance, len(grid))
     breaks = [int(np.argmin(np.abs(grid - b))) for b in timeline.breaks]
     return fit_knots(kind, grid, np.array(breaks), timeline, tolerance)
+
+
+def stretched(timeline: Motion, k: float, cycle: float | None, step: float) -> tuple[Motion, np.ndarray]:
+    """``timeline`` with every move ``k`` times longer (rounded up to whole ``cycle``s [s] when one is set; holds
+    unchanged) and its grid: every ``step`` [s] from each piece's start, and the pieces' ends."""
+    pieces: list[Piece] = []
+    t0 = 0.0
+    for p in timeline.pieces:
+        length = p.length
+        if p.plan is not None:
+            length = k * p.length
+            if cycle is not None:
+                length = np.ceil(length / cycle - 1e-9) * cycle
+        pieces.append(Piece(t0, float(length), p.plan, p.hold))
+        t0 += float(length)
+    out = Motion(pieces, None, timeline.models)
+    grid = np.concatenate([p.t0 + np.arange(0.0, p.length - 1e-9 * step, step) for p in pieces] + [[t0]])
+    return out, grid
+
+
+@dataclass(frozen=True)
+class JudgedTable:
+    """A table fitted to a tolerance and then made to hold every limit as the drive rebuilds it: ``table`` (a
+    KnotTable), ``report`` (the LimitReport of the rebuilt motion), ``stretch`` (the moves' durations over the
+    planned ones: 1 unless re-timed), ``tolerance_points`` (what the tolerance alone needed), ``duration`` [s] of the
+    table's timeline and ``step`` [s] (the cycle the per-cycle steps are bounded by)."""
+
+    table: object
+    report: object
+    stretch: float
+    tolerance_points: int
+    duration: float
+    step: float
+
+
+def _segments_at(t: np.ndarray, times: list[float]) -> set[int]:
+    """The segments of points ``t`` holding (or ending at) each time."""
+    out: set[int] = set()
+    for x in times:
+        i = int(np.clip(np.searchsorted(t, x, side="right") - 1, 0, len(t) - 2))
+        out.add(i)
+        if i > 0 and abs(x - t[i]) <= 1e-9 * max(1.0, abs(x)):
+            out.add(i - 1)
+        if i + 1 < len(t) - 1 and abs(x - t[i + 1]) <= 1e-9 * max(1.0, abs(x)):
+            out.add(i + 1)
+    return out
+
+
+def _refine_knots(kind, grid, timeline, table, report, judge, tolerance):
+    """Split the segments where the rebuilt ``table`` exceeds a limit (at its grid midpoint) until it holds or
+    ``REFINE_ROUNDS`` pass (or no segment can be split) → (table, report)."""
+    from ..export.knots import knot_table
+
+    for _ in range(REFINE_ROUNDS):
+        bad = [r.t_peak for r in report.violations if r.t_peak is not None]
+        if not bad:
+            break
+        idx = np.searchsorted(grid, table.t - 1e-12)
+        new = set(idx.tolist())
+        for s in _segments_at(table.t, bad):
+            a, b = int(idx[s]), int(idx[s + 1])
+            if b - a > 1:
+                new.add((a + b) // 2)
+        if len(new) == len(idx):
+            break
+        table = knot_table(kind, grid, np.array(sorted(new)), timeline, tolerance)
+        report = judge(table)
+    return table, report
+
+
+def _refine_count(timeline, table, report, judge, tolerance, read):
+    """An equidistant table whose points the drive reads exactly: ``read`` [s] divides the duration into K whole
+    steps (the controller cycle), and the counts tried are m·K + 1 (m = 1, 2, 4, 8, the first at least the
+    tolerance's count), whose points lie on every read setpoint — between points the drive's setpoints would be
+    off the trajectory by up to the tolerance, and their differences over a cycle magnify that into acceleration
+    (4·tolerance / cycle²). → (table, report), the last tried when none holds."""
+    from ..export.knots import MAX_TABLE_POINTS, equidistant_table
+
+    if report.ok:
+        return table, report
+    K = max(1, int(round(timeline.duration / read)))
+    m = max(1, int(np.ceil((len(table.t) - 1) / K)))
+    for _ in range(4):
+        n = m * K + 1
+        if n > MAX_TABLE_POINTS:
+            break
+        table = equidistant_table(timeline.duration, n, timeline, tolerance, table.samples)
+        report = judge(table)
+        if report.ok:
+            break
+        m *= 2
+    return table, report
+
+
+def judged_table(kind: str, grid: np.ndarray, timeline: Motion, tolerance: float, profile, dwell: float,
+                 cycle: float | None, retime: bool = True, capacity: bool = False) -> JudgedTable:
+    """The ``kind`` table of ``timeline`` (:func:`table_of`: its points from ``grid`` [s] within ``tolerance``)
+    made to hold every limit of ``profile`` (at its limit use) as the drive rebuilds it
+    (:func:`~pickplace_cli.limits.table.check_table`; per-cycle steps bounded over ``cycle`` [s], else over the
+    grid's step): points are added where the rebuilt motion exceeds a limit, then, when ``retime`` (not for a
+    conveyor move) and that is not enough, every move is slowed (``stretch``) and the table fitted again. The
+    report says whether it holds; a table that cannot be made to is returned with its violations. ``capacity``: the
+    profile's Cartesian capacity is checked too (when the plan's duration rule holds it)."""
+    from ..export.interpolate import rebuild
+    from ..limits.table import check_table
+    from ..planner import motion_model_static
+
+    robot, specs, margin, box = motion_model_static(profile)[:4]
+    grid = np.asarray(grid, float)
+    step = float(cycle) if cycle is not None else float(np.median(np.diff(grid)))
+
+    def judge_on(g, read):
+        def judge(table):
+            return check_table(rebuild(table, read), robot, specs, read, dwell, margin, box, samples=g,
+                               capacity=profile.capacity if capacity else None).rated(profile.limit_use)
+        return judge
+
+    k = 1.0
+    line, g = timeline, grid
+    first = None
+    used = 1.0
+    for attempt in range(RETIMES + 1):
+        used = k
+        if attempt:
+            line, g = stretched(timeline, k, cycle, step)
+        # an equidistant table is read every cycle: whole cycles of the duration (without a cycle, whole steps of
+        # about the sample period)
+        read = line.duration / max(1, round(line.duration / step)) if kind == "cam-table" else step
+        judge = judge_on(g, read)
+        table = table_of(kind, g, line, tolerance)
+        first = len(table.t) if first is None else first
+        report = judge(table)
+        if kind == "cam-table":
+            table, report = _refine_count(line, table, report, judge, tolerance, read)
+        else:
+            table, report = _refine_knots(kind, g, line, table, report, judge, tolerance)
+        failing = report.violations
+        if not failing or not retime or any(r.kind != "limit" for r in failing):
+            break
+        worst = max(r.utilisation / r.target for r in failing)
+        k *= max(worst, 1.0 + 1e-4) ** 0.5 * (1.0 + 1e-4)
+    return JudgedTable(table, report, used, first, line.duration, read)

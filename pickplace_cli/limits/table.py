@@ -1,0 +1,187 @@
+"""The limit check of a table as the drive rebuilds it (:func:`check_table`): the rebuilt joint motion
+(:func:`~pickplace_cli.export.interpolate.rebuild`) becomes a path of the tool (forward kinematics, and the tool's
+velocity, acceleration and jerk solved from the joints' through the robot's own joint mapping,
+:func:`tool_motion`), which runs through the same motion model and continuous check as a plan.
+
+Where the rebuilt acceleration steps (PVT at every point; a linear cam table at the ends of the one-cycle blend of
+each point) the torque rate is unbounded for an instant: the drive takes the step within one controller cycle, so
+the step is bounded by what the torque rate allows in one cycle — |Δ motor torque| ≤ torque rate · cycle (and
+|Δq̈| ≤ jerk · cycle for a joint with a jerk limit) — and reported as its own rows (``motor torque step`` and
+``acceleration step``), the ends of the motion counted as steps from and to rest.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..model.trajectory import CartesianPath
+from .report import LimitReport, LimitRow
+
+def tool_motion(robot, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, qddd: np.ndarray) -> tuple:
+    """The tool's (p, v, a, j) (each (N, 3) [m, m/s, m/s², m/s³]) — and, with a rotary fourth axis, the tool angle's
+    θ … θ⃛ (4, N) as a fifth entry — whose joint motion is (q, q̇, q̈, q⃛) (each (N, n)): p = FK(q); the joint mapping
+    is q̇ = M·v, q̈ = M·a + c(p, v), q⃛ = M·j + d(p, v, a) with M = ∂q/∂p, so v, a, j are solved from the robot's own
+    ``joint_motion`` (M column by column from unit velocities, c and d from the motion without the highest order)."""
+    rotary = getattr(robot, "rotary", False)
+    base = robot.base if rotary else robot
+    q, qd, qdd, qddd = (np.asarray(x, float) for x in (q, qd, qdd, qddd))
+    m = len(base.joint_names)
+    qb = [x[:, :m] for x in (q, qd, qdd, qddd)]
+    p = base.forward_kinematics(qb[0])
+    zero = np.zeros_like(p)
+    cols = []
+    for k in range(3):
+        unit = zero.copy()
+        unit[:, k] = 1.0
+        cols.append(base.joint_motion(p, unit, zero, zero)[1])
+    M = np.stack(cols, axis=2)  # (N, m, 3)
+
+    def solve(rhs: np.ndarray) -> np.ndarray:
+        return np.linalg.solve(M, rhs[..., None])[..., 0]
+
+    v = solve(qb[1])
+    a = solve(qb[2] - base.joint_motion(p, v, zero, zero)[2])
+    j = solve(qb[3] - base.joint_motion(p, v, a, zero)[3])
+    if not rotary:
+        return p, v, a, j
+    return p, v, a, j, np.stack([robot.tool_angle(x) for x in (q, qd, qdd, qddd)])
+
+
+class _TableAngle:
+    """The tool angle's law of a table's path on a rotary fourth axis (θ = tool_angle(q), linear in q)."""
+
+    def __init__(self, source: "_TablePath") -> None:
+        self.source = source
+
+    def all_orders(self, tau: np.ndarray) -> np.ndarray:
+        return self.source.orders(tau)[4]
+
+    def __call__(self, tau: np.ndarray, order: int = 0) -> np.ndarray:
+        return self.all_orders(tau)[order]
+
+
+class _TablePath:
+    """τ ∈ [0, 1] → the tool's motion of a TableMotion at T = 1 (derivatives × duration^k), last τ memoised."""
+
+    def __init__(self, motion, robot) -> None:
+        self.motion, self.robot = motion, robot
+        self._last: tuple | None = None
+
+    def orders(self, tau: np.ndarray) -> tuple:
+        tau = np.atleast_1d(np.asarray(tau, float))
+        if self._last is not None and self._last[0].shape == tau.shape and np.array_equal(self._last[0], tau):
+            return self._last[1]
+        D = self.motion.duration
+        joints = self.motion.all_orders(self.motion.start + tau * D)
+        out = tool_motion(self.robot, *joints)
+        scaled = [x * D**k for k, x in enumerate(out[:4])]
+        if len(out) > 4:
+            scaled.append(out[4] * (D ** np.arange(4))[:, None])
+        self._last = (tau.copy(), tuple(scaled))
+        return self._last[1]
+
+    def evaluate(self, tau: np.ndarray, order: int) -> np.ndarray:
+        return self.orders(tau)[order]
+
+    def evaluate_all(self, tau: np.ndarray) -> list:
+        return [x.copy() for x in self.orders(tau)[:4]]
+
+
+def table_path(motion, robot) -> CartesianPath:
+    """The tool's path (T = 1 normalisation, :class:`~pickplace_cli.model.trajectory.CartesianPath`) of a rebuilt
+    table ``motion`` (:class:`~pickplace_cli.export.interpolate.TableMotion`) on ``robot``: its breaks are the path's
+    breakpoints and jumps (the check samples both sides and never interpolates across them)."""
+    src = _TablePath(motion, robot)
+    bp = (np.asarray(motion.breaks, float) - motion.start) / motion.duration
+    bp[0], bp[-1] = 0.0, 1.0
+    return CartesianPath(src.evaluate, f"{motion.kind} table", {"points": len(motion.points)}, (0.0, 0.0, 0.0),
+                         bp, jumps=bp[1:-1], evaluate_all=src.evaluate_all,
+                         angle=_TableAngle(src) if getattr(robot, "rotary", False) else None)
+
+
+def _steps(model, motion) -> tuple[dict[str, np.ndarray], np.ndarray, np.ndarray]:
+    """The steps of the motion at every break (the ends against the same position and velocity at rest: no
+    acceleration): ({joint: |Δ motor torque| (B,)} for the joints whose motor torque is limited, |Δq̈| (B, n),
+    the breaks' times (B,) [s] from the motion's start)."""
+    t = np.asarray(motion.breaks, float)
+    left = motion.all_orders(t, side="left")
+    right = motion.all_orders(t, side="right")
+    for side, k in ((left, 0), (right, len(t) - 1)):  # before the start, after the end: at rest
+        side[2][k] = 0.0
+        side[3][k] = 0.0
+    torque = []
+    for q, qd, qdd, qddd in (left, right):
+        parts = model.parts(np.zeros(len(t)), derivatives=False, singularity=False,
+                            motion=tool_motion(model.robot, q, qd, qdd, qddd))
+        meta, data = model.columns(parts, 1.0)
+        torque.append({m[0]: data[:, c] for c, m in enumerate(meta) if m[1] == "motor torque"})
+    dtorque = {name: np.abs(torque[1][name] - torque[0][name]) for name in torque[0]}
+    return dtorque, np.abs(right[2] - left[2]), t - motion.start
+
+
+def step_rows(model, motion, cycle: float) -> tuple[LimitRow, ...]:
+    """The per-cycle step rows (module docstring) of a rebuilt ``motion`` on ``model`` (a MotionModel whose specs
+    carry the limits at the plan's limit use), ``cycle`` [s]: per joint with a torque rate (jerk) limit, the largest
+    motor torque (acceleration) step against torque rate (jerk) × cycle."""
+    dtorque, dacc, times = _steps(model, motion)
+    rows = []
+    for i, (name, unit, spec) in enumerate(zip(model.robot.joint_names, model.robot.joint_units, model.specs)):
+        rate = None if spec.drive is None else spec.drive.torque_rate
+        for quantity, values, limit, u in (("motor torque step", dtorque.get(name), rate, "N·m"),
+                                           ("acceleration step", dacc[:, i], spec.limits.jerk, f"{unit}/s^2")):
+            if limit is None or values is None:
+                continue
+            bound = float(limit) * cycle
+            k = int(np.argmax(values))
+            peak = float(values[k])
+            rows.append(LimitRow(name, quantity, u, peak, bound, peak / bound, float(times[k]), peak <= bound))
+    return tuple(rows)
+
+
+def capacity_rows(path, T: float, capacity, tau: np.ndarray) -> tuple[LimitRow, ...]:
+    """The Cartesian capacity rows (|v| ≤ [v], |a| ≤ [a], |j| ≤ [j] when set) of a table's ``path`` run in ``T`` [s]:
+    the peaks of the norms sampled on ``tau`` (sorted, both sides of every jump) and refined on the path itself,
+    never across a jump (:func:`~pickplace_cli.curves.peaks.refine_max`)."""
+    from ..curves.peaks import refine_max
+    from .grid import interior_jumps, segment_ids
+
+    def norms(s: np.ndarray) -> np.ndarray:
+        p = path.all_orders(np.clip(s, 0.0, 1.0))
+        return np.column_stack([np.linalg.norm(p[k], axis=1) / T**k for k in (1, 2, 3)])
+
+    seg = segment_ids(tau, interior_jumps(path.breakpoints, path.jumps))
+    peak, at = refine_max(norms, tau, norms(tau), segments=seg)
+    rows = [("speed", "m/s", 0, capacity.velocity), ("acceleration", "m/s²", 1, capacity.acceleration)]
+    if capacity.jerk is not None:
+        rows.append(("jerk", "m/s³", 2, capacity.jerk))
+    return tuple(LimitRow("tool", f"capacity {q}", unit, float(peak[c]), float(lim), float(peak[c]) / lim,
+                          float(at[c]) * T, bool(peak[c] <= lim * (1.0 + 1e-12)), "limit") for q, unit, c, lim in rows)
+
+
+def check_table(motion, robot, specs, cycle: float, dwell: float, margin=None, box=None,
+                samples: np.ndarray | None = None, capacity=None) -> LimitReport:
+    """Every limit of ``specs`` (joint specs at the plan's limit use) on the rebuilt table ``motion`` on ``robot``:
+    the continuous check of :func:`~pickplace_cli.limits.check.check_limits` (duration = the motion's, RMS over
+    move–``dwell``–back–``dwell``), plus the per-cycle step rows (``cycle`` [s]) where the acceleration steps
+    (pvt, cam-table), and with ``capacity`` (the profile's Cartesian capacity) the tool's speed, acceleration and
+    jerk. ``samples``: extra times [s] to sample (e.g. the controller's cycle)."""
+    from .check import check_limits
+    from .grid import check_grid
+    from .motion import MotionModel
+
+    path = table_path(motion, robot)
+    model = MotionModel(path, robot, list(specs), margin, box)
+    T = motion.duration
+    tau = np.linspace(0.0, 1.0, 129) if samples is None else np.clip((np.asarray(samples) - motion.start) / T, 0, 1)
+    grid = check_grid(np.unique(tau), path.breakpoints, path.jumps)
+    report = check_limits(model, T, parts=model.parts(grid), dwell=dwell)
+    rows = report.rows
+    if capacity is not None:
+        rows = rows + capacity_rows(path, T, capacity, grid)
+    if motion.kind in ("pvt", "cam-table"):
+        rows = rows + step_rows(model, motion, cycle)
+    shift = motion.start  # times from the table's own start (t = 0 at its first point)
+    rows = tuple(LimitRow(r.joint, r.quantity, r.unit, r.peak, r.limit, r.utilisation,
+                          None if r.t_peak is None else r.t_peak + shift, r.ok, r.kind, r.bound, r.target, r.accuracy)
+                 for r in rows)
+    return LimitReport(rows, T, dwell, (f"{motion.kind} table ({len(motion.points)} points) as the drive rebuilds it",))
