@@ -36,10 +36,6 @@ from ..model.errors import UnreachableError
 #: the factor a power picks up from k derivatives, powers 5 … k highest first (exact small integers, the table
 #: of plan_bspline)
 _FALLING = [np.array([float(np.prod([n - r for r in range(k)])) for n in range(DEGREE, k - 1, -1)]) for k in range(4)]
-#: the capacity binds when the screened fit is below T_auto by more than this (relative; plan()'s own test)
-CAPACITY_GAP = 1e-5
-#: fit_s is the screened fit raised by this (relative; plan()'s own margin)
-FIT_MARGIN = 1e-7
 #: the fields of a Parts that are arrays over the samples
 _FIELDS = ("tau", "p", "v1", "a1", "j1", "q", "qd1", "qdd1", "qddd1", "A", "G", "Am", "Gm", "dAm", "dGm", "singularity")
 
@@ -218,16 +214,12 @@ def limits_fit(model, parts, starts: np.ndarray, T: np.ndarray, rms: tuple, dwel
     first samples, stacked and sorted; ``T`` (P,) their auto durations
     [s]; ``rms`` their RMS integrals): per move the float plan() writes (None where no limit depends on the
     duration), or NaN where the move is not decided here (its fit is not clearly below T, or not a number)."""
-    from ..timing.fit import batch_fit_screen
+    from ..timing.fit import batch_fit_screen, capacity_fit_s
 
     t = batch_fit_screen(model, parts, starts, rms, dwell)
     if t is None:
         return [None] * len(T)
-    out: list[float | None] = []
-    for t_screen, t_auto in zip(t.tolist(), T.tolist()):
-        ok = t_screen == t_screen and t_screen * (1.0 + CAPACITY_GAP) < t_auto
-        out.append(t_screen * (1.0 + FIT_MARGIN) if ok else float("nan"))
-    return out
+    return capacity_fit_s(t, T).tolist()
 
 
 # ------------------------------------------------------- plan()'s first samples and RMS start, for many moves

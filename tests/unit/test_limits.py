@@ -243,7 +243,7 @@ def test_check_grid_estimates_every_peak_well_inside_the_exact_band(name, task, 
     (EXACT_BAND), so no violation can hide between the grid's points. An estimate may be *above* the true
     peak (the parabola through a jump of the torque rate, where a 3-4-5 law's jerk steps): that only sends
     the quantity to the exact refinement. Measured worst underestimate: 3.7e-3 (ph, torque rate)."""
-    from pickplace_cli.limits.check import _parabolic_peak
+    from pickplace_cli.curves.peaks import parabolic_peak
     from pickplace_cli.limits.grid import check_grid
     from pickplace_cli.limits.motion import EXACT_BAND
     from pickplace_cli.paths import plan_path
@@ -257,7 +257,7 @@ def test_check_grid_estimates_every_peak_well_inside_the_exact_band(name, task, 
     T = 0.3
     grid = check_grid(np.array([0.0, 1.0]), path.breakpoints)
     meta, data = model.columns(model.parts(grid), T)
-    est, _ = _parabolic_peak(grid, data, np.argmax(data, axis=0))
+    est, _ = parabolic_peak(grid, data)
     fine = np.linspace(0, 1, 20001)
     ref, _ = refine_max(lambda s: model.columns(model.parts(np.clip(s, 0, 1)), T)[1], fine)
     scale = np.maximum(np.abs(ref), 1e-9 * np.max(np.abs(ref)))
