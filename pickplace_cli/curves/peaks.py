@@ -1,10 +1,12 @@
 """Exact and refined peaks of vector-valued motion: max over the continuous curve, not only at samples.
 
-Two tools:
+Three tools:
 
 * :func:`ppoly_norm_peak` — the exact maximum of ‖c(τ)‖ for a piecewise polynomial c (each piece a
   polynomial in τ): on each piece ‖c‖² is a polynomial whose maximum lies at an end or at a real root of
   its derivative, found from the eigenvalues of the companion matrix (all pieces in one batched call).
+* :func:`parabolic_peak` — the peak of sampled values refined by the vertex of the parabola through the
+  largest sample and its neighbours, for one grid or many stacked: the one sampled estimate of the package.
 * :func:`refine_max` — for any smooth function known only by evaluation (joint torques, rates …):
   sample, take the local maxima of the samples, and refine each by a vectorised golden-section search
   inside its bracket. scipy's ``minimize_scalar`` would do the same one bracket at a time; doing all
@@ -137,6 +139,64 @@ def batch_norm_peaks(breaks: np.ndarray, coefs: list[np.ndarray]) -> np.ndarray:
         at += r.size
         out[:, k] = np.sqrt(np.maximum(np.max(vals.reshape(P, -1), axis=1), 0.0))
     return out
+
+
+
+def parabolic_peak(x: np.ndarray, y: np.ndarray, starts: np.ndarray | None = None, seg: np.ndarray | None = None,
+                   i: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """The peak of every column of samples ``y`` (M, C) on the sorted grid ``x`` (M,), refined by the vertex of the
+    parabola through the largest sample (the first maximum, as ``np.argmax``; or the rows ``i`` (C,) given) and its
+    two neighbours. The vertex is kept when the parabola opens downward and the vertex lies at or above the
+    sample; else the sample (at an end of the grid, with fewer than three samples, where the three samples are
+    not in one segment ``seg`` (:func:`~pickplace_cli.limits.grid.segment_ids`): never across a jump).
+    → (peak, τ of the peak), each (C,).
+
+    ``starts`` (P + 1,): the rows of P grids stacked one after the other, grid k in rows starts[k]:starts[k + 1]
+    (at least one each; every grid sorted); → (peak, τ), each (P, C), every grid's numbers those of the grid alone
+    (bitwise: the same operations on the same numbers). The one estimate of the limit check, the duration fit
+    (one move and many), the verdict engine's screening and the line's searches."""
+    x, y = np.asarray(x), np.asarray(y)
+    C = y.shape[1]
+    if starts is None:
+        first = np.zeros((1, 1), np.intp)
+        n = np.array([[len(x)]])
+        i = (np.argmax(y, axis=0) if i is None else np.asarray(i))[None]
+    else:
+        starts = np.asarray(starts, dtype=np.intp)
+        n = np.diff(starts)
+        P = len(n)
+        if P == 0:
+            return np.zeros((0, C)), np.zeros((0, C))
+        first = starts[:-1, None]
+        if i is not None:
+            i = np.asarray(i)
+        elif np.all(n == n[0]):  # grids of one length: one call
+            i = np.argmax(y[starts[0] : starts[-1]].reshape(P, int(n[0]), C), axis=1)
+        else:  # np.argmax per grid: faster than one call on padded arrays
+            i = np.array([np.argmax(y[s:e], axis=0) for s, e in zip(starts[:-1].tolist(), starts[1:].tolist())])
+        n = n[:, None]
+    # the middle k of the three samples (i itself inside the grid), global rows
+    k = np.minimum(np.maximum(i, 1), np.maximum(n - 2, 1)) + first
+    i = i + first
+    cols = np.arange(C)
+    top, at_top = y[i, cols], x[i]
+    near = [np.minimum(np.maximum(k + d, 0), len(x) - 1) for d in (-1, 0, 1)]  # (fewer than 3 samples: unused)
+    (x0, x1, x2), (y0, y1, y2) = (x[j] for j in near), (y[j, cols] for j in near)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        d1 = (y1 - y0) / (x1 - x0)
+        d2 = (y2 - y1) / (x2 - x1)
+        curv = (d2 - d1) / (x2 - x0)  # = a of a(x − x1)² + …
+        ok = (curv < 0) & (k == i) & (n >= 3)
+        if seg is not None:
+            s0, s1, s2 = (seg[j] for j in near)
+            ok &= (s0 == s1) & (s1 == s2)
+        slope = d1 + curv * (x1 - x0)  # the derivative at x1
+        safe = np.where(ok, curv, -1.0)
+        xv = np.minimum(np.maximum(x1 - slope / (2 * safe), x0), x2)
+        yv = y1 - slope**2 / (4 * safe)
+        use = ok & (yv >= top)
+    peak, at = np.where(use, yv, top), np.where(use, xv, at_top)
+    return (peak[0], at[0]) if starts is None else (peak, at)
 
 
 #: points per call of the peaks' refinement (:func:`refine_max`): a call of a model costs ~0.35 ms, a point ~1.5 µs

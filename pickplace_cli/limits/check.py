@@ -11,41 +11,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..curves.peaks import parabolic_peak
 from ..model.errors import UnreachableError
 from .grid import interior_jumps, segment_ids
 from .motion import MotionModel, Parts
 from .report import LimitReport, LimitRow
-
-
-def _parabolic_peak(x: np.ndarray, y: np.ndarray, i: np.ndarray,
-                    seg: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Vertex of the parabola through samples i−1, i, i+1 of each column (falls back to the sample: at an
-    end of the grid, where the parabola opens upwards, where its vertex lies below the sample, or where the
-    three samples are not in one segment ``seg`` (:func:`segment_ids`): never across a jump)."""
-    n = len(x)
-    cols = np.arange(y.shape[1])
-    top, at_top = y[i, cols], x[i]
-    if n < 3:
-        return top, at_top
-    k = np.minimum(np.maximum(i, 1), n - 2)  # the middle of the three samples (i itself inside the grid)
-    three = k + _NEIGHBOURS  # (3, n_cols)
-    (x0, x1, x2), (y0, y1, y2) = x[three], y[three, cols]
-    d1 = (y1 - y0) / (x1 - x0)
-    d2 = (y2 - y1) / (x2 - x1)
-    curv = (d2 - d1) / (x2 - x0)  # = a of a(x-x1)^2 + ...
-    ok = (curv < 0) & (k == i)
-    if seg is not None:
-        s0, s1, s2 = seg[three]
-        ok &= (s0 == s1) & (s1 == s2)
-    slope = d1 + curv * (x1 - x0)  # derivative at x1
-    safe = np.where(ok, curv, -1.0)
-    xv = np.minimum(np.maximum(x1 - slope / (2 * safe), x0), x2)
-    yv = y1 - slope**2 / (4 * safe)
-    use = ok & (yv >= top)
-    return np.where(use, yv, top), np.where(use, xv, at_top)
-
-
-_NEIGHBOURS = np.array([-1, 0, 1])[:, None]
 
 
 #: points per bracket of :func:`_zoom_peak` (the bracket's two ends are grid points already)
@@ -177,7 +147,7 @@ def check_limits(
     if data.shape[1]:
         seg = segment_ids(x, interior_jumps(model.path.breakpoints, model.path.jumps))
         imax = np.argmax(data, axis=0)
-        peak, at = _parabolic_peak(x, data, imax, seg)
+        peak, at = parabolic_peak(x, data, seg=seg, i=imax)
         # the duration-dependent peaks the grid does not resolve (a sharp one), zoomed in on the model
         zoom = plan.zoom[_unresolved(x, data[:, plan.zoom], imax[plan.zoom], at[plan.zoom], seg)]
         if zoom.size:

@@ -184,27 +184,60 @@ def adaptive_gk15(integrand, edges: np.ndarray, n: int, rtol: float = RMS_RTOL,
     ``rtol`` times that column's scale (∫f², ∫g², and √(∫f²·∫g²) for ∫f·g, plus 1e-13 of the largest),
     otherwise bisected. (scipy's quad_vec does the same adaptively but evaluates one point per call, ~100×
     slower on the robot models; the tests check this against it.) ``first``: the integrand at the first
-    round's nodes ((len(edges) − 1)·15, 3n), when already known."""
+    round's nodes ((len(edges) − 1)·15, 3n), when already known. The batch of one of :func:`gk15_many`."""
     a = np.asarray(edges[:-1], float)
     b = np.asarray(edges[1:], float)
-    done = np.zeros(3 * n)
+    return gk15_many(lambda x, owner: (integrand(x), None), a, b, np.zeros(len(a), np.intp), 1, n,
+                     first, rtol, min_width, max_rounds, float(edges[-1] - edges[0]))[0]
+
+
+def _sums(values: np.ndarray, owner: np.ndarray, P: int) -> np.ndarray:
+    """Per integral, the sum of its rows of ``values`` (``owner`` non-decreasing) as ``values[rows].sum(axis=0)``
+    adds them (one after the other; ``np.add.reduceat`` adds in another order); 0 for an integral without rows."""
+    count = np.bincount(owner, minlength=P)
+    at = np.arange(len(owner)) - np.concatenate([[0], np.cumsum(count)])[owner]
+    padded = np.zeros((P, int(count.max()) if len(owner) else 0, values.shape[1]))
+    padded[owner, at] = values
+    return padded.sum(axis=1)
+
+
+def gk15_many(evaluate, a: np.ndarray, b: np.ndarray, owner: np.ndarray, P: int, n: int,
+              first: np.ndarray | None = None, rtol: float = RMS_RTOL, min_width: float = RMS_MIN_WIDTH,
+              max_rounds: int = 40, length: float = 1.0) -> np.ndarray:
+    """:func:`adaptive_gk15` of P integrals at once (P (3n,) results, one after the other in ``owner``): the spans
+    [a, b] of integral ``owner`` (non-decreasing), ``length`` the width of each integral's interval;
+    ``evaluate(x, owner)`` → (the integrand at the nodes x of the spans of ``owner`` (S·15, 3n), which integrals
+    could be evaluated: (P,) bool, or None for all); ``first``: the integrand at the first round's nodes. Each
+    integral's spans are bisected, accepted and summed as :func:`adaptive_gk15` does them for that integral alone
+    (its unfinished spans' left halves in order, then their right halves); NaN for an integral that could not be
+    evaluated. → (P, 3n)."""
+    G = len(GK_NODES)
+    done = np.zeros((P, 3 * n))
+    f = first
     for _ in range(max_rounds):
         c, h = 0.5 * (a + b), 0.5 * (b - a)
-        x = (c[:, None] + h[:, None] * GK_NODES).ravel()
-        f = (integrand(x) if first is None else first).reshape(len(a), 15, 3 * n)
-        first = None
+        if f is None:
+            f, keep = evaluate((c[:, None] + h[:, None] * GK_NODES).ravel(), owner)
+            if keep is not None:
+                done[~keep] = np.nan
+        f = f.reshape(len(a), G, 3 * n)
         k = h[:, None] * np.einsum("j,mjc->mc", GK_WEIGHTS, f)
         g = h[:, None] * np.einsum("j,mjc->mc", GK_GAUSS, f)
-        est = done + k.sum(axis=0)
-        aa, gg = np.abs(est[:n]), np.abs(est[2 * n:])
-        scale = np.concatenate([aa, np.sqrt(aa * gg), gg])
-        tol = rtol * (scale + 1e-13 * scale.max()) + 1e-300
-        width = (b - a) / (edges[-1] - edges[0])
-        ok = np.all(np.abs(k - g) <= tol * width[:, None], axis=1) | (b - a < min_width)
-        done += k[ok].sum(axis=0)
+        f = None
+        est = done + _sums(k, owner, P)
+        aa, gg = np.abs(est[:, :n]), np.abs(est[:, 2 * n :])
+        scale = np.concatenate([aa, np.sqrt(aa * gg), gg], axis=1)
+        tol = rtol * (scale + 1e-13 * scale.max(axis=1, keepdims=True)) + 1e-300
+        width = (b - a) / length
+        ok = np.all(np.abs(k - g) <= tol[owner] * width[:, None], axis=1) | (b - a < min_width)
+        ok |= np.isnan(done[owner, 0])  # (an integral that could not be evaluated: no further rounds)
+        done = done + _sums(k[ok], owner[ok], P)
         if ok.all():
             return done
-        a, b = a[~ok], b[~ok]
+        rest, rest_owner = k[~ok], owner[~ok]
+        # every integral's unfinished spans bisected: their left halves in order, then their right halves
+        a, b, owner = a[~ok], b[~ok], rest_owner
         m = 0.5 * (a + b)
-        a, b = np.concatenate([a, m]), np.concatenate([m, b])
-    return done + k[~ok].sum(axis=0)  # not converged in max_rounds (never seen): the last estimate
+        o = np.argsort(np.concatenate([owner, owner]), kind="stable")
+        a, b, owner = np.concatenate([a, m])[o], np.concatenate([m, b])[o], np.concatenate([owner, owner])[o]
+    return done + _sums(rest, rest_owner, P)  # not converged in max_rounds (never seen): the last estimate

@@ -325,11 +325,19 @@ class MotionModel:
         """RMS motor torque [N·m] over the duty cycle move–dwell–back–dwell (module docstring), (n,) per
         joint; ``T`` [s] may be an array (shape (..., n) then). Exact for every T from one integration:
         ∫₀ᵀ (A_m/T² + G_m)² dt = T·(I_AA/T⁴ + 2·I_AG/T² + I_GG) (:meth:`rms_integrals`)."""
-        (iaa, iag, igg), g = self.rms_integrals(parts)
-        T = np.asarray(T, float)[..., None]
-        move = T * (iaa / T**4 + 2.0 * iag / T**2 + igg)
-        hold = g[0] ** 2 + g[1] ** 2
-        return np.sqrt(np.maximum(2.0 * move + dwell * hold, 0.0) / (2.0 * T + 2.0 * dwell))
+        integrals, ends = self.rms_integrals(parts)
+        return duty_cycle_rms(integrals, ends, np.asarray(T, float)[..., None], dwell)
+
+
+def duty_cycle_rms(integrals: np.ndarray, ends: np.ndarray, T, dwell: float) -> np.ndarray:
+    """RMS motor torque [N·m] over the duty cycle move–dwell–back–dwell (module docstring) from the RMS integrals
+    (:meth:`MotionModel.rms_integrals`: ``integrals`` (..., 3, n), ``ends`` (..., 2, n), one move or many) at the
+    durations ``T`` [s] (broadcast against (..., n)): ∫₀ᵀ (A_m/T² + G_m)² dt = T·(I_AA/T⁴ + 2·I_AG/T² + I_GG)."""
+    integrals, ends = np.asarray(integrals), np.asarray(ends)
+    iaa, iag, igg = integrals[..., 0, :], integrals[..., 1, :], integrals[..., 2, :]
+    move = T * (iaa / T**4 + 2.0 * iag / T**2 + igg)
+    hold = ends[..., 0, :] ** 2 + ends[..., 1, :] ** 2
+    return np.sqrt(np.maximum(2.0 * move + dwell * hold, 0.0) / (2.0 * T + 2.0 * dwell))
 
 
 #: each limited quantity as columns (N, len(idx)) of the joints (or axes) ``idx``: (parts, idx, T, gear) → values

@@ -171,9 +171,12 @@ class Move:
         return [a + T * b for a, b in zip(self.A, self.B)]
 
     def _dots(self, k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(‖A_k‖², 2·A_k·B_k, ‖B_k‖²) per point of the search grid: ‖d^k p/dτ^k‖² = aa + T·ab + T²·bb."""
+        """(‖A_k‖², 2·A_k·B_k, ‖B_k‖²) per point of the search grid: ‖d^k p/dτ^k‖² = aa + T·ab + T²·bb; k = 0:
+        the three orders 1, 2, 3 side by side, each (G, 3)."""
         hit = self._dot.get(k)
-        if hit is None:
+        if hit is None and k == 0:
+            hit = self._dot[0] = tuple(np.column_stack(x) for x in zip(*(self._dots(o) for o in (1, 2, 3))))
+        elif hit is None:
             m = self.basis.search[k]
             a, b = m @ self.da, m @ self.db
             hit = self._dot[k] = (np.einsum("gd,gd->g", a, a), 2.0 * np.einsum("gd,gd->g", a, b),
@@ -182,31 +185,23 @@ class Move:
 
     def grid_peaks(self, Ts: np.ndarray, orders=(1, 2, 3)) -> np.ndarray:
         """Peaks of ‖d^k p/dτ^k‖ on the grid, refined by the parabola through the top sample and its neighbours
-        (never below the top sample), for every trial duration: (len(Ts), len(orders))."""
+        (:func:`~pickplace_cli.curves.peaks.parabolic_peak`), for every trial duration: (len(Ts), len(orders))."""
+        from ..curves.peaks import parabolic_peak
+
         T = np.asarray(Ts, float)[:, None]
         out = np.empty((T.shape[0], len(orders)))
         for c, k in enumerate(orders):
             aa, ab, bb = self._dots(k)
-            out[:, c] = np.sqrt(np.maximum(_parabolic_max(self.basis.search_tau, aa + T * (ab + T * bb)), 0.0))
+            y = aa + T * (ab + T * bb)
+            out[:, c] = np.sqrt(np.maximum(parabolic_peak(self.basis.search_tau, y.T)[0], 0.0))
         return out
 
-    def peak_at(self, T: float, k: int) -> float:
-        """:meth:`grid_peaks` of one order at one duration, with Python scalars for the refinement (the search's
-        inner loop)."""
-        aa, ab, bb = self._dots(k)
-        y = aa + T * (ab + T * bb)
-        i = int(np.argmax(y))
-        top = float(y[i])
-        tau = self.basis.search_tau
-        if 0 < i < len(y) - 1:
-            x0, x1, x2 = float(tau[i - 1]), float(tau[i]), float(tau[i + 1])
-            y0, y2 = float(y[i - 1]), float(y[i + 1])
-            d1, d2 = (top - y0) / (x1 - x0), (y2 - top) / (x2 - x1)
-            curv = (d2 - d1) / (x2 - x0)
-            if curv < 0:
-                slope = d1 + curv * (x1 - x0)
-                top = max(top, top - slope * slope / (4 * curv))
-        return math.sqrt(max(top, 0.0))
+    def peaks_at(self, T: float) -> list[float]:
+        """:meth:`grid_peaks` of the orders 1, 2, 3 at one duration (the search's inner loop: one call)."""
+        from ..curves.peaks import parabolic_peak
+
+        aa, ab, bb = self._dots(0)
+        return np.sqrt(np.maximum(parabolic_peak(self.basis.search_tau, aa + T * (ab + T * bb))[0], 0.0)).tolist()
 
     def excess_auto(self, capacity) -> Callable[[np.ndarray], np.ndarray]:
         """e(T) = T_auto(path planned for T)/T − 1 on the grid (≤ 0: the capacity rule holds) [Li2018, Eq. (26)]."""
@@ -217,9 +212,10 @@ class Move:
             Ts = np.asarray(Ts, float)
             if Ts.size == 1:
                 T = float(Ts.reshape(-1)[0])
-                t_rule = max(self.peak_at(T, 1) / vmax, math.sqrt(self.peak_at(T, 2) / amax))
+                pk = self.peaks_at(T)
+                t_rule = max(pk[0] / vmax, math.sqrt(pk[1] / amax))
                 if jmax:
-                    t_rule = max(t_rule, (self.peak_at(T, 3) / jmax) ** (1.0 / 3.0))
+                    t_rule = max(t_rule, (pk[2] / jmax) ** (1.0 / 3.0))
                 return np.array([t_rule / T - 1.0])
             pk = self.grid_peaks(Ts, orders)
             t_rule = np.maximum(pk[:, 0] / vmax, np.sqrt(pk[:, 1] / amax))
@@ -248,28 +244,6 @@ class Move:
         from ..paths.bspline_vel import plan_bspline_vel
 
         return plan_bspline_vel(self.task(T), T, params=list(self.basis.params))
-
-
-def _parabolic_max(tau: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """Row-wise max of ``y`` (K, G) on the sorted grid ``tau`` (G,), refined by the vertex of the parabola through
-    the top sample and its neighbours (kept only when it opens downwards and lies above the sample): the batch
-    verdict engine's estimate (``_batched_parabolic_peak``) for one shared grid and one column per row, written
-    for 2-D arrays — 2.5× faster at this size (52 against 130 µs for 16 × 136; it is the search's inner loop)."""
-    K, G = y.shape
-    i = np.argmax(y, axis=1)
-    rows = np.arange(K)
-    top = y[rows, i]
-    k = np.clip(i, 1, G - 2)
-    x0, x1, x2 = tau[k - 1], tau[k], tau[k + 1]
-    y0, y1, y2 = y[rows, k - 1], y[rows, k], y[rows, k + 1]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        d1 = (y1 - y0) / (x1 - x0)
-        d2 = (y2 - y1) / (x2 - x1)
-        curv = (d2 - d1) / (x2 - x0)
-        slope = d1 + curv * (x1 - x0)
-        yv = y1 - slope**2 / (4 * curv)
-    good = (k == i) & (curv < 0) & np.isfinite(yv)
-    return np.where(good, np.maximum(yv, top), top)
 
 
 def first_feasible(excess: Callable[[np.ndarray], np.ndarray], a: float, b: float, rtol: float = RTOL,
@@ -488,7 +462,7 @@ def exact_rule(found: list[tuple[Move, float]], capacity) -> tuple[list[tuple[fl
     from ..curves.peaks import batch_norm_peaks
 
     all_orders = (1, 2, 3) if capacity.jerk else (1, 2)
-    grid = np.array([_rule_times([mv.peak_at(T, k) for k in all_orders], capacity) for mv, T in found])
+    grid = np.array([_rule_times(mv.peaks_at(T), capacity) for mv, T in found])
     need = np.any(grid >= BIND_SHARE * grid.max(axis=1, keepdims=True), axis=0)
     orders = tuple(o for o, n in zip(all_orders, need) if n)
     breaks = np.stack([mv.basis.breaks for mv, _ in found])

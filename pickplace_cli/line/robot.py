@@ -33,6 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..curves.peaks import parabolic_peak
 from ..model.errors import PickplaceError, TaskError, UnreachableError
 from .frames import Frame
 from .moves import (HORIZON, Move, Shapes, Solved, T_MIN, exact_rule, first_feasible, search_auto, solve_auto,
@@ -486,10 +487,8 @@ class LineRobot:
         meta, data = self.model.columns(parts, np.repeat(Ts, G))
         cols = [c for c, m in enumerate(meta) if m[1] in TIMED]
         limits = np.array([meta[c][3] for c in cols])
-        for k in range(len(Ts)):
-            block = data[k * G:(k + 1) * G, cols].T
-            out[k] = float(np.max(_peaks(tau, block) / limits)) - 1.0
-        return out
+        peaks = parabolic_peak(np.tile(tau, len(Ts)), data[:, cols], np.arange(0, len(Ts) * G + 1, G))[0]
+        return np.max(peaks / limits, axis=1) - 1.0
 
     # ---------------------------------------------------------------------------------------- the check
     def _check(self, legs: list[Leg]) -> Decline | None:
@@ -518,11 +517,10 @@ class LineRobot:
         meta, data = self.model.columns(parts, Ts)
         plan = self._use_plan(meta)
         start = 0
-        peaks = np.empty((len(legs), data.shape[1]))
-        for k, (leg, (gtau, _, gl_i, gl_w)) in enumerate(zip(legs, grids)):
+        peaks = parabolic_peak(tau, data, np.concatenate([[0], np.cumsum([len(g[0]) for g in grids])]))[0]
+        for leg, (gtau, _, gl_i, gl_w) in zip(legs, grids):
             sl = slice(start, start + len(gtau))
             start += len(gtau)
-            peaks[k] = _peaks(gtau, data[sl].T)
             T = max(leg.duration, 1e-9)
             am, gm = (parts.Am[sl], parts.Gm[sl]) if self.has_drives else (parts.A[sl], parts.G[sl])
             torque = am / T**2 + gm
@@ -599,13 +597,6 @@ def _targets(place, frame: Frame) -> list[tuple[np.ndarray, np.ndarray]]:
     else:
         pts = [np.asarray(p, float) for p in place.points]
     return [(frame.to_robot(p), np.zeros(3)) for p in pts]
-
-
-def _peaks(tau: np.ndarray, block: np.ndarray) -> np.ndarray:
-    """Per row of ``block`` (C, G) its maximum on the sorted grid ``tau``, refined by the parabola (never lower)."""
-    from .moves import _parabolic_max
-
-    return _parabolic_max(tau, block)
 
 
 class UsePlan:

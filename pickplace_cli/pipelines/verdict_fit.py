@@ -36,10 +36,6 @@ from ..model.errors import UnreachableError
 #: the factor a power picks up from k derivatives, powers 5 … k highest first (exact small integers, the table
 #: of plan_bspline)
 _FALLING = [np.array([float(np.prod([n - r for r in range(k)])) for n in range(DEGREE, k - 1, -1)]) for k in range(4)]
-#: the capacity binds when the screened fit is below T_auto by more than this (relative; plan()'s own test)
-CAPACITY_GAP = 1e-5
-#: fit_s is the screened fit raised by this (relative; plan()'s own margin)
-FIT_MARGIN = 1e-7
 #: the fields of a Parts that are arrays over the samples
 _FIELDS = ("tau", "p", "v1", "a1", "j1", "q", "qd1", "qdd1", "qddd1", "A", "G", "Am", "Gm", "dAm", "dGm", "singularity")
 
@@ -117,40 +113,6 @@ def take_moves(parts, starts: np.ndarray, which: np.ndarray):
     return Parts(**fields), np.concatenate([[0], np.cumsum(lengths)])
 
 
-def _sums(values: np.ndarray, owner: np.ndarray, P: int) -> np.ndarray:
-    """Per move, the sum of its rows of ``values`` in row order, one after the other (as ``values[rows].sum(axis=0)``
-    adds them; from 0)."""
-    count = np.bincount(owner, minlength=P)
-    at = np.arange(len(owner)) - np.concatenate([[0], np.cumsum(count)])[owner]
-    padded = np.zeros((P, int(count.max()) if len(owner) else 0, values.shape[1]))
-    padded[owner, at] = values
-    out = np.zeros((P, values.shape[1]))
-    for s in range(padded.shape[1]):
-        out = out + padded[:, s]
-    return out
-
-
-def _round(got, keep: np.ndarray, lengths: np.ndarray, h: np.ndarray, so: np.ndarray, n: int):
-    """(K15, G7) of every span of a further round of the RMS quadrature from the model ``got`` at its nodes (the kept
-    moves': ``lengths`` nodes each), move by move as the model's integrand gives them (the robot's arrays as they
-    come, their products and their Gauss–Kronrod sums in its memory order: the sums' order follows it); NaN for
-    the moves not kept."""
-    from ..limits.grid import GK_GAUSS, GK_WEIGHTS
-
-    k = np.full((len(h), 3 * n), np.nan)
-    g = np.full((len(h), 3 * n), np.nan)
-    at = 0
-    for j in np.flatnonzero(keep & (lengths > 0)):
-        rows = slice(at, at + lengths[j])
-        at += lengths[j]
-        Am, Gm = got.Am[rows], got.Gm[rows]
-        f = np.concatenate([Am * Am, Am * Gm, Gm * Gm], axis=1).reshape(-1, 15, 3 * n)
-        spans = so == j
-        k[spans] = h[spans, None] * np.einsum("j,mjc->mc", GK_WEIGHTS, f)
-        g[spans] = h[spans, None] * np.einsum("j,mjc->mc", GK_GAUSS, f)
-    return k, g
-
-
 def rms_integrals(first: "FirstSamples", moves: np.ndarray, parts, starts: np.ndarray, model, pieces: Pieces,
                   piece_of: np.ndarray, model_of) -> tuple[np.ndarray, np.ndarray]:
     """Every move's :meth:`~pickplace_cli.limits.motion.MotionModel.rms_integrals` (I (P, 3, n), G_end (P, 2, n)),
@@ -161,7 +123,7 @@ def rms_integrals(first: "FirstSamples", moves: np.ndarray, parts, starts: np.nd
     call (``model``, the motion by ``pieces``); the same sums in the same order, span by span. A move whose nodes
     are not on its grid is integrated by its own model (``model_of(j)``: the j-th of ``moves``); NaN for a move
     with an unreachable node (plan() raises there)."""
-    from ..limits.grid import GK_GAUSS, GK_NODES, GK_WEIGHTS, RMS_MIN_WIDTH, RMS_RTOL
+    from ..limits.grid import GK_NODES, gk15_many
     from ..limits.motion import Parts
 
     n, P, G = parts.Am.shape[1], len(moves), len(GK_NODES)
@@ -171,39 +133,22 @@ def rms_integrals(first: "FirstSamples", moves: np.ndarray, parts, starts: np.nd
     a, b, so = first.a[sel], first.b[sel], pos[first.span_owner[sel]]
     rows = (first.node_at.reshape(-1, G)[sel] + starts[so][:, None]).ravel()
     Am, Gm = parts.Am[rows], parts.Gm[rows]  # (gathered, as _first_round gathers them)
-    f = np.concatenate([Am * Am, Am * Gm, Gm * Gm], axis=1).reshape(len(a), G, 3 * n)
-    done = np.zeros((P, 3 * n))
-    open_ = np.ones(P, bool)  # moves still integrating
-    for _ in range(40):  # adaptive_gk15's max_rounds
-        h = 0.5 * (b - a)
-        if f is not None:
-            k = h[:, None] * np.einsum("j,mjc->mc", GK_WEIGHTS, f)
-            g = h[:, None] * np.einsum("j,mjc->mc", GK_GAUSS, f)
-        est = done + _sums(k, so, P)
-        aa, gg = np.abs(est[:, :n]), np.abs(est[:, 2 * n :])
-        scale = np.concatenate([aa, np.sqrt(aa * gg), gg], axis=1)
-        tol = RMS_RTOL * (scale + 1e-13 * scale.max(axis=1, keepdims=True)) + 1e-300
-        ok = np.all(np.abs(k - g) <= tol[so] * (b - a)[:, None], axis=1) | (b - a < RMS_MIN_WIDTH)
-        ok |= np.isnan(done[so, 0])  # (a move with an unreachable node: no further rounds)
-        done = done + _sums(np.where(ok[:, None], k, 0.0), so, P)
-        open_ &= np.bincount(so, weights=~ok, minlength=P) > 0
-        if not open_.any():
-            break
-        # every move's unfinished spans bisected: their left halves in order, then their right halves
-        a, b, so = a[~ok], b[~ok], so[~ok]
-        m = 0.5 * (a + b)
-        o = np.argsort(np.concatenate([so, so]), kind="stable")
-        a, b, so = np.concatenate([a, m])[o], np.concatenate([m, b])[o], np.concatenate([so, so])[o]
-        c, h = 0.5 * (a + b), 0.5 * (b - a)
-        x = (c[:, None] + h[:, None] * GK_NODES).ravel()
-        lengths = np.bincount(so, minlength=P) * G
-        got, keep = model_at(model, pieces, x, np.repeat(piece_of[so], G), lengths, derivatives=False,
+
+    def evaluate(x: np.ndarray, owner: np.ndarray):  # every move's nodes in one model call
+        lengths = np.bincount(owner, minlength=P) * G
+        got, keep = model_at(model, pieces, x, np.repeat(piece_of[owner], G), lengths, derivatives=False,
                              singularity=False)
-        done[~keep] = np.nan  # (an unreachable node: not decided)
-        k, g = _round(got, keep, lengths, h, so, n)
-        f = None
-    else:
-        done = done + _sums(np.where(ok[:, None], 0.0, k), so, P)  # not converged in 40 rounds: the last estimate
+        if got is None:
+            return np.full((len(x), 3 * n), np.nan), keep
+        # the model's arrays as they come: their memory order is the order of the Gauss–Kronrod sums (einsum's)
+        f = np.concatenate([got.Am * got.Am, got.Am * got.Gm, got.Gm * got.Gm], axis=1)
+        if keep.all():
+            return f, keep
+        out = np.full((len(x), 3 * n), np.nan, order="F" if f.flags.f_contiguous else "C")
+        out[np.repeat(keep, lengths)] = f
+        return out, keep
+
+    done = gk15_many(evaluate, a, b, so, P, n, np.concatenate([Am * Am, Am * Gm, Gm * Gm], axis=1))
     integrals = done.reshape(P, 3, n)
     ends = np.stack([parts.Gm[starts[:-1]], parts.Gm[starts[1:] - 1]], axis=1)
     for j in np.flatnonzero(~first.nodes_ok[moves]):  # (never seen: the grids hold the nodes)
@@ -218,16 +163,12 @@ def limits_fit(model, parts, starts: np.ndarray, T: np.ndarray, rms: tuple, dwel
     first samples, stacked and sorted; ``T`` (P,) their auto durations
     [s]; ``rms`` their RMS integrals): per move the float plan() writes (None where no limit depends on the
     duration), or NaN where the move is not decided here (its fit is not clearly below T, or not a number)."""
-    from ..timing.fit import batch_fit_screen
+    from ..timing.fit import batch_fit_screen, capacity_fit_s
 
     t = batch_fit_screen(model, parts, starts, rms, dwell)
     if t is None:
         return [None] * len(T)
-    out: list[float | None] = []
-    for t_screen, t_auto in zip(t.tolist(), T.tolist()):
-        ok = t_screen == t_screen and t_screen * (1.0 + CAPACITY_GAP) < t_auto
-        out.append(t_screen * (1.0 + FIT_MARGIN) if ok else float("nan"))
-    return out
+    return capacity_fit_s(t, T).tolist()
 
 
 # ------------------------------------------------------- plan()'s first samples and RMS start, for many moves

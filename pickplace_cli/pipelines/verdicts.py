@@ -56,6 +56,7 @@ import numpy as np
 
 from .batch import ANGLES, BELT, BatchRow, RowResult, plan_rows, row_task, run_chunks_in_order
 from ..curves.bspline import DEGREE
+from ..curves.peaks import parabolic_peak
 from ..paths.bspline import batch_paths
 from ..model.errors import PickplaceError, UnreachableError
 from ..limits.check import capacity_rows
@@ -173,29 +174,6 @@ def batch_motion(breaks: np.ndarray, coef: np.ndarray, tau: np.ndarray) -> list[
 # ------------------------------------------------------------------------------------------ screening
 
 
-def _batched_parabolic_peak(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """Per move and column, the max of the samples refined by the vertex of the parabola through the top
-    sample and its neighbours (:func:`~pickplace_cli.limits.check._parabolic_peak` for (B, G) grids and (B, G, C)
-    values); never below the sampled maximum. A zero-width neighbour interval (a knot on a uniform sample)
-    keeps the sample."""
-    G = y.shape[1]
-    i = np.argmax(y, axis=1)  # (B, C)
-    k = np.clip(i, 1, G - 2)
-    take = lambda a, j: np.take_along_axis(a, j[:, None, :], axis=1)[:, 0]
-    top = take(y, i)
-    y0, y1, y2 = take(y, k - 1), take(y, k), take(y, k + 1)
-    xk = np.take_along_axis(x, k, axis=1)
-    x0, x2 = np.take_along_axis(x, k - 1, axis=1), np.take_along_axis(x, k + 1, axis=1)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        d1 = (y1 - y0) / (xk - x0)
-        d2 = (y2 - y1) / (x2 - xk)
-        curv = (d2 - d1) / (x2 - x0)
-        slope = d1 + curv * (xk - x0)
-        yv = y1 - slope**2 / (4 * curv)
-    good = (i == k) & (curv < 0) & np.isfinite(yv)
-    return np.where(good, np.maximum(yv, top), top)
-
-
 def _thresholds(meta: list, margin: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """For every column of ``MotionModel.columns``: (mid, scale, kind) to turn a column peak (column sign
     convention) into plan()'s utilisation. kind 0: upper bound, u = peak/limit; 1: lower bound (singularity
@@ -270,7 +248,8 @@ def screen_block(model, breaks: np.ndarray, coef: np.ndarray, origin: np.ndarray
         meta, data = model.columns(parts, Tn)  # every column is per sample: T may be per sample
         n_cols = data.shape[1]
         b = len(use)
-        value, u = _utilisation(meta, _batched_parabolic_peak(tau[use], data.reshape(b, G, n_cols)), margin)
+        est = parabolic_peak(tau[use].reshape(-1), data, np.arange(0, b * G + 1, G))[0]
+        value, u = _utilisation(meta, est, margin)
         # RMS motor torque over the duty cycle move–dwell–back–dwell (limits module docstring), per move
         tm = parts.Am.reshape(b, G, -1) / T[use, None, None] ** 2 + parts.Gm.reshape(b, G, -1)
         integral = T[use, None] * np.trapezoid(tm**2, tau[use][:, :, None], axis=1)
@@ -449,10 +428,9 @@ def _limits_block(model, profile, pieces, items: list, margin: float = SCREEN_MA
     [s])) that the engine decides: {index: fit_s [s] or None}, as plan() computes them on its first samples
     (:mod:`~pickplace_cli.pipelines.verdict_fit`); a row is decided when every limit is clearly held at T (the
     screening's contract) and the capacity binds (the fit is clearly shorter)."""
-    from ..limits.motion import MotionModel
+    from ..limits.motion import MotionModel, duty_cycle_rms
     from ..model.trajectory import CartesianPath
     from ..planner import motion_model_static
-    from ..timing.fit import segment_parabolic_peak
     from .verdict_fit import FirstSamples, limits_fit, model_at, rms_integrals, take_moves
 
     static = motion_model_static(profile)
@@ -479,7 +457,7 @@ def _limits_block(model, profile, pieces, items: list, margin: float = SCREEN_MA
         lengths = first.lengths[keep]
         starts = np.concatenate([[0], np.cumsum(lengths)])
         meta, data = model.columns(parts, np.repeat(T, lengths))
-        est, _ = segment_parabolic_peak(parts.tau, data, starts)
+        est, _ = parabolic_peak(parts.tau, data, starts)
         clear = np.flatnonzero(np.all(_utilisation(meta, est, margin)[1] <= margin, axis=1))
         if not clear.size:
             continue
@@ -488,7 +466,7 @@ def _limits_block(model, profile, pieces, items: list, margin: float = SCREEN_MA
             idx, T, local = idx[clear], T[clear], local[clear]
         rms = rms_integrals(first, local, parts, starts, model, pieces, idx, lambda j: model_of(int(idx[j])))
         fits = limits_fit(model, parts, starts, T, rms, dwell)
-        held = np.all(_rms_at(rms, T, dwell) / rated <= margin, axis=1)
+        held = np.all(duty_cycle_rms(*rms, T[:, None], dwell) / rated <= margin, axis=1)
         for k, fit, ok in zip(idx.tolist(), fits, held):
             if ok and (fit is None or fit == fit):
                 out[k] = fit
@@ -506,16 +484,6 @@ def _sample_blocks(lengths: list[int]) -> list[list[int]]:
         groups[-1].append(i)
         total += n
     return groups if groups[0] else []
-
-
-def _rms_at(rms: tuple, T: np.ndarray, dwell: float) -> np.ndarray:
-    """RMS motor torque [N·m] (P, n) over the duty cycle at the durations T (P,) [s] from the RMS integrals
-    (:meth:`~pickplace_cli.limits.motion.MotionModel.rms_motor_torque`'s formula)."""
-    (integrals, ends), T = rms, T[:, None]
-    iaa, iag, igg = integrals[:, 0], integrals[:, 1], integrals[:, 2]
-    move = T * (iaa / T**4 + 2.0 * iag / T**2 + igg)
-    hold = ends[:, 0] ** 2 + ends[:, 1] ** 2
-    return np.sqrt(np.maximum(2.0 * move + dwell * hold, 0.0) / (2.0 * T + 2.0 * dwell))
 
 
 def verdict_rows(

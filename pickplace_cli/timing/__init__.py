@@ -171,9 +171,12 @@ def _limits_duration(model, dwell: float, auto: tuple, check=None, parts=None) -
     found = fit_screen(model, dwell, parts)
     if found is None:  # no joint or motor limit depends on the duration: the capacity alone decides
         return Duration(t_auto, "limits", tv, ta, tj, f"capacity {binding}", None)
+    from .fit import capacity_fit_s
+
     t_screen, fit_binding, parts, _ = found
-    if t_screen * (1.0 + 1e-5) < t_auto:
-        return Duration(t_auto, "limits", tv, ta, tj, f"capacity {binding}", t_screen * (1.0 + 1e-7))
+    fit_s = float(capacity_fit_s(t_screen, t_auto))
+    if fit_s == fit_s:  # the capacity binds: the fit is only screened
+        return Duration(t_auto, "limits", tv, ta, tj, f"capacity {binding}", fit_s)
     t_fit = fit_confirm(model, fit_precise(model, found, dwell), dwell, check=check, parts=parts)
     if t_auto > t_fit:
         return Duration(t_auto, "limits", tv, ta, tj, f"capacity {binding}", t_fit)
@@ -186,7 +189,7 @@ def _worst_utilisation(model, dwell: float = 0.0, tau=None):
     None when no limit depends on T."""
     import numpy as np
 
-    from ..limits.check import _parabolic_peak
+    from ..curves.peaks import parabolic_peak
     from ..limits.grid import fit_grid, interior_jumps, segment_ids
 
     # 1,001 uniform points and the check's own extra points (knots, points per span, both sides of every
@@ -208,7 +211,7 @@ def _worst_utilisation(model, dwell: float = 0.0, tau=None):
         m, data = model.columns(parts, T)
         if timed:
             d = data[:, timed]
-            util = _parabolic_peak(tau, d, np.argmax(d, axis=0), seg)[0] / limits
+            util = parabolic_peak(tau, d, seg=seg)[0] / limits
         else:
             util = np.zeros(0)
         rms = (model.rms_motor_torque(T, dwell, parts) / rated)[has_rated] if has_rated.any() else np.zeros(0)
@@ -294,7 +297,7 @@ def fit_screen(model, dwell: float = 0.0, parts=None) -> tuple[float, str, objec
     confirms it by the exact check. ``parts``: the model on another grid holding the check's extra points
     (e.g. the plan's first samples), used instead of the fit grid."""
     from ..limits.grid import fit_grid, interior_jumps, segment_ids
-    from .fit import screened_fit
+    from .fit import screen_bounds, screened_fit
 
     path = model.path
     parts = model.parts(fit_grid(path.breakpoints, path.jumps)) if parts is None else parts.sorted()
@@ -303,11 +306,12 @@ def fit_screen(model, dwell: float = 0.0, parts=None) -> tuple[float, str, objec
     if found is None:
         return None
     T, binding = found
-    if not (math.isfinite(T) and T <= 1e4):
+    T = float(screen_bounds(T))
+    if T != T:
         from ..model.errors import NoFeasibleDuration
 
         raise NoFeasibleDuration(f"time = fit: no duration up to 1e4 s satisfies {binding}")
-    return max(T, 1e-4), binding, parts, seg
+    return T, binding, parts, seg
 
 
 def fit_confirm(model, T: float, dwell: float = 0.0, margin: float = 1e-7, check=None, parts=None) -> float:

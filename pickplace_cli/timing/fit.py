@@ -29,7 +29,7 @@ then confirms it or nudges it up (:func:`~pickplace_cli.timing.fit_duration`).
 
 from __future__ import annotations
 
-import math
+from typing import NamedTuple
 
 import numpy as np
 
@@ -165,36 +165,20 @@ def fit_thresholds(model, parts, dwell: float = 0.0, rms: bool = True, seg=None,
     a smooth function of τ, so its largest sample is replaced by the vertex of the parabola through it and its
     neighbours (never across a jump: ``seg``, :func:`~pickplace_cli.limits.grid.segment_ids` of sorted ``parts``):
     the continuous maximum to ~1e-6 on the fit grid. ``vertices``: a list that receives the τ of each quantity's
-    maximum (sampled or refined), the RMS aside."""
-    names, data, overloads = threshold_columns(model, parts)
-    for name, limit, over in overloads:
-        if over.any():
-            raise NoFeasibleDuration(f"time = fit: no duration satisfies {name} (the holding torque alone exceeds "
-                                     f"{limit:g} N·m)")
-    out: list[tuple[str, float]] = []
-    if data is not None and len(parts.tau):
-        top = np.argmax(data, axis=0)
-        if refine:
-            from ..limits.check import _parabolic_peak
+    maximum (sampled or refined), the RMS aside.
 
-            peak, where = _parabolic_peak(parts.tau, data, top, seg)
-        else:
-            peak, where = data[top, np.arange(data.shape[1])], parts.tau[top]
-        out = [(n, float(v)) for n, v in zip(names, peak)]
-        if vertices is not None:
-            vertices.extend(float(x) for x in where)
-    rated, has = _rated(model)
-    if rms and has:
-        (iaa, iag, igg), g = model.rms_integrals(parts)
-        hold = g[0] ** 2 + g[1] ** 2
-        ts = rms_thresholds(iaa[has], iag[has], igg[has], hold[has], dwell, [rated[i] for i in has])
-        for i, t in zip(has, ts):
-            name = f"{model.robot.joint_names[i]} rms motor torque"
-            if not math.isfinite(t):
-                raise NoFeasibleDuration(f"time = fit: no duration satisfies {name} (the holding torque alone "
-                                         f"exceeds the rated {rated[i]:g} N·m)")
-            out.append((name, float(t)))
-    return out
+    The batch of one of :func:`batch_fit_thresholds`: the same code for one move and many."""
+    integrals = None
+    if rms and _rated(model)[1]:
+        integral, ends = model.rms_integrals(parts)
+        integrals = (np.asarray(integral)[None], np.asarray(ends)[None])
+    fit = _fit_table(model, parts, np.array([0, len(parts.tau)]), integrals, dwell, refine, seg)
+    for c in np.flatnonzero(fit.infeasible[0]):  # the first one, in the table's order (motor torques, then RMS)
+        raise NoFeasibleDuration(f"time = fit: no duration satisfies {fit.names[c]} (the holding torque alone "
+                                 f"exceeds {fit.why[c]})")
+    if vertices is not None:
+        vertices.extend(fit.where[0].tolist())
+    return list(zip(fit.names, fit.thresholds[0].tolist()))
 
 
 def screened_fit(model, parts, dwell: float = 0.0, seg=None, refine: bool = False) -> tuple[float, str] | None:
@@ -213,39 +197,88 @@ def rms_threshold(model, parts, dwell: float = 0.0) -> float:
     return max((t for n, t in fit_thresholds(model, parts, dwell) if n.endswith("rms motor torque")), default=0.0)
 
 
-# ------------------------------------------------------------------------- the same fit for many moves at once
+#: the screened fit is searched up to this duration [s] (longer: no duration holds the limits)
+FIT_CEILING = 1e4
+#: the shortest screened fit [s]
+FIT_FLOOR = 1e-4
+
+
+def screen_bounds(T):
+    """The screened fit T [s] (a float or an array) held to [``FIT_FLOOR``, …]: NaN where it is not a number or
+    beyond ``FIT_CEILING`` (no duration holds the limits), as :func:`~pickplace_cli.timing.fit_screen` and
+    :func:`batch_fit_screen` both give it."""
+    T = np.asarray(T, float)
+    bad = ~(np.isfinite(T) & (T <= FIT_CEILING))
+    return np.where(bad, np.nan, np.maximum(T, FIT_FLOOR))
+
+
+#: under ``time = limits`` the capacity binds when the screened fit lies below T_auto by more than this (relative)
+CAPACITY_GAP = 1e-5
+#: ... and ``fit_s`` is the screened fit raised by this (relative)
+FIT_MARGIN = 1e-7
+
+
+def capacity_fit_s(t_screen, t_auto):
+    """``fit_s`` of ``time = limits`` where the Cartesian capacity binds (the screened fit t_screen [s] clearly below
+    the auto duration t_auto [s]: t_screen·(1 + ``CAPACITY_GAP``) < t_auto): t_screen·(1 + ``FIT_MARGIN``); NaN
+    where it does not (or t_screen is NaN). Floats or arrays: :func:`~pickplace_cli.timing._limits_duration` for one
+    move, the verdict engine for many."""
+    t_screen = np.asarray(t_screen, float)
+    with np.errstate(invalid="ignore"):
+        binds = t_screen * (1.0 + CAPACITY_GAP) < np.asarray(t_auto, float)
+    return np.where(binds, t_screen * (1.0 + FIT_MARGIN), np.nan)
+
+
+# ------------------------------------------------------------------------- the fit for many moves at once
 #
 # The batch verdict engine (:mod:`pickplace_cli.pipelines.verdicts`) evaluates the model of P moves in one call,
 # their samples one move after the other (move k in rows starts[k]:starts[k + 1], sorted in τ within a move).
-# The functions below give, for every move, the very numbers :func:`fit_thresholds` and
-# :func:`~pickplace_cli.timing.fit_screen` give for that move alone: :func:`threshold_columns` element by element,
-# then maxima and arg-maxima per move (exact whatever the order). Where the scalar functions raise
-# NoFeasibleDuration they give inf (fit_screen's T: NaN); where a number is NaN the move's result is NaN (the scalar
-# functions' Python ``max`` skips a NaN that is not first: such a move is not comparable and is left to the scalar
-# path).
+# :func:`_fit_table` gives every move's thresholds: :func:`threshold_columns` element by element, then maxima and
+# arg-maxima per move (exact whatever the order); :func:`fit_thresholds` is its case of one move, so one move's
+# numbers and many moves' are the same code. Where the scalar functions raise NoFeasibleDuration the batch ones
+# give inf (fit_screen's T: NaN); where a number is NaN the move's result is NaN (the scalar functions' Python
+# ``max`` skips a NaN that is not first: such a move is not comparable and is left to the scalar path).
 
 
-def _segment_reduce(ufunc, x: np.ndarray, starts: np.ndarray) -> np.ndarray:
-    """``ufunc.reduce`` of every move's rows of ``x`` (axis 0); every move has at least one row."""
-    return ufunc.reduceat(x, starts[:-1], axis=0)
+class FitTable(NamedTuple):
+    """Every move's thresholds: ``names`` "joint quantity" (Q,), ``thresholds`` (P, Q) [s] (inf where no duration
+    holds it), ``infeasible`` (P, Q) bool (the holding torque alone exceeds the limit), ``why`` (Q,) the limit in
+    words, ``where`` (P, sampled Q) the τ of every sampled quantity's maximum (refined or sampled)."""
+
+    names: list
+    thresholds: np.ndarray
+    infeasible: np.ndarray
+    why: list
+    where: np.ndarray
 
 
-def _batch_columns(model, parts, starts: np.ndarray, rms: tuple | None, dwell: float, refine: bool):
-    """(names, thresholds (P, quantities) [s]) of every move: its columns' largest sample (``refine``: the parabola
-    vertex at it, the move's path without jumps), inf where the holding torque alone exceeds a motor torque, and
-    the RMS thresholds from ``rms`` = (I (P, 3, n), G_end (P, 2, n)), or none when ``rms`` is None."""
+def _fit_table(model, parts, starts: np.ndarray, rms: tuple | None, dwell: float, refine: bool,
+               seg=None) -> FitTable:
+    """:class:`FitTable` of P moves (``parts`` stacked, move k in rows starts[k]:starts[k + 1]): every column's
+    largest sample (``refine``: the parabola vertex at it, never across a jump ``seg``), and the RMS thresholds from
+    ``rms`` = (I (P, 3, n), G_end (P, 2, n)), or none when ``rms`` is None."""
+    from ..curves.peaks import parabolic_peak
+
     starts = np.asarray(starts, dtype=np.intp)
     P = len(starts) - 1
     names, data, overloads = threshold_columns(model, parts)
     if data is None or not len(parts.tau):
-        out = np.zeros((P, 0))
+        names, out, where = [], np.zeros((P, 0)), np.zeros((P, 0))
     elif refine:
-        out = segment_parabolic_peak(parts.tau, data, starts)[0]
+        out, where = parabolic_peak(parts.tau, data, starts, seg)
+    elif P == 1:
+        top = np.argmax(data, axis=0)
+        out, where = data[top, np.arange(data.shape[1])][None], parts.tau[top][None]
     else:
-        out = _segment_reduce(np.maximum, data, starts)
-    for name, _limit, over in overloads:
-        c = names.index(name)
-        out[:, c] = np.where(_segment_reduce(np.logical_or, over, starts), np.inf, out[:, c])
+        out, where = np.maximum.reduceat(data, starts[:-1], axis=0), np.zeros((P, 0))
+    bad = np.zeros(out.shape, bool)
+    why = [""] * len(names)
+    for name, limit, over in overloads:
+        if name in names:
+            c = names.index(name)
+            bad[:, c] = np.logical_or.reduceat(over, starts[:-1], axis=0) if len(over) else False
+            out[:, c] = np.where(bad[:, c], np.inf, out[:, c])
+            why[c] = f"{limit:g} N·m"
     rated, has = _rated(model)
     if rms is not None and has:
         integrals, ends = (np.asarray(x, float) for x in rms)
@@ -254,8 +287,10 @@ def _batch_columns(model, parts, starts: np.ndarray, rms: tuple | None, dwell: f
         ts = rms_thresholds(flat(integrals[:, 0]), flat(integrals[:, 1]), flat(integrals[:, 2]), flat(hold), dwell,
                             np.tile([rated[i] for i in has], P)).reshape(P, len(has))
         names = names + [f"{model.robot.joint_names[i]} rms motor torque" for i in has]
+        why = why + [f"the rated {rated[i]:g} N·m" for i in has]
         out = np.concatenate([out, ts], axis=1)
-    return names, out
+        bad = np.concatenate([bad, ~np.isfinite(ts)], axis=1)
+    return FitTable(names, out, bad, why, where)
 
 
 def batch_fit_thresholds(model, parts, starts: np.ndarray, rms: tuple | None = None,
@@ -263,51 +298,19 @@ def batch_fit_thresholds(model, parts, starts: np.ndarray, rms: tuple | None = N
     """:func:`fit_thresholds` of P moves at once: ``parts`` holds their samples one move after the other, move k in
     rows ``starts[k]:starts[k + 1]`` (at least one each); ``rms`` = (I (P, 3, n), G_end (P, 2, n)), every move's
     :meth:`~pickplace_cli.limits.motion.MotionModel.rms_integrals`, or None to leave the RMS out (``rms=False``).
-    → (names "joint quantity" in fit_thresholds' order, thresholds (P, len(names)) [s]), bitwise fit_thresholds'
-    numbers for each move; inf where it raises NoFeasibleDuration."""
-    return _batch_columns(model, parts, starts, rms, dwell, refine=False)
-
-
-def segment_parabolic_peak(x: np.ndarray, y: np.ndarray, starts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Per move (rows ``starts[k]:starts[k + 1]`` of the sorted τ ``x`` (M,) and the columns ``y`` (M, C)):
-    :func:`~pickplace_cli.limits.check._parabolic_peak` at every column's top sample (its first maximum, as
-    ``np.argmax``), on a path without jumps. → (peak, τ of the peak), each (P, C), bitwise the function's."""
-    starts = np.asarray(starts, dtype=np.intp)
-    n = np.diff(starts)
-    P, C = len(n), y.shape[1]
-    if P == 0:
-        return np.zeros((0, C)), np.zeros((0, C))
-    # the first maximum of every move's column (np.argmax per move: faster than one call on padded arrays)
-    i = np.array([np.argmax(y[s:e], axis=0) for s, e in zip(starts[:-1].tolist(), starts[1:].tolist())])
-    first = starts[:-1, None]
-    k = np.minimum(np.maximum(i, 1), np.maximum(n[:, None] - 2, 1)) + first
-    i = i + first
-    cols = np.arange(C)
-    top, at_top = y[i, cols], x[i]
-    near = [np.minimum(np.maximum(k + d, 0), len(x) - 1) for d in (-1, 0, 1)]  # (a move of < 3 samples: unused)
-    (x0, x1, x2), (y0, y1, y2) = (x[j] for j in near), (y[j, cols] for j in near)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        d1 = (y1 - y0) / (x1 - x0)
-        d2 = (y2 - y1) / (x2 - x1)
-        curv = (d2 - d1) / (x2 - x0)
-        ok = (curv < 0) & (k == i) & (n[:, None] >= 3)
-        slope = d1 + curv * (x1 - x0)
-        safe = np.where(ok, curv, -1.0)
-        xv = np.minimum(np.maximum(x1 - slope / (2 * safe), x0), x2)
-        yv = y1 - slope**2 / (4 * safe)
-    use = ok & (yv >= top)
-    return np.where(use, yv, top), np.where(use, xv, at_top)
+    → (names "joint quantity" in fit_thresholds' order, thresholds (P, len(names)) [s]); inf where fit_thresholds
+    raises NoFeasibleDuration."""
+    fit = _fit_table(model, parts, starts, rms, dwell, refine=False)
+    return fit.names, fit.thresholds
 
 
 def batch_fit_screen(model, parts, starts: np.ndarray, rms: tuple | None, dwell: float) -> np.ndarray | None:
     """:func:`~pickplace_cli.timing.fit_screen`'s duration for P moves at once (``parts``, ``starts``, ``rms`` as in
     :func:`batch_fit_thresholds`, every move's samples sorted in τ; paths without jumps): every quantity's
     per-sample thresholds refined at the parabola vertex of its largest sample, the largest over quantities and
-    the RMS. → (P,) [s], bitwise fit_screen's T for each move; NaN where fit_screen raises or a number is NaN; None
-    when no limit depends on the duration (fit_screen's None)."""
-    names, th = _batch_columns(model, parts, starts, rms, dwell, refine=True)
-    if not names:
+    the RMS. → (P,) [s], fit_screen's T for each move; NaN where fit_screen raises or a number is NaN; None when
+    no limit depends on the duration (fit_screen's None)."""
+    fit = _fit_table(model, parts, starts, rms, dwell, refine=True)
+    if not fit.names:
         return None
-    T = th.max(axis=1)
-    bad = ~(np.isfinite(T) & (T <= 1e4))
-    return np.where(bad, np.nan, np.maximum(T, 1e-4))
+    return screen_bounds(fit.thresholds.max(axis=1))

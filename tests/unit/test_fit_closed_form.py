@@ -190,25 +190,6 @@ def test_batch_fit_thresholds_are_the_scalar_thresholds_bitwise(which):
     assert names2 == [n for n in names if "rms" not in n] and np.array_equal(got2, got[:, : len(names2)])
 
 
-def test_segment_parabolic_peak_is_the_check_s_parabola_per_move():
-    from pickplace_cli.limits.check import _parabolic_peak
-    from pickplace_cli.timing.fit import segment_parabolic_peak
-
-    rng = np.random.default_rng(5)
-    xs, ys = [], []
-    for n in rng.integers(3, 60, 40):
-        x = np.sort(rng.uniform(0, 1, n))
-        y = np.sin(rng.uniform(1, 20) * x[:, None] + rng.uniform(0, 6, 4)) + rng.normal(0, 0.01, (n, 4))
-        y[rng.integers(0, n), 0] = y[:, 0].max()  # a tie: the first maximum counts, as np.argmax takes it
-        xs.append(x)
-        ys.append(y)
-    starts = np.concatenate([[0], np.cumsum([len(x) for x in xs])])
-    peak, at = segment_parabolic_peak(np.concatenate(xs), np.concatenate(ys), starts)
-    for k, (x, y) in enumerate(zip(xs, ys)):
-        ref_peak, ref_at = _parabolic_peak(x, y, np.argmax(y, axis=0), None)
-        assert np.array_equal(peak[k], ref_peak) and np.array_equal(at[k], ref_at)
-
-
 @pytest.mark.parametrize("which", ["delta", "scara", "delta-tight"])
 def test_batch_fit_screen_is_fit_screen_bitwise(which):
     """batch_fit_screen = fit_screen's T for each B-spline move (no jumps), bit for bit; NaN where it raises."""

@@ -243,7 +243,7 @@ def test_check_grid_estimates_every_peak_well_inside_the_exact_band(name, task, 
     (EXACT_BAND), so no violation can hide between the grid's points. An estimate may be *above* the true
     peak (the parabola through a jump of the torque rate, where a 3-4-5 law's jerk steps): that only sends
     the quantity to the exact refinement. Measured worst underestimate: 3.7e-3 (ph, torque rate)."""
-    from pickplace_cli.limits.check import _parabolic_peak
+    from pickplace_cli.curves.peaks import parabolic_peak
     from pickplace_cli.limits.grid import check_grid
     from pickplace_cli.limits.motion import EXACT_BAND
     from pickplace_cli.paths import plan_path
@@ -257,7 +257,7 @@ def test_check_grid_estimates_every_peak_well_inside_the_exact_band(name, task, 
     T = 0.3
     grid = check_grid(np.array([0.0, 1.0]), path.breakpoints)
     meta, data = model.columns(model.parts(grid), T)
-    est, _ = _parabolic_peak(grid, data, np.argmax(data, axis=0))
+    est, _ = parabolic_peak(grid, data)
     fine = np.linspace(0, 1, 20001)
     ref, _ = refine_max(lambda s: model.columns(model.parts(np.clip(s, 0, 1)), T)[1], fine)
     scale = np.maximum(np.abs(ref), 1e-9 * np.max(np.abs(ref)))
@@ -289,6 +289,45 @@ def test_rms_integrals_match_scipy_quad_vec():
         np.testing.assert_allclose(np.concatenate([iaa, iag, igg]), ref, rtol=1e-9, atol=1e-12 * np.abs(ref).max())
         g0 = model._torques(np.array([0.0, 1.0]), singularity=False)[11]
         np.testing.assert_allclose(ends, g0, rtol=1e-14)
+
+
+def test_gk15_many_is_each_integral_alone():
+    """gk15_many of several integrals at once (sharp and smooth integrands: different numbers of rounds, one that
+    cannot be evaluated) = adaptive_gk15 of each alone, bit for bit (the verdict engine's RMS integrals are the
+    planner's), and the integrals themselves to 1e-9 (scipy's quad_vec)."""
+    from scipy.integrate import quad_vec
+
+    from pickplace_cli.limits.grid import adaptive_gk15, gk15_many, rms_edges
+
+    sharp = np.array([3.0, 40.0, 400.0, 1.0])
+    centre = np.array([0.3, 0.51, 0.93, 0.0])
+
+    def one(p: int):
+        def f(x):
+            u = 1.0 / (1.0 + (sharp[p] * (x - centre[p])) ** 2)
+            v = np.sin(3 * x + p)
+            return np.stack([u * u, u * v, v * v], axis=1)
+        return f
+
+    edges = rms_edges(np.array([0.0, 0.25, 0.5, 1.0]), np.zeros(0))
+    a, b = edges[:-1], edges[1:]
+    P = len(sharp) + 1  # the last: not evaluated (NaN)
+    owner = np.repeat(np.arange(P), len(a))
+
+    def evaluate(x, own):
+        sp = np.repeat(own, 15)
+        out = np.full((len(x), 3), np.nan)
+        for p in range(len(sharp)):
+            out[sp == p] = one(p)(x[sp == p])
+        return out, np.arange(P) < len(sharp)
+
+    got = gk15_many(evaluate, np.tile(a, P), np.tile(b, P), owner, P, 1)
+    assert np.isnan(got[-1]).all()
+    for p in range(len(sharp)):
+        alone = adaptive_gk15(one(p), edges, 1)
+        assert np.array_equal(got[p], alone), p
+        ref, _ = quad_vec(lambda s: one(p)(np.array([s]))[0], 0.0, 1.0, epsrel=1e-12, points=[centre[p]])
+        np.testing.assert_allclose(alone, ref, rtol=1e-9)
 
 
 def test_rms_is_exact_for_every_duration():

@@ -158,16 +158,12 @@ def test_solve_auto_keeps_the_better_candidate():
     assert both.T == pytest.approx(min(one), rel=1e-9)
 
 
-def test_parabolic_max_is_the_verdict_engines_estimate():
-    """The 2-D estimate equals the batch verdict engine's 3-D one on random rows (bitwise: the same arithmetic)."""
-    from pickplace_cli.line.moves import _parabolic_max
-    from pickplace_cli.pipelines.verdicts import _batched_parabolic_peak
-
-    rng = np.random.default_rng(0)
-    tau = np.sort(rng.random(97))
-    y = rng.random((20, 97))
-    ref = _batched_parabolic_peak(np.broadcast_to(tau, y.shape), y[:, :, None])[:, 0]
-    assert np.array_equal(_parabolic_max(tau, y), ref)
+def test_one_duration_s_peaks_are_the_grid_s():
+    """peaks_at (the search's scalar steps) = grid_peaks at that duration, bit for bit (one estimate)."""
+    rng = np.random.default_rng(3)
+    mv = _random_move(rng)
+    for T in rng.uniform(0.1, 1.0, 5):
+        assert np.array_equal(np.array(mv.peaks_at(float(T))), mv.grid_peaks(np.array([T]))[0])
 
 
 def test_screened_limit_use_against_the_exact_check():
@@ -176,7 +172,8 @@ def test_screened_limit_use_against_the_exact_check():
     only below 90 % use; measured 0.2 %)."""
     from pickplace_cli.limits.check import check_limits
     from pickplace_cli.limits.motion import MotionModel
-    from pickplace_cli.line.robot import UsePlan, _peaks
+    from pickplace_cli.curves.peaks import parabolic_peak
+    from pickplace_cli.line.robot import UsePlan
     from pickplace_cli.planner import motion_model, motion_model_static
 
     rng = np.random.default_rng(1)
@@ -192,7 +189,7 @@ def test_screened_limit_use_against_the_exact_check():
         parts = model.parts(mv.basis.tau, motion=tuple(mv.samples(T)))
         meta, data = model.columns(parts, np.full(len(mv.basis.tau), T))
         plan = UsePlan(meta)
-        use = dict(zip(plan.keys, plan(_peaks(mv.basis.tau, data.T)[None])[0]))
+        use = dict(zip(plan.keys, plan(parabolic_peak(mv.basis.tau, data)[0][None])[0]))
         for r in rep.rows:
             if (r.joint, r.quantity) in use and r.utilisation > 0.05:
                 worst = max(worst, abs(use[(r.joint, r.quantity)] / r.utilisation - 1))

@@ -52,3 +52,54 @@ def test_batched_peaks_equal_one_by_one():
     for p, (breaks, coefs) in enumerate(zip(breaks_all, coefs_all)):
         for k, c in enumerate(coefs):
             assert got[p, k] == pytest.approx(ppoly_norm_peak(breaks, c)[0], rel=1e-13)
+
+
+def _vertex_by_hand(x, y):
+    """The parabola-vertex estimate of one column, in plain Python (an independent slow implementation)."""
+    i = max(range(len(y)), key=lambda j: (y[j], -j))  # the first maximum
+    top, at = float(y[i]), float(x[i])
+    if not 0 < i < len(y) - 1:
+        return top, at
+    x0, x1, x2 = (float(v) for v in x[i - 1 : i + 2])
+    y0, y1, y2 = (float(v) for v in y[i - 1 : i + 2])
+    d1, d2 = (y1 - y0) / (x1 - x0), (y2 - y1) / (x2 - x1)
+    curv = (d2 - d1) / (x2 - x0)
+    if not curv < 0:
+        return top, at
+    slope = d1 + curv * (x1 - x0)
+    yv = y1 - slope * slope / (4 * curv)
+    return (yv, min(max(x1 - slope / (2 * curv), x0), x2)) if yv >= top else (top, at)
+
+
+def test_parabolic_peak_of_stacked_grids_is_each_grid_s_alone():
+    """parabolic_peak of many grids stacked (``starts``, of one length and of many) = of every grid alone, bit for
+    bit, and = the estimate written out by hand (within 1e-15: the same formula in Python floats)."""
+    from pickplace_cli.curves.peaks import parabolic_peak
+
+    rng = np.random.default_rng(5)
+    for lengths in (rng.integers(1, 60, 40), np.full(12, 33)):
+        xs, ys = [], []
+        for n in lengths:
+            x = np.sort(rng.uniform(0, 1, n))
+            y = np.sin(rng.uniform(1, 20) * x[:, None] + rng.uniform(0, 6, 4)) + rng.normal(0, 0.01, (n, 4))
+            y[rng.integers(0, n), 0] = y[:, 0].max()  # a tie: the first maximum counts, as np.argmax takes it
+            xs.append(x)
+            ys.append(y)
+        starts = np.concatenate([[0], np.cumsum([len(x) for x in xs])])
+        peak, at = parabolic_peak(np.concatenate(xs), np.concatenate(ys), starts)
+        for k, (x, y) in enumerate(zip(xs, ys)):
+            ref_peak, ref_at = parabolic_peak(x, y)
+            assert np.array_equal(peak[k], ref_peak) and np.array_equal(at[k], ref_at)
+            for c in range(y.shape[1]):
+                assert (peak[k, c], at[k, c]) == pytest.approx(_vertex_by_hand(x, y[:, c]), rel=1e-15, abs=1e-15)
+
+
+def test_parabolic_peak_never_across_a_jump():
+    """Three samples in two segments: the sample, not the vertex."""
+    from pickplace_cli.curves.peaks import parabolic_peak
+
+    x = np.array([0.0, 0.4, 0.5, 0.6, 1.0])
+    y = np.array([[0.0], [0.8], [1.0], [0.9], [0.0]])
+    assert parabolic_peak(x, y)[0][0] > 1.0
+    peak, at = parabolic_peak(x, y, seg=np.array([0, 0, 0, 1, 1]))
+    assert peak[0] == 1.0 and at[0] == 0.5
