@@ -142,6 +142,11 @@ RMS_RTOL = 1e-8
 RMS_START_WIDTH = 1.0 / 4.0
 #: a span narrower than this in τ is accepted as it is (a singular integrand cannot stall the integration)
 RMS_MIN_WIDTH = 1e-7
+#: the most integrand evaluations one RMS integral makes: a smooth move needs a few thousand (the shipped profiles'
+#: plans 450–3,000); an integrand that never settles (round-off of a file's absurd values, a torque that is noise)
+#: would otherwise bisect for ``max_rounds`` rounds, doubling its spans every round (minutes, gigabytes). Past the
+#: budget the last estimate of the unfinished spans is taken, as after ``max_rounds``.
+RMS_MAX_NODES = 60_000
 
 # Gauss–Kronrod 7/15 nodes on [-1, 1] (QUADPACK qk15): the Kronrod weights of all 15 nodes, the Gauss weights
 # of the 7 that are the Gauss–Legendre nodes (every other one)
@@ -177,18 +182,24 @@ def rms_edges(breakpoints: np.ndarray, jumps: np.ndarray) -> np.ndarray:
 
 
 def adaptive_gk15(integrand, edges: np.ndarray, n: int, rtol: float = RMS_RTOL,
-                  min_width: float = RMS_MIN_WIDTH, max_rounds: int = 40, first: np.ndarray | None = None) -> np.ndarray:
+                  min_width: float = RMS_MIN_WIDTH, max_rounds: int = 40, first: np.ndarray | None = None,
+                  max_nodes: int = RMS_MAX_NODES) -> np.ndarray:
     """∫ over [edges[0], edges[-1]] of ``integrand`` (τ (M,) → (M, 3n): the columns [f², f·g, g²] of n
     joints), vectorised adaptive Gauss–Kronrod 7/15: every round evaluates the nodes of all unfinished
     spans in one call; a span is accepted when |K15 − G7| of every column is within its share (∝ width) of
     ``rtol`` times that column's scale (∫f², ∫g², and √(∫f²·∫g²) for ∫f·g, plus 1e-13 of the largest),
     otherwise bisected. (scipy's quad_vec does the same adaptively but evaluates one point per call, ~100×
     slower on the robot models; the tests check this against it.) ``first``: the integrand at the first
-    round's nodes ((len(edges) − 1)·15, 3n), when already known."""
+    round's nodes ((len(edges) − 1)·15, 3n), when already known. ``max_nodes``: the evaluation budget
+    (``RMS_MAX_NODES``); a round that would exceed it is not made, the last estimate is taken."""
     a = np.asarray(edges[:-1], float)
     b = np.asarray(edges[1:], float)
     done = np.zeros(3 * n)
+    used = 0
     for _ in range(max_rounds):
+        if first is None and used and used + 15 * len(a) > max_nodes:
+            break  # the budget: the unfinished spans' last estimate (k of the halves' parent)
+        used += 15 * len(a)
         c, h = 0.5 * (a + b), 0.5 * (b - a)
         x = (c[:, None] + h[:, None] * GK_NODES).ravel()
         f = (integrand(x) if first is None else first).reshape(len(a), 15, 3 * n)
@@ -205,6 +216,7 @@ def adaptive_gk15(integrand, edges: np.ndarray, n: int, rtol: float = RMS_RTOL,
         if ok.all():
             return done
         a, b = a[~ok], b[~ok]
+        kept = k[~ok]
         m = 0.5 * (a + b)
         a, b = np.concatenate([a, m]), np.concatenate([m, b])
-    return done + k[~ok].sum(axis=0)  # not converged in max_rounds (never seen): the last estimate
+    return done + kept.sum(axis=0)  # not converged in max_rounds or the budget: the last estimate
