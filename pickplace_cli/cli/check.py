@@ -76,7 +76,8 @@ def check(
     refuse_overwriting_inputs([("--report", report)], [("TRAJECTORY", trajectory)], profile)
     prof = load_profile(profile)
     checks = check_file(trajectory, prof, smooth, limit_use,
-                        notify=lambda text: sys.stderr.write(f"pickplace: {text}\n"))
+                        notify=lambda text: sys.stderr.write(f"pickplace: {text}\n"), strict=strict,
+                        warn=lambda text: sys.stderr.write(f"pickplace: {text}\n"))
     several = len(checks) > 1 or checks[0].move is not None
     if report is not None:
         with atomic_output(report) as stream:
