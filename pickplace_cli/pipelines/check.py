@@ -299,6 +299,13 @@ def check_table(table, profile: Profile, source: str) -> LimitReport:
     note = (f"{s.where(source)}: a {table.kind} table of {len(t)} points over {T:.6g} s; the motion is {_HOW[table.kind]}, "
             "as the drive runs it (each point a step of its derivatives: both sides checked); joint positions checked "
             "as interpolated")
+    if table.kind == "pvt":  # the drive's cubic Hermite is C¹: its acceleration steps at the points
+        from .check_read import pvt_acceleration_steps
+
+        jumps = ", ".join(f"{n} {v:.4g} {u}/s²" for n, v, u in zip(robot.joint_names, pvt_acceleration_steps(table),
+                                                                     robot.joint_units))
+        note += (f"; its acceleration steps at the points by up to {jumps} (the torque there is checked on both "
+                 "sides; the torque rate is that inside the segments)")
     report, _ = _motion_report(t, tool_of(table.q), robot, profile, 0.0, source, lambda how: (note,),
                                rebuilt=(ev, steps, _HOW[table.kind]))
     report = _with_accuracy(report, [(report, 1.0)])

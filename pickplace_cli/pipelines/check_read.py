@@ -496,3 +496,18 @@ def _is_number(cell: str) -> bool:
     except ValueError:
         return False
     return True
+
+
+def pvt_acceleration_steps(table: Table) -> np.ndarray:
+    """Per joint: the largest step of the acceleration [rad/s² or m/s²] at a PVT table's interior points (the cubic
+    Hermite is C¹: its acceleration at the end of one segment, (−6Δq/h + 2q̇₀ + 4q̇₁)/h, and at the start of the next,
+    (6Δq/h − 4q̇₀ − 2q̇₁)/h, differ); zeros for fewer than 3 points."""
+    if len(table.t) < 3:
+        return np.zeros(table.q.shape[1])
+    h = np.diff(table.t)[:, None]
+    dq = np.diff(table.q, axis=0)
+    v0, v1 = table.qd[:-1], table.qd[1:]
+    start = (6 * dq / h - 4 * v0 - 2 * v1) / h
+    end = (-6 * dq / h + 2 * v0 + 4 * v1) / h
+    return np.abs(start[1:] - end[:-1]).max(axis=0)
+
