@@ -388,7 +388,7 @@ def check_file(path: str | Path, profile: Profile, smoothing: float | str = 0.0,
     robot = build_robot(profile.robot)
     from .check_read import read_checked
 
-    kind, what = read_checked(text, source, profile, robot)  # joints, drive units, or a table (check_read)
+    kind, what, source = read_checked(text, source, profile, robot)  # joints, drive units, a table (check_read)
     if kind == "table":
         return [MoveCheck(None, int(what.lines[0]), int(what.lines[-1]),
                           check_table(what, profile, source).rated(profile.limit_use))]

@@ -457,15 +457,48 @@ def tool_motion(table: Table, tool_of):
 #: the most points a table may have for ``check`` (each segment gets its own fit): as many as ``plan`` writes at most
 MAX_POINTS = 200_000
 
+#: one array of a table in Structured Text as ``plan --format pvt-st|cam-st|cam-table-st`` writes it (either dialect):
+#: ``NAME : ARRAY[1..n] OF LREAL := [ (* column [unit]: words *) values ];``
+_ST_ARRAY = r"(\w+)\s*:\s*ARRAY\s*\[\s*1\s*\.\.\s*(\d+)\s*\]\s*OF\s*LREAL\s*:=\s*\[\s*\(\*\s*([^*]*?)\*\)([^\]]*)\]"
+
+
+def st_table_text(text: str, source: str) -> str | None:
+    """A table in Structured Text (``plan --format pvt-st|cam-st|cam-table-st``) as the CSV ``plan --format
+    pvt|cam|cam-table`` writes (each array's comment names its column and unit); None when ``text`` is not one. Row
+    k + 1 of the CSV is point k of the arrays."""
+    import re
+
+    if ":= [" not in text or not re.search(r"FB_Pickplace(Pvt|Cam|CamTable)\b|PP_(PVT|CAM|CAMTABLE)_", text):
+        return None
+    cols = []
+    for name, count, comment, body in re.findall(_ST_ARRAY, text):
+        head = comment.split(":", 1)[0].strip()
+        values = [v.strip() for v in body.split(",") if v.strip()]
+        if len(values) != int(count):
+            raise TaskError(f"{source}: {name}: {len(values)} values for ARRAY[1..{count}]: a table's arrays must be "
+                            "complete")
+        cols.append((head.replace(" [", "["), values))
+    if not cols or len({len(v) for _, v in cols}) != 1:
+        raise TaskError(f"{source}: not a table plan writes in Structured Text (no arrays, or arrays of different "
+                        "lengths)")
+    rows = [",".join(c[0] for c in cols)]
+    rows += [",".join(v[k] for _, v in cols) for k in range(len(cols[0][1]))]
+    return "\n".join(rows) + "\n"
+
+
 def read_checked(text: str, source: str, profile, robot):
     """What ``check`` judges in a file: ("samples", [Samples …]) of a file of joint or drive positions (drive units
     converted to the model's), ("table", Table) of a PVT or cam table, ("cam-table", Samples) of an equidistant cam
-    table; TaskError naming the file, line and rule for a file without a header or without the columns needed."""
+    table, each with the name its messages give the file (a table in Structured Text says how its lines count);
+    TaskError naming the file, line and rule for a file without a header or without the columns needed."""
     from dataclasses import replace
 
     from ..export.drive import drive_map
 
     drive = drive_map(profile)
+    st = st_table_text(text, source)
+    if st is not None:  # the same table in Structured Text: its arrays as CSV columns (line k + 1 = point k)
+        text, source = st, f"{source} (Structured Text; line k + 1 is point k)"
     head = read_header(text)
     if head is not None and all(_is_number(c) for c in head.cells):
         raise TaskError(f"{source}:{head.line}: no header line (the tsv dialect writes none): check needs a header "
@@ -478,16 +511,16 @@ def read_checked(text: str, source: str, profile, robot):
             need = ", ".join(["t", *robot.joint_names])
             raise TaskError(f"{source}:{head.line}: header lacks the columns of the joints ({need}) and of the "
                             f"profile's drives (t, {', '.join(drive.names)}); found {', '.join(head.names)}")
-        return "samples", read_moves(text, source, robot.joint_names, robot.joint_units)
+        return "samples", read_moves(text, source, robot.joint_names, robot.joint_units), source
     if kind == "drive":
         moves = read_moves(text, source, drive.names, drive.labels)
-        return "samples", [replace(m, q=drive.joint_position(m.q)) for m in moves]
+        return "samples", [replace(m, q=drive.joint_position(m.q)) for m in moves], source
     table = read_table(text, source, kind, robot.joint_names, robot.joint_units, drive)
     if kind == "cam-table":
         if len(table.t) < MIN_SAMPLES:
             raise TaskError(f"{source}: {len(table.t)} points in a cam-table; check needs at least {MIN_SAMPLES}")
-        return "cam-table", Samples(None, table.t, table.q, table.lines, 0, int(table.lines[-1]))
-    return "table", table
+        return "cam-table", Samples(None, table.t, table.q, table.lines, 0, int(table.lines[-1])), source
+    return "table", table, source
 
 
 def _is_number(cell: str) -> bool:

@@ -1,5 +1,6 @@
 """What ``plan`` writes for the drive, ``check`` reads with the same profile: the PLC feed (``--columns plc``, default
-and twincat dialects, with the drive velocities), and the PVT, cam and cam-table tables. Plan's files of moves within
+and twincat dialects, with the drive velocities), and the PVT, cam and cam-table tables
+(CSV, and Structured Text in both dialects). Plan's files of moves within
 their limits are accepted (exit 0); copies re-timed 1 % and 3 % faster (every time divided by the factor, the
 velocity columns multiplied by it, accelerations by its square, as a controller running the same points faster would
 see them) are refused where a limit that depends on the duration binds (``--time fit``: exit 3; a positions-only
@@ -19,12 +20,13 @@ MOVES = {"delta-su2018": ("-0.1525,0,-0.8", "0.1525,0,-0.8"),  # the Adept move
 #: the files: (name, plan options)
 FORMATS = {"plc": ("--columns", "plc"), "twincat": ("--columns", "plc", "--csv-dialect", "twincat"),
            "plc-vel": ("--columns", "plc,drive_vel"), "pvt": ("--format", "pvt"), "cam": ("--format", "cam"),
-           "cam-table": ("--format", "cam-table")}
+           "cam-table": ("--format", "cam-table"), "pvt-st": ("--format", "pvt-st"),
+           "cam-st": ("--format", "cam-st", "--st-dialect", "codesys"), "cam-table-st": ("--format", "cam-table-st")}
 
 
 def _plan(tmp_path, prof: str, fmt: str, rule: str) -> str:
     a, b = MOVES[prof]
-    out = tmp_path / f"{prof}-{fmt}-{rule}.csv"
+    out = tmp_path / f"{prof}-{fmt}-{rule}.{'st' if fmt.endswith('-st') else 'csv'}"
     res = runner.invoke(app, ["plan", "-p", prof, "--from", a, "--to", b, "--time", rule, "-q", "-o", str(out),
                               *FORMATS[fmt]])
     if res.exit_code != 0:
@@ -104,3 +106,24 @@ def test_tables_are_judged_as_rebuilt_when_retimed(tmp_path, fmt):
                    strict=False)
 def test_plans_cam_at_fit_is_accepted(tmp_path):
     assert _check(_plan(tmp_path, "delta-su2018", "cam", "fit"), "delta-su2018") == 0
+
+
+@pytest.mark.parametrize("fmt", ["pvt", "cam", "cam-table"])
+def test_structured_text_reads_as_its_csv(tmp_path, fmt):
+    """The same table written as CSV and as Structured Text (codesys and strict dialects) is read to the same points
+    (to 1e-12 relative: both print every value round-trip exactly, the ST with repr's 17 digits, the CSV with 12)."""
+    import numpy as np
+
+    from pickplace_cli.model.profile import load_profile
+    from pickplace_cli.pipelines.check_read import read_checked
+    from pickplace_cli.robots import build_robot
+
+    prof = load_profile("delta-su2018")
+    robot = build_robot(prof.robot)
+    csv_path = _plan(tmp_path, "delta-su2018", fmt, "limits")
+    got = []
+    for path in (csv_path, _plan(tmp_path, "delta-su2018", f"{fmt}-st", "limits")):
+        kind, what, _ = read_checked(open(path).read(), path, prof, robot)
+        got.append(what)
+    assert np.allclose(got[0].t, got[1].t, rtol=1e-11, atol=1e-15)
+    assert np.allclose(got[0].q, got[1].q, rtol=1e-11, atol=1e-12)

@@ -109,7 +109,7 @@ def test_drive_counts_are_read_back_to_joint_radians(tmp_path):
     q = np.column_stack([0.3 + 0.2 * np.sin(10 * t), 0.4 + 0.1 * t, 0.35 - 0.1 * t])
     rows = "".join(f"{a:.12g};{b:.12g};{c:.12g};{d:.12g}\r\n" for a, b, c, d in
                    np.column_stack([t, q * K_COUNTS]))
-    kind, moves = cr.read_checked("t[s];A1[counts];A2[counts];A3[counts]\r\n" + rows, "rec.csv", prof, robot)
+    kind, moves, _ = cr.read_checked("t[s];A1[counts];A2[counts];A3[counts]\r\n" + rows, "rec.csv", prof, robot)
     assert kind == "samples"
     assert np.allclose(moves[0].q, q, rtol=0, atol=1e-9)
 
@@ -121,7 +121,7 @@ def test_drive_offsets_and_signs_of_a_table(tmp_path):
     robot = build_robot(prof.robot)
     text = ("t[ms],dt[ms],AxisX[mm],AxisX_vel[mm/ms],AxisY[mm],AxisY_vel[mm/ms],AxisZ[mm],AxisZ_vel[mm/ms]\n"
             "0,0,100,0,200,0,-400,0\n10,10,150,2,210,0.5,-400,0\n20,10,180,0,220,0,-400,0\n")
-    kind, table = cr.read_checked(text, "p.csv", prof, robot)
+    kind, table, _ = cr.read_checked(text, "p.csv", prof, robot)
     assert kind == "table" and table.kind == "pvt"
     assert np.allclose(table.t, [0, 0.01, 0.02], rtol=0, atol=1e-12)
     assert np.allclose(table.q[1], [0.15, 0.21, -0.4], rtol=0, atol=1e-12)
