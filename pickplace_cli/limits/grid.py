@@ -142,11 +142,12 @@ RMS_RTOL = 1e-8
 RMS_START_WIDTH = 1.0 / 4.0
 #: a span narrower than this in τ is accepted as it is (a singular integrand cannot stall the integration)
 RMS_MIN_WIDTH = 1e-7
-#: the most integrand evaluations one RMS integral makes: a smooth move needs a few thousand (the shipped profiles'
-#: plans 450–3,000); an integrand that never settles (round-off of a file's absurd values, a torque that is noise)
-#: would otherwise bisect for ``max_rounds`` rounds, doubling its spans every round (minutes, gigabytes). Past the
-#: budget the last estimate of the unfinished spans is taken, as after ``max_rounds``.
-RMS_MAX_NODES = 60_000
+#: the most integrand evaluations one RMS integral makes: a smooth move needs far fewer (plans on the shipped profiles,
+#: every method, default and optimal laws: 105–630; check of plan's files: up to ~4,000, 15 per span of up to 256
+#: spans); an integrand that never settles (round-off of a file's absurd values, a torque that is noise) would
+#: otherwise bisect for ``max_rounds`` rounds, doubling its spans every round (minutes, gigabytes). Past the budget
+#: the last estimate of the unfinished spans is taken, as after ``max_rounds``.
+RMS_MAX_NODES = 20_000
 
 # Gauss–Kronrod 7/15 nodes on [-1, 1] (QUADPACK qk15): the Kronrod weights of all 15 nodes, the Gauss weights
 # of the 7 that are the Gauss–Legendre nodes (every other one)

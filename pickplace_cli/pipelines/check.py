@@ -328,6 +328,19 @@ def check_table(table, profile: Profile, source: str) -> LimitReport:
 CHECK_MAX_BYTES = 64 << 20
 
 
+def _read_bounded(fh, limit: int) -> bytes:
+    """At most ``limit`` bytes of ``fh``, read in 1 MiB pieces (one ``read(limit)`` would allocate all of ``limit``
+    however small the file)."""
+    parts, total = [], 0
+    while total < limit:
+        piece = fh.read(min(1 << 20, limit - total))
+        if not piece:
+            break
+        parts.append(piece)
+        total += len(piece)
+    return b"".join(parts)
+
+
 def check_file(path: str | Path, profile: Profile, smoothing: float | str = 0.0,
                limit_use: float | None = None, notify=None, strict: bool = False, warn=None) -> list[MoveCheck]:
     """Check every move of a trajectory file against a profile's limits.
@@ -371,12 +384,12 @@ def check_file(path: str | Path, profile: Profile, smoothing: float | str = 0.0,
     source = "<stdin>" if str(path) == "-" else str(p)
     try:
         if str(path) == "-":
-            raw = sys.stdin.buffer.read(CHECK_MAX_BYTES + 1)
+            raw = _read_bounded(sys.stdin.buffer, CHECK_MAX_BYTES + 1)
         else:  # (a named pipe: its writer awaited for a bounded time, saying so through ``notify``)
             from ..model.files import open_for_reading
 
             with open(open_for_reading(str(p), "trajectory", TaskError, notify=notify), "rb") as fh:
-                raw = fh.read(CHECK_MAX_BYTES + 1)
+                raw = _read_bounded(fh, CHECK_MAX_BYTES + 1)
     except OSError as exc:
         raise TaskError(f"{p}: cannot read: {exc.strerror}") from None
     if len(raw) > CHECK_MAX_BYTES:
