@@ -294,11 +294,11 @@ def file_kind(head: Header, joint_names: tuple[str, ...], drive_names: tuple[str
     """The kind of file a header names (module docstring): one of ``KINDS``; "joints" also when it fits none (the
     reader of the model's joints then says which column is missing)."""
     names = set(head.names)
-    if "t" in names and set(joint_names) <= names:
-        return "joints"
     table_names = drive_names if drive_names is not None else joint_names
     if "t" in names and "dt" in names and all(n in names and f"{n}_vel" in names for n in table_names):
-        return "pvt"
+        return "pvt"  # (before the joints: without controller.joints a PVT table names them q1 … qn too)
+    if "t" in names and set(joint_names) <= names:
+        return "joints"
     if "master" in names and all(n in names for n in table_names):
         return "cam" if all(f"{n}_vel" in names and f"{n}_acc" in names for n in table_names) else "cam-table"
     if drive_names is not None and "t" in names and set(drive_names) <= names:
@@ -507,10 +507,12 @@ def read_checked(text: str, source: str, profile, robot):
     kind = file_kind(head, robot.joint_names, drive.names if drive is not None else None) if head else "joints"
     if kind == "joints":
         names = set(head.names) if head is not None else set()
-        if head is not None and drive is not None and not set(robot.joint_names) <= names:
-            need = ", ".join(["t", *robot.joint_names])
-            raise TaskError(f"{source}:{head.line}: header lacks the columns of the joints ({need}) and of the "
-                            f"profile's drives (t, {', '.join(drive.names)}); found {', '.join(head.names)}")
+        if head is not None and drive is not None and not names & set(robot.joint_names):
+            lack = [c for c in ("t", *robot.joint_names) if c not in names]
+            lack_d = [c for c in ("t", *drive.names) if c not in names]
+            raise TaskError(f"{source}:{head.line}: header lacks column(s) {', '.join(lack)} (the joints) and "
+                            f"{', '.join(lack_d)} (the profile's drives); need t and q1 … qn, or t and the drives' "
+                            f"columns; found {', '.join(head.names)}")
         return "samples", read_moves(text, source, robot.joint_names, robot.joint_units), source
     if kind == "drive":
         moves = read_moves(text, source, drive.names, drive.labels)

@@ -212,3 +212,15 @@ def test_rms_quadrature_budget():
     assert n_eval[0] <= RMS_MAX_NODES
     got = adaptive_gk15(lambda x: np.column_stack([x**2, x**3, x**4]), np.linspace(0, 1, 5), 1)
     assert np.allclose(got, [1 / 3, 1 / 4, 1 / 5], rtol=0, atol=1e-12)
+
+
+def test_tables_without_controller_joints_name_the_model_joints():
+    """A profile without controller.joints: plan's tables name q1 … qn in rad; a PVT table (t, dt, q1, q1_vel …) is a
+    table, not samples of t and q1 … qn; a cam-table (master, q1 …) too."""
+    prof = load_profile("delta-su2018").model_copy(update={"controller": None})
+    robot = build_robot(prof.robot)
+    pvt = ("t[s],dt[s],q1[rad],q1_vel[rad/s],q2[rad],q2_vel[rad/s],q3[rad],q3_vel[rad/s]\n"
+           "0,0,0.6,0,0.3,0,0.3,0\n0.1,0.1,0.5,0,0.35,0,0.35,0\n")
+    kind, table, _ = cr.read_checked(pvt, "p.csv", prof, robot)
+    assert kind == "table" and table.kind == "pvt"
+    assert np.allclose(table.q[1], [0.5, 0.35, 0.35], rtol=0, atol=1e-15)
