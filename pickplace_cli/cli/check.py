@@ -16,8 +16,10 @@ from .render import _print_limit_table, _print_verdict
 def check(
     trajectory: str = typer.Argument(
         ..., metavar="TRAJECTORY",
-        help="CSV with a header holding t [s] and q1 … qn (this tool's CSV works, also --batch and --round-trip "
-        "output); '-' = stdin.",
+        help="CSV with a header holding t [s] (or t[ms], t[us]) and q1 … qn [rad or m] (this tool's CSV works, also "
+        "--batch and --round-trip output); or, with the profile's controller.joints, t and the drives' columns in "
+        "their units (plan --columns plc, any dialect with a header), or a pvt, cam or cam-table table, CSV or "
+        "Structured Text (plan --format pvt|cam|cam-table and their -st forms, time master); '-' = stdin.",
     ),
     profile: Optional[str] = typer.Option(None, "--profile", "-p", help="Profile YAML file or shipped name. [default: delta-su2018]"),
     smoothing: str = typer.Option(
@@ -33,7 +35,9 @@ def check(
     ),
     strict: bool = typer.Option(
         False, "--strict", help="Exit 3 also when a peak is not resolved by the samples (its accuracy is worse than "
-        "1 % of the limit and it may be beyond it), not only when the data shows a limit exceeded.",
+        "1 % of the limit and it may be beyond it), not only when the data shows a limit exceeded; and exit 1 for a "
+        "file whose derivative columns (vx … jz) disagree with its positions, instead of judging it from its "
+        "positions with a warning.",
     ),
     report: Optional[str] = typer.Option(None, "--report", help="Also write the limit report as JSON to this file."),
     report_only: bool = typer.Option(False, "--report-only", help="Exit 0 even when a limit is exceeded."),
@@ -47,6 +51,13 @@ def check(
     wrapped). Every duration-dependent peak is estimated twice, from all samples and from every other one: the
     difference, and at least 0.1 % of the peak, is its accuracy (the "± %" column); a limit counts as exceeded when the peak less its accuracy is
     beyond it, so a trajectory `plan` wrote as within its limits passes, and one 1 % faster fails.
+
+    A file's tool derivative columns (vx … jz [m/s, m/s², m/s³]) are used only where they agree with its
+    positions (velocity within 1 %, acceleration 10 % of their peak on every interval, jerk 5 % on the median
+    one); otherwise the move is judged from its positions, with a one-line warning. With the profile's
+    controller.joints the drive's files are read in its names and units (d = sign·k·(q − offset) undone), and a PVT
+    table is judged as the drive's cubic Hermite, a cam as the quintic through position, velocity and acceleration,
+    a cam-table as samples of the motion.
 
     A file with a `move` column (`plan --batch` or `--round-trip` output) is checked move by move: each
     move gets its own limit table and verdict, and the exit code is the worst of them. Samples at the end
@@ -76,7 +87,8 @@ def check(
     refuse_overwriting_inputs([("--report", report)], [("TRAJECTORY", trajectory)], profile)
     prof = load_profile(profile)
     checks = check_file(trajectory, prof, smooth, limit_use,
-                        notify=lambda text: sys.stderr.write(f"pickplace: {text}\n"))
+                        notify=lambda text: sys.stderr.write(f"pickplace: {text}\n"), strict=strict,
+                        warn=lambda text: sys.stderr.write(f"pickplace: {text}\n"))
     several = len(checks) > 1 or checks[0].move is not None
     if report is not None:
         with atomic_output(report) as stream:

@@ -142,6 +142,12 @@ RMS_RTOL = 1e-8
 RMS_START_WIDTH = 1.0 / 4.0
 #: a span narrower than this in τ is accepted as it is (a singular integrand cannot stall the integration)
 RMS_MIN_WIDTH = 1e-7
+#: the most integrand evaluations one RMS integral makes: a smooth move needs far fewer (plans on the shipped profiles,
+#: every method, default and optimal laws: 105–630; check of plan's files: up to ~4,000, 15 per span of up to 256
+#: spans); an integrand that never settles (round-off of a file's absurd values, a torque that is noise) would
+#: otherwise bisect for ``max_rounds`` rounds, doubling its spans every round (minutes, gigabytes). Past the budget
+#: the last estimate of the unfinished spans is taken, as after ``max_rounds``.
+RMS_MAX_NODES = 20_000
 
 # Gauss–Kronrod 7/15 nodes on [-1, 1] (QUADPACK qk15): the Kronrod weights of all 15 nodes, the Gauss weights
 # of the 7 that are the Gauss–Legendre nodes (every other one)
@@ -177,18 +183,21 @@ def rms_edges(breakpoints: np.ndarray, jumps: np.ndarray) -> np.ndarray:
 
 
 def adaptive_gk15(integrand, edges: np.ndarray, n: int, rtol: float = RMS_RTOL,
-                  min_width: float = RMS_MIN_WIDTH, max_rounds: int = 40, first: np.ndarray | None = None) -> np.ndarray:
+                  min_width: float = RMS_MIN_WIDTH, max_rounds: int = 40, first: np.ndarray | None = None,
+                  max_nodes: int = RMS_MAX_NODES) -> np.ndarray:
     """∫ over [edges[0], edges[-1]] of ``integrand`` (τ (M,) → (M, 3n): the columns [f², f·g, g²] of n
     joints), vectorised adaptive Gauss–Kronrod 7/15: every round evaluates the nodes of all unfinished
     spans in one call; a span is accepted when |K15 − G7| of every column is within its share (∝ width) of
     ``rtol`` times that column's scale (∫f², ∫g², and √(∫f²·∫g²) for ∫f·g, plus 1e-13 of the largest),
     otherwise bisected. (scipy's quad_vec does the same adaptively but evaluates one point per call, ~100×
     slower on the robot models; the tests check this against it.) ``first``: the integrand at the first
-    round's nodes ((len(edges) − 1)·15, 3n), when already known. The batch of one of :func:`gk15_many`."""
+    round's nodes ((len(edges) − 1)·15, 3n), when already known. ``max_nodes``: the evaluation budget
+    (``RMS_MAX_NODES``); a round that would exceed it is not made, the last estimate is taken. The batch of one
+    of :func:`gk15_many`."""
     a = np.asarray(edges[:-1], float)
     b = np.asarray(edges[1:], float)
     return gk15_many(lambda x, owner: (integrand(x), None), a, b, np.zeros(len(a), np.intp), 1, n,
-                     first, rtol, min_width, max_rounds, float(edges[-1] - edges[0]))[0]
+                     first, rtol, min_width, max_rounds, float(edges[-1] - edges[0]), max_nodes)[0]
 
 
 def _sums(values: np.ndarray, owner: np.ndarray, P: int) -> np.ndarray:
@@ -203,18 +212,24 @@ def _sums(values: np.ndarray, owner: np.ndarray, P: int) -> np.ndarray:
 
 def gk15_many(evaluate, a: np.ndarray, b: np.ndarray, owner: np.ndarray, P: int, n: int,
               first: np.ndarray | None = None, rtol: float = RMS_RTOL, min_width: float = RMS_MIN_WIDTH,
-              max_rounds: int = 40, length: float = 1.0) -> np.ndarray:
+              max_rounds: int = 40, length: float = 1.0, max_nodes: int | None = None) -> np.ndarray:
     """:func:`adaptive_gk15` of P integrals at once (P (3n,) results, one after the other in ``owner``): the spans
     [a, b] of integral ``owner`` (non-decreasing), ``length`` the width of each integral's interval;
     ``evaluate(x, owner)`` → (the integrand at the nodes x of the spans of ``owner`` (S·15, 3n), which integrals
     could be evaluated: (P,) bool, or None for all); ``first``: the integrand at the first round's nodes. Each
     integral's spans are bisected, accepted and summed as :func:`adaptive_gk15` does them for that integral alone
     (its unfinished spans' left halves in order, then their right halves); NaN for an integral that could not be
-    evaluated. → (P, 3n)."""
+    evaluated. ``max_nodes``: the evaluation budget (None: ``RMS_MAX_NODES`` per integral); a round that would
+    exceed it is not made, the unfinished spans' last estimate is taken. → (P, 3n)."""
     G = len(GK_NODES)
     done = np.zeros((P, 3 * n))
     f = first
+    budget = RMS_MAX_NODES * P if max_nodes is None else max_nodes
+    used = 0
     for _ in range(max_rounds):
+        if f is None and used and used + G * len(a) > budget:
+            break  # the budget: the unfinished spans' last estimate (k of the halves' parent)
+        used += G * len(a)
         c, h = 0.5 * (a + b), 0.5 * (b - a)
         if f is None:
             f, keep = evaluate((c[:, None] + h[:, None] * GK_NODES).ravel(), owner)
@@ -240,4 +255,4 @@ def gk15_many(evaluate, a: np.ndarray, b: np.ndarray, owner: np.ndarray, P: int,
         m = 0.5 * (a + b)
         o = np.argsort(np.concatenate([owner, owner]), kind="stable")
         a, b, owner = np.concatenate([a, m])[o], np.concatenate([m, b])[o], np.concatenate([owner, owner])[o]
-    return done + _sums(rest, rest_owner, P)  # not converged in max_rounds (never seen): the last estimate
+    return done + _sums(rest, rest_owner, P)  # not converged in max_rounds or the budget: the last estimate

@@ -21,8 +21,6 @@ the same joint mapping, dynamics and limit check as ``plan``.
 
 from __future__ import annotations
 
-import csv
-import math
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -37,6 +35,8 @@ from ..model.headroom import limit_specs
 from ..model.profile import Profile
 from ..robots import build_robot
 from ..model.trajectory import CartesianPath
+from .check_read import (JOINT_UNITS, MIN_SAMPLES, TIME_UNITS, TOOL_COLUMNS, Samples, column_scales,  # noqa: F401
+                         read_moves, read_trajectory)
 
 #: a joint position in the file may differ from the model's inverse kinematics of its own forward
 #: kinematics by this much (rad or m) before it counts as another branch. FK∘IK round trips to ~1e-12 and
@@ -51,35 +51,8 @@ CHECK_RESOLUTION = 1e-3
 #: the change of a peak when every other sample is dropped, over this, is the septic Hermite's accuracy: (2⁵ − 1)/2,
 #: its third derivative converging as h⁵, with a factor 2 of safety
 HERMITE_DIVISOR = 15.5
-#: fewest samples a move needs: a quintic spline has 6 coefficients
-MIN_SAMPLES = 6
-#: the tool's motion this tool's CSV writes beside the joints (m, m/s, m/s², m/s³): with all of them, and the
-#: positions FK(q) within ``TOOL_TOL``, the motion between samples is the septic Hermite through them
-TOOL_COLUMNS = ("x", "y", "z", "vx", "vy", "vz", "ax", "ay", "az", "jx", "jy", "jz")
 #: the file's x, y, z may differ from FK of its joint positions by this much [m] (12 significant digits: ~1e-12)
 TOOL_TOL = 1e-7
-
-
-@dataclass(frozen=True)
-class Samples:
-    """One move of a trajectory file: ``move`` its number in the file's move column (None: no such column),
-    ``t`` (N,) s and ``q`` (N, n) as in the file, ``lines`` (N,) the 1-based file line of every sample,
-    ``rest`` how many trailing samples at rest were set aside (see the module docstring) and ``last_line``
-    the file line of the move's last row (with them)."""
-
-    move: int | None
-    t: np.ndarray
-    q: np.ndarray
-    lines: np.ndarray
-    rest: int
-    last_line: int
-    #: (N, 12) the tool's x, y, z [m], vx … [m/s], ax … [m/s²], jx … [m/s³] when the file has all of them (this
-    #: tool's CSV does), else None
-    tool: np.ndarray | None = None
-
-    def where(self, source: str) -> str:
-        name = f"move {self.move}" if self.move is not None else "the trajectory"
-        return f"{source}: {name} (lines {int(self.lines[0])}–{self.last_line})"
 
 
 @dataclass(frozen=True)
@@ -100,170 +73,6 @@ class MoveCheck:
     first_line: int
     last_line: int
     report: LimitReport
-
-
-def _number(cell: str, name: str, source: str, line: int, column: str) -> float:
-    """The number in one cell; TaskError naming file:line, the column and the cell's text."""
-    from ..model.text import plain_float
-
-    try:
-        x = plain_float(cell.strip())
-    except ValueError:
-        shown = cell.strip() if len(cell.strip()) <= 40 else cell.strip()[:40] + "…"
-        raise TaskError(f"{source}:{line}: {name} = {shown!r}: not a number (column {column})") from None
-    if not np.isfinite(x):
-        raise TaskError(f"{source}:{line}: {name} = {cell.strip()}: must be a finite number (column {column})")
-    return x
-
-
-def _cells(line: str, sep: str, source: str, number: int) -> list[str]:
-    """The cells of one line (quotes as CSV has them, within the line); TaskError naming the line for a quote that is
-    not closed, a field over csv's size limit, and the like (never the rest of the file in the message)."""
-    if '"' not in line:
-        return line.split(sep)
-    try:
-        return next(csv.reader([line], delimiter=sep, strict=True))
-    except csv.Error as exc:
-        raise TaskError(f"{source}:{number}: not a CSV row ({exc}): a quote opened and not closed on this line?") from None
-
-
-#: the units a header may give a checked column in, and the factor to SI: time, an angle, a length
-TIME_UNITS = {"": 1.0, "s": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6}
-JOINT_UNITS = {"rad": {"": 1.0, "rad": 1.0, "deg": math.pi / 180, "°": math.pi / 180},
-               "m": {"": 1.0, "m": 1.0, "mm": 1e-3}}
-
-
-def column_scales(names: list[str], joint_units: tuple[str, ...] | None, source: str, line: int) -> np.ndarray:
-    """Factors from the units in the header cells ``names`` (``t[ms]``, ``q1[deg]``, ``q3[mm]``; no unit: SI) of the
-    columns t, q1 … qn to s, rad or m; TaskError naming the column for a unit that is not one of the column's
-    (``q1[rpm]``, ``q3[deg]`` of a prismatic joint). Derivative columns are not read (check derives them)."""
-    out = np.ones(len(names))
-    for k, cell in enumerate(names):
-        unit = cell.split("[", 1)[1].rstrip("]").strip() if "[" in cell else ""
-        base = cell.split("[")[0].strip()
-        if k == 0:
-            table, kind = TIME_UNITS, "s"
-        else:
-            kind = joint_units[k - 1] if joint_units is not None else "rad"
-            table = JOINT_UNITS.get(kind, {"": 1.0, kind: 1.0})
-        if unit not in table:
-            units = [u for u in table if u]
-            allowed = ", ".join(units[:-1]) + " or " + units[-1] if len(units) > 1 else units[0]
-            raise TaskError(f"{source}:{line}: column {cell!r}: {base} is read in {allowed} (the header's unit "
-                            f"{unit!r} is not one of them)")
-        out[k] = table[unit]
-    return out
-
-
-def _si_tool_unit(cell: str) -> bool:
-    """Whether a tool column's header names the SI unit this tool writes (x [m], vx [m/s], ax [m/s^2], jx [m/s^3]),
-    or none."""
-    name, _, unit = cell.strip().partition("[")
-    unit = unit.rstrip("]").strip().replace("²", "^2").replace("³", "^3")
-    order = {"v": 1, "a": 2, "j": 3}.get(name.strip()[0], 0) if len(name.strip()) == 2 else 0
-    return unit in ("", ("m", "m/s", "m/s^2", "m/s^3")[order])
-
-
-def read_moves(text: str, source: str, joint_names: tuple[str, ...],
-               joint_units: tuple[str, ...] | None = None) -> list[Samples]:
-    """The moves of a trajectory CSV (see the module docstring); TaskError naming the file, line, column and
-    value of the first problem. Units in the header (``t[ms]``, ``q1[deg]``, ``q3[mm]``, :func:`column_scales`;
-    ``joint_units`` "rad" or "m" per joint, default rad) are converted to s, rad and m."""
-    from .batch import sniff_delimiter
-
-    numbered = [(n, ln) for n, ln in enumerate(text.removeprefix("\ufeff").splitlines(), start=1)
-                if ln.strip() and not ln.lstrip().startswith("#")]
-    need = ["t", *joint_names]
-    if not numbered:
-        raise TaskError(f"{source}: empty file (need a header with {', '.join(need)})")
-    head_line, head = numbered[0]
-    sep = sniff_delimiter(head)
-    rows = [_cells(ln, sep, source, n) for n, ln in numbered]  # line by line: an open quote ends with its line
-    header = [h.strip().split("[")[0].strip() for h in rows[0]]
-    missing = [c for c in need if c not in header]
-    if missing:
-        raise TaskError(
-            f"{source}:{head_line}: header lacks column(s) {', '.join(missing)} (need {', '.join(need)}; found {', '.join(header)})"
-        )
-    if len(rows) < 2:
-        raise TaskError(f"{source}:{head_line}: a header and no samples (need rows of {', '.join(need)} after it; "
-                        f"a move needs at least {MIN_SAMPLES})")
-    tool = [c for c in TOOL_COLUMNS if c in header] if all(c in header for c in TOOL_COLUMNS) else []
-    if tool and not all(_si_tool_unit(rows[0][header.index(c)]) for c in tool):
-        tool = []  # the tool columns in other units than this tool writes: the joint positions alone are used
-    cols = need + tool + (["move"] if "move" in header else [])
-    idx = [header.index(c) for c in cols]
-    scales = column_scales([rows[0][i].strip() for i in idx[: len(need)]], joint_units, source, head_line)
-    data = np.empty((len(rows) - 1, len(cols)))
-    lines = np.array([n for n, _ in numbered[1:]], dtype=int)
-    for k, (r, line) in enumerate(zip(rows[1:], lines)):
-        for c, (name, i) in enumerate(zip(cols, idx)):
-            if i >= len(r):
-                raise TaskError(
-                    f"{source}:{line}: {name}: no value (the row has {len(r)} cells, the header {len(header)})"
-                )
-            data[k, c] = _number(r[i], name, source, int(line), f"{i + 1}, {rows[0][i].strip()!r}")
-    data[:, : len(need)] *= scales  # the header's units (ms, deg, mm) to s, rad, m
-    nq = len(joint_names)
-    extra = (lambda a, b: data[a:b, 1 + nq:1 + nq + 12]) if tool else (lambda a, b: None)
-    if "move" not in header:
-        return [_one_move(None, data[:, 0], data[:, 1:1 + nq], lines, source, trim=False, tool=extra(0, len(data)))]
-    move = data[:, -1]
-    bad = np.flatnonzero(move != np.round(move))
-    if bad.size:
-        raise TaskError(f"{source}:{lines[bad[0]]}: move = {move[bad[0]]:g}: must be a whole number (the move's index)")
-    starts = np.r_[0, np.flatnonzero(np.diff(move) != 0) + 1]
-    ends = np.r_[starts[1:], len(move)]
-    seen: dict[int, int] = {}
-    moves = []
-    for a, b in zip(starts, ends):
-        m = int(move[a])
-        if m in seen:
-            raise TaskError(
-                f"{source}:{lines[a]}: move = {m}: its rows must be consecutive (move {m} already ended at line {seen[m]})"
-            )
-        seen[m] = int(lines[b - 1])
-        moves.append(_one_move(m, data[a:b, 0], data[a:b, 1:1 + nq], lines[a:b], source, trim=True, tool=extra(a, b)))
-    return moves
-
-
-def _one_move(move: int | None, t: np.ndarray, q: np.ndarray, lines: np.ndarray, source: str, trim: bool,
-              tool: np.ndarray | None = None) -> Samples:
-    what = f" (move {move})" if move is not None else ""
-    dt = np.diff(t)
-    if np.any(dt <= 0):
-        i = int(np.flatnonzero(dt <= 0)[0]) + 1
-        hint = ""
-        if move is None and t[i] <= t[0]:
-            hint = ("; the time starts again, as if the file held several moves one after another: keep their "
-                    "'move' column (plan --batch and --round-trip write one) and each move is checked on its own")
-        raise TaskError(
-            f"{source}:{lines[i]}: t = {t[i]:.9g} s is not after the previous row's t = {t[i - 1]:.9g} s{what}: "
-            f"t must increase strictly from row to row{hint}"
-        )
-    rest = 0
-    last_line = int(lines[-1])
-    if trim:
-        at_end = np.all(q == q[-1], axis=1)
-        rest = len(q) - 1 - int(np.flatnonzero(~at_end)[-1] + 1) if not at_end.all() else 0
-        if rest:
-            t, q, lines = t[: len(t) - rest], q[: len(q) - rest], lines[: len(lines) - rest]
-            tool = None if tool is None else tool[: len(tool) - rest]
-    if len(t) < MIN_SAMPLES:
-        raise TaskError(
-            f"{source}:{lines[0]}: {len(t)} samples{what}; a move needs at least {MIN_SAMPLES} for a quintic spline"
-        )
-    return Samples(move, t, q, lines, rest, last_line, tool)
-
-
-def read_trajectory(text: str, source: str, joint_names: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:
-    """(t (N,) s from 0, q (N, n)) of a file holding one move; TaskError naming the file, line and problem
-    (also when the file holds several moves: :func:`read_moves` reads those)."""
-    moves = read_moves(text, source, joint_names)
-    if len(moves) > 1:
-        raise TaskError(f"{source}: {len(moves)} moves (a 'move' column); read them with read_moves")
-    s = moves[0]
-    return s.t - s.t[0], s.q
 
 
 def _check_branch(s: Samples, robot, pos: np.ndarray, source: str) -> None:
@@ -289,20 +98,23 @@ def _check_branch(s: Samples, robot, pos: np.ndarray, source: str) -> None:
 
 
 def _motion_report(t: np.ndarray, pos: np.ndarray, robot, profile: Profile, smoothing: float, source: str,
-                   notes=None, tool: np.ndarray | None = None):
+                   notes=None, tool: np.ndarray | None = None, rebuilt=None):
     """The limit report of the tool positions ``pos`` (N, 3) m (and angle, rad, a 4th column with a rotary axis) at
     ``t`` (N,) s from 0, through a reconstruction of
     the continuous motion (an interpolating spline split at the jerk steps found in the data,
     :func:`~pickplace_cli.curves.sampled.reconstruct`, or a smoothing spline), and the words that say how the
     derivatives were found. ``notes``: a function of those words → the report's notes. ``tool`` (N, 12): the
     file's own tool positions, velocities, accelerations and jerks (consistent with ``pos``), through which the
-    motion between samples is the septic Hermite interpolant (exact at every sample up to the jerk)."""
+    motion between samples is the septic Hermite interpolant (exact at every sample up to the jerk). ``rebuilt``:
+    (evaluate(x, order), the times of its steps [s], the words) of a motion already rebuilt (a table)."""
     from scipy.interpolate import UnivariateSpline
 
     T = float(t[-1])
     rotary = pos.shape[1] == 4  # the tool angle θ (a rotary fourth axis) as one more column
     extra = " and angle" if rotary else ""
-    if tool is not None and not smoothing:
+    if rebuilt is not None:
+        ev, steps, how = rebuilt
+    elif tool is not None and not smoothing:
         from ..curves.sampled import hermite, reconstruct
 
         ev3, steps = hermite(t, tool[:, 0:3], tool[:, 3:6], tool[:, 6:9], tool[:, 9:12])
@@ -364,7 +176,8 @@ def _half(n: int) -> np.ndarray:
     return idx if idx[-1] == n - 1 else np.append(idx, n - 1)
 
 
-def check_samples(s: Samples, profile: Profile, smoothing: float = 0.0, source: str = "<trajectory>") -> LimitReport:
+def check_samples(s: Samples, profile: Profile, smoothing: float = 0.0, source: str = "<trajectory>",
+                  strict: bool = False, warn=None) -> LimitReport:
     """Limit report of one move read by :func:`read_moves` (see the module docstring).
 
     Every duration-dependent peak is estimated from the samples twice, from all of them and from every other one
@@ -372,7 +185,11 @@ def check_samples(s: Samples, profile: Profile, smoothing: float = 0.0, source: 
     peak's stated accuracy (the error of an estimate that converges with the sample rate is smaller than its change
     when the rate halves). A row is exceeded only
     when its peak less that accuracy is beyond the limit (the data shows it exceeded); a peak whose accuracy is
-    worse than 1 % of the limit is reported as not resolved by the samples (``LimitReport.unresolved``)."""
+    worse than 1 % of the limit is reported as not resolved by the samples (``LimitReport.unresolved``).
+
+    The file's tool derivative columns (vx … jz) are used only when they agree with its positions
+    (:func:`~pickplace_cli.pipelines.check_read.derivative_problems`); otherwise the move is judged from its positions
+    and ``warn`` (a callable) is told in one line, or with ``strict`` the file is refused (TaskError)."""
     robot = build_robot(profile.robot)
     t = s.t - s.t[0]
     pos = robot.forward_kinematics(s.q)
@@ -393,6 +210,18 @@ def check_samples(s: Samples, profile: Profile, smoothing: float = 0.0, source: 
         off = float(np.max(np.abs(tool[:, :3] - pos)))
         rest += f"; its x, y, z differ from FK of its joint positions by up to {off:.3g} m, so its tool columns are not used"
         tool = None
+    if tool is not None:
+        from .check_read import derivative_problems, describe_problems
+
+        problems = derivative_problems(t, tool)
+        if problems:
+            said = f"{s.where(source)}: {describe_problems(problems)}"
+            if strict:
+                raise TaskError(f"{said}: refused (--strict); without --strict the move is judged from its positions")
+            if warn is not None:
+                warn(f"warning: {said}: judged from its positions alone")
+            rest += f"; its derivative columns are not used ({describe_problems(problems)})"
+            tool = None
     if getattr(robot, "rotary", False):  # the tool angle θ = FK of the fourth axis, one more column
         pos = np.column_stack([pos, robot.tool_angle(s.q)])
     report, _ = _motion_report(t, pos, robot, profile, smoothing, source, notes, tool)
@@ -442,13 +271,78 @@ def _with_accuracy(fine: LimitReport, others: list[tuple[LimitReport, float]]) -
     return replace(fine, rows=tuple(rows))
 
 
+_HOW = {"pvt": "the drive's cubic Hermite through each point's position and velocity (PVT)",
+        "cam": "the kernel's quintic through each point's position, velocity and acceleration (cam, XYVA)"}
+
+
+def check_table(table, profile: Profile, source: str) -> LimitReport:
+    """The limit report of a PVT or cam table as the drive interpolates it (:func:`tool_motion`): the same dynamics and
+    limit check as ``plan``; every duration-dependent peak to ``CHECK_RESOLUTION`` (the rebuild is exact up to the fit
+    of the tool's motion, far finer); the position rows on the interpolated joint positions themselves."""
+    from .check_read import MAX_POINTS, SEGMENT_POINTS, joint_polynomial, tool_motion
+
+    if len(table.t) > MAX_POINTS:
+        raise TaskError(f"{source}: {len(table.t):,} points in a {table.kind} table: check reads at most {MAX_POINTS:,}")
+    robot = build_robot(profile.robot)
+    rotary = getattr(robot, "rotary", False)
+
+    def tool_of(q: np.ndarray) -> np.ndarray:
+        p = robot.forward_kinematics(q)
+        return np.column_stack([p, robot.tool_angle(q)]) if rotary else p
+
+    t = table.t - table.t[0]
+    rebased = replace(table, t=t)
+    s = Samples(None, t, table.q, table.lines, 0, int(table.lines[-1]))
+    _check_branch(s, robot, robot.forward_kinematics(table.q), source)
+    ev, steps = tool_motion(rebased, tool_of)
+    T = float(t[-1])
+    note = (f"{s.where(source)}: a {table.kind} table of {len(t)} points over {T:.6g} s; the motion is {_HOW[table.kind]}, "
+            "as the drive runs it (each point a step of its derivatives: both sides checked); joint positions checked "
+            "as interpolated")
+    if table.kind == "pvt":  # the drive's cubic Hermite is C¹: its acceleration steps at the points
+        from .check_read import pvt_acceleration_steps
+
+        jumps = ", ".join(f"{n} {v:.4g} {u}/s²" for n, v, u in zip(robot.joint_names, pvt_acceleration_steps(table),
+                                                                     robot.joint_units))
+        note += (f"; its acceleration steps at the points by up to {jumps} (the torque there is checked on both "
+                 "sides; the torque rate is that inside the segments)")
+    report, _ = _motion_report(t, tool_of(table.q), robot, profile, 0.0, source, lambda how: (note,),
+                               rebuilt=(ev, steps, _HOW[table.kind]))
+    report = _with_accuracy(report, [(report, 1.0)])
+    u = 0.5 - 0.5 * np.cos(np.pi * np.arange(SEGMENT_POINTS) / (SEGMENT_POINTS - 1))
+    x = np.append((t[:-1, None] + np.diff(t)[:, None] * u).ravel(), T)
+    q = joint_polynomial(rebased)(x)
+    given = {}
+    for j, (name, unit, spec) in enumerate(zip(robot.joint_names, robot.joint_units, limit_specs(profile))):
+        if spec.limits.position is not None:
+            lo, hi = spec.limits.position
+            kmax, kmin = int(np.argmax(q[:, j])), int(np.argmin(q[:, j]))
+            given[name] = _range_row((name, "position", unit, "reach", float(lo), float(hi)),
+                                     float(q[kmax, j]), float(q[kmin, j]), float(x[kmax]), float(x[kmin]))
+    rows = tuple(given.get(r.joint, r) if r.quantity == "position" else r for r in report.rows)
+    return replace(report, rows=rows)
+
+
 #: the largest trajectory file ``check`` reads [bytes] (~600,000 rows of a 3-joint trajectory at 1 kHz; its
 #: parse holds a few times this in memory): larger is one line, exit 1, never a swap storm
 CHECK_MAX_BYTES = 64 << 20
 
 
+def _read_bounded(fh, limit: int) -> bytes:
+    """At most ``limit`` bytes of ``fh``, read in 1 MiB pieces (one ``read(limit)`` would allocate all of ``limit``
+    however small the file)."""
+    parts, total = [], 0
+    while total < limit:
+        piece = fh.read(min(1 << 20, limit - total))
+        if not piece:
+            break
+        parts.append(piece)
+        total += len(piece)
+    return b"".join(parts)
+
+
 def check_file(path: str | Path, profile: Profile, smoothing: float | str = 0.0,
-               limit_use: float | None = None, notify=None) -> list[MoveCheck]:
+               limit_use: float | None = None, notify=None, strict: bool = False, warn=None) -> list[MoveCheck]:
     """Check every move of a trajectory file against a profile's limits.
 
     Parameters
@@ -465,6 +359,11 @@ def check_file(path: str | Path, profile: Profile, smoothing: float | str = 0.0,
         The fraction (0, 1] [-] of every timed limit's rating allowed; None: the profile's ``planning.limit_use``.
     notify : callable, optional
         Told (one text argument) what a named pipe without a writer is waiting for.
+    strict : bool
+        Refuse (TaskError) a file whose derivative columns disagree with its positions, instead of judging it from
+        its positions.
+    warn : callable, optional
+        Told (one line) when a file's derivative columns are not used because they disagree with its positions.
 
     Returns
     -------
@@ -485,12 +384,12 @@ def check_file(path: str | Path, profile: Profile, smoothing: float | str = 0.0,
     source = "<stdin>" if str(path) == "-" else str(p)
     try:
         if str(path) == "-":
-            raw = sys.stdin.buffer.read(CHECK_MAX_BYTES + 1)
+            raw = _read_bounded(sys.stdin.buffer, CHECK_MAX_BYTES + 1)
         else:  # (a named pipe: its writer awaited for a bounded time, saying so through ``notify``)
             from ..model.files import open_for_reading
 
             with open(open_for_reading(str(p), "trajectory", TaskError, notify=notify), "rb") as fh:
-                raw = fh.read(CHECK_MAX_BYTES + 1)
+                raw = _read_bounded(fh, CHECK_MAX_BYTES + 1)
     except OSError as exc:
         raise TaskError(f"{p}: cannot read: {exc.strerror}") from None
     if len(raw) > CHECK_MAX_BYTES:
@@ -500,10 +399,16 @@ def check_file(path: str | Path, profile: Profile, smoothing: float | str = 0.0,
 
     text = decode_text(raw, source, "a CSV trajectory", TaskError)
     robot = build_robot(profile.robot)
+    from .check_read import read_checked
+
+    kind, what, source = read_checked(text, source, profile, robot)  # joints, drive units, a table (check_read)
+    if kind == "table":
+        return [MoveCheck(None, int(what.lines[0]), int(what.lines[-1]),
+                          check_table(what, profile, source).rated(profile.limit_use))]
     out = []
-    for s in read_moves(text, source, robot.joint_names, robot.joint_units):
+    for s in (what if kind == "samples" else [what]):
         out.append(MoveCheck(s.move, int(s.lines[0]), s.last_line,
-                             check_samples(s, profile, smoothing, source).rated(profile.limit_use)))
+                             check_samples(s, profile, smoothing, source, strict, warn).rated(profile.limit_use)))
     return out
 
 

@@ -1,0 +1,548 @@
+"""What ``check`` reads besides the model's own joint columns: the drive's view and the tables a kernel interpolates,
+and whether a file's derivative columns agree with its positions.
+
+* **The file's kind** (:func:`file_kind`) from its header's names: ``t`` and ``q1 … qn`` (the model's joints),
+  ``t`` and the profile's drive names (``controller.joints``: ``plan --columns plc``, ``drive``, any CSV dialect, or a
+  recording in those names and units), ``t``, ``dt`` and ``NAME``, ``NAME_vel`` (a PVT table), ``master``, ``NAME``,
+  ``NAME_vel``, ``NAME_acc`` (a cam of XYVA points) or ``master`` and ``NAME`` (an equidistant cam table). Without
+  ``controller.joints`` the tables' names are q1 … qn (as ``plan`` writes them then).
+* **Drive units back to the joints:** q = d / (sign · k) + offset, q̇ = ḋ / (sign · k), q̈ = d̈ / (sign · k)
+  (:class:`~pickplace_cli.export.drive.DriveMap`); a header unit other than the profile's label is refused.
+* **Derivative columns** (:func:`derivative_problems`): the tool's ``vx … jz`` beside ``x, y, z`` are used only when
+  each agrees with the column it is the derivative of, on the intervals between samples (trapezoidal rule with the
+  Hermite end correction, exact for a quintic):
+  velocity within ``AGREE[1]`` and acceleration within ``AGREE[2]`` of the interval's change on every interval, jerk
+  within ``AGREE[3]`` on at least half of them (the jerk of a planned motion steps: on an interval across a step the
+  rule is off by up to half the step). Otherwise the file is judged from its positions.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..model.errors import TaskError
+
+#: fewest samples a move needs: a quintic spline has 6 coefficients
+MIN_SAMPLES = 6
+#: the tool's motion this tool's CSV writes beside the joints (m, m/s, m/s², m/s³): with all of them, and the
+#: positions FK(q) within ``TOOL_TOL``, the motion between samples is the septic Hermite through them
+TOOL_COLUMNS = ("x", "y", "z", "vx", "vy", "vz", "ax", "ay", "az", "jx", "jy", "jz")
+
+@dataclass(frozen=True)
+class Samples:
+    """One move of a trajectory file: ``move`` its number in the file's move column (None: no such column),
+    ``t`` (N,) s and ``q`` (N, n) as in the file, ``lines`` (N,) the 1-based file line of every sample,
+    ``rest`` how many trailing samples at rest were set aside (see the module docstring) and ``last_line``
+    the file line of the move's last row (with them)."""
+
+    move: int | None
+    t: np.ndarray
+    q: np.ndarray
+    lines: np.ndarray
+    rest: int
+    last_line: int
+    #: (N, 12) the tool's x, y, z [m], vx … [m/s], ax … [m/s²], jx … [m/s³] when the file has all of them (this
+    #: tool's CSV does), else None
+    tool: np.ndarray | None = None
+
+    def where(self, source: str) -> str:
+        name = f"move {self.move}" if self.move is not None else "the trajectory"
+        return f"{source}: {name} (lines {int(self.lines[0])}–{self.last_line})"
+
+
+def _number(cell: str, name: str, source: str, line: int, column: str) -> float:
+    """The number in one cell; TaskError naming file:line, the column and the cell's text."""
+    from ..model.text import plain_float
+
+    try:
+        x = plain_float(cell.strip())
+    except ValueError:
+        shown = cell.strip() if len(cell.strip()) <= 40 else cell.strip()[:40] + "…"
+        raise TaskError(f"{source}:{line}: {name} = {shown!r}: not a number (column {column})") from None
+    if not np.isfinite(x):
+        raise TaskError(f"{source}:{line}: {name} = {cell.strip()}: must be a finite number (column {column})")
+    return x
+
+
+def _cells(line: str, sep: str, source: str, number: int) -> list[str]:
+    """The cells of one line (quotes as CSV has them, within the line); TaskError naming the line for a quote that is
+    not closed, a field over csv's size limit, and the like (never the rest of the file in the message)."""
+    if '"' not in line:
+        return line.split(sep)
+    try:
+        return next(csv.reader([line], delimiter=sep, strict=True))
+    except csv.Error as exc:
+        raise TaskError(f"{source}:{number}: not a CSV row ({exc}): a quote opened and not closed on this line?") from None
+
+
+#: the units a header may give a checked column in, and the factor to SI: time, an angle, a length
+TIME_UNITS = {"": 1.0, "s": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6}
+JOINT_UNITS = {"rad": {"": 1.0, "rad": 1.0, "deg": math.pi / 180, "°": math.pi / 180},
+               "m": {"": 1.0, "m": 1.0, "mm": 1e-3}}
+
+
+def column_scales(names: list[str], joint_units: tuple[str, ...] | None, source: str, line: int) -> np.ndarray:
+    """Factors from the units in the header cells ``names`` (``t[ms]``, ``q1[deg]``, ``q3[mm]``; no unit: SI) of the
+    columns t, q1 … qn to s, rad or m; TaskError naming the column for a unit that is not one of the column's
+    (``q1[rpm]``, ``q3[deg]`` of a prismatic joint). Derivative columns are not read (check derives them)."""
+    out = np.ones(len(names))
+    for k, cell in enumerate(names):
+        unit = cell.split("[", 1)[1].rstrip("]").strip() if "[" in cell else ""
+        base = cell.split("[")[0].strip()
+        if k == 0:
+            table, kind = TIME_UNITS, "s"
+        else:
+            kind = joint_units[k - 1] if joint_units is not None else "rad"
+            table = JOINT_UNITS.get(kind, {"": 1.0, kind: 1.0})
+        if unit not in table:
+            units = [u for u in table if u]
+            allowed = ", ".join(units[:-1]) + " or " + units[-1] if len(units) > 1 else units[0]
+            raise TaskError(f"{source}:{line}: column {cell!r}: {base} is read in {allowed} (the header's unit "
+                            f"{unit!r} is not one of them)")
+        out[k] = table[unit]
+    return out
+
+
+def _si_tool_unit(cell: str) -> bool:
+    """Whether a tool column's header names the SI unit this tool writes (x [m], vx [m/s], ax [m/s^2], jx [m/s^3]),
+    or none."""
+    name, _, unit = cell.strip().partition("[")
+    unit = unit.rstrip("]").strip().replace("²", "^2").replace("³", "^3")
+    order = {"v": 1, "a": 2, "j": 3}.get(name.strip()[0], 0) if len(name.strip()) == 2 else 0
+    return unit in ("", ("m", "m/s", "m/s^2", "m/s^3")[order])
+
+
+def read_moves(text: str, source: str, joint_names: tuple[str, ...],
+               joint_units: tuple[str, ...] | None = None) -> list[Samples]:
+    """The moves of a trajectory CSV (see the module docstring); TaskError naming the file, line, column and
+    value of the first problem. Units in the header (``t[ms]``, ``q1[deg]``, ``q3[mm]``, :func:`column_scales`;
+    ``joint_units`` "rad" or "m" per joint, default rad) are converted to s, rad and m."""
+    from .batch import sniff_delimiter
+
+    numbered = [(n, ln) for n, ln in enumerate(text.removeprefix("\ufeff").splitlines(), start=1)
+                if ln.strip() and not ln.lstrip().startswith("#")]
+    need = ["t", *joint_names]
+    if not numbered:
+        raise TaskError(f"{source}: empty file (need a header with {', '.join(need)})")
+    head_line, head = numbered[0]
+    sep = sniff_delimiter(head)
+    rows = [_cells(ln, sep, source, n) for n, ln in numbered]  # line by line: an open quote ends with its line
+    header = [h.strip().split("[")[0].strip() for h in rows[0]]
+    missing = [c for c in need if c not in header]
+    if missing:
+        raise TaskError(
+            f"{source}:{head_line}: header lacks column(s) {', '.join(missing)} (need {', '.join(need)}; found {', '.join(header)})"
+        )
+    if len(rows) < 2:
+        raise TaskError(f"{source}:{head_line}: a header and no samples (need rows of {', '.join(need)} after it; "
+                        f"a move needs at least {MIN_SAMPLES})")
+    tool = [c for c in TOOL_COLUMNS if c in header] if all(c in header for c in TOOL_COLUMNS) else []
+    if tool and not all(_si_tool_unit(rows[0][header.index(c)]) for c in tool):
+        tool = []  # the tool columns in other units than this tool writes: the joint positions alone are used
+    cols = need + tool + (["move"] if "move" in header else [])
+    idx = [header.index(c) for c in cols]
+    scales = column_scales([rows[0][i].strip() for i in idx[: len(need)]], joint_units, source, head_line)
+    data = np.empty((len(rows) - 1, len(cols)))
+    lines = np.array([n for n, _ in numbered[1:]], dtype=int)
+    for k, (r, line) in enumerate(zip(rows[1:], lines)):
+        for c, (name, i) in enumerate(zip(cols, idx)):
+            if i >= len(r):
+                raise TaskError(
+                    f"{source}:{line}: {name}: no value (the row has {len(r)} cells, the header {len(header)})"
+                )
+            data[k, c] = _number(r[i], name, source, int(line), f"{i + 1}, {rows[0][i].strip()!r}")
+    data[:, : len(need)] *= scales  # the header's units (ms, deg, mm) to s, rad, m
+    nq = len(joint_names)
+    extra = (lambda a, b: data[a:b, 1 + nq:1 + nq + 12]) if tool else (lambda a, b: None)
+    if "move" not in header:
+        return [_one_move(None, data[:, 0], data[:, 1:1 + nq], lines, source, trim=False, tool=extra(0, len(data)))]
+    move = data[:, -1]
+    bad = np.flatnonzero(move != np.round(move))
+    if bad.size:
+        raise TaskError(f"{source}:{lines[bad[0]]}: move = {move[bad[0]]:g}: must be a whole number (the move's index)")
+    starts = np.r_[0, np.flatnonzero(np.diff(move) != 0) + 1]
+    ends = np.r_[starts[1:], len(move)]
+    seen: dict[int, int] = {}
+    moves = []
+    for a, b in zip(starts, ends):
+        m = int(move[a])
+        if m in seen:
+            raise TaskError(
+                f"{source}:{lines[a]}: move = {m}: its rows must be consecutive (move {m} already ended at line {seen[m]})"
+            )
+        seen[m] = int(lines[b - 1])
+        moves.append(_one_move(m, data[a:b, 0], data[a:b, 1:1 + nq], lines[a:b], source, trim=True, tool=extra(a, b)))
+    return moves
+
+
+def _one_move(move: int | None, t: np.ndarray, q: np.ndarray, lines: np.ndarray, source: str, trim: bool,
+              tool: np.ndarray | None = None) -> Samples:
+    what = f" (move {move})" if move is not None else ""
+    dt = np.diff(t)
+    if np.any(dt <= 0):
+        i = int(np.flatnonzero(dt <= 0)[0]) + 1
+        hint = ""
+        if move is None and t[i] <= t[0]:
+            hint = ("; the time starts again, as if the file held several moves one after another: keep their "
+                    "'move' column (plan --batch and --round-trip write one) and each move is checked on its own")
+        raise TaskError(
+            f"{source}:{lines[i]}: t = {t[i]:.9g} s is not after the previous row's t = {t[i - 1]:.9g} s{what}: "
+            f"t must increase strictly from row to row{hint}"
+        )
+    rest = 0
+    last_line = int(lines[-1])
+    if trim:
+        at_end = np.all(q == q[-1], axis=1)
+        rest = len(q) - 1 - int(np.flatnonzero(~at_end)[-1] + 1) if not at_end.all() else 0
+        if rest:
+            t, q, lines = t[: len(t) - rest], q[: len(q) - rest], lines[: len(lines) - rest]
+            tool = None if tool is None else tool[: len(tool) - rest]
+    if len(t) < MIN_SAMPLES:
+        raise TaskError(
+            f"{source}:{lines[0]}: {len(t)} samples{what}; a move needs at least {MIN_SAMPLES} for a quintic spline"
+        )
+    return Samples(move, t, q, lines, rest, last_line, tool)
+
+
+def read_trajectory(text: str, source: str, joint_names: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:
+    """(t (N,) s from 0, q (N, n)) of a file holding one move; TaskError naming the file, line and problem
+    (also when the file holds several moves: :func:`read_moves` reads those)."""
+    moves = read_moves(text, source, joint_names)
+    if len(moves) > 1:
+        raise TaskError(f"{source}: {len(moves)} moves (a 'move' column); read them with read_moves")
+    s = moves[0]
+    return s.t - s.t[0], s.q
+
+
+
+
+#: the largest disagreement, per derivative order (1 velocity, 2 acceleration, 3 jerk), of a derivative column with
+#: the change over an interval of the column it is the derivative of, relative to the interval times the larger peak
+#: of the two: plan's files at 100 Hz to 4 kHz, every method, stay below 2.8e-3, 5.1e-2 and (median) 9.2e-3 (one
+#: time-optimal superposition law at 100 Hz: 0.27, judged from its positions); a column set to zero, left from another
+#: timing or in other units is off by 0.3 to 1
+AGREE = {1: 1e-2, 2: 1e-1, 3: 5e-2}
+#: names of the tool's derivative columns per order
+ORDER_COLUMNS = {1: "vx, vy, vz", 2: "ax, ay, az", 3: "jx, jy, jz"}
+
+
+def _interval_misfit(lo: np.ndarray, hi: np.ndarray, hi2: np.ndarray | None, h: np.ndarray) -> np.ndarray:
+    """Per interval: |Δlo − h·(hi₀ + hi₁)/2 − h²·(hi2₀ − hi2₁)/12| over h · the larger peak of |hi| and |Δlo/h|."""
+    pred = h * (hi[1:] + hi[:-1]) / 2
+    if hi2 is not None:
+        pred = pred + h * h * (hi2[:-1] - hi2[1:]) / 12
+    d = np.diff(lo, axis=0)
+    with np.errstate(over="ignore", invalid="ignore"):
+        scale = max(float(np.abs(hi).max()), float((np.abs(d) / h).max()), 1e-300)
+        out = np.abs(d - pred).max(axis=1) / (h[:, 0] * scale)
+    return np.where(np.isfinite(out), out, np.inf)
+
+
+def derivative_problems(t: np.ndarray, tool: np.ndarray) -> list[tuple[int, float]]:
+    """(order, misfit) of each of the tool's derivative columns (``tool`` (N, 12): x … jz) that does not agree with its
+    positions (module docstring); [] when all agree."""
+    t = np.asarray(t, float)
+    h = np.diff(t)[:, None]
+    p, v, a, j = tool[:, 0:3], tool[:, 3:6], tool[:, 6:9], tool[:, 9:12]
+    fits = {1: float(np.max(_interval_misfit(p, v, a, h))), 2: float(np.max(_interval_misfit(v, a, j, h))),
+            3: float(np.median(_interval_misfit(a, j, None, h)))}
+    return [(k, m) for k, m in fits.items() if not m <= AGREE[k]]
+
+
+def describe_problems(problems: list[tuple[int, float]]) -> str:
+    """One clause naming the columns that disagree and by how much."""
+    words = {1: "every interval", 2: "every interval", 3: "the median interval"}
+    return "; ".join(f"{ORDER_COLUMNS[k]} disagree with the positions by {100 * m:.3g} % of their peak on "
+                     f"{words[k]} (allowed {100 * AGREE[k]:g} %)" for k, m in problems)
+
+
+@dataclass(frozen=True)
+class Header:
+    """The header line of a file: its 1-based line number, the separator, the cells as written and their bare names."""
+
+    line: int
+    sep: str
+    cells: list[str]
+    names: list[str]
+
+    def unit(self, name: str) -> str:
+        cell = self.cells[self.names.index(name)]
+        return cell.split("[", 1)[1].rsplit("]", 1)[0].strip() if "[" in cell else ""
+
+
+def read_header(text: str) -> Header | None:
+    """The first line that is not blank or a ``#`` comment, as a :class:`Header` (None for an empty file)."""
+    from .batch import sniff_delimiter
+
+    for n, ln in enumerate(text.removeprefix("\ufeff").splitlines(), start=1):
+        if ln.strip() and not ln.lstrip().startswith("#"):
+            sep = sniff_delimiter(ln)
+            cells = [c.strip().strip('"') for c in ln.split(sep)]
+            return Header(n, sep, cells, [c.split("[")[0].strip() for c in cells])
+    return None
+
+
+#: the kinds of file ``check`` reads
+KINDS = ("joints", "drive", "pvt", "cam", "cam-table")
+
+
+def file_kind(head: Header, joint_names: tuple[str, ...], drive_names: tuple[str, ...] | None) -> str:
+    """The kind of file a header names (module docstring): one of ``KINDS``; "joints" also when it fits none (the
+    reader of the model's joints then says which column is missing)."""
+    names = set(head.names)
+    table_names = drive_names if drive_names is not None else joint_names
+    if "t" in names and "dt" in names and all(n in names and f"{n}_vel" in names for n in table_names):
+        return "pvt"  # (before the joints: without controller.joints a PVT table names them q1 … qn too)
+    if "t" in names and set(joint_names) <= names:
+        return "joints"
+    if "master" in names and all(n in names for n in table_names):
+        return "cam" if all(f"{n}_vel" in names and f"{n}_acc" in names for n in table_names) else "cam-table"
+    if drive_names is not None and "t" in names and set(drive_names) <= names:
+        return "drive"
+    return "joints"
+
+
+def _unit_check(head: Header, name: str, want: str, source: str) -> None:
+    got = head.unit(name)
+    if got not in ("", want):
+        raise TaskError(f"{source}:{head.line}: column {name}[{got}]: the profile's controller.joints gives {name} in "
+                        f"{want}; check reads it in {want} (a file in other units: give the profile that names them)")
+
+
+@dataclass(frozen=True)
+class Table:
+    """A table a kernel interpolates, in the model's joint units: ``kind`` (pvt, cam, cam-table), the points' times
+    ``t`` (K,) [s], ``q``, ``qd``, ``qdd`` (K, n) [rad or m, per s, per s²] (``qd`` None for a cam-table, ``qdd`` None
+    unless a cam) and the file ``lines`` (K,) of the points."""
+
+    kind: str
+    t: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray | None
+    qdd: np.ndarray | None
+    lines: np.ndarray
+
+
+def read_table(text: str, source: str, kind: str, joint_names: tuple[str, ...], joint_units: tuple[str, ...],
+               drive=None) -> Table:
+    """The points of a ``kind`` table (pvt, cam, cam-table) as :func:`pickplace_cli.export.tables.table_columns`
+    writes them, in drive units (``drive``, a DriveMap) or the model's; TaskError naming file, line, column and
+    value of the first problem (a belt master, a time that does not increase, ``dt`` that disagrees with ``t``)."""
+    head = read_header(text)
+    names = list(drive.names) if drive is not None else list(joint_names)
+    labels = list(drive.labels) if drive is not None else list(joint_units)
+    tname = "t" if kind == "pvt" else "master"
+    tunit = head.unit(tname)
+    if tunit == "m":
+        raise TaskError(f"{source}:{head.line}: column {tname}[m]: a belt master (belt travel since the detection); "
+                        "check reads tables whose master is time [s] (plan --cam-master time)")
+    if tunit not in TIME_UNITS:
+        raise TaskError(f"{source}:{head.line}: column {head.cells[head.names.index(tname)]!r}: {tname} is read in s, "
+                        f"ms or us (the header's unit {tunit!r} is not one of them)")
+    k_t = TIME_UNITS[tunit]
+    per = tunit or "s"
+    for name, label in zip(names, labels):
+        _unit_check(head, name, label, source)
+        if kind in ("pvt", "cam"):
+            _unit_check(head, f"{name}_vel", f"{label}/{per}", source)
+        if kind == "cam":
+            _unit_check(head, f"{name}_acc", f"{label}/{per}^2", source)
+    cols = [tname] + (["dt"] if kind == "pvt" else [])
+    for name in names:
+        cols += [name] + ([f"{name}_vel"] if kind in ("pvt", "cam") else []) + ([f"{name}_acc"] if kind == "cam" else [])
+    idx = [head.names.index(c) for c in cols]
+    rows, lines = [], []
+    for n, ln in enumerate(text.removeprefix("\ufeff").splitlines(), start=1):
+        if n <= head.line or not ln.strip() or ln.lstrip().startswith("#"):
+            continue
+        cells = _cells(ln, head.sep, source, n)
+        row = []
+        for c, i in zip(cols, idx):
+            if i >= len(cells):
+                raise TaskError(f"{source}:{n}: {c}: no value (the row has {len(cells)} cells, the header "
+                                f"{len(head.cells)})")
+            row.append(_number(cells[i], c, source, n, f"{i + 1}, {head.cells[i]!r}"))
+        rows.append(row)
+        lines.append(n)
+    if len(rows) < 2:
+        raise TaskError(f"{source}:{head.line}: {len(rows)} point(s) in a {kind} table; it needs at least 2")
+    data = np.array(rows)
+    lines_a = np.array(lines)
+    t = data[:, 0] * k_t
+    off = 2 if kind == "pvt" else 1
+    if kind == "pvt":  # the drive runs the segment times dt: t must be their sum
+        dt = data[:, 1] * (TIME_UNITS[head.unit("dt")] if head.unit("dt") in TIME_UNITS else 1.0)
+        run = t[0] + np.concatenate([[0.0], np.cumsum(dt[1:])])
+        bad = np.flatnonzero(np.abs(run - t) > 1e-9 * np.maximum(1.0, np.abs(t)) + 1e-12)
+        if bad.size:
+            k = int(bad[0])
+            raise TaskError(f"{source}:{lines_a[k]}: dt = {dt[k]:.9g} s: t = {t[k]:.9g} s is not the previous point's "
+                            f"t plus dt ({run[k]:.9g} s); the drive runs the segment times dt, so they must agree")
+    step = np.diff(t)
+    if np.any(step <= 0):
+        k = int(np.flatnonzero(step <= 0)[0]) + 1
+        raise TaskError(f"{source}:{lines_a[k]}: {tname} = {t[k]:.9g} s is not after the previous point's "
+                        f"{t[k - 1]:.9g} s: a table's {tname} must increase strictly")
+    width = {"pvt": 2, "cam": 3, "cam-table": 1}[kind]
+    block = data[:, off:].reshape(len(t), len(names), width)
+    scale = np.asarray(drive.scale) if drive is not None else np.ones(len(names))
+    q = drive.joint_position(block[:, :, 0]) if drive is not None else block[:, :, 0].copy()
+    qd = block[:, :, 1] / scale / k_t if width > 1 else None
+    qdd = block[:, :, 2] / scale / k_t**2 if width > 2 else None
+    return Table(kind, t, q, qd, qdd, lines_a)
+
+
+#: evaluation points per table segment on which the tool's motion is fitted (a quintic spline through the forward
+#: kinematics of the drive's polynomial: the FK is analytic, the fit's third derivative is exact to ~1e-5 relative)
+SEGMENT_POINTS = 24
+
+
+def joint_polynomial(table: Table):
+    """evaluate(x (M,) [s]) → q (M, n): the table as the drive interpolates it: cubic Hermite through (q, q̇) for PVT,
+    the quintic through (q, q̇, q̈) for a cam (:mod:`pickplace_cli.export.knots`' conventions)."""
+    t, q, qd, qdd = table.t, table.q, table.qd, table.qdd
+
+    def evaluate(x: np.ndarray) -> np.ndarray:
+        x = np.asarray(x, float)
+        k = np.clip(np.searchsorted(t, x, side="right") - 1, 0, len(t) - 2)
+        h = (t[k + 1] - t[k])[:, None]
+        s = ((x - t[k]) / h[:, 0])[:, None]
+        p0, p1, v0, v1 = q[k], q[k + 1], qd[k], qd[k + 1]
+        if table.kind == "pvt":
+            s2, s3 = s * s, s * s * s
+            return ((2 * s3 - 3 * s2 + 1) * p0 + (s3 - 2 * s2 + s) * h * v0 + (-2 * s3 + 3 * s2) * p1
+                    + (s3 - s2) * h * v1)
+        a0, a1 = qdd[k], qdd[k + 1]
+        dp = p1 - p0 - v0 * h - a0 * h * h / 2
+        dv = (v1 - v0 - a0 * h) * h
+        da = (a1 - a0) * h * h
+        c3, c4, c5 = 10 * dp - 4 * dv + da / 2, -15 * dp + 7 * dv - da, 6 * dp - 3 * dv + da / 2
+        return p0 + s * (v0 * h + s * (a0 * h * h / 2 + s * (c3 + s * (c4 + s * c5))))
+
+    return evaluate
+
+
+def tool_motion(table: Table, tool_of):
+    """(evaluate(x, order) → (M, d) the tool's motion [m, m/s, …; the angle in rad], the interior points' times [s])
+    of a PVT or cam table: per segment, the quintic interpolating spline through ``SEGMENT_POINTS`` points of
+    ``tool_of`` (joint positions (M, n) → tool coordinates (M, d)) of the drive's polynomial. The motion's derivatives
+    step at the points (a PVT's acceleration, a cam's jerk): the check takes both one-sided values there."""
+    from scipy.interpolate import make_interp_spline
+
+    poly = joint_polynomial(table)
+    t = table.t
+    u = 0.5 - 0.5 * np.cos(np.pi * np.arange(SEGMENT_POINTS) / (SEGMENT_POINTS - 1))  # denser at the ends
+    x = (t[:-1, None] + np.diff(t)[:, None] * u).ravel()
+    x = x.reshape(len(t) - 1, SEGMENT_POINTS)
+    x[:, -1] = t[1:]
+    pos = tool_of(poly(x.ravel())).reshape(len(t) - 1, SEGMENT_POINTS, -1)
+    splines = [make_interp_spline(x[i], pos[i], k=5) for i in range(len(t) - 1)]
+
+    def evaluate(xx: np.ndarray, order: int = 0) -> np.ndarray:
+        xx = np.asarray(xx, float)
+        seg = np.clip(np.searchsorted(t, xx, side="right") - 1, 0, len(t) - 2)
+        out = np.empty((len(xx), pos.shape[2]))
+        for i in np.unique(seg):
+            sel = seg == i
+            out[sel] = splines[i](xx[sel], order)
+        return out
+
+    return evaluate, t[1:-1].copy()
+
+
+#: the most points a table may have for ``check`` (each segment gets its own fit): as many as ``plan`` writes at most
+MAX_POINTS = 200_000
+
+#: one array of a table in Structured Text as ``plan --format pvt-st|cam-st|cam-table-st`` writes it (either dialect):
+#: ``NAME : ARRAY[1..n] OF LREAL := [ (* column [unit]: words *) values ];``
+_ST_ARRAY = r"(\w+)\s*:\s*ARRAY\s*\[\s*1\s*\.\.\s*(\d+)\s*\]\s*OF\s*LREAL\s*:=\s*\[\s*\(\*\s*([^*]*?)\*\)([^\]]*)\]"
+
+
+def st_table_text(text: str, source: str) -> str | None:
+    """A table in Structured Text (``plan --format pvt-st|cam-st|cam-table-st``) as the CSV ``plan --format
+    pvt|cam|cam-table`` writes (each array's comment names its column and unit); None when ``text`` is not one. Row
+    k + 1 of the CSV is point k of the arrays."""
+    import re
+
+    if ":= [" not in text or not re.search(r"FB_Pickplace(Pvt|Cam|CamTable)\b|PP_(PVT|CAM|CAMTABLE)_", text):
+        return None
+    cols = []
+    for name, count, comment, body in re.findall(_ST_ARRAY, text):
+        head = comment.split(":", 1)[0].strip()
+        values = [v.strip() for v in body.split(",") if v.strip()]
+        if len(values) != int(count):
+            raise TaskError(f"{source}: {name}: {len(values)} values for ARRAY[1..{count}]: a table's arrays must be "
+                            "complete")
+        cols.append((head.replace(" [", "["), values))
+    if not cols or len({len(v) for _, v in cols}) != 1:
+        raise TaskError(f"{source}: not a table plan writes in Structured Text (no arrays, or arrays of different "
+                        "lengths)")
+    rows = [",".join(c[0] for c in cols)]
+    rows += [",".join(v[k] for _, v in cols) for k in range(len(cols[0][1]))]
+    return "\n".join(rows) + "\n"
+
+
+def read_checked(text: str, source: str, profile, robot):
+    """What ``check`` judges in a file: ("samples", [Samples …]) of a file of joint or drive positions (drive units
+    converted to the model's), ("table", Table) of a PVT or cam table, ("cam-table", Samples) of an equidistant cam
+    table, each with the name its messages give the file (a table in Structured Text says how its lines count);
+    TaskError naming the file, line and rule for a file without a header or without the columns needed."""
+    from dataclasses import replace
+
+    from ..export.drive import drive_map
+
+    drive = drive_map(profile)
+    st = st_table_text(text, source)
+    if st is not None:  # the same table in Structured Text: its arrays as CSV columns (line k + 1 = point k)
+        text, source = st, f"{source} (Structured Text; line k + 1 is point k)"
+    head = read_header(text)
+    if head is not None and all(_is_number(c) for c in head.cells):
+        raise TaskError(f"{source}:{head.line}: no header line (the tsv dialect writes none): check needs a header "
+                        f"naming t and the joints q1 … qn" + (f" or the profile's drives {', '.join(drive.names)}"
+                                                               if drive is not None else ""))
+    kind = file_kind(head, robot.joint_names, drive.names if drive is not None else None) if head else "joints"
+    if kind == "joints":
+        names = set(head.names) if head is not None else set()
+        if head is not None and drive is not None and not names & set(robot.joint_names):
+            lack = [c for c in ("t", *robot.joint_names) if c not in names]
+            lack_d = [c for c in ("t", *drive.names) if c not in names]
+            raise TaskError(f"{source}:{head.line}: header lacks column(s) {', '.join(lack)} (the joints) and "
+                            f"{', '.join(lack_d)} (the profile's drives); need t and q1 … qn, or t and the drives' "
+                            f"columns; found {', '.join(head.names)}")
+        return "samples", read_moves(text, source, robot.joint_names, robot.joint_units), source
+    if kind == "drive":
+        moves = read_moves(text, source, drive.names, drive.labels)
+        return "samples", [replace(m, q=drive.joint_position(m.q)) for m in moves], source
+    table = read_table(text, source, kind, robot.joint_names, robot.joint_units, drive)
+    if kind == "cam-table":
+        if len(table.t) < MIN_SAMPLES:
+            raise TaskError(f"{source}: {len(table.t)} points in a cam-table; check needs at least {MIN_SAMPLES}")
+        return "cam-table", Samples(None, table.t, table.q, table.lines, 0, int(table.lines[-1])), source
+    return "table", table, source
+
+
+def _is_number(cell: str) -> bool:
+    try:
+        float(cell)
+    except ValueError:
+        return False
+    return True
+
+
+def pvt_acceleration_steps(table: Table) -> np.ndarray:
+    """Per joint: the largest step of the acceleration [rad/s² or m/s²] at a PVT table's interior points (the cubic
+    Hermite is C¹: its acceleration at the end of one segment, (−6Δq/h + 2q̇₀ + 4q̇₁)/h, and at the start of the next,
+    (6Δq/h − 4q̇₀ − 2q̇₁)/h, differ); zeros for fewer than 3 points."""
+    if len(table.t) < 3:
+        return np.zeros(table.q.shape[1])
+    h = np.diff(table.t)[:, None]
+    dq = np.diff(table.q, axis=0)
+    v0, v1 = table.qd[:-1], table.qd[1:]
+    start = (6 * dq / h - 4 * v0 - 2 * v1) / h
+    end = (-6 * dq / h + 2 * v0 + 4 * v1) / h
+    return np.abs(start[1:] - end[:-1]).max(axis=0)
+
