@@ -402,28 +402,13 @@ SEGMENT_POINTS = 24
 
 
 def joint_polynomial(table: Table):
-    """evaluate(x (M,) [s]) → q (M, n): the table as the drive interpolates it: cubic Hermite through (q, q̇) for PVT,
-    the quintic through (q, q̇, q̈) for a cam (:mod:`pickplace_cli.export.knots`' conventions)."""
-    t, q, qd, qdd = table.t, table.q, table.qd, table.qdd
+    """evaluate(x (M,) [s]) → q (M, n): the table as the drive interpolates it, cubic Hermite through (q, q̇) for PVT,
+    the quintic through (q, q̇, q̈) for a cam: :func:`pickplace_cli.export.interpolate.rebuild`, the function ``plan``
+    judges its own tables by."""
+    from ..export.interpolate import rebuild
 
-    def evaluate(x: np.ndarray) -> np.ndarray:
-        x = np.asarray(x, float)
-        k = np.clip(np.searchsorted(t, x, side="right") - 1, 0, len(t) - 2)
-        h = (t[k + 1] - t[k])[:, None]
-        s = ((x - t[k]) / h[:, 0])[:, None]
-        p0, p1, v0, v1 = q[k], q[k + 1], qd[k], qd[k + 1]
-        if table.kind == "pvt":
-            s2, s3 = s * s, s * s * s
-            return ((2 * s3 - 3 * s2 + 1) * p0 + (s3 - 2 * s2 + s) * h * v0 + (-2 * s3 + 3 * s2) * p1
-                    + (s3 - s2) * h * v1)
-        a0, a1 = qdd[k], qdd[k + 1]
-        dp = p1 - p0 - v0 * h - a0 * h * h / 2
-        dv = (v1 - v0 - a0 * h) * h
-        da = (a1 - a0) * h * h
-        c3, c4, c5 = 10 * dp - 4 * dv + da / 2, -15 * dp + 7 * dv - da, 6 * dp - 3 * dv + da / 2
-        return p0 + s * (v0 * h + s * (a0 * h * h / 2 + s * (c3 + s * (c4 + s * c5))))
-
-    return evaluate
+    motion = rebuild(table)
+    return lambda x: motion(np.asarray(x, float))
 
 
 def tool_motion(table: Table, tool_of):

@@ -272,9 +272,14 @@ def test_written_cam_table_of_the_fit_move_holds_the_torque_rate(tmp_path):
 
 def test_without_re_timing_the_fit_cam_table_cannot_hold():
     """At the fit duration the trajectory's torque rate is at its limit; the quintics' jerk at the points misses it
-    by O(h²), so more points alone (down to one per sample) leave the rebuilt motion a little beyond: only a slower
-    table holds. Without re-timing (a conveyor move) the report says so."""
-    prof, move = planned("adept-fit", None)
+    by O(h²), so more points alone may leave the rebuilt motion a little beyond: only a slower table holds. Without
+    re-timing (a conveyor move) the report says so. (The lumped Delta model's fit move is such a case; under the
+    rigid-body model one more point happens to be enough.)"""
+    from tests.conftest import lumped
+
+    name, task, opts = CASES["adept-fit"]
+    prof = lumped(load_profile(name))
+    move = plan(task, prof, PlanOptions(**opts))
     line = timeline_of([move], prof, move.report.dwell, False)
     out = judged_table("cam", move.t, line, 1e-6, prof, move.report.dwell, None, retime=False)
     assert not out.report.ok
@@ -288,15 +293,23 @@ def test_a_table_that_cannot_hold_is_exit_3_and_not_written(tmp_path, monkeypatc
     from pickplace_cli.pipelines import controller
     from tests.unit.test_controller_tables import run
 
+    import yaml
+
+    from pickplace_cli.model.profile import resolve_profile_path
+
     monkeypatch.setattr(controller, "RETIMES", 0)
+    doc = yaml.safe_load(resolve_profile_path("delta-su2018").read_text())
+    doc["robot"]["dynamics"] = "lumped"  # (a move whose cam cannot hold by points alone: see the test above)
+    lumped_file = tmp_path / "lumped.yaml"
+    lumped_file.write_text(yaml.safe_dump(doc))
     out = tmp_path / "cam.csv"
-    res = run("plan", "--from", "-0.1525,0,-0.8", "--to", "0.1525,0,-0.8", "--time", "fit", "--format", "cam",
-              "-o", str(out))
+    res = run("plan", "-p", str(lumped_file), "--from", "-0.1525,0,-0.8", "--to", "0.1525,0,-0.8", "--time", "fit",
+              "--format", "cam", "-o", str(out))
     assert res.exit_code == 3, res.stderr
     assert "table verdict: LIMITS EXCEEDED" in res.stderr and "q1 motor torque rate" in res.stderr
     assert not out.exists()
-    res = run("plan", "--from", "-0.1525,0,-0.8", "--to", "0.1525,0,-0.8", "--time", "fit", "--format", "cam",
-              "-o", str(out), "--write-anyway", "--json")
+    res = run("plan", "-p", str(lumped_file), "--from", "-0.1525,0,-0.8", "--to", "0.1525,0,-0.8", "--time", "fit",
+              "--format", "cam", "-o", str(out), "--write-anyway", "--json")
     assert res.exit_code == 0 and out.exists()
     import json
 
