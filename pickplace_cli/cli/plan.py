@@ -31,6 +31,7 @@ from .app import (
 )
 from .batch import _plan_batch
 from .plan_options import (
+    _rosbag2_format,
     _check_plan_usage,
     _check_plan_values,
     _check_shape_usage,
@@ -225,6 +226,9 @@ def plan(
         McapFlavor.ros2, "--mcap-flavor", help="MCAP: ros2 (CDR, ROS 2 messages) or foxglove (JSON, Foxglove schemas)."
     ),
     compression: Compression = typer.Option(Compression.none, "--compression", help="MCAP chunk compression."),
+    rosbag2: bool = typer.Option(
+        False, "--rosbag2", help="MCAP (ros2 flavour; implies -f mcap): write -o DIR as a rosbag2 directory, "
+        "DIR/DIR_0.mcap and DIR/metadata.yaml, as ros2 bag play and ros2 bag info read it. DIR must be new or empty."),
     output: Optional[str] = typer.Option(
         None, "--output", "-o", help="Output file ('-' = stdout, the default without --json). Written atomically."
     ),
@@ -278,12 +282,14 @@ def plan(
     _JSON_ERRORS[0] = json_summary  # (a batch: its rows have their lines; an error that ends it gets one more)
     from .guards import output_format
 
+    if rosbag2:
+        fmt = _rosbag2_format(ctx, fmt, output)
     fmt = a.fmt = output_format(ctx, fmt, output if output is not None or json_summary else "-")
     _check_plan_values(a)
     _check_plan_usage(a)
     if a.output is None and not json_summary:
         a.output = "-"
-    _check_output_paths(a.output, report)
+    _check_output_paths(a.output, report, bag=rosbag2)
     from .guards import refuse_overwriting_inputs
 
     refuse_overwriting_inputs([("-o", a.output), ("--report", report)], [("--batch", batch), ("--table", table)], profile)
@@ -304,7 +310,7 @@ def plan(
     a.cycle_s = resolve_cycle(cycle, rate, prof)
     check_cycle_usage(a, a.cycle_s, fmt)
     a.drive = drive_map(prof)
-    writer = _writer(fmt, csv_dialect, mcap_flavor, compression, _columns(columns, prof, a.drive), a.drive)
+    writer = _writer(fmt, csv_dialect, mcap_flavor, compression, _columns(columns, prof, a.drive), a.drive, rosbag2)
     _check_shape_usage(a)
     options = PlanOptions(method=a.method.value, method_params=params, time=a.time, rate=rate,
                           fit=a.time == "fit" or show_fit, shape=a.optimize == OptimizeWhat.shape,
