@@ -170,6 +170,10 @@ def plan(
         StDialect.strict, "--st-dialect", help="pvt-st, cam-st, cam-table-st: strict (IEC 61131-3: a FUNCTION_BLOCK "
         "holding the tables, for any compiler) or codesys (a VAR_GLOBAL CONSTANT list, CODESYS/TwinCAT).",
     ),
+    pvt_integer: bool = typer.Option(
+        False, "--pvt-integer", help="pvt, pvt-st: the drive's integer units: segment times in whole ms (1-255; a "
+        "longer segment is split on its own cubic; needs a whole-ms --cycle), positions in encoder counts and "
+        "velocities in counts/s as int32 (every profile controller.joints unit counts). A value past int32 is exit 1."),
     cam_master: CamMaster = typer.Option(
         CamMaster.time, "--cam-master", help="cam, cam-table: the master axis: time [s] from the start, or belt (with "
         "--to-belt): the belt's travel [m] since the part's detection.",

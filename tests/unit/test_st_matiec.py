@@ -211,6 +211,7 @@ PLANS = {
     "cam-table-belt": (*BELT, "-f", "cam-table-st", "--cam-master", "belt", "--tolerance", "1e-4"),
     "pvt-delta-4axis": (*D4, "-f", "pvt-st"),
     "cam-delta-4axis": (*D4, "-f", "cam-st"),
+    "pvt-integer": (*ADEPT, "--round-trip", "--cycle", "0.001", "-f", "pvt-st", "--pvt-integer"),
 }
 
 
@@ -250,13 +251,14 @@ def test_build_table_st_from_the_cli_compiles(tmp_path):
 _KINDS = {"FB_PICKPLACEPVT": "pvt", "FB_PICKPLACECAM": "cam", "FB_PICKPLACECAMTABLE": "cam-table"}
 
 
-def _fb_harness(fb: str, arrays: list[str], joints: list[str]) -> str:
+def _fb_harness(fb: str, arrays: list[str], joints: list[str], x: str, x_scale: float) -> str:
     """C main: init and run a static instance (matiec's initialiser), print nPoints, each array, then the kernel's
-    interpolation at s = 1/4, 1/2, 3/4 of every segment, per joint (``%a``: exact doubles)."""
+    interpolation at s = 1/4, 1/2, 3/4 of every segment, per joint (``%a``: exact doubles); the master ``x`` times
+    ``x_scale`` is in the unit of the velocities' denominator (ms → s: 1e-3)."""
     kind = _KINDS[fb]
-    x = "FTIME" if kind == "pvt" else "FMASTER"
     lines = [f"static {fb} fb;", "static void seg(int k, int n) {", "    static const double S[3] = {0.25, 0.5, 0.75};",
-             f"    double x0 = fb.{x}.value.table[k], x1 = fb.{x}.value.table[k + 1], h = x1 - x0;",
+             f"    double x0 = fb.{x}.value.table[k] * {x_scale!r}, x1 = fb.{x}.value.table[k + 1] * {x_scale!r};",
+             "    double h = x1 - x0;",
              "    for (int m = 0; m < 3; m++) {", "        double s = S[m];"]
     for j in joints:
         p = f"fb.{j}_POS.value.table"
@@ -278,16 +280,16 @@ def _fb_harness(fb: str, arrays: list[str], joints: list[str]) -> str:
     lines += ['        printf("\\n");', "    }", "}", "int main(void) {", f"    {fb}_init__(&fb, 0);",
               f"    {fb}_body__(&fb);", "    int n = fb.NPOINTS.value;", '    printf("%d\\n", n);']
     for name in arrays:
-        lines.append(f'    for (int i = 0; i < n; i++) printf("%a ", fb.{name}.value.table[i]);\n    printf("\\n");')
+        lines.append(f'    for (int i = 0; i < n; i++) printf("%a ", (double)fb.{name}.value.table[i]);\n    printf("\\n");')
     lines += ["    for (int k = 0; k + 1 < n; k++) seg(k, n);", "    return 0;", "}"]
     return "\n".join(lines) + "\n"
 
 
-def _python_interpolation(kind: str, cols: dict[str, np.ndarray], joints: list[str]) -> np.ndarray:
+def _python_interpolation(kind: str, cols: dict[str, np.ndarray], joints: list[str], x_scale: float) -> np.ndarray:
     """The same points by the exporter's own formulas (knots.hermite3 / knots.quintic; linear)."""
     from pickplace_cli.export.knots import hermite3, quintic
 
-    x = cols["t" if kind == "pvt" else "master"]
+    x = cols["t" if kind == "pvt" else "master"] * x_scale
     out = []
     for k in range(len(x) - 1):
         at = x[k] + np.array([0.25, 0.5, 0.75]) * (x[k + 1] - x[k])
@@ -318,10 +320,13 @@ def test_table_st_compiles_and_runs_in_c(name, folder, tmp_path):
     compile_ok(text, tmp_path)
     fb = re.search(r"^FUNCTION_BLOCK (\w+)$", text, re.M).group(1).upper()
     kind = _KINDS[fb]
-    st_names = {"t": "FTIME", "dt": "FDT", "master": "FMASTER"}
+    integer = "--pvt-integer" in PLANS[name]  # times in ms, DINT arrays nTime, nDt
+    st_names = {"t": "NTIME", "dt": "NDT"} if integer else {"t": "FTIME", "dt": "FDT", "master": "FMASTER"}
+    x_scale = 1e-3 if integer else 1.0
     arrays = [st_names.get(n, n.upper() if n.endswith(("_vel", "_acc")) else f"{n.upper()}_POS") for n in names]
     joints = [n.upper() for n in names if n not in st_names and not n.endswith(("_vel", "_acc"))]
-    out = run_c(tmp_path, _fb_harness(fb, arrays, joints)).splitlines()
+    x = st_names["t" if kind == "pvt" else "master"]
+    out = run_c(tmp_path, _fb_harness(fb, arrays, joints, x, x_scale)).splitlines()
     n = int(out[0])
     assert n == len(data) >= 2
     got = {nm: np.array([float.fromhex(v) for v in line.split()]) for nm, line in zip(names, out[1:1 + len(names)])}
@@ -329,7 +334,7 @@ def test_table_st_compiles_and_runs_in_c(name, folder, tmp_path):
         assert [float(f"{v:.12g}") for v in got[nm]] == [float(v) for v in text_cols[k]], nm  # (-0.0 == 0.0)
     c_interp = np.array([[float.fromhex(v) for v in line.split()] for line in out[1 + len(names):]])
     jn = [n for n in names if n.upper() in joints]
-    py = _python_interpolation(kind, got, jn)
+    py = _python_interpolation(kind, got, jn, x_scale)
     assert c_interp.shape == py.shape == (3 * (n - 1), len(jn))
     scale = np.max(np.abs(np.column_stack([got[j] for j in jn])), axis=0)
     assert np.all(np.abs(c_interp - py) <= 1e-12 * scale), np.max(np.abs(c_interp - py) / scale)
