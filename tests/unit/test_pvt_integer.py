@@ -131,3 +131,27 @@ def test_usage_and_refusals(args, code, says, tmp_path):
     moves = ("--from", "0.3,-0.2,-0.1", "--to", "0.3,0.2,-0.1") if "scara-600" in args else ADEPT
     res = run("plan", *moves, *args, "--pvt-integer", "-q", "-o", str(tmp_path / "t.csv"))
     assert res.exit_code == code and says in res.stderr, res.stderr
+
+
+@pytest.mark.parametrize("dialect", ["strict", "codesys"])
+def test_integer_st_parses_and_holds_the_csv_integers(dialect):
+    """Both dialects parse with tree-sitter's IEC 61131-3 grammar (strict also compiles with matiec:
+    test_st_matiec) and hold exactly the integers of the CSV form; no name is reserved."""
+    from pickplace_cli.export.pvt_int import format_integer_csv, format_integer_st
+
+    from .test_st_strict import _errors, _identifiers, _tree_sitter, reserved
+
+    table = KnotTable("pvt", np.array([0.0, 0.004, 0.3]), np.array([[0.1, -0.2], [0.11, -0.19], [0.2, 0.0]]),
+                      np.array([[0.0, 0.0], [3.0, 1.0], [0.0, 0.0]]), None, 1e-6, np.zeros(2), 301)
+    pvt = integer_pvt(table, _drive(1e6))
+    text = format_integer_st(pvt, dialect)
+    tree = _tree_sitter(text)
+    assert not _errors(tree.root_node)
+    assert not [i for i in _identifiers(tree.root_node) if reserved(i)]
+    _, *rows = [line.split(",") for line in format_integer_csv(pvt).splitlines()]
+    prefix = "" if dialect == "strict" else "PP_PVT_"
+    for k, name in enumerate(["nTime", "nDt", "J1_pos", "J1_vel", "J2_pos", "J2_vel"]):
+        st_name = name if dialect == "strict" else prefix + name.upper()
+        body = re.search(rf"{st_name} : ARRAY\[1\.\.(\d+)\] OF DINT := \[ \(\*.*?\*\)(.*?)\];", text, re.S)
+        assert body and int(body.group(1)) == len(rows) == 4  # the 300 ms segment split in two
+        assert [int(v) for v in body.group(2).split(",")] == [int(r[k]) for r in rows], name
