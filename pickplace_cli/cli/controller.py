@@ -82,6 +82,8 @@ def check_cycle_usage(a, cycle: float | None, fmt) -> None:
         _usage(f"--cam-master applies to the cam formats, not {fmt.value}")
     if a.cam_master.value == "belt" and a.to_belt is None:
         _usage("--cam-master belt: the master is the belt's travel, which needs a conveyor move (--to-belt)")
+    if a.pvt_integer and fmt.value not in ("pvt", "pvt-st"):
+        _usage(f"--pvt-integer applies to the PVT formats (pvt, pvt-st), not {fmt.value}")
     if table and a.batch is not None:
         _usage(f"--format {fmt.value}: one table per move; plan the rows one at a time (not with --batch)")
     if table and a.json_summary and a.output is None:
@@ -191,9 +193,26 @@ def write_table(a, legs: list, judged) -> dict:
     if a.cam_master.value == "belt":
         part = a.rendezvous.part
         master = Master("belt", part.speed, part.latency)
-    cols = table_columns(table, a.drive, legs[0].joint.units, master)
-    text = (format_table_st(table, cols, a.st_dialect.value, table_header(table, a.drive, master)) if st
-            else format_table_csv(cols))
+    if a.pvt_integer:
+        text = _integer_text(a, table, legs, master, st)
+    else:
+        cols = table_columns(table, a.drive, legs[0].joint.units, master)
+        text = (format_table_st(table, cols, a.st_dialect.value, table_header(table, a.drive, master)) if st
+                else format_table_csv(cols))
     with atomic_output(a.output) as stream:
         stream.write(text)
     return table_info(a, judged)
+
+
+def _integer_text(a, table, legs: list, master, st: bool) -> str:
+    """``--pvt-integer``: the PVT table in the drive's integer units (ms, counts, counts/s) as CSV or ST."""
+    from ..export.pvt_int import format_integer_csv, format_integer_st, integer_pvt
+    from ..export.tables import table_header
+
+    pvt = integer_pvt(table, a.drive, legs[0].joint.units)
+    if pvt.split and not a.quiet:
+        sys.stderr.write(f"pvt integer: {pvt.split} segment(s) longer than 255 ms split in whole ms on their own cubic\n")
+    if not st:
+        return format_integer_csv(pvt)
+    header = table_header(table, a.drive, master) + [f"integer units: {len(pvt.t_ms)} points (segments of 1-255 ms)"]
+    return format_integer_st(pvt, a.st_dialect.value, header)

@@ -31,6 +31,7 @@ from .app import (
 )
 from .batch import _plan_batch
 from .plan_options import (
+    _rosbag2_format,
     _check_plan_usage,
     _check_plan_values,
     _check_shape_usage,
@@ -170,6 +171,10 @@ def plan(
         StDialect.strict, "--st-dialect", help="pvt-st, cam-st, cam-table-st: strict (IEC 61131-3: a FUNCTION_BLOCK "
         "holding the tables, for any compiler) or codesys (a VAR_GLOBAL CONSTANT list, CODESYS/TwinCAT).",
     ),
+    pvt_integer: bool = typer.Option(
+        False, "--pvt-integer", help="pvt, pvt-st: the drive's integer units: segment times in whole ms (1-255; a "
+        "longer segment is split on its own cubic; needs a whole-ms --cycle), positions in encoder counts and "
+        "velocities in counts/s as int32 (every profile controller.joints unit counts). A value past int32 is exit 1."),
     cam_master: CamMaster = typer.Option(
         CamMaster.time, "--cam-master", help="cam, cam-table: the master axis: time [s] from the start, or belt (with "
         "--to-belt): the belt's travel [m] since the part's detection.",
@@ -226,6 +231,9 @@ def plan(
         McapFlavor.ros2, "--mcap-flavor", help="MCAP: ros2 (CDR, ROS 2 messages) or foxglove (JSON, Foxglove schemas)."
     ),
     compression: Compression = typer.Option(Compression.none, "--compression", help="MCAP chunk compression."),
+    rosbag2: bool = typer.Option(
+        False, "--rosbag2", help="MCAP (ros2 flavour; implies -f mcap): write -o DIR as a rosbag2 directory, "
+        "DIR/DIR_0.mcap and DIR/metadata.yaml, as ros2 bag play and ros2 bag info read it. DIR must be new or empty."),
     output: Optional[str] = typer.Option(
         None, "--output", "-o", help="Output file ('-' = stdout, the default without --json). Written atomically."
     ),
@@ -279,12 +287,14 @@ def plan(
     _JSON_ERRORS[0] = json_summary  # (a batch: its rows have their lines; an error that ends it gets one more)
     from .guards import output_format
 
+    if rosbag2:
+        fmt = _rosbag2_format(ctx, fmt, output)
     fmt = a.fmt = output_format(ctx, fmt, output if output is not None or json_summary else "-")
     _check_plan_values(a)
     _check_plan_usage(a)
     if a.output is None and not json_summary:
         a.output = "-"
-    _check_output_paths(a.output, report)
+    _check_output_paths(a.output, report, bag=rosbag2)
     from .guards import refuse_overwriting_inputs
 
     refuse_overwriting_inputs([("-o", a.output), ("--report", report)], [("--batch", batch), ("--table", table)], profile)
@@ -305,7 +315,7 @@ def plan(
     a.cycle_s = resolve_cycle(cycle, rate, prof)
     check_cycle_usage(a, a.cycle_s, fmt)
     a.drive = drive_map(prof)
-    writer = _writer(fmt, csv_dialect, mcap_flavor, compression, _columns(columns, prof, a.drive), a.drive)
+    writer = _writer(fmt, csv_dialect, mcap_flavor, compression, _columns(columns, prof, a.drive), a.drive, rosbag2)
     _check_shape_usage(a)
     options = PlanOptions(method=a.method.value, method_params=params, time=a.time, rate=rate,
                           fit=a.time == "fit" or show_fit, shape=a.optimize == OptimizeWhat.shape,

@@ -47,6 +47,16 @@ def _check_plan_values(a) -> None:
         raise TaskError(f"eta = {a.eta!r}: the lift-off/set-down ratio η must lie strictly between 0 and 1")
 
 
+def _rosbag2_format(ctx, fmt, output):
+    """--rosbag2: the format (mcap; -f, when given, must say so) after the usage checks: a directory -o DIR."""
+    source = ctx.get_parameter_source("fmt")
+    if source is not None and source.name != "DEFAULT" and fmt != OutputFormat.mcap:
+        _usage(f"--rosbag2 writes an MCAP bag: not with -f {fmt.value}")
+    if output in (None, "-"):
+        _usage("--rosbag2 writes a directory (DIR/DIR_0.mcap, DIR/metadata.yaml): give -o DIR")
+    return OutputFormat.mcap
+
+
 def _law_coefficients(text: str) -> int | None:
     """--law-coefficients: None for auto, else an integer in 8 ... 80 (exit 2 otherwise)."""
     if text.strip().lower() == "auto":
@@ -107,6 +117,8 @@ def _check_plan_usage(a) -> None:
     if fmt != OutputFormat.mcap and (a.mcap_flavor != McapFlavor.ros2 or a.compression != Compression.none):
         what = f"--mcap-flavor {a.mcap_flavor.value}" if a.mcap_flavor != McapFlavor.ros2 else f"--compression {a.compression.value}"
         _usage(f"{what} only applies to --format mcap (the format is {fmt.value})")
+    if a.rosbag2 and a.mcap_flavor != McapFlavor.ros2:
+        _usage(f"--rosbag2 holds ROS 2 messages: not with --mcap-flavor {a.mcap_flavor.value}")
     if fmt != OutputFormat.csv and a.csv_dialect != CsvDialectName.default:
         _usage(f"--csv-dialect {a.csv_dialect.value} only applies to --format csv (the format is {fmt.value})")
     if fmt != OutputFormat.csv and a.columns is not None:

@@ -30,10 +30,12 @@ def _print_rendezvous(rv) -> None:
     )
 
 
-def _writer(fmt, dialect, flavor, compression, columns: tuple[str, ...] | None = None, drive=None) -> Callable:
+def _writer(fmt, dialect, flavor, compression, columns: tuple[str, ...] | None = None, drive=None,
+            bag: bool = False) -> Callable:
     """A function (samples, output path) that writes atomically in the chosen format; ``columns``: the CSV
     columns to write (:class:`~pickplace_cli.export.csv.CsvFormat`), None for all; ``drive``: the profile's
-    :class:`~pickplace_cli.export.drive.DriveMap` (names, drive units), None without one."""
+    :class:`~pickplace_cli.export.drive.DriveMap` (names, drive units), None without one; ``bag``: MCAP as a rosbag2
+    directory (:mod:`~pickplace_cli.export.rosbag2`)."""
     from ..model.errors import ExportError
 
     if fmt != OutputFormat.mcap and compression != Compression.none:
@@ -60,6 +62,11 @@ def _writer(fmt, dialect, flavor, compression, columns: tuple[str, ...] | None =
 
             with atomic_output(output) as stream:
                 write_json(samples, stream, drive=drive)
+        elif bag:
+            from ..export.rosbag2 import write_rosbag2
+
+            write_rosbag2(samples, output, compression=None if compression == Compression.none else compression.value,
+                          drive=drive)
         else:
             from ..export.mcap import write_mcap
 
@@ -120,15 +127,20 @@ def _batch_line(codes: list, first_failed, written) -> None:
     )
 
 
-def _check_output_paths(output: Optional[str], report: Optional[str]) -> None:
+def _check_output_paths(output: Optional[str], report: Optional[str], bag: bool = False) -> None:
     """Refuse colliding or impossible outputs before anything is computed or written (``output`` None: no
-    trajectory is written, as with ``--json`` alone)."""
+    trajectory is written, as with ``--json`` alone; ``bag``: a rosbag2 directory)."""
     import os
 
     from ..model.errors import ExportError
     from ..export import check_writable, promise
 
-    check_writable(output)
+    if bag:
+        from ..export.rosbag2 import check_bag_directory
+
+        check_bag_directory(output)
+    else:
+        check_writable(output)
     promise(output)
     if report is not None:
         check_writable(report)

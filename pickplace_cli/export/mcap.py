@@ -5,9 +5,12 @@ Input is duck-typed (a :class:`~pickplace_cli.planner.Plan` or a batch/round-tri
 optional ``move`` (N,) int = the move number of each sample (absent or None: one move); each run of
 equal numbers is one move. ``t`` must not decrease.
 
-Time base. Every message's log time (and header stamp) is ``EPOCH_NS + round(t · 1e9)`` ns: the sample
-time of the trajectory plus a fixed, documented epoch offset (2024-01-01T00:00:00Z), never the wall clock,
-so the same plan always gives the same bytes.
+Time base. Every message's log time (and the header stamp of every per-sample message) is
+``EPOCH_NS + round(t · 1e9)`` ns: the sample time of the trajectory plus a fixed, documented epoch offset
+(2024-01-01T00:00:00Z), never the wall clock, so the same plan always gives the same bytes. A
+``/joint_trajectory`` message is a command for ros2_control's JointTrajectoryController: its header stamp is 0
+("start on receipt"; any other stamp in the past is refused) and its points carry no effort (refused by a position
+or velocity controller); its log time is the move's start, its points' ``time_from_start`` the time since then.
 
 ``ros2`` flavour (profile ``ros2``, every channel ``cdr`` with a ``ros2msg`` schema holding the full
 message definition, dependencies included; no JSON channel, which ROS 2 tools reject): ``/joint_trajectory``
@@ -307,7 +310,8 @@ def _metadata(flavor: str, epoch_ns: int, frame_id: str, samples) -> dict[str, s
     meta = {
         "flavor": flavor,
         "epoch_offset_ns": str(epoch_ns),
-        "time": "log time = header stamp = epoch_offset_ns + round(t * 1e9) ns; t = time from the start of the trajectory",
+        "time": "log time = header stamp = epoch_offset_ns + round(t * 1e9) ns; t = time from the start of the trajectory"
+                + ("; /joint_trajectory: header stamp 0 (start on receipt)" if flavor == "ros2" else ""),
         "frame_id": frame_id,
         "units": "SI: m, s, rad; joint effort N*m (revolute) or N (prismatic); motor torque N*m",
         "joints": ",".join(f"{n}[{u}]" for n, u in zip(samples.joint.names, samples.joint.units)),
@@ -567,7 +571,7 @@ def tool_turn(jt) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
 
 
 def _write_ros2(writer, samples, epoch_ns: int, frame_id: str, fast: bool = True) -> None:
-    from mcap_ros2._dynamic import serialize_dynamic
+    from mcap_ros2._dynamic import serialize_dynamic  # encode-only; its public Writer stamps its version (pinned <0.7)
 
     jt = samples.joint
     nj = len(jt.names)
@@ -605,20 +609,21 @@ def _write_ros2(writer, samples, epoch_ns: int, frame_id: str, fast: bool = True
             blobs.append((topic, [enc(build(s, c, r)) for s, c, r in zip(sec, nsec, values.tolist())]))
 
     q, qd, qdd = jt.q.tolist(), jt.qd.tolist(), jt.qdd.tolist()
-    torque = jt.torque.tolist() if has_torque else [[] for _ in ns]
     for sl in move_slices(samples):
         t0 = ns[sl.start]
+        # for ros2_control's JointTrajectoryController: stamp 0 = start on receipt (a past stamp is refused), no effort
+        # (refused without an effort command interface; the torques are in /joint_states and /motor_states)
         points = [
             {
                 "positions": q[i],
                 "velocities": qd[i],
                 "accelerations": qdd[i],
-                "effort": torque[i],
+                "effort": [],
                 "time_from_start": _stamp(ns[i] - t0),
             }
             for i in range(sl.start, sl.stop)
         ]
-        traj = {"header": {"stamp": _stamp(t0), "frame_id": ""}, "joint_names": names, "points": points}
+        traj = {"header": {"stamp": _stamp(0), "frame_id": ""}, "joint_names": names, "points": points}
         channels.write("/joint_trajectory", t0, encoders["/joint_trajectory"](traj))
         for i in range(sl.start, sl.stop):
             for topic, data in blobs:

@@ -101,9 +101,10 @@ def format_table_2d_st(
         f"FUNCTION {function} : BOOL\n"
         "VAR_INPUT\n    fLambda : LREAL; (* lambda = b/h [-] *)\n    fEta : LREAL; (* eta [-] *)\nEND_VAR\n"
         "VAR_OUTPUT\n    fK1 : LREAL; (* k1 [-] *)\n    fK2 : LREAL; (* k2 [-] *)\nEND_VAR\n"
-        + (constants_block(const, dialect) if dialect == "strict" else "") +
+        # the working variables before the constant block (matiec reads a VAR after a VAR CONSTANT as constant)
         "VAR\n    nE0 : DINT;\n    nE1 : DINT;\n    nL0 : DINT;\n    nL1 : DINT;\n    nMid : DINT;\n"
         "    nEi : DINT;\n    nLi : DINT;\n    fWe : LREAL;\n    fWl : LREAL;\n    bIn : BOOL;\nEND_VAR\n"
+        + (constants_block(const, dialect) if dialect == "strict" else "") +
         f"bIn := fLambda >= {L}[1] AND fLambda <= {L}[{nl}] AND fEta >= {E}[1] AND fEta <= {E}[{ne}];\n"
     )
     out.append(_bisect("fLambda", L, nl, "nL0", "nL1", "nMid", "fWl"))

@@ -157,8 +157,8 @@ def format_table_st(
         "    fK2 : LREAL; (* k2 [-] *)\n"
         "END_VAR\n"
     )
-    if dialect == "strict":
-        out.append(constants_block(const, dialect))
+    # the working variables before the constant block: matiec reads a plain VAR that follows a VAR CONSTANT as
+    # constant too ("Assignment to CONSTANT variables is not allowed")
     out.append(
         "VAR\n"
         "    nLo : DINT;\n"
@@ -166,6 +166,10 @@ def format_table_st(
         "    nMid : DINT;\n"
         "    fW : LREAL;\n"
         "END_VAR\n"
+    )
+    if dialect == "strict":
+        out.append(constants_block(const, dialect))
+    out.append(
         "IF fLambda <> fLambda THEN (* NaN *)\n"
         f"    fK1 := {K1}[1];\n"
         f"    fK2 := {K2}[1];\n"
