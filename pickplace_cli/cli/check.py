@@ -35,6 +35,14 @@ def check(
         False, "--strict", help="Exit 3 also when a peak is not resolved by the samples (its accuracy is worse than "
         "1 % of the limit and it may be beyond it), not only when the data shows a limit exceeded.",
     ),
+    hold_capacity: bool = typer.Option(
+        True, "--hold-capacity/--no-hold-capacity",
+        help="Hold the profile's Cartesian capacity: the tool's |v| <= capacity.velocity [m/s], |a| <= "
+        "capacity.acceleration [m/s²] (and |j| <= capacity.jerk [m/s³] when set), from the file's x, y, z "
+        "columns (else forward kinematics of the joints), at the limit use. --no-hold-capacity: a trajectory "
+        "planned with plan --time fit or optimal (joint and motor limits alone): the capacity rows are still "
+        "reported, marked not held, and an exceeded capacity does not fail the check (exit 0).",
+    ),
     report: Optional[str] = typer.Option(None, "--report", help="Also write the limit report as JSON to this file."),
     report_only: bool = typer.Option(False, "--report-only", help="Exit 0 even when a limit is exceeded."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="Only violations and errors on stderr."),
@@ -47,6 +55,10 @@ def check(
     wrapped). Every duration-dependent peak is estimated twice, from all samples and from every other one: the
     difference, and at least 0.1 % of the peak, is its accuracy (the "± %" column); a limit counts as exceeded when the peak less its accuracy is
     beyond it, so a trajectory `plan` wrote as within its limits passes, and one 1 % faster fails.
+
+    The tool's Cartesian capacity (speed, acceleration, jerk of x, y, z) is checked too, as `plan` does under its
+    default rule; a trajectory planned with `plan --time fit` or `optimal` (joint and motor limits alone) is
+    checked under the same rule with --no-hold-capacity.
 
     A file with a `move` column (`plan --batch` or `--round-trip` output) is checked move by move: each
     move gets its own limit table and verdict, and the exit code is the worst of them. Samples at the end
@@ -76,7 +88,7 @@ def check(
     refuse_overwriting_inputs([("--report", report)], [("TRAJECTORY", trajectory)], profile)
     prof = load_profile(profile)
     checks = check_file(trajectory, prof, smooth, limit_use,
-                        notify=lambda text: sys.stderr.write(f"pickplace: {text}\n"))
+                        notify=lambda text: sys.stderr.write(f"pickplace: {text}\n"), hold_capacity=hold_capacity)
     several = len(checks) > 1 or checks[0].move is not None
     if report is not None:
         with atomic_output(report) as stream:

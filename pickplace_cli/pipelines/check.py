@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from ..model.errors import TaskError
-from ..limits.check import _range_row, check_limits
+from ..limits.check import _range_row, capacity_rows, check_limits
 from ..limits.grid import check_grid
 from ..limits.motion import MotionModel
 from ..limits.report import LimitReport
@@ -289,14 +289,16 @@ def _check_branch(s: Samples, robot, pos: np.ndarray, source: str) -> None:
 
 
 def _motion_report(t: np.ndarray, pos: np.ndarray, robot, profile: Profile, smoothing: float, source: str,
-                   notes=None, tool: np.ndarray | None = None):
+                   notes=None, tool: np.ndarray | None = None, not_held: str = ""):
     """The limit report of the tool positions ``pos`` (N, 3) m (and angle, rad, a 4th column with a rotary axis) at
     ``t`` (N,) s from 0, through a reconstruction of
     the continuous motion (an interpolating spline split at the jerk steps found in the data,
     :func:`~pickplace_cli.curves.sampled.reconstruct`, or a smoothing spline), and the words that say how the
     derivatives were found. ``notes``: a function of those words → the report's notes. ``tool`` (N, 12): the
     file's own tool positions, velocities, accelerations and jerks (consistent with ``pos``), through which the
-    motion between samples is the septic Hermite interpolant (exact at every sample up to the jerk)."""
+    motion between samples is the septic Hermite interpolant (exact at every sample up to the jerk). The tool's
+    Cartesian capacity rows come from the same continuous motion (:func:`capacity_rows` on the check's grid);
+    ``not_held``: why they are not held ("" when they are: they then decide the verdict with the others)."""
     from scipy.interpolate import UnivariateSpline
 
     T = float(t[-1])
@@ -354,8 +356,9 @@ def _motion_report(t: np.ndarray, pos: np.ndarray, robot, profile: Profile, smoo
     margin = getattr(profile.robot, "singularity_margin", None)
     model = MotionModel(cpath, robot, limit_specs(profile), margin, profile.workcell.box)
     grid = check_grid(t / T, cpath.breakpoints, jumps=jumps)
-    return check_limits(model, T, parts=model.parts(grid), dwell=profile.planning.dwell,
-                        notes=() if notes is None else notes(how)), how
+    report = check_limits(model, T, parts=model.parts(grid), dwell=profile.planning.dwell,
+                          notes=() if notes is None else notes(how))
+    return report.with_rows(capacity_rows(cpath, T, profile.capacity, not_held, grid=grid)), how
 
 
 def _half(n: int) -> np.ndarray:
@@ -364,7 +367,8 @@ def _half(n: int) -> np.ndarray:
     return idx if idx[-1] == n - 1 else np.append(idx, n - 1)
 
 
-def check_samples(s: Samples, profile: Profile, smoothing: float = 0.0, source: str = "<trajectory>") -> LimitReport:
+def check_samples(s: Samples, profile: Profile, smoothing: float = 0.0, source: str = "<trajectory>",
+                  not_held: str = "") -> LimitReport:
     """Limit report of one move read by :func:`read_moves` (see the module docstring).
 
     Every duration-dependent peak is estimated from the samples twice, from all of them and from every other one
@@ -372,7 +376,8 @@ def check_samples(s: Samples, profile: Profile, smoothing: float = 0.0, source: 
     peak's stated accuracy (the error of an estimate that converges with the sample rate is smaller than its change
     when the rate halves). A row is exceeded only
     when its peak less that accuracy is beyond the limit (the data shows it exceeded); a peak whose accuracy is
-    worse than 1 % of the limit is reported as not resolved by the samples (``LimitReport.unresolved``)."""
+    worse than 1 % of the limit is reported as not resolved by the samples (``LimitReport.unresolved``).
+    ``not_held``: why the tool's Cartesian capacity is not held ("" when it is: an exceeded capacity then fails)."""
     robot = build_robot(profile.robot)
     t = s.t - s.t[0]
     pos = robot.forward_kinematics(s.q)
@@ -395,7 +400,7 @@ def check_samples(s: Samples, profile: Profile, smoothing: float = 0.0, source: 
         tool = None
     if getattr(robot, "rotary", False):  # the tool angle θ = FK of the fourth axis, one more column
         pos = np.column_stack([pos, robot.tool_angle(s.q)])
-    report, _ = _motion_report(t, pos, robot, profile, smoothing, source, notes, tool)
+    report, _ = _motion_report(t, pos, robot, profile, smoothing, source, notes, tool, not_held)
     others = []
     half = _half(len(t))
     if len(half) >= 6:
@@ -437,7 +442,7 @@ def _with_accuracy(fine: LimitReport, others: list[tuple[LimitReport, float]]) -
             acc = max(max(share * abs(r.peak - c.peak) for c, share in cs), CHECK_RESOLUTION * abs(r.peak))
             ok = r.peak - acc <= r.allowed
             r = LimitRow(r.joint, r.quantity, r.unit, r.peak, r.limit, r.utilisation, r.t_peak, ok, r.kind, r.bound,
-                         r.target, acc)
+                         r.target, acc, r.not_held)
         rows.append(r)
     return replace(fine, rows=tuple(rows))
 
@@ -448,7 +453,7 @@ CHECK_MAX_BYTES = 64 << 20
 
 
 def check_file(path: str | Path, profile: Profile, smoothing: float | str = 0.0,
-               limit_use: float | None = None, notify=None) -> list[MoveCheck]:
+               limit_use: float | None = None, notify=None, hold_capacity: bool = True) -> list[MoveCheck]:
     """Check every move of a trajectory file against a profile's limits.
 
     Parameters
@@ -465,6 +470,10 @@ def check_file(path: str | Path, profile: Profile, smoothing: float | str = 0.0,
         The fraction (0, 1] [-] of every timed limit's rating allowed; None: the profile's ``planning.limit_use``.
     notify : callable, optional
         Told (one text argument) what a named pipe without a writer is waiting for.
+    hold_capacity : bool
+        Whether the profile's Cartesian capacity (the tool's |v| [m/s], |a| [m/s²], |j| [m/s³]) is held: True, an
+        exceeded capacity fails the check (as ``plan`` under its default rule); False, its rows are reported as
+        not held (``--no-hold-capacity``, as ``plan --time fit`` or ``optimal``).
 
     Returns
     -------
@@ -500,10 +509,11 @@ def check_file(path: str | Path, profile: Profile, smoothing: float | str = 0.0,
 
     text = decode_text(raw, source, "a CSV trajectory", TaskError)
     robot = build_robot(profile.robot)
+    not_held = "" if hold_capacity else "--no-hold-capacity"
     out = []
     for s in read_moves(text, source, robot.joint_names, robot.joint_units):
         out.append(MoveCheck(s.move, int(s.lines[0]), s.last_line,
-                             check_samples(s, profile, smoothing, source).rated(profile.limit_use)))
+                             check_samples(s, profile, smoothing, source, not_held).rated(profile.limit_use)))
     return out
 
 
