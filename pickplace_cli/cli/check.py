@@ -102,7 +102,7 @@ def check(
             stream.write("\n")
     for c in checks:
         rep = c.report
-        if several and (not quiet or not rep.ok):
+        if several and (not quiet or not rep.all_ok):
             sys.stderr.write(f"--- move {c.move} (lines {c.first_line}–{c.last_line}) ---\n")
         if not quiet:
             for note in rep.notes:
@@ -114,8 +114,11 @@ def check(
         code = 3
     if several and not quiet:
         bad = sum(not c.report.ok for c in checks)
+        loose = sum(c.report.ok and not c.report.all_ok for c in checks)
+        within = "within every limit held" if loose else "within every limit"
+        more = f", {loose} of them exceed the Cartesian capacity (not held: --no-hold-capacity)" if loose else ""
         sys.stderr.write(
-            f"checked {len(checks)} move(s): {len(checks) - bad} within every limit, {bad} exceed one\n"
+            f"checked {len(checks)} move(s): {len(checks) - bad} {within}{more}, {bad} exceed one\n"
         )
     if code and not report_only:
         raise typer.Exit(code)

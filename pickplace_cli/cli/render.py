@@ -110,6 +110,15 @@ def _emit_row_json(res) -> None:
     _emit_json(doc)
 
 
+def _row_not_held(res) -> None:
+    """A batch row's limits exceeded that its rule does not hold (the Cartesian capacity under --time fit or
+    optimal), one line each on stderr in a single plan's words; the row itself is within its rule (exit 0)."""
+    rep = getattr(res.plan, "report", None)
+    loose = () if rep is None else rep.exceeded_not_held
+    if loose:
+        sys.stderr.write("".join(f"pickplace: row {res.row}: {_violation_text(r)}\n" for r in loose))
+
+
 def _batch_line(codes: list, first_failed, written) -> None:
     """The batch's closing line on stderr (``written``: rows written to -o, None without -o)."""
     n_ok = sum(1 for c in codes if c == 0)
