@@ -160,8 +160,8 @@ class LimitReport:
 
     @property
     def unresolved(self) -> tuple[LimitRow, ...]:
-        """Rows within their limit whose peak the samples do not resolve to ``RESOLVED`` (``check``)."""
-        return tuple(r for r in self.rows if r.ok and not r.resolved)
+        """Rows the rule holds, within their limit, whose peak the samples do not resolve to ``RESOLVED`` (``check``)."""
+        return tuple(r for r in self.rows if r.ok and not r.resolved and not r.not_held)
 
     @property
     def round_trip(self) -> float:
