@@ -234,8 +234,9 @@ def _print_verdict(report, quiet: bool, with_cycle: bool = True) -> None:
             if loose:  # the rule leaves the capacity out and the move exceeds it: never "all limits hold"
                 held = (("every limit held by the rule holds" if not vague else held)
                         + f"; {_not_held_words(loose)}")
-            elif any(r.not_held for r in report.rows):
-                held = held.replace("all limits hold", "all limits hold (the Cartesian capacity too, not held)")
+            elif any(r.not_held for r in report.rows):  # within the capacity although the rule does not hold it
+                rules = " / ".join(sorted({r.not_held for r in report.rows if r.not_held}))
+                held = held.replace("all limits hold", f"all limits hold, the Cartesian capacity too (not held under {rules})")
             sys.stderr.write(f"verdict: {held}{scope}; {cycle}\n")
         return
     from ..pipelines.batch import violation_text  # the same words as a batch row's limit lines

@@ -213,3 +213,19 @@ def test_batch_rows_carry_the_capacity_under_fit(tmp_path):
     assert r.exit_code == 0
     for doc in (json.loads(x) for x in r.stdout.splitlines()):
         assert doc["capacity_held"] is True and doc["all_limits_ok"] is True and doc["exceeded_not_held"] == []
+
+
+def test_fit_within_the_capacity_says_all_limits_hold_and_that_the_capacity_was_not_held(tmp_path):
+    # the SCARA's fit move is bound by q1's velocity, well inside the capacity (4 m/s, 30 m/s²)
+    out = tmp_path / "s.csv"
+    r = run("plan", "-p", "scara-600", "--from", "0.3,-0.2,-0.1", "--to", "0.3,0.2,-0.1", "--time", "fit",
+            "-o", str(out), "--json")
+    assert r.exit_code == 0, r.stderr
+    assert "verdict: all limits hold, the Cartesian capacity too (not held under --time fit)" in r.stderr
+    assert "ok (not held: --time fit)" in r.stderr and "limit exceeded" not in r.stderr
+    doc = json.loads(r.stdout)
+    assert doc["capacity_held"] is False and doc["all_limits_ok"] is True and doc["exceeded_not_held"] == []
+    v, a = spline_peaks(out)
+    assert v < 4.0 and a < 30.0
+    r = run("check", str(out), "-p", "scara-600", "-q")
+    assert r.exit_code == 0 and r.stderr == ""
