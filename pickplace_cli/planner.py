@@ -57,7 +57,8 @@ class PlanOptions:
         Headroom: the fraction (0, 1] [-] of every timed limit's rating to plan to; None: the profile's.
     capacity_rows : bool or None
         Whether the capacity's rows are held (decide the verdict; else they are reported as not held); None: by the
-        duration rule.
+        duration rule. False with a duration in seconds: the caller timed the move by the fit rule (a conveyor
+        rendezvous under ``--time fit``).
     turn : str
         A rotary fourth axis: the way round to the end angle (``shortest``, ``ccw``, ``cw``, ``as-given``).
     turn_during : str
@@ -99,7 +100,8 @@ def capacity_not_held(options: PlanOptions) -> str:
     (:attr:`~pickplace_cli.limits.report.LimitRow.not_held`)."""
     if holds_capacity(options):
         return ""
-    return f"--time {options.time}" if options.time in ("fit", "optimal") else "the duration rule"
+    # (capacity_rows False with a duration in seconds: a conveyor rendezvous timed by the fit rule)
+    return f"--time {options.time}" if options.time in ("fit", "optimal") else "--time fit"
 
 
 @dataclass(frozen=True)

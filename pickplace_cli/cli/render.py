@@ -119,6 +119,16 @@ def _row_not_held(res) -> None:
         sys.stderr.write("".join(f"pickplace: row {res.row}: {_violation_text(r)}\n" for r in loose))
 
 
+def _cycle_not_held(res) -> None:
+    """A belt schedule row's segments' limits exceeded that the rule does not hold, one line each on stderr."""
+    c = res.cycle
+    if c is None:
+        return
+    names = ("pick", "track", "place") if c.track is not None else ("pick", "place")
+    sys.stderr.write("".join(f"pickplace: row {res.row}: {name}: {_violation_text(r)}\n"
+                             for name, leg in zip(names, c.legs) for r in leg.report.exceeded_not_held))
+
+
 def _batch_line(codes: list, first_failed, written) -> None:
     """The batch's closing line on stderr (``written``: rows written to -o, None without -o)."""
     n_ok = sum(1 for c in codes if c == 0)

@@ -229,3 +229,18 @@ def test_fit_within_the_capacity_says_all_limits_hold_and_that_the_capacity_was_
     assert v < 4.0 and a < 30.0
     r = run("check", str(out), "-p", "scara-600", "-q")
     assert r.exit_code == 0 and r.stderr == ""
+
+
+def test_belt_schedule_rows_carry_the_capacity_under_fit(tmp_path):
+    # a belt schedule (t_detect column): each row's pick (rendezvous) and place moves under fit
+    p = "-0.1525,0,-0.8"
+    src = tmp_path / "parts.csv"
+    src.write_text("t_detect,to_x,to_y,to_z,to_belt_vx,to_belt_vy,to_belt_vz,place_x,place_y,place_z,from_x,from_y,"
+                   f"from_z\n0.00,0.1525,-0.25,-0.8,0,0.3,0,{p},{p}\n")
+    r = run("plan", "--batch", str(src), "--time", "fit", "--json", "-o", str(tmp_path / "o.csv"))
+    assert r.exit_code == 0, r.stderr
+    row = json.loads(r.stdout.splitlines()[0])
+    loose = {(x["segment"], x["quantity"]) for x in row["exceeded_not_held"]}
+    assert ("pick", "capacity acceleration") in loose and ("place", "capacity acceleration") in loose
+    assert all(x["not_held"] == "--time fit" and x["utilisation"] > 1.0 for x in row["exceeded_not_held"])
+    assert "row 1: pick: limit exceeded, not held under --time fit: tool capacity acceleration" in r.stderr
