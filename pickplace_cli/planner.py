@@ -56,7 +56,9 @@ class PlanOptions:
     limit_use : float or None
         Headroom: the fraction (0, 1] [-] of every timed limit's rating to plan to; None: the profile's.
     capacity_rows : bool or None
-        Whether the capacity's rows join the report; None: by the duration rule.
+        Whether the capacity's rows are held (decide the verdict; else they are reported as not held); None: by the
+        duration rule. False with a duration in seconds: the caller timed the move by the fit rule (a conveyor
+        rendezvous under ``--time fit``).
     turn : str
         A rotary fourth axis: the way round to the end angle (``shortest``, ``ccw``, ``cw``, ``as-given``).
     turn_during : str
@@ -78,18 +80,28 @@ class PlanOptions:
     # sample per cycle: :mod:`pickplace_cli.timing.cycle`); None: sampled at ``rate``
     limit_use: float | None = None  # fraction (0, 1] of every timed limit's rating to plan to; None: the profile's
     # planning.limit_use
-    capacity_rows: bool | None = None  # the Cartesian capacity's rows in the report: None by the rule
+    capacity_rows: bool | None = None  # the Cartesian capacity's rows held (else reported as not held): None by the rule
     # (:func:`holds_capacity`); a caller that chose the duration itself (a conveyor rendezvous) says
     turn: str = "shortest"  # a rotary fourth axis: the way round to the task's end angle (curves.rotation.TurnRule)
     turn_during: str = "transfer"  # … and when the tool turns: between lift-off and set-down, or the whole move
 
 
 def holds_capacity(options: PlanOptions) -> bool:
-    """Whether the duration rule holds the profile's Cartesian capacity (its rows then join the limit report):
-    every rule but fit and optimal without ``hold_capacity`` (those hold the joint and motor limits alone)."""
+    """Whether the duration rule holds the profile's Cartesian capacity (its rows then decide the verdict with the
+    others): every rule but fit and optimal without ``hold_capacity`` (those hold the joint and motor limits alone;
+    the capacity's rows are still reported, as not held)."""
     if options.capacity_rows is not None:
         return options.capacity_rows
     return options.hold_capacity or options.time not in ("fit", "optimal")
+
+
+def capacity_not_held(options: PlanOptions) -> str:
+    """Why the duration rule does not hold the Cartesian capacity (``--time fit``), "" when it does
+    (:attr:`~pickplace_cli.limits.report.LimitRow.not_held`)."""
+    if holds_capacity(options):
+        return ""
+    # (capacity_rows False with a duration in seconds: a conveyor rendezvous timed by the fit rule)
+    return f"--time {options.time}" if options.time in ("fit", "optimal") else "--time fit"
 
 
 @dataclass(frozen=True)
@@ -161,6 +173,9 @@ class Plan:
             "cycle_time_round_trip_s": self.report.round_trip,
             "picks_per_minute": self.report.picks_per_minute,
             "limits_ok": self.report.ok,
+            "all_limits_ok": self.report.all_ok,
+            "capacity_held": not any(r.not_held for r in self.report.rows),
+            "exceeded_not_held": [r.as_dict() for r in self.report.exceeded_not_held],
             **({"cycle": self.cycle.as_dict()} if getattr(self, "cycle", None) is not None else {}),
         }
 
@@ -351,8 +366,8 @@ def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions(), *,
         stop()
         duration, model, path, samples, report, rounding = _cycle_stage(options.cycle, profile, model, path, factory,
                                                                         duration, report)
-    if holds_capacity(options):
-        report = report.with_rows(capacity_rows(path, duration.seconds, profile.capacity))
+    # the Cartesian capacity's rows always: judged when the rule holds it, else reported as not held
+    report = report.with_rows(capacity_rows(path, duration.seconds, profile.capacity, capacity_not_held(options)))
     planned = _assemble(task, profile, path, duration, model, samples, report.rated(profile.limit_use))
     return planned if rounding is None else replace(planned, cycle=rounding)
 

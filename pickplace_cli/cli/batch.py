@@ -9,7 +9,7 @@ from typing import Optional
 import typer
 
 from .app import _usage, note_exit
-from .render import _batch_line, _emit_json, _emit_row_json, _write_report
+from .render import _batch_line, _cycle_not_held, _emit_json, _emit_row_json, _row_not_held, _write_report
 
 
 def _plan_batch(source, prof, options, height, eta, fail_fast, writer, output, report, report_only, json_summary,
@@ -137,6 +137,7 @@ class _RowSink:
             self.first_failed = res.row
         if res.error is not None:  # one line per problem (a limit row: one per exceeded limit)
             sys.stderr.write("".join(f"pickplace: {ln}\n" for ln in res.error.splitlines()))
+        _row_not_held(res)
         if self.json_summary:
             _emit_row_json(res)
         if res.plan is not None and self.report is not None:
@@ -314,6 +315,7 @@ def _plan_schedule(items, name, streamed, prof, options, height, eta, fail_fast,
                     sys.stderr.write(f"row {res.row}: starts t = {c.t_start:.4f} s (latency {c.latency:.4f} s), meets the part "
                                      f"at ({xyz}) m at t = {c.t_meet:.4f} s, placed t = {c.t_place:.4f} s, free "
                                      f"t = {c.t_end:.4f} s\n")
+                _cycle_not_held(res)
                 sys.stderr.flush()
                 if json_summary:
                     _emit_json(res.as_dict())
@@ -447,6 +449,7 @@ def _stream_batch(items, name, prof, options, height, eta, fail_fast, writer, ou
                 if res.error is not None:
                     sys.stderr.write("".join(f"pickplace: {ln}\n" for ln in res.error.splitlines()))
                     sys.stderr.flush()
+                _row_not_held(res)
                 if json_summary:
                     _emit_row_json(res)
                 if warmer is not None:

@@ -39,6 +39,14 @@ def check(
         "file whose derivative columns (vx … jz) disagree with its positions, instead of judging it from its "
         "positions with a warning.",
     ),
+    hold_capacity: bool = typer.Option(
+        True, "--hold-capacity/--no-hold-capacity",
+        help="Hold the profile's Cartesian capacity: the tool's |v| <= capacity.velocity [m/s], |a| <= "
+        "capacity.acceleration [m/s²] (and |j| <= capacity.jerk [m/s³] when set), from the file's x, y, z "
+        "columns (else forward kinematics of the joints), at the limit use. --no-hold-capacity: a trajectory "
+        "planned with plan --time fit or optimal (joint and motor limits alone): the capacity rows are still "
+        "reported, marked not held, and an exceeded capacity does not fail the check (exit 0).",
+    ),
     report: Optional[str] = typer.Option(None, "--report", help="Also write the limit report as JSON to this file."),
     report_only: bool = typer.Option(False, "--report-only", help="Exit 0 even when a limit is exceeded."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="Only violations and errors on stderr."),
@@ -58,6 +66,10 @@ def check(
     controller.joints the drive's files are read in its names and units (d = sign·k·(q − offset) undone), and a PVT
     table is judged as the drive's cubic Hermite, a cam as the quintic through position, velocity and acceleration,
     a cam-table as samples of the motion.
+
+    The tool's Cartesian capacity (speed, acceleration, jerk of x, y, z) is checked too, as `plan` does under its
+    default rule; a trajectory planned with `plan --time fit` or `optimal` (joint and motor limits alone) is
+    checked under the same rule with --no-hold-capacity.
 
     A file with a `move` column (`plan --batch` or `--round-trip` output) is checked move by move: each
     move gets its own limit table and verdict, and the exit code is the worst of them. Samples at the end
@@ -88,7 +100,7 @@ def check(
     prof = load_profile(profile)
     checks = check_file(trajectory, prof, smooth, limit_use,
                         notify=lambda text: sys.stderr.write(f"pickplace: {text}\n"), strict=strict,
-                        warn=lambda text: sys.stderr.write(f"pickplace: {text}\n"))
+                        warn=lambda text: sys.stderr.write(f"pickplace: {text}\n"), hold_capacity=hold_capacity)
     several = len(checks) > 1 or checks[0].move is not None
     if report is not None:
         with atomic_output(report) as stream:
@@ -102,7 +114,7 @@ def check(
             stream.write("\n")
     for c in checks:
         rep = c.report
-        if several and (not quiet or not rep.ok):
+        if several and (not quiet or not rep.all_ok):
             sys.stderr.write(f"--- move {c.move} (lines {c.first_line}–{c.last_line}) ---\n")
         if not quiet:
             for note in rep.notes:
@@ -114,8 +126,11 @@ def check(
         code = 3
     if several and not quiet:
         bad = sum(not c.report.ok for c in checks)
+        loose = sum(c.report.ok and not c.report.all_ok for c in checks)
+        within = "within every limit held" if loose else "within every limit"
+        more = f", {loose} of them exceed the Cartesian capacity (not held: --no-hold-capacity)" if loose else ""
         sys.stderr.write(
-            f"checked {len(checks)} move(s): {len(checks) - bad} within every limit, {bad} exceed one\n"
+            f"checked {len(checks)} move(s): {len(checks) - bad} {within}{more}, {bad} exceed one\n"
         )
     if code and not report_only:
         raise typer.Exit(code)

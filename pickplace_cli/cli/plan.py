@@ -120,7 +120,9 @@ def plan(
         "profile holds: joint and motor limits, RMS torque and the Cartesian capacity), 'auto' (the Cartesian "
         "capacity alone, Li 2018 Eq. 26), 'fit' (the joint and motor limits alone, path scaled uniformly in time), "
         "or 'optimal' (the same path with a non-uniform, jerk-bounded time law that minimises the duration under the "
-        "same joint and motor limits, RMS included; ~0.05-1 s more; not for bspline-vel). Names in any case.",
+        "same joint and motor limits, RMS included; ~0.05-1 s more; not for bspline-vel). Names in any case. fit "
+        "and optimal do not hold the Cartesian capacity: its rows are reported as not held and a move beyond it "
+        "exits 0 with the verdict saying so (--hold-capacity holds it).",
     ),
     limit_use: Optional[float] = typer.Option(
         None, "--limit-use", metavar="FRACTION", help="Headroom: plan and check every timed limit (joint speed, "
@@ -146,8 +148,10 @@ def plan(
     hold_capacity: bool = typer.Option(
         False, "--hold-capacity", help="With --time fit or optimal (and --optimize shape): also hold the profile's "
         "Cartesian capacity |v| ≤ capacity.velocity [m/s], |a| ≤ capacity.acceleration [m/s²] (and |j| ≤ capacity.jerk "
-        "[m/s³] when set), e.g. for a payload or gripper that limits the tool. Default: off, fit and optimal hold "
-        "the joint and motor limits only (auto holds the capacity only).",
+        "[m/s³] when set), e.g. for a payload or gripper that limits the tool (exceeded: exit 3). Default: off, fit "
+        "and optimal hold the joint and motor limits only (auto holds the capacity only): the capacity's rows are "
+        "still in the limit table and JSON, marked not held, and an exceeded capacity is said on stderr and in the "
+        "verdict (exit 0).",
     ),
     show_fit: bool = typer.Option(
         False, "--show-fit", help="With --time auto or seconds: also compute the fitted duration (the smallest at "
@@ -269,9 +273,10 @@ def plan(
 
     CSV columns: t[s], x y z [m], vx… [m/s], ax… [m/s^2], jx… [m/s^3], then per joint q<i>, qd<i>, qdd<i>,
     then torque<i> (joint side, N*m or N), motor_speed<i> [rad/s], motor_torque<i> [N*m]; a batch or round
-    trip adds a leading move column. Exit 3 when a limit is exceeded, 4 when a point is unreachable, a joint leaves
-    its position range or the tool leaves the workcell box, 1 for invalid input; a batch exits with the highest
-    code of its rows (with --report-only, of the rows that are not written).
+    trip adds a leading move column. Exit 3 when a limit the duration rule holds is exceeded (--time fit and
+    optimal do not hold the Cartesian capacity: exceeded, it is reported and exits 0), 4 when a point is
+    unreachable, a joint leaves its position range or the tool leaves the workcell box, 1 for invalid input; a batch
+    exits with the highest code of its rows (with --report-only, of the rows that are not written).
     """
     from types import SimpleNamespace
 

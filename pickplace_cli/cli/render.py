@@ -117,6 +117,25 @@ def _emit_row_json(res) -> None:
     _emit_json(doc)
 
 
+def _row_not_held(res) -> None:
+    """A batch row's limits exceeded that its rule does not hold (the Cartesian capacity under --time fit or
+    optimal), one line each on stderr in a single plan's words; the row itself is within its rule (exit 0)."""
+    rep = getattr(res.plan, "report", None)
+    loose = () if rep is None else rep.exceeded_not_held
+    if loose:
+        sys.stderr.write("".join(f"pickplace: row {res.row}: {_violation_text(r)}\n" for r in loose))
+
+
+def _cycle_not_held(res) -> None:
+    """A belt schedule row's segments' limits exceeded that the rule does not hold, one line each on stderr."""
+    c = res.cycle
+    if c is None:
+        return
+    names = ("pick", "track", "place") if c.track is not None else ("pick", "place")
+    sys.stderr.write("".join(f"pickplace: row {res.row}: {name}: {_violation_text(r)}\n"
+                             for name, leg in zip(names, c.legs) for r in leg.report.exceeded_not_held))
+
+
 def _batch_line(codes: list, first_failed, written) -> None:
     """The batch's closing line on stderr (``written``: rows written to -o, None without -o)."""
     n_ok = sum(1 for c in codes if c == 0)
@@ -191,6 +210,9 @@ def _print_limit_table(report) -> None:
         table.add_column(escape(col), justify=just)  # type: ignore[arg-type]  ("[s]" is not rich markup)
     for r in report.rows:
         mark = "ok" if r.ok else "[bold red]EXCEEDED[/]"
+        if r.not_held:  # reported, not judged: the duration rule leaves this limit out (the capacity under fit)
+            mark = escape(f"{'ok' if r.ok else 'EXCEEDED'} (not held: {r.not_held})")
+            mark = mark if r.ok else f"[bold yellow]{mark}[/]"
         quantity = r.quantity
         if quantity.startswith(("position", "workcell")):  # a [min, max] range: say which side the row is
             quantity += " min" if r.bound == "lower" else " max"
@@ -217,6 +239,8 @@ def _print_verdict(report, quiet: bool, with_cycle: bool = True) -> None:
     if not with_cycle:
         cycle = f"move {report.duration:.4f} s"
     if report.ok:
+        for r in report.exceeded_not_held:  # said even with -q: the rule left this limit out and the move breaks it
+            sys.stderr.write(f"pickplace: {_violation_text(r)}\n")
         vague = report.unresolved
         for r in vague:  # a peak the samples cannot pin down: said even with -q (the verdict depends on it)
             sys.stderr.write(
@@ -231,14 +255,42 @@ def _print_verdict(report, quiet: bool, with_cycle: bool = True) -> None:
             scope = " (positions and workcell only: this profile sets no limit that depends on the duration)" if untimed else ""
             held = ("all limits hold" if not vague else
                     f"no limit exceeded; {len(vague)} peak(s) not resolved by the samples")
+            loose = report.exceeded_not_held
+            if loose:  # the rule leaves the capacity out and the move exceeds it: never "all limits hold"
+                held = (("every limit held by the rule holds" if not vague else held)
+                        + f"; {_not_held_words(loose)}")
+            elif any(r.not_held for r in report.rows):  # within the capacity although the rule does not hold it
+                rules = " / ".join(sorted({r.not_held for r in report.rows if r.not_held}))
+                held = held.replace("all limits hold", f"all limits hold, the Cartesian capacity too (not held under {rules})")
             sys.stderr.write(f"verdict: {held}{scope}; {cycle}\n")
         return
     from ..pipelines.batch import violation_text  # the same words as a batch row's limit lines
 
     for r in report.violations:
         sys.stderr.write(f"pickplace: {violation_text(r)}\n")
+    for r in report.exceeded_not_held:
+        sys.stderr.write(f"pickplace: {violation_text(r)}\n")
     if not quiet:
-        sys.stderr.write(f"verdict: {len(report.violations)} limit(s) exceeded; {cycle}\n")
+        loose = report.exceeded_not_held
+        more = f"; {_not_held_words(loose)}" if loose else ""
+        sys.stderr.write(f"verdict: {len(report.violations)} limit(s) exceeded{more}; {cycle}\n")
+
+
+def _violation_text(r) -> str:
+    from ..pipelines.batch import violation_text
+
+    return violation_text(r)
+
+
+def _not_held_words(rows) -> str:
+    """The verdict's words for limits exceeded that the rule does not hold, e.g. ``Cartesian capacity exceeded,
+    not held under --time fit (speed 116.5 %, acceleration 184.0 %)``."""
+    from ..limits.report import percent
+
+    what = ", ".join(f"{r.quantity.removeprefix('capacity ')} {percent(r.utilisation)} %" for r in rows)
+    rules = sorted({r.not_held for r in rows})
+    cap = all(r.quantity.startswith("capacity") for r in rows)
+    return f"{'Cartesian capacity' if cap else 'limits'} exceeded, not held under {' / '.join(rules)} ({what})"
 
 
 def _print_summary(result) -> None:
@@ -276,6 +328,9 @@ def _print_summary(result) -> None:
         rule = "limits: every limit of the profile"
         fit = (f"; fit (joint and motor limits alone) {d.t_fit:.4f} s" if d.t_fit is not None
                else "; fit: no joint or motor limit depends on the duration")
+    loose = sorted({r.not_held for r in result.report.rows if r.not_held})
+    if loose:  # fit / optimal: the joint and motor limits alone
+        rule += f": joint and motor limits alone, the Cartesian capacity not held"
     use = result.report.rows and min(r.target for r in result.report.rows)
     if use and use < 1.0:
         rule += f", limit use {100 * use:g} %"

@@ -209,13 +209,35 @@ def reach_error(exc: UnreachableError, tau: np.ndarray, T: float | None) -> Unre
     return UnreachableError(f"{exc} at {when}", index=exc.index)
 
 
-def capacity_rows(path, T: float, capacity) -> tuple[LimitRow, ...]:
+def capacity_rows(path, T: float, capacity, not_held: str = "", grid: np.ndarray | None = None) -> tuple[LimitRow, ...]:
     """The Cartesian capacity as limit rows of the tool [Li2018, Eq. (24)–(25)]: |v| ≤ [v], |a| ≤ [a] (and |j| ≤ [j]
-    when the profile sets it), each peak exact from the path's own normalised peaks scaled to T [s] (v̂/T, â/T²,
-    ĵ/T³; a time-law path's peaks are its composed ones). The peak's time is not located (t_peak None)."""
-    v, a, j = path.peaks
-    rows = [("speed", "m/s", v / T, capacity.velocity), ("acceleration", "m/s²", a / T**2, capacity.acceleration)]
+    when the profile sets it) [m/s, m/s², m/s³].
+
+    Without ``grid`` each peak is the path's own exact normalised peak scaled to T [s] (v̂/T, â/T², ĵ/T³; a time-law
+    path's peaks are its composed ones, found on the continuous motion) and its time is not located (t_peak None).
+    With ``grid`` (τ samples, e.g. a checked file's) the peaks are found on the continuous path as the joint check
+    finds its own: sampled there, each local maximum refined on the path itself (never across a jump), with their
+    times. ``not_held``: why the duration rule does not hold the capacity ("" when it does): the rows are then
+    reported, not judged (:attr:`LimitRow.not_held`)."""
+    if grid is None:
+        v, a, j = path.peaks
+        at = (None, None, None)
+    else:
+        from ..curves.peaks import refine_max
+
+        def norms(tau: np.ndarray) -> np.ndarray:
+            o = path.all_orders(np.clip(tau, 0.0, 1.0))
+            return np.column_stack([np.linalg.norm(o[k], axis=1) for k in (1, 2, 3)])
+
+        x = np.unique(np.clip(np.asarray(grid, float), 0.0, 1.0))
+        seg = segment_ids(x, interior_jumps(path.breakpoints, path.jumps))
+        peak, where = refine_max(norms, x, segments=seg)
+        v, a, j = (float(p) for p in peak)
+        at = tuple(float(w) * T for w in where)
+    rows = [("speed", "m/s", v / T, capacity.velocity, at[0]),
+            ("acceleration", "m/s²", a / T**2, capacity.acceleration, at[1])]
     if capacity.jerk is not None:
-        rows.append(("jerk", "m/s³", j / T**3, capacity.jerk))
-    return tuple(LimitRow("tool", f"capacity {q}", unit, float(peak), float(lim), float(peak) / lim, None,
-                          bool(peak <= lim * (1.0 + 1e-12)), "limit") for q, unit, peak, lim in rows)
+        rows.append(("jerk", "m/s³", j / T**3, capacity.jerk, at[2]))
+    return tuple(LimitRow("tool", f"capacity {q}", unit, float(peak), float(lim), float(peak) / lim, when,
+                          bool(peak <= lim * (1.0 + 1e-12)), "limit", not_held=not_held)
+                 for q, unit, peak, lim, when in rows)

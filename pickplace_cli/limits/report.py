@@ -51,6 +51,10 @@ class LimitRow:
         The fraction [-] of ``limit`` the peak may use (the limit use of a timed limit, else 1).
     accuracy : float or None
         ± how far the peak may be off [unit] when estimated from samples (``check``); None on the continuous motion.
+    not_held : str
+        Empty when the duration rule holds this limit; else why it does not (e.g. ``--time fit``: the Cartesian
+        capacity under a rule of joint and motor limits alone). Such a row is reported (peak, use, ``ok`` whether
+        it is within the limit) but does not decide the verdict or the exit code.
 
     Notes
     -----
@@ -73,6 +77,13 @@ class LimitRow:
     #: ± how far the peak may be off [unit], when it is estimated from samples (``check``); None: found on the
     #: continuous motion. ok then means the peak less this is allowed: the data does not show the limit exceeded
     accuracy: float | None = None
+    #: "" when the duration rule holds this limit; else why it does not (``--time fit``): reported, not judged
+    not_held: str = ""
+
+    @property
+    def held(self) -> bool:
+        """Whether the duration rule holds this limit (its verdict counts toward the report's ``ok``)."""
+        return not self.not_held
 
     @property
     def resolved(self) -> bool:
@@ -97,6 +108,7 @@ class LimitRow:
             "limit": self.limit, "utilisation": self.utilisation, "t_peak_s": self.t_peak, "ok": self.ok,
             "kind": self.kind, "bound": self.bound, "excess": self.excess, "limit_use": self.target,
             **({} if self.accuracy is None else {"accuracy": self.accuracy, "resolved": self.resolved}),
+            "held": self.held, **({"not_held": self.not_held} if self.not_held else {}),
         }
 
 
@@ -115,7 +127,9 @@ class LimitReport:
     notes : tuple of str
         What the check wants said (how a peak was found, what was left out).
     ok : bool
-        Whether every limit holds; ``violations`` lists the rows that do not.
+        Whether every limit the duration rule holds is within its limit; ``violations`` lists the rows that are
+        not. Rows the rule does not hold (``LimitRow.not_held``, the Cartesian capacity under ``fit`` or
+        ``optimal``) do not count: ``exceeded_not_held`` lists those beyond their limit, ``all_ok`` counts them.
     round_trip : float
         The duty cycle 2·(duration + dwell) [s]; ``picks_per_minute`` is 60 / round_trip [1/min].
     """
@@ -127,16 +141,27 @@ class LimitReport:
 
     @property
     def ok(self) -> bool:
+        return all(r.ok for r in self.rows if not r.not_held)
+
+    @property
+    def all_ok(self) -> bool:
+        """Whether every row is within its limit, the rows the rule does not hold included."""
         return all(r.ok for r in self.rows)
 
     @property
     def violations(self) -> tuple[LimitRow, ...]:
-        return tuple(r for r in self.rows if not r.ok)
+        """The rows the rule holds that exceed their limit (they decide the exit code)."""
+        return tuple(r for r in self.rows if not r.ok and not r.not_held)
+
+    @property
+    def exceeded_not_held(self) -> tuple[LimitRow, ...]:
+        """The rows beyond their limit that the duration rule does not hold (``LimitRow.not_held``)."""
+        return tuple(r for r in self.rows if not r.ok and r.not_held)
 
     @property
     def unresolved(self) -> tuple[LimitRow, ...]:
-        """Rows within their limit whose peak the samples do not resolve to ``RESOLVED`` (``check``)."""
-        return tuple(r for r in self.rows if r.ok and not r.resolved)
+        """Rows the rule holds, within their limit, whose peak the samples do not resolve to ``RESOLVED`` (``check``)."""
+        return tuple(r for r in self.rows if r.ok and not r.resolved and not r.not_held)
 
     @property
     def round_trip(self) -> float:
@@ -164,7 +189,7 @@ class LimitReport:
             if r.kind == "limit" and r.bound == "upper":
                 rating = r.limit / use
                 r = LimitRow(r.joint, r.quantity, r.unit, r.peak, rating, r.peak / rating, r.t_peak, r.ok, r.kind,
-                             r.bound, use, r.accuracy)
+                             r.bound, use, r.accuracy, r.not_held)
             rows.append(r)
         return LimitReport(tuple(rows), self.duration, self.dwell, self.notes)
 
@@ -175,12 +200,14 @@ class LimitReport:
     def as_dict(self) -> dict[str, Any]:
         return {
             "ok": self.ok,
+            "all_limits_ok": self.all_ok,
             "duration_s": self.duration,
             "dwell_s": self.dwell,
             "cycle_time_one_way_s": self.duration,
             "cycle_time_round_trip_s": self.round_trip,
             "picks_per_minute": self.picks_per_minute,
             "violations": [r.as_dict() for r in self.violations],
+            "exceeded_not_held": [r.as_dict() for r in self.exceeded_not_held],
             "rows": [r.as_dict() for r in self.rows],
             "notes": list(self.notes),
         }

@@ -86,13 +86,16 @@ def violation_text(r) -> str:
 
     when = (f" at t = {r.t_peak:.4f} s" if r.t_peak is not None else
             " (peak of the move)" if r.quantity.startswith("capacity") else " over the duty cycle")
+    head = "limit exceeded"
+    if r.not_held:  # reported, not judged: the rule leaves this limit out (the Cartesian capacity under fit)
+        head = f"limit exceeded, not held under {r.not_held}"
     if r.target < 1.0:  # headroom: the allowed use of the rating
         return (
-            f"limit exceeded: {r.joint} {r.quantity} = {r.peak:.4g} {r.unit}{when}; {percent(r.utilisation)} % of the "
+            f"{head}: {r.joint} {r.quantity} = {r.peak:.4g} {r.unit}{when}; {percent(r.utilisation)} % of the "
             f"rated {r.limit:.4g} {r.unit}, above the limit use of {percent(r.target)} % (by {abs(r.excess):.4g} {r.unit})"
         )
     return (
-        f"limit exceeded: {r.joint} {r.quantity} = {r.peak:.4g} {r.unit}{when}; "
+        f"{head}: {r.joint} {r.quantity} = {r.peak:.4g} {r.unit}{when}; "
         f"limit {r.limit:.4g} {r.unit} (by {abs(r.excess):.4g} {r.unit}, {percent(r.utilisation)} %)"
     )
 

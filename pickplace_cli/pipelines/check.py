@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from ..model.errors import TaskError
-from ..limits.check import _range_row, check_limits
+from ..limits.check import _range_row, capacity_rows, check_limits
 from ..limits.grid import check_grid
 from ..limits.motion import MotionModel
 from ..limits.report import LimitReport
@@ -98,7 +98,7 @@ def _check_branch(s: Samples, robot, pos: np.ndarray, source: str) -> None:
 
 
 def _motion_report(t: np.ndarray, pos: np.ndarray, robot, profile: Profile, smoothing: float, source: str,
-                   notes=None, tool: np.ndarray | None = None, rebuilt=None):
+                   notes=None, tool: np.ndarray | None = None, rebuilt=None, not_held: str = ""):
     """The limit report of the tool positions ``pos`` (N, 3) m (and angle, rad, a 4th column with a rotary axis) at
     ``t`` (N,) s from 0, through a reconstruction of
     the continuous motion (an interpolating spline split at the jerk steps found in the data,
@@ -106,7 +106,9 @@ def _motion_report(t: np.ndarray, pos: np.ndarray, robot, profile: Profile, smoo
     derivatives were found. ``notes``: a function of those words → the report's notes. ``tool`` (N, 12): the
     file's own tool positions, velocities, accelerations and jerks (consistent with ``pos``), through which the
     motion between samples is the septic Hermite interpolant (exact at every sample up to the jerk). ``rebuilt``:
-    (evaluate(x, order), the times of its steps [s], the words) of a motion already rebuilt (a table)."""
+    (evaluate(x, order), the times of its steps [s], the words) of a motion already rebuilt (a table). The tool's
+    Cartesian capacity rows come from the same continuous motion (:func:`capacity_rows` on the check's grid);
+    ``not_held``: why they are not held ("" when they are: they then decide the verdict with the others)."""
     from scipy.interpolate import UnivariateSpline
 
     T = float(t[-1])
@@ -166,8 +168,9 @@ def _motion_report(t: np.ndarray, pos: np.ndarray, robot, profile: Profile, smoo
     margin = getattr(profile.robot, "singularity_margin", None)
     model = MotionModel(cpath, robot, limit_specs(profile), margin, profile.workcell.box)
     grid = check_grid(t / T, cpath.breakpoints, jumps=jumps)
-    return check_limits(model, T, parts=model.parts(grid), dwell=profile.planning.dwell,
-                        notes=() if notes is None else notes(how)), how
+    report = check_limits(model, T, parts=model.parts(grid), dwell=profile.planning.dwell,
+                          notes=() if notes is None else notes(how))
+    return report.with_rows(capacity_rows(cpath, T, profile.capacity, not_held, grid=grid)), how
 
 
 def _half(n: int) -> np.ndarray:
@@ -177,7 +180,7 @@ def _half(n: int) -> np.ndarray:
 
 
 def check_samples(s: Samples, profile: Profile, smoothing: float = 0.0, source: str = "<trajectory>",
-                  strict: bool = False, warn=None) -> LimitReport:
+                  strict: bool = False, warn=None, not_held: str = "") -> LimitReport:
     """Limit report of one move read by :func:`read_moves` (see the module docstring).
 
     Every duration-dependent peak is estimated from the samples twice, from all of them and from every other one
@@ -189,7 +192,8 @@ def check_samples(s: Samples, profile: Profile, smoothing: float = 0.0, source: 
 
     The file's tool derivative columns (vx … jz) are used only when they agree with its positions
     (:func:`~pickplace_cli.pipelines.check_read.derivative_problems`); otherwise the move is judged from its positions
-    and ``warn`` (a callable) is told in one line, or with ``strict`` the file is refused (TaskError)."""
+    and ``warn`` (a callable) is told in one line, or with ``strict`` the file is refused (TaskError).
+    ``not_held``: why the tool's Cartesian capacity is not held ("" when it is: an exceeded capacity then fails)."""
     robot = build_robot(profile.robot)
     t = s.t - s.t[0]
     pos = robot.forward_kinematics(s.q)
@@ -224,7 +228,7 @@ def check_samples(s: Samples, profile: Profile, smoothing: float = 0.0, source: 
             tool = None
     if getattr(robot, "rotary", False):  # the tool angle θ = FK of the fourth axis, one more column
         pos = np.column_stack([pos, robot.tool_angle(s.q)])
-    report, _ = _motion_report(t, pos, robot, profile, smoothing, source, notes, tool)
+    report, _ = _motion_report(t, pos, robot, profile, smoothing, source, notes, tool, not_held=not_held)
     others = []
     half = _half(len(t))
     if len(half) >= 6:
@@ -266,7 +270,7 @@ def _with_accuracy(fine: LimitReport, others: list[tuple[LimitReport, float]]) -
             acc = max(max(share * abs(r.peak - c.peak) for c, share in cs), CHECK_RESOLUTION * abs(r.peak))
             ok = r.peak - acc <= r.allowed
             r = LimitRow(r.joint, r.quantity, r.unit, r.peak, r.limit, r.utilisation, r.t_peak, ok, r.kind, r.bound,
-                         r.target, acc)
+                         r.target, acc, r.not_held)
         rows.append(r)
     return replace(fine, rows=tuple(rows))
 
@@ -275,7 +279,7 @@ _HOW = {"pvt": "the drive's cubic Hermite through each point's position and velo
         "cam": "the kernel's quintic through each point's position, velocity and acceleration (cam, XYVA)"}
 
 
-def check_table(table, profile: Profile, source: str) -> LimitReport:
+def check_table(table, profile: Profile, source: str, not_held: str = "") -> LimitReport:
     """The limit report of a PVT or cam table as the drive interpolates it (:func:`tool_motion`): the same dynamics and
     limit check as ``plan``; every duration-dependent peak to ``CHECK_RESOLUTION`` (the rebuild is exact up to the fit
     of the tool's motion, far finer); the position rows on the interpolated joint positions themselves."""
@@ -307,7 +311,7 @@ def check_table(table, profile: Profile, source: str) -> LimitReport:
         note += (f"; its acceleration steps at the points by up to {jumps} (the torque there is checked on both "
                  "sides; the torque rate is that inside the segments)")
     report, _ = _motion_report(t, tool_of(table.q), robot, profile, 0.0, source, lambda how: (note,),
-                               rebuilt=(ev, steps, _HOW[table.kind]))
+                               rebuilt=(ev, steps, _HOW[table.kind]), not_held=not_held)
     report = _with_accuracy(report, [(report, 1.0)])
     u = 0.5 - 0.5 * np.cos(np.pi * np.arange(SEGMENT_POINTS) / (SEGMENT_POINTS - 1))
     x = np.append((t[:-1, None] + np.diff(t)[:, None] * u).ravel(), T)
@@ -342,7 +346,8 @@ def _read_bounded(fh, limit: int) -> bytes:
 
 
 def check_file(path: str | Path, profile: Profile, smoothing: float | str = 0.0,
-               limit_use: float | None = None, notify=None, strict: bool = False, warn=None) -> list[MoveCheck]:
+               limit_use: float | None = None, notify=None, strict: bool = False, warn=None,
+               hold_capacity: bool = True) -> list[MoveCheck]:
     """Check every move of a trajectory file against a profile's limits.
 
     Parameters
@@ -364,6 +369,10 @@ def check_file(path: str | Path, profile: Profile, smoothing: float | str = 0.0,
         its positions.
     warn : callable, optional
         Told (one line) when a file's derivative columns are not used because they disagree with its positions.
+    hold_capacity : bool
+        Whether the profile's Cartesian capacity (the tool's |v| [m/s], |a| [m/s²], |j| [m/s³]) is held: True, an
+        exceeded capacity fails the check (as ``plan`` under its default rule); False, its rows are reported as
+        not held (``--no-hold-capacity``, as ``plan --time fit`` or ``optimal``).
 
     Returns
     -------
@@ -401,14 +410,15 @@ def check_file(path: str | Path, profile: Profile, smoothing: float | str = 0.0,
     robot = build_robot(profile.robot)
     from .check_read import read_checked
 
+    not_held = "" if hold_capacity else "--no-hold-capacity"
     kind, what, source = read_checked(text, source, profile, robot)  # joints, drive units, a table (check_read)
     if kind == "table":
         return [MoveCheck(None, int(what.lines[0]), int(what.lines[-1]),
-                          check_table(what, profile, source).rated(profile.limit_use))]
+                          check_table(what, profile, source, not_held).rated(profile.limit_use))]
     out = []
     for s in (what if kind == "samples" else [what]):
         out.append(MoveCheck(s.move, int(s.lines[0]), s.last_line,
-                             check_samples(s, profile, smoothing, source, strict, warn).rated(profile.limit_use)))
+                             check_samples(s, profile, smoothing, source, strict, warn, not_held).rated(profile.limit_use)))
     return out
 
 

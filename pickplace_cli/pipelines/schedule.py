@@ -99,6 +99,9 @@ class Cycle:
             "limits_ok": self.code == 0,
             "violations": [{"segment": n, **r.as_dict()} for n, leg in zip(names, self.legs)
                            for r in leg.report.violations],
+            # limits beyond their rating that the rule does not hold (the Cartesian capacity under fit)
+            "exceeded_not_held": [{"segment": n, **r.as_dict()} for n, leg in zip(names, self.legs)
+                                  for r in leg.report.exceeded_not_held],
         }
 
     def report_doc(self) -> list[dict[str, Any]]:

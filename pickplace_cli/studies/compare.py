@@ -497,7 +497,8 @@ def compare_row(task, profile, method, params: Mapping[str, Any] | None = None, 
     for r in result.report.rows:
         if r.quantity in util:
             util[r.quantity] = max(util[r.quantity] or 0.0, r.utilisation)
-    worst = max(result.report.rows, key=lambda r: r.utilisation, default=None)
+    # the worst of the limits the rule holds (fit and optimal: not the Cartesian capacity)
+    worst = max((r for r in result.report.rows if r.held), key=lambda r: r.utilisation, default=None)
     paper = None
     try:
         paper = paper_duration(method, task, profile)
