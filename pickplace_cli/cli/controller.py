@@ -114,7 +114,8 @@ def judge_table(a, prof, legs: list, track, grid):
     dwell = legs[0].report.dwell
     motion = timeline_of(legs, prof, dwell, a.round_trip, track)
     tolerance = DEFAULT_TOLERANCE if a.tolerance is None else a.tolerance
-    capacity = any(r.quantity.startswith("capacity") for leg in legs for r in leg.report.rows)
+    # the table holds the Cartesian capacity where the rule of the move holds it (not under --time fit or optimal)
+    capacity = any(r.quantity.startswith("capacity") and r.held for leg in legs for r in leg.report.rows)
     retime = track is None and a.cam_master.value == "time"
     judged = judged_table(kind, grid, motion, tolerance, prof, 0.0 if a.round_trip else dwell, a.cycle_s,
                           retime=retime, capacity=capacity)
