@@ -175,6 +175,10 @@ class _StandIn:
     def __call__(self, tau, order=0):  # pragma: no cover - the model is always given the motion
         raise RuntimeError("the line's stacked model has no path")
 
+    def angle_orders(self, tau):
+        """No angle law: a robot with a rotary fourth axis holds the tool angle at 0 rad (its model's default)."""
+        return None
+
 
 class TrackBasis:
     """The grid of a tracking leg (constant velocity, τ ∈ [0, 1]): uniform samples and Gauss–Legendre nodes."""
@@ -488,7 +492,7 @@ class LineRobot:
         limits = np.array([meta[c][3] for c in cols])
         for k in range(len(Ts)):
             block = data[k * G:(k + 1) * G, cols].T
-            out[k] = float(np.max(_peaks(tau, block) / limits)) - 1.0
+            out[k] = float(np.max(_peaks(tau, block) / limits, initial=0.0)) - 1.0  # no timed limit: none binds
         return out
 
     # ---------------------------------------------------------------------------------------- the check
