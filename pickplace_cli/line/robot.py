@@ -663,33 +663,4 @@ def _leg_of(index, grids) -> int:
     return len(grids) - 1
 
 
-def check_reach(robot: LineRobot, bands: tuple[float, float], step: float = 5e-3) -> None:
-    """UnreachableError (exit 4) when part of the robot's window — along its window, across its band, at the
-    grip height — or a place target or its home is outside its workspace (reach, joint ranges, workcell box)."""
-    from ..pipelines.rendezvous import workspace_mask
-
-    w0, w1 = robot.window
-    lo, hi = bands
-    al = np.linspace(w0, w1, max(2, int(math.ceil((w1 - w0) / step)) + 1))
-    ac = np.linspace(lo, hi, max(2, int(math.ceil((hi - lo) / step)) + 1))
-    A, C = np.meshgrid(al, ac, indexing="ij")
-    line_pts = np.column_stack([A.ravel(), C.ravel(), np.full(A.size, robot.grip)])
-    ok = workspace_mask(robot.profile, robot.frame.to_robot(line_pts))
-    if not ok.all():
-        k = int(np.argmin(ok))
-        raise UnreachableError(
-            f"robot {robot.name}: window [{w0:g}, {w1:g}] m across [{lo:g}, {hi:g}] m: the point along "
-            f"{line_pts[k, 0]:.4f} m, across {line_pts[k, 1]:.4f} m (grip height {robot.grip:g} m) is outside the "
-            f"workspace of profile {robot.profile.name} (reach, joint range or workcell box); the window must lie "
-            "inside it across the robot's part of the belt"
-        )
-    for what, pts in (("home point", [robot.home]), ("place target", [t[0] for t in robot.targets])):
-        ok = workspace_mask(robot.profile, np.asarray(pts))
-        if not ok.all():
-            k = int(np.argmin(ok))
-            ln = robot.frame.to_line(pts[k])
-            raise UnreachableError(f"robot {robot.name}: {what} [{ln[0]:g}, {ln[1]:g}, {ln[2]:g}] m (line frame) is "
-                                   f"outside the workspace of profile {robot.profile.name}")
-
-
-__all__ = ["LineRobot", "RobotState", "Leg", "Cycle", "Decline", "check_reach", "PickplaceError"]
+__all__ = ["LineRobot", "RobotState", "Leg", "Cycle", "Decline", "PickplaceError"]
