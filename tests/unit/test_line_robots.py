@@ -144,3 +144,33 @@ def test_rms_over_the_run_against_the_written_torque(run):
         rms = np.sqrt(simpson(torque**2, x=tt, axis=0) / (tt[-1] - tt[0]))
         assert tt[-1] - tt[0] == pytest.approx(s.span, abs=2e-9)
         assert np.allclose(r.rms, rms, rtol=5e-3, atol=1e-9), (r.name, r.rms, rms)
+
+
+def test_gripper_times_lengthen_the_grip_and_the_release():
+    """``gripper: {close, open}``: the tracking lasts the dwell + close and the wait at the place the dwell + open
+    (1e-12 s: sums of the same floats); the written tool stays on the part until the grip is done and the place move
+    starts where the part is then, x0 + v_belt·(t_meet + dwell + close − t_detect) (1e-6 m, as the meeting)."""
+    from pickplace_cli.line.trajectories import robot_samples
+
+    close, opened = 0.05, 0.08
+    robot = ROBOTS["delta-su2018"].replace("    time: auto\n", f"    time: auto\n    gripper: {{close: {close}, "
+                                                                 f"open: {opened}}}\n")
+    line, eng, _ = _run(BELT + "robots:\n" + robot + PARTS.format(rate=1.5, count=6))
+    dwell = load_profile("delta-su2018").planning.dwell
+    v_belt = np.array([line.belt.speed, 0.0, 0.0])
+    picked = [res for res in eng.results if res.cycle is not None]
+    assert len(picked) >= 3
+    for res in picked:
+        d, c = res.detection, res.cycle
+        legs = {leg.kind: leg for leg in c.legs}
+        assert legs["track"].duration == pytest.approx(dwell + close, abs=1e-12)
+        assert legs["release"].duration == pytest.approx(dwell + opened, abs=1e-12)
+        assert c.t_free - c.t_start == pytest.approx(legs["pick"].duration + legs["place"].duration + 2 * dwell + close
+                                                     + opened, abs=1e-9)
+        t_leave = c.t_meet + dwell + close
+        assert legs["place"].t0 == pytest.approx(t_leave, abs=1e-9)
+        x0 = np.array([d.along, d.across, line.parts.height])
+        t = np.array([t_leave - 1e-6, t_leave])  # the end of the tracking, and the place move's first sample
+        tool = robot_samples(eng.runs[0], t).tool
+        part = x0 + np.multiply.outer(t - d.t, v_belt)
+        assert np.abs(tool - part).max() < 1e-6
