@@ -8,12 +8,14 @@ on it). A part detected at ``t`` may be reached from ``t_ready = t + latency``. 
 1. **pick**: from the robot's position and velocity to the part, arriving with the belt's velocity at the
    meeting point, in T by the robot's duration rule (:mod:`~pickplace_cli.line.moves`); the meeting must lie
    in the window (from its start to ``claim`` into it) with room left for the tracking;
-2. **track**: the profile's dwell with the part at the belt's velocity (the grip);
+2. **track**: the profile's dwell plus the gripper's closing time with the part at the belt's velocity (the grip);
 3. **place**: to the next place target (a point, a tray slot: arriving at rest; an outgoing belt: arriving with
    its velocity), leaving with the belt's velocity, duration by the same rule;
-4. **release**: the dwell at the place point (at rest; on an outgoing belt, moving with it).
+4. **release**: the dwell plus the gripper's opening time at the place point (at rest; on an outgoing belt, moving
+   with it).
 
-Then ``t_free = t_start + T_pick + dwell + T_place + dwell``. A robot left moving with an outgoing belt starts
+Then ``t_free = t_start + T_pick + (dwell + close) + T_place + (dwell + open)``. A robot left moving with an outgoing
+belt starts
 its next pick from that motion when the part is already waiting; otherwise it first comes to rest by a **stop**
 move to its home point (at once, at ``t_free``). A part the robot cannot take (no meeting in the window, a move
 that breaks a limit or leaves the workspace) is declined with the reason; the robot's state does not change.
@@ -220,13 +222,16 @@ class LineRobot:
         self.v_belt = self.frame.velocity(self.speed)
         self.window = (float(spec.window[0]), float(spec.window[1]))
         claim = line.strategy.claim
-        self.meet_end = self.window[1] - self.speed * profile.planning.dwell
+        #: the tracking at the pick (the dwell and the gripper's closing) and the wait at the place (the dwell and its
+        #: opening) [s]
+        self.dwell = float(profile.planning.dwell) + float(spec.gripper.close)
+        self.release = float(profile.planning.dwell) + float(spec.gripper.open)
+        self.meet_end = self.window[1] - self.speed * self.dwell
         if claim is not None:
             self.meet_end = min(self.meet_end, self.window[0] + float(claim))
         self.latency, self.grip = float(latency), float(grip)
         self.rule = time_rule(spec)
         self.optimal = spec.shape == "optimal"
-        self.dwell = float(profile.planning.dwell)
         self.height, self.eta = float(profile.planning.height), float(profile.planning.eta)
         self.capacity = profile.capacity
         self.shapes = shapes
@@ -325,7 +330,7 @@ class LineRobot:
         meet = pick.end
         track = Leg("track", t_start + pick.T, self.dwell, point=meet, velocity=self.v_belt.copy())
         legs = [Leg("pick", t_start, pick.T, pick), track, Leg("place", track.t1, place.T, place)]
-        legs.append(Leg("release", legs[-1].t1, self.dwell, point=target.copy(), velocity=v_out.copy()))
+        legs.append(Leg("release", legs[-1].t1, self.release, point=target.copy(), velocity=v_out.copy()))
         bad = self._check(legs)
         if bad is not None:
             return bad

@@ -90,6 +90,16 @@ class Place(_Model):
         return self
 
 
+class Gripper(_Model):
+    """The gripper's switching times, each added to the profile's dwell: at the pick the tool tracks the part for the
+    dwell plus ``close`` before it leaves; at the place it waits the dwell plus ``open`` before it moves on."""
+
+    close: Num = Field(default=0.0, ge=0, le=10, description="Seconds from the grip command until the part is held "
+                                                             "(the tool tracks the part meanwhile)")
+    open: Num = Field(default=0.0, ge=0, le=10, description="Seconds from the release command until the part is free "
+                                                            "(the tool waits at the place point meanwhile)")
+
+
 class RobotSpec(_Model):
     """One robot of the line."""
 
@@ -110,6 +120,8 @@ class RobotSpec(_Model):
     limit_use: Optional[float] = Field(
         default=None, gt=0, le=1, description="Headroom: every timed limit planned to at most this fraction of its "
                                               "rating, in (0, 1] (default: the profile's planning.limit_use)")
+    gripper: Gripper = Field(default_factory=Gripper, description="Gripper close and open times in s, each added "
+                             "to the profile's dwell at the pick and at the place (default 0 s)")
     shape: Literal["table", "optimal"] = Field(
         default="table", description="table: each move's shape from the conveyor table, held fixed while its duration "
         "is searched (fast); optimal: re-optimised at every trial duration, as plan --to-belt (about a second a pick)")
