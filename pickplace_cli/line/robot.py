@@ -15,9 +15,8 @@ on it). A part detected at ``t`` may be reached from ``t_ready = t + latency``. 
    with it).
 
 Then ``t_free = t_start + T_pick + (dwell + close) + T_place + (dwell + open)``. A robot left moving with an outgoing
-belt starts
-its next pick from that motion when the part is already waiting; otherwise it first comes to rest by a **stop**
-move to its home point (at once, at ``t_free``). A part the robot cannot take (no meeting in the window, a move
+belt starts its next pick from that motion when the part is already waiting; otherwise it first comes to rest by a
+**stop** move to its home point (at once, at ``t_free``). A part the robot cannot take (no meeting in the window, a move
 that breaks a limit or leaves the workspace) is declined with the reason; the robot's state does not change.
 
 **Limits.** Every leg is checked against every limit of the profile except the RMS torque, which is a property
