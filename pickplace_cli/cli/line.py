@@ -4,6 +4,7 @@ the real sequence; sweeps over belt speed × robot count × strategy × seed."""
 from __future__ import annotations
 
 import contextlib
+import os
 import sys
 from typing import Optional
 
@@ -69,9 +70,12 @@ def line_cmd(
     RMS torque over the run exceeds its rated torque; 4 a window, home or place point outside the workspace, a belt
     no robot can ever keep up with, or --max-miss-rate exceeded.
     """
+    from ..line.spec import MAX_SEED
     from ..model.errors import TaskError
 
     sweep = any(x is not None for x in (speeds, robot_counts, strategies, seeds))
+    if seed is not None and not 0 <= seed <= MAX_SEED:
+        raise TaskError(f"seed = {_short(str(seed))}: a seed is a whole number from 0 to 2^64 − 1")
     if max_miss_rate is not None and not (0.0 <= max_miss_rate <= 1.0):
         raise TaskError(f"max-miss-rate = {max_miss_rate!r}: must be a share between 0 and 1")
     if rate is not None and not (rate > 0 and rate <= 1e5):
@@ -95,15 +99,16 @@ def line_cmd(
 
 def _prepare(line_file, belt_speed, robots, strategy, seed):
     """(line, profiles) with the command line's overrides applied and checked."""
-    from ..line.spec import check_rules, load_line
+    from ..line.spec import MAX_BELT_SPEED, MIN_BELT_SPEED, check_rules, load_line
     from ..line.sweep import Case, case_line
     from ..model.errors import TaskError
 
     line = load_line(line_file)
     if robots is not None and not (1 <= robots <= len(line.robots)):
         raise TaskError(f"robots = {robots}: the line file has {len(line.robots)} robots; give 1 … {len(line.robots)}")
-    if belt_speed is not None and not (0 < belt_speed <= 100):
-        raise TaskError(f"belt-speed = {belt_speed!r}: must be > 0 and at most 100 m/s")
+    if belt_speed is not None and not (MIN_BELT_SPEED <= belt_speed <= MAX_BELT_SPEED):
+        raise TaskError(f"belt-speed = {belt_speed!r}: must be at least {MIN_BELT_SPEED:g} and at most "
+                        f"{MAX_BELT_SPEED:g} m/s")
     kind = _strategy_names(strategy)[0] if strategy is not None else line.strategy.kind
     case = Case(float(belt_speed if belt_speed is not None else line.belt.speed),
                 int(robots if robots is not None else len(line.robots)), kind, seed)
@@ -172,9 +177,13 @@ def _check_outputs(outputs: dict, inputs: list[str]) -> None:
 
 @contextlib.contextmanager
 def _detection_lines(source: str):
-    """The lines of a detection file or of standard input (read as they arrive)."""
+    """The lines of a detection file, a named pipe or standard input (read as they arrive), each bounded
+    (:func:`~pickplace_cli.line.parts.bounded_lines`: an over-long line is one row). A named pipe's writer is
+    awaited for a bounded time, saying so on stderr, as ``check`` does."""
+    from ..line.parts import bounded_lines
     from ..model.errors import TaskError
 
+    name = "stdin" if source == "-" else source
     if source == "-":
         if sys.stdin is None:
             raise TaskError("detections = -: standard input is closed; give the detections on stdin or a file")
@@ -183,19 +192,24 @@ def _detection_lines(source: str):
         except (AttributeError, ValueError, OSError):  # a test runner's stand-in
             fd = None
         if fd is None:
-            yield sys.stdin
+            yield bounded_lines(sys.stdin.readline, source=name)
             return
         from ..pipelines.warm import WarmLines
 
         reader = WarmLines(fd, None, None, sys.stdin.encoding or "utf-8")
-        yield iter(lambda: reader.readline(8192), "")
+        yield bounded_lines(reader.readline, source=name)
         return
+    from ..model.files import open_for_reading
+
+    fd = open_for_reading(source, "detections", TaskError,
+                          notify=lambda text: sys.stderr.write(f"pickplace: {text}\n"))
     try:
-        fh = open(source, encoding="utf-8-sig", newline="", errors="surrogateescape")
-    except OSError as exc:
+        fh = open(fd, encoding="utf-8-sig", newline="", errors="surrogateescape")
+    except OSError as exc:  # pragma: no cover - an open descriptor
+        os.close(fd)
         raise TaskError(f"detections = {source}: cannot read it: {exc.strerror}") from None
     with fh:
-        yield fh
+        yield bounded_lines(fh.readline, source=name)
 
 
 def _single(line_file, detections, belt_speed, robots, strategy, seed, output, as_json, robots_csv, summary_file,
@@ -263,7 +277,9 @@ def _after(engine, summary, line, robots_csv, summary_file, plot, plot_kind, mca
     from ..line.report import print_table, summary_json, write_robots_csv
 
     if not quiet:
-        print_table(summary)
+        from .render import console
+
+        print_table(summary, console(stderr=True, highlight=False))  # no styling under NO_COLOR or TERM=dumb
     if robots_csv is not None:
         with atomic_output(robots_csv) as fh:
             write_robots_csv(summary, fh)
@@ -288,31 +304,62 @@ def _after(engine, summary, line, robots_csv, summary_file, plot, plot_kind, mca
 # ------------------------------------------------------------------------------------------------------ sweeps
 
 
+def _cap_workers(workers: int) -> int:
+    """``-j N`` capped at the cores this process may use (more processes only share them), with a one-line note;
+    0 stays 0 (all cores)."""
+    import os
+
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        cores = os.cpu_count() or 1
+    if workers > cores:
+        sys.stderr.write(f"pickplace: note: -j {workers}: {cores} core{'s' if cores > 1 else ''} available; running "
+                         f"{cores} worker process{'es' if cores > 1 else ''}\n")
+        return cores
+    return workers
+
+
+def _short(text: str, most: int = 60) -> str:
+    """``text`` quoted, cut to ``most`` characters (a value pasted by mistake stays one short line)."""
+    return repr(text) if len(text) <= most else repr(text[:most]) + f" … ({len(text)} characters)"
+
+
 def _numbers(name: str, text: str, integer: bool = False) -> list:
-    """A list ``a,b,c`` or a range ``start:stop:step`` (stop included when on the grid)."""
+    """A list ``a,b,c`` or a range ``start:stop:step`` (stop included when on the grid); whole numbers exactly when
+    ``integer``."""
     import math
 
     from ..model.errors import TaskError
     from ..model.text import plain_float
 
+    def number(x: str):
+        x = x.strip()
+        if integer and x.lstrip("+-").isdigit() and x.isascii():
+            if len(x) > 40:
+                raise ValueError(x)
+            return int(x)
+        return plain_float(x)
+
     try:
         if ":" in text:
-            parts = [plain_float(x) for x in text.split(":")]
+            parts = [number(x) for x in text.split(":")]
             if len(parts) != 3 or parts[2] <= 0 or parts[1] < parts[0]:
                 raise ValueError
             n = int(math.floor((parts[1] - parts[0]) / parts[2] + 1e-9)) + 1
             if n > 10000:
-                raise TaskError(f"{name} = {text!r}: {n} values; at most 10000")
-            values = [round(parts[0] + k * parts[2], 12) for k in range(n)]
+                raise TaskError(f"{name} = {_short(text)}: {n} values; at most 10000")
+            values = [parts[0] + k * parts[2] if integer and all(isinstance(p, int) for p in parts)
+                      else round(parts[0] + k * parts[2], 12) for k in range(n)]
         else:
-            values = [plain_float(x.strip()) for x in text.split(",") if x.strip()]
+            values = [number(x) for x in text.split(",") if x.strip()]
         if not values or not all(math.isfinite(v) for v in values):
             raise ValueError
-    except ValueError:
-        raise TaskError(f"{name} = {text!r}: give numbers separated by commas, or START:STOP:STEP") from None
+    except (ValueError, OverflowError):
+        raise TaskError(f"{name} = {_short(text)}: give numbers separated by commas, or START:STOP:STEP") from None
     if integer:
         if not all(v == int(v) for v in values):
-            raise TaskError(f"{name} = {text!r}: give whole numbers")
+            raise TaskError(f"{name} = {_short(text)}: give whole numbers")
         values = [int(v) for v in values]
     return list(dict.fromkeys(values))
 
@@ -323,22 +370,23 @@ def _sweep(line_file, detections, belt_speed, robots, strategy, seed, speeds, ro
 
     from ..export import atomic_output
     from ..line.parts import BadRow, read_detections
-    from ..line.spec import load_line, resolve_relative
+    from ..line.spec import MAX_BELT_SPEED, MAX_SEED, MIN_BELT_SPEED, load_line, resolve_relative
     from ..line.sweep import cases, checkpoint_path, digest, run_sweep, write_sweep_csv
     from ..model.errors import TaskError
 
     base = load_line(line_file)
     v = _numbers("speeds", speeds) if speeds else [belt_speed if belt_speed is not None else base.belt.speed]
-    if not all(0 < x <= 100 for x in v):
-        raise TaskError(f"speeds = {speeds!r}: every belt speed must be > 0 and at most 100 m/s")
+    if not all(MIN_BELT_SPEED <= x <= MAX_BELT_SPEED for x in v):
+        raise TaskError(f"speeds = {_short(speeds or '')}: every belt speed must be at least {MIN_BELT_SPEED:g} and at "
+                        f"most {MAX_BELT_SPEED:g} m/s")
     n = _numbers("robot-counts", robot_counts, True) if robot_counts else [robots or len(base.robots)]
     if not all(1 <= x <= len(base.robots) for x in n):
         raise TaskError(f"robot-counts = {robot_counts!r}: the line file has {len(base.robots)} robots; give 1 … "
                         f"{len(base.robots)}")
     k = _strategy_names(strategies) if strategies else [strategy or base.strategy.kind]
     s = _numbers("seeds", seeds, True) if seeds else [seed]
-    if seeds and any(x < 0 for x in s):
-        raise TaskError(f"seeds = {seeds!r}: seeds are whole numbers >= 0")
+    if seeds and any(not 0 <= x <= MAX_SEED for x in s):
+        raise TaskError(f"seeds = {_short(seeds)}: seeds are whole numbers from 0 to 2^64 − 1")
     if workers < 0:
         raise TaskError(f"workers = {workers}: must be 0 (all cores) or a positive number")
     if resume and output == "-":
@@ -366,9 +414,17 @@ def _sweep(line_file, detections, belt_speed, robots, strategy, seed, speeds, ro
     axes = {"speeds": v, "robots": n, "strategies": k, "seeds": s, "detections": src}
     ckpt = checkpoint_path(output) if output != "-" else None
     tag = digest(base, axes)
-    with contextlib.ExitStack() as stack:
+    if not scheduler:
+        workers = _cap_workers(workers)
+    from ..lookup.checkpoint import checkpoint_lock
+
+    with checkpoint_lock(ckpt, "line sweep"), contextlib.ExitStack() as stack:  # one sweep owns the checkpoint
         from .build_table import _engine
 
+        if ckpt is not None:
+            from .app import _TERM_NOTES
+
+            _TERM_NOTES.append(f"pickplace: finished cases are saved in {ckpt}; run the same command with --resume\n")
         executor, n_workers, tick = _engine(stack, scheduler, workers, quiet, len(all_cases), "runs", eta=False,
                                             label="line sweep")
         try:
@@ -377,15 +433,16 @@ def _sweep(line_file, detections, belt_speed, robots, strategy, seed, speeds, ro
             if ckpt is not None and ckpt.exists():
                 sys.stderr.write(f"pickplace: finished cases are saved in {ckpt}; run the same command with --resume\n")
             raise
-    with atomic_output(output) as fh:
-        write_sweep_csv(rows, fh)
-    if plot is not None:
-        from ..line.figures import write_sweep_plot
+        stack.close()  # the progress bar and the cluster's client end before the table is written
+        with atomic_output(output) as fh:
+            write_sweep_csv(rows, fh)
+        if plot is not None:
+            from ..line.figures import write_sweep_plot
 
-        with atomic_output(plot, binary=True) as fh:
-            write_sweep_plot(rows, fh, plot_kind, title=f"{base.name}: miss rate against belt speed")
-    if ckpt is not None and ckpt.exists():
-        os.unlink(ckpt)
+            with atomic_output(plot, binary=True) as fh:
+                write_sweep_plot(rows, fh, plot_kind, title=f"{base.name}: miss rate against belt speed")
+        if ckpt is not None and ckpt.exists():
+            os.unlink(ckpt)
     failed = [r for r in rows if r.get("error") and r.get("exit_code") != 4]
     for r in failed[:5]:
         sys.stderr.write(f"pickplace: case {r['strategy']}, {r['robots']} robots, {r['belt_speed']:g} m/s, seed "

@@ -25,7 +25,8 @@ import numpy as np
 
 from ..model.errors import PickplaceError, TaskError, UnreachableError
 from .parts import BadRow, Detection
-from .robot import Cycle, Decline, Leg, LineRobot, RobotState, check_reach
+from .reach import check_reach
+from .robot import Cycle, Decline, Leg, LineRobot, RobotState
 from .spec import Line, robot_bands, upstream_order
 from .summary import LineSummary, summarise
 

@@ -28,6 +28,9 @@ COLUMNS = {"t": "s", "along": "m", "across": "m", "angle": "rad", "id": ""}
 REQUIRED = ("t", "along", "across")
 #: the longest line accepted in a detection file [characters]
 MAX_LINE = 4096
+#: the most parts one run may have (generated or read): each part's plan is kept for the results, about 0.14 MB a
+#: part on a 3-Delta line, so this bounds a run at some 14 GB; a longer production is run in pieces
+MAX_PARTS = 100_000
 
 
 @dataclass(frozen=True)
@@ -104,9 +107,31 @@ def _row(cells: list[str], names: list[str], row: int, lineno: int, source: str)
     return Detection(values.get("id", str(row)), values["t"], values["along"], values["across"], values.get("angle"), row)
 
 
+def bounded_lines(readline, limit: int = MAX_LINE, source: str = "detections") -> Iterator[str]:
+    """The lines of ``readline(n)`` (a text file's or a stream's, at most n characters a call), each at most
+    ``limit`` + 1 characters: a longer line is given once, cut there, and its rest is read and dropped as it arrives
+    (only when the next line is asked for), so it is one row, never one row per piece; a NUL byte in that rest is a
+    TaskError (a binary input)."""
+    lineno = 0
+    while True:
+        line = readline(limit + 1)
+        if not line:
+            return
+        lineno += 1
+        yield line
+        if len(line) > limit and not line.endswith(("\n", "\r")):
+            while True:  # the rest of the over-long line
+                rest = readline(limit + 1)
+                if "\0" in rest:
+                    raise TaskError(f"{source}:{lineno}: NUL bytes: a binary file, not a detection CSV")
+                if not rest or rest.endswith(("\n", "\r")) or len(rest) <= limit:
+                    break
+
+
 def read_detections(lines: Iterable[str], source: str = "detections") -> Iterator[Detection | BadRow]:
     """Detections (or BadRows) from CSV text lines, lazily (a stream is answered row by row). A missing or
-    wrong header is a TaskError (nothing can be read); a bad row is a BadRow and reading goes on."""
+    wrong header is a TaskError (nothing can be read); a bad row is a BadRow and reading goes on; more than
+    :data:`MAX_PARTS` rows is a TaskError at the row after them."""
     names = None
     row = 0
     for lineno, line in enumerate(lines, 1):
@@ -127,14 +152,26 @@ def read_detections(lines: Iterable[str], source: str = "detections") -> Iterato
             names = _header(text, source)
             continue
         row += 1
+        if row > MAX_PARTS:
+            raise TaskError(f"{source}:{lineno}: more than {MAX_PARTS} detections in one run (the most a run keeps: "
+                            "about 0.14 MB a part); run the rest as another run")
         yield _row(text.split(","), names, row, lineno, source)
     if names is None:
         raise TaskError(f"{source}: no header: a detection file starts with t[s],along[m],across[m]")
 
 
+def expected_parts(gen) -> float:
+    """How many parts a generator spec makes: its count, or rate × duration (the mean of a Poisson stream)."""
+    return float(gen.count) if gen.count is not None else float(gen.rate) * float(gen.duration)
+
+
 def generate(gen, belt_width: float) -> list[Detection]:
     """The parts of a generator spec (:class:`~pickplace_cli.line.spec.Generator`): arrival times (regular or
-    Poisson), across uniform over the spread, along = ``detect_at``; the same seed gives the same parts."""
+    Poisson), across uniform over the spread, along = ``detect_at``; the same seed gives the same parts. TaskError
+    when it would make more than :data:`MAX_PARTS` (a Poisson stream's draws are capped there too)."""
+    if expected_parts(gen) > MAX_PARTS:
+        raise TaskError(f"parts.generate: {expected_parts(gen):.6g} parts, more than the {MAX_PARTS} a run may have "
+                        "(about 0.14 MB a part): give a lower count, rate or duration")
     rng = np.random.default_rng(gen.seed)
     rate = float(gen.rate)
     if gen.count is not None:
@@ -151,9 +188,9 @@ def generate(gen, belt_width: float) -> list[Detection]:
         else:
             gaps = rng.exponential(1.0 / rate, int(horizon * rate * 1.5) + 20)
             t = np.cumsum(gaps)
-            while t[-1] < horizon:
+            while t[-1] < horizon and len(t) <= 2 * MAX_PARTS:
                 t = np.concatenate([t, t[-1] + np.cumsum(rng.exponential(1.0 / rate, len(t)))])
-            t = t[t < horizon]
+            t = t[t < horizon][:MAX_PARTS]
     spread = float(belt_width if gen.spread is None else gen.spread)
     across = rng.uniform(-spread / 2, spread / 2, len(t)) if spread > 0 else np.zeros(len(t))
     angle = rng.uniform(-math.pi, math.pi, len(t)) if gen.angles else None

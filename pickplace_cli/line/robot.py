@@ -8,14 +8,15 @@ on it). A part detected at ``t`` may be reached from ``t_ready = t + latency``. 
 1. **pick**: from the robot's position and velocity to the part, arriving with the belt's velocity at the
    meeting point, in T by the robot's duration rule (:mod:`~pickplace_cli.line.moves`); the meeting must lie
    in the window (from its start to ``claim`` into it) with room left for the tracking;
-2. **track**: the profile's dwell with the part at the belt's velocity (the grip);
+2. **track**: the profile's dwell plus the gripper's closing time with the part at the belt's velocity (the grip);
 3. **place**: to the next place target (a point, a tray slot: arriving at rest; an outgoing belt: arriving with
    its velocity), leaving with the belt's velocity, duration by the same rule;
-4. **release**: the dwell at the place point (at rest; on an outgoing belt, moving with it).
+4. **release**: the dwell plus the gripper's opening time at the place point (at rest; on an outgoing belt, moving
+   with it).
 
-Then ``t_free = t_start + T_pick + dwell + T_place + dwell``. A robot left moving with an outgoing belt starts
-its next pick from that motion when the part is already waiting; otherwise it first comes to rest by a **stop**
-move to its home point (at once, at ``t_free``). A part the robot cannot take (no meeting in the window, a move
+Then ``t_free = t_start + T_pick + (dwell + close) + T_place + (dwell + open)``. A robot left moving with an outgoing
+belt starts its next pick from that motion when the part is already waiting; otherwise it first comes to rest by a
+**stop** move to its home point (at once, at ``t_free``). A part the robot cannot take (no meeting in the window, a move
 that breaks a limit or leaves the workspace) is declined with the reason; the robot's state does not change.
 
 **Limits.** Every leg is checked against every limit of the profile except the RMS torque, which is a property
@@ -176,6 +177,10 @@ class _StandIn:
     def __call__(self, tau, order=0):  # pragma: no cover - the model is always given the motion
         raise RuntimeError("the line's stacked model has no path")
 
+    def angle_orders(self, tau):
+        """No angle law: a robot with a rotary fourth axis holds the tool angle at 0 rad (its model's default)."""
+        return None
+
 
 class TrackBasis:
     """The grid of a tracking leg (constant velocity, τ ∈ [0, 1]): uniform samples and Gauss–Legendre nodes."""
@@ -217,13 +222,16 @@ class LineRobot:
         self.v_belt = self.frame.velocity(self.speed)
         self.window = (float(spec.window[0]), float(spec.window[1]))
         claim = line.strategy.claim
-        self.meet_end = self.window[1] - self.speed * profile.planning.dwell
+        #: the tracking at the pick (the dwell and the gripper's closing) and the wait at the place (the dwell and its
+        #: opening) [s]
+        self.dwell = float(profile.planning.dwell) + float(spec.gripper.close)
+        self.release = float(profile.planning.dwell) + float(spec.gripper.open)
+        self.meet_end = self.window[1] - self.speed * self.dwell
         if claim is not None:
             self.meet_end = min(self.meet_end, self.window[0] + float(claim))
         self.latency, self.grip = float(latency), float(grip)
         self.rule = time_rule(spec)
         self.optimal = spec.shape == "optimal"
-        self.dwell = float(profile.planning.dwell)
         self.height, self.eta = float(profile.planning.height), float(profile.planning.eta)
         self.capacity = profile.capacity
         self.shapes = shapes
@@ -322,7 +330,7 @@ class LineRobot:
         meet = pick.end
         track = Leg("track", t_start + pick.T, self.dwell, point=meet, velocity=self.v_belt.copy())
         legs = [Leg("pick", t_start, pick.T, pick), track, Leg("place", track.t1, place.T, place)]
-        legs.append(Leg("release", legs[-1].t1, self.dwell, point=target.copy(), velocity=v_out.copy()))
+        legs.append(Leg("release", legs[-1].t1, self.release, point=target.copy(), velocity=v_out.copy()))
         bad = self._check(legs)
         if bad is not None:
             return bad
@@ -487,6 +495,8 @@ class LineRobot:
         meta, data = self.model.columns(parts, np.repeat(Ts, G))
         cols = [c for c, m in enumerate(meta) if m[1] in TIMED]
         limits = np.array([meta[c][3] for c in cols])
+        if not cols:  # no timed limit (a gantry without drives' ratings): none binds
+            return np.full(len(Ts), -1.0)
         peaks = parabolic_peak(np.tile(tau, len(Ts)), data[:, cols], np.arange(0, len(Ts) * G + 1, G))[0]
         return np.max(peaks / limits, axis=1) - 1.0
 
@@ -650,33 +660,4 @@ def _leg_of(index, grids) -> int:
     return len(grids) - 1
 
 
-def check_reach(robot: LineRobot, bands: tuple[float, float], step: float = 5e-3) -> None:
-    """UnreachableError (exit 4) when part of the robot's window — along its window, across its band, at the
-    grip height — or a place target or its home is outside its workspace (reach, joint ranges, workcell box)."""
-    from ..pipelines.rendezvous import workspace_mask
-
-    w0, w1 = robot.window
-    lo, hi = bands
-    al = np.linspace(w0, w1, max(2, int(math.ceil((w1 - w0) / step)) + 1))
-    ac = np.linspace(lo, hi, max(2, int(math.ceil((hi - lo) / step)) + 1))
-    A, C = np.meshgrid(al, ac, indexing="ij")
-    line_pts = np.column_stack([A.ravel(), C.ravel(), np.full(A.size, robot.grip)])
-    ok = workspace_mask(robot.profile, robot.frame.to_robot(line_pts))
-    if not ok.all():
-        k = int(np.argmin(ok))
-        raise UnreachableError(
-            f"robot {robot.name}: window [{w0:g}, {w1:g}] m across [{lo:g}, {hi:g}] m: the point along "
-            f"{line_pts[k, 0]:.4f} m, across {line_pts[k, 1]:.4f} m (grip height {robot.grip:g} m) is outside the "
-            f"workspace of profile {robot.profile.name} (reach, joint range or workcell box); the window must lie "
-            "inside it across the robot's part of the belt"
-        )
-    for what, pts in (("home point", [robot.home]), ("place target", [t[0] for t in robot.targets])):
-        ok = workspace_mask(robot.profile, np.asarray(pts))
-        if not ok.all():
-            k = int(np.argmin(ok))
-            ln = robot.frame.to_line(pts[k])
-            raise UnreachableError(f"robot {robot.name}: {what} [{ln[0]:g}, {ln[1]:g}, {ln[2]:g}] m (line frame) is "
-                                   f"outside the workspace of profile {robot.profile.name}")
-
-
-__all__ = ["LineRobot", "RobotState", "Leg", "Cycle", "Decline", "check_reach", "PickplaceError"]
+__all__ = ["LineRobot", "RobotState", "Leg", "Cycle", "Decline", "PickplaceError"]

@@ -23,6 +23,11 @@ from ..model.errors import ProfileError
 LINE_MAX_BYTES = 1 << 20
 #: the most robots a line may have
 MAX_ROBOTS = 16
+#: the slowest and fastest belt [m/s]: slower than 1 mm/s a part takes longer than 10^3 s per metre of window, and
+#: the times of a run lose the resolution the meeting needs (1e-300 m/s met 20 parts at one instant)
+MIN_BELT_SPEED, MAX_BELT_SPEED = 1e-3, 100.0
+#: the largest generator seed (numpy's seeds are any integer >= 0; a seed is a 64-bit number in practice)
+MAX_SEED = 2**64 - 1
 
 
 def _no_flag(value: Any) -> Any:
@@ -44,7 +49,8 @@ class _Model(BaseModel):
 class Belt(_Model):
     """The infeed belt that carries the parts past the robots."""
 
-    speed: Num = Field(gt=0, le=100, description="Belt speed in m/s along its direction of travel")
+    speed: Num = Field(ge=MIN_BELT_SPEED, le=MAX_BELT_SPEED, description="Belt speed in m/s along its direction of "
+                       "travel (0.001 … 100 m/s)")
     width: Num = Field(gt=0, le=10, description="Belt width in m (parts lie within ±width/2 of the centre line)")
     direction: Literal["+x", "-x", "+y", "-y"] = Field(
         default="+y", description="The belt's direction of travel as an axis of the robots' base frames")
@@ -84,6 +90,16 @@ class Place(_Model):
         return self
 
 
+class Gripper(_Model):
+    """The gripper's switching times, each added to the profile's dwell: at the pick the tool tracks the part for the
+    dwell plus ``close`` before it leaves; at the place it waits the dwell plus ``open`` before it moves on."""
+
+    close: Num = Field(default=0.0, ge=0, le=10, description="Seconds from the grip command until the part is held "
+                                                             "(the tool tracks the part meanwhile)")
+    open: Num = Field(default=0.0, ge=0, le=10, description="Seconds from the release command until the part is free "
+                                                            "(the tool waits at the place point meanwhile)")
+
+
 class RobotSpec(_Model):
     """One robot of the line."""
 
@@ -104,6 +120,8 @@ class RobotSpec(_Model):
     limit_use: Optional[float] = Field(
         default=None, gt=0, le=1, description="Headroom: every timed limit planned to at most this fraction of its "
                                               "rating, in (0, 1] (default: the profile's planning.limit_use)")
+    gripper: Gripper = Field(default_factory=Gripper, description="Gripper close and open times in s, each added "
+                             "to the profile's dwell at the pick and at the place (default 0 s)")
     shape: Literal["table", "optimal"] = Field(
         default="table", description="table: each move's shape from the conveyor table, held fixed while its duration "
         "is searched (fast); optimal: re-optimised at every trial duration, as plan --to-belt (about a second a pick)")
@@ -127,7 +145,7 @@ class Generator(_Model):
                                                                    "parts lie (uniform; default: the belt's width)")
     arrival: Literal["regular", "poisson"] = Field(default="poisson", description="regular: one every 1/rate s; "
                                                    "poisson: exponential gaps of mean 1/rate s")
-    seed: Int = Field(default=0, ge=0, description="Seed of the random numbers")
+    seed: Int = Field(default=0, ge=0, le=MAX_SEED, description="Seed of the random numbers (0 … 2^64 − 1)")
     detect_at: Num = Field(default=0.0, description="Where along the belt the parts are detected, in m")
     angles: bool = Field(default=False, description="Give each part a random angle in [-pi, pi) rad")
 
@@ -244,6 +262,16 @@ def check_rules(line: Line, source: str = "line") -> None:
             if lo < -half - 1e-12 or hi > half + 1e-12:
                 raise ProfileError(f"{source}: strategy.bands of robot {name} = [{lo:g}, {hi:g}] m: must lie on "
                                    f"the belt, within ±{half:g} m (belt.width / 2)")
+    gen = line.parts.generate
+    if gen is not None:
+        from .parts import MAX_PARTS, expected_parts
+
+        if expected_parts(gen) > MAX_PARTS:
+            what = (f"count = {gen.count}" if gen.count is not None else
+                    f"rate × duration = {gen.rate:g}/s × {gen.duration:g} s = {expected_parts(gen):.6g} parts")
+            raise ProfileError(f"{source}: parts.generate.{what}: more than the {MAX_PARTS} parts a run may have (each "
+                               "part's plan is kept for the results, about 0.14 MB a part): run a long production in "
+                               "pieces")
     if line.parts.generate is not None and line.parts.generate.spread is not None \
             and line.parts.generate.spread > line.belt.width + 1e-12:
         raise ProfileError(f"{source}: parts.generate.spread = {line.parts.generate.spread:g} m: wider than the belt "

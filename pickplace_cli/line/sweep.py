@@ -8,7 +8,8 @@ when it is of that kind, else that strategy's defaults) and the generator's seed
 process pool (``workers`` processes; 1: in this process), as for ``build-table``.
 
 **Resumable.** Each finished case is appended at once to ``OUTPUT.partial.jsonl`` (a first line names the sweep: a
-digest of the line file and the axes); ``resume`` reads it and runs only the cases it lacks. The table replaces
+digest of the line file and the axes, which every row carries too); ``resume`` reads it and runs only the cases it
+lacks. One sweep at a time owns the file (the CLI holds it locked: a second sweep on the same output is refused). The table replaces
 OUTPUT only when every case is done, and the partial file is then removed.
 """
 
@@ -85,7 +86,7 @@ def run_case(args: tuple) -> dict:
 
     line, profiles, case, detections = args
     t0, c0 = time.perf_counter(), time.process_time()
-    row = {"strategy": case.strategy, "robots": case.robots, "belt_speed": case.speed, "seed": case.seed, "key": case.key}
+    row = {"strategy": case.strategy, "robots": case.robots, "belt_speed": case.speed, "seed": case.seed, "case": case.key}
     try:
         cl = case_line(line, case)
         from .spec import check_rules
@@ -131,7 +132,10 @@ def checkpoint_path(output: str | Path) -> Path:
 
 
 def read_checkpoint(path: Path, tag: str) -> dict[str, dict]:
-    """The finished rows of a checkpoint (key → row); TaskError when it belongs to another sweep."""
+    """The finished rows of a checkpoint (case key → row); TaskError when it belongs to another sweep, TableError
+    when a row was written by another sweep under this one's header (each row carries its sweep's digest)."""
+    from ..lookup.checkpoint import refuse_row_of_other_run
+
     if not path.exists():
         return {}
     rows: dict[str, dict] = {}
@@ -146,12 +150,13 @@ def read_checkpoint(path: Path, tag: str) -> dict[str, dict]:
                     raise TaskError(f"{path}:1: not a sweep checkpoint (remove it, or run without --resume)") from None
                 continue  # a line cut short by a kill: that case is run again
             if n == 1:
-                if doc.get("sweep") != tag:
+                if not isinstance(doc, dict) or doc.get("sweep") != tag:
                     raise TaskError(f"{path}: the checkpoint of another sweep (other line file or axes); remove it or "
                                     "run the same command")
                 continue
-            if isinstance(doc, dict) and "key" in doc:
-                rows[doc["key"]] = doc
+            if isinstance(doc, dict) and "case" in doc:
+                refuse_row_of_other_run(doc, tag, path, n, "sweep")
+                rows[doc["case"]] = doc
     return rows
 
 
@@ -159,25 +164,26 @@ def run_sweep(line, profiles, all_cases: list[Case], detections, workers: int = 
               progress: Callable[[int, int], None] | None = None, checkpoint: Path | None = None,
               resume: bool = False, tag: str = "") -> list[dict]:
     """Every case's row (in ``all_cases`` order): the finished ones from the checkpoint when resuming, the others
-    run on ``executor`` (or ``workers`` local processes), each appended to the checkpoint as it finishes."""
+    run on ``executor`` (or ``workers`` local processes that die with this one:
+    :func:`~pickplace_cli.lookup.executors.local_pool`), each appended to the checkpoint as it finishes (synced;
+    every row carries the sweep's digest). The caller holds the checkpoint
+    (:func:`~pickplace_cli.lookup.checkpoint.checkpoint_lock`) for the whole sweep."""
+    from ..lookup.checkpoint import CheckpointWriter
+
     done = read_checkpoint(checkpoint, tag) if (checkpoint is not None and resume) else {}
     todo = [c for c in all_cases if c.key not in done]
-    fh = None
+    writer = None
     if checkpoint is not None:
-        fresh = not (resume and checkpoint.exists())
-        fh = open(checkpoint, "a" if not fresh else "w", encoding="utf-8")
-        if fresh:
-            fh.write(json.dumps({"sweep": tag, "cases": len(all_cases)}) + "\n")
-            fh.flush()
+        writer = CheckpointWriter(checkpoint, {"sweep": tag, "cases": len(all_cases)}, tag,
+                                  append=resume and checkpoint.exists())
     total = len(all_cases)
     if progress:
         progress(len(done), total)
 
     def finished(row: dict) -> None:
-        done[row["key"]] = row
-        if fh is not None:
-            fh.write(json.dumps(_plain(row)) + "\n")
-            fh.flush()
+        done[row["case"]] = row
+        if writer is not None:
+            writer.add([_plain(row)])
         if progress:
             progress(len(done), total)
 
@@ -187,12 +193,12 @@ def run_sweep(line, profiles, all_cases: list[Case], detections, workers: int = 
             for a in args:
                 finished(run_case(a))
         else:
-            from concurrent.futures import ProcessPoolExecutor, as_completed
+            from concurrent.futures import as_completed
 
-            from ..lookup.executors import ignore_sigint
+            from ..lookup.executors import local_pool
 
             own = executor is None
-            ex = ProcessPoolExecutor(max_workers=workers, initializer=ignore_sigint) if own else executor
+            ex = local_pool(workers) if own else executor
             try:
                 futures = [ex.submit(run_case, a) for a in args]
                 for f in as_completed(futures):
@@ -201,8 +207,8 @@ def run_sweep(line, profiles, all_cases: list[Case], detections, workers: int = 
                 if own:
                     ex.shutdown(wait=False, cancel_futures=True)
     finally:
-        if fh is not None:
-            fh.close()
+        if writer is not None:
+            writer.close()
     return [done[c.key] for c in all_cases]
 
 

@@ -22,9 +22,9 @@ from ..model.errors import TableError
 
 
 @contextmanager
-def checkpoint_lock(path: Path | None) -> Iterator[None]:
+def checkpoint_lock(path: Path | None, what: str = "build-table run") -> Iterator[None]:
     """Hold the build's checkpoint ``path`` for this run (None: no checkpoint, nothing to hold); TableError when
-    another run holds it."""
+    another run holds it (``what``: the kind of run, as the message names it)."""
     if path is None:
         yield
         return
@@ -39,8 +39,8 @@ def checkpoint_lock(path: Path | None) -> Iterator[None]:
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
-            raise TableError(f"checkpoint {path}: in use by another build-table run writing the same output; wait "
-                             "for it to finish, or give this build another -o") from None
+            raise TableError(f"checkpoint {path}: in use by another {what} writing the same output; wait "
+                             "for it to finish, or give this run another -o") from None
         try:
             yield
         finally:
@@ -104,11 +104,11 @@ class CheckpointWriter:
             pass
 
 
-def refuse_row_of_other_run(rec: dict, key: str, path: Path, lineno: int) -> None:
+def refuse_row_of_other_run(rec: dict, key: str, path: Path, lineno: int, what: str = "build") -> None:
     """TableError when checkpoint row ``rec`` (line ``lineno``) was written by a run with other settings than the
-    header's ``key`` (rows of older checkpoints carry no key: they are the header's)."""
+    header's ``key`` (rows of older checkpoints carry no key: they are the header's); ``what``: build or sweep."""
     if "key" in rec and rec["key"] != key:
-        raise TableError(f"checkpoint {path}:{lineno}: a row of another build (settings_key = {rec['key']}, the "
+        raise TableError(f"checkpoint {path}:{lineno}: a row of another {what} (settings_key = {rec['key']}, the "
                          f"header's is {key}): the file mixes two runs; run without --resume to start over")
 
 

@@ -97,8 +97,50 @@ def dask_executor(address: str, timeout: float = CONNECT_TIMEOUT) -> Iterator[tu
     except (OSError, TimeoutError, ValueError) as exc:
         detail = " ".join(str(exc).split()) or type(exc).__name__
         raise TableError(f"scheduler = {address}: cannot reach the Dask scheduler within {timeout:g} s ({detail})") from None
+    quiet = _quiet_dask_logs()
     try:
         threads = sum(client.nthreads().values()) or 1
         yield client.get_executor(), threads
+    except _lost_errors() as exc:
+        detail = " ".join(str(exc).split())[:200] or type(exc).__name__
+        raise TableError(f"scheduler = {address}: lost the Dask scheduler while the work ran ({detail}); restart the "
+                         "scheduler and run the same command (with --resume to keep what was finished)") from None
     finally:
-        client.close()
+        try:
+            client.close(timeout=timeout)
+        except Exception:  # noqa: BLE001 - a client whose scheduler is gone may fail to close: nothing is left to do
+            pass
+        quiet()
+
+
+def _lost_errors() -> tuple[type[BaseException], ...]:
+    """The exceptions by which a Dask client says its scheduler is gone (cancelled futures, a closed comm)."""
+    import asyncio
+    import concurrent.futures
+
+    errors: list[type[BaseException]] = [concurrent.futures.CancelledError, asyncio.CancelledError]
+    try:
+        from distributed.comm.core import CommClosedError
+
+        errors.append(CommClosedError)
+    except ImportError:  # pragma: no cover - distributed is installed when a client exists
+        pass
+    return tuple(dict.fromkeys(errors))
+
+
+def _quiet_dask_logs():
+    """Silence Dask's own loggers while the client lives (a lost scheduler logged a traceback per reconnect attempt
+    before the command's one line); returns the function that restores their levels."""
+    import logging
+
+    loggers = [logging.getLogger(name) for name in list(logging.root.manager.loggerDict)
+               if name == "distributed" or name.startswith(("distributed.", "tornado"))]
+    levels = [(lg, lg.level) for lg in loggers]
+    for lg in loggers:
+        lg.setLevel(logging.CRITICAL + 1)
+
+    def restore() -> None:
+        for lg, level in levels:
+            lg.setLevel(level)
+
+    return restore

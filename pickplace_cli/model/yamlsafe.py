@@ -65,6 +65,10 @@ def _yaml_with_lines(text: str, source: str, what: str = "profile") -> tuple[Any
         data = loader.construct_document(node)
     except yaml.YAMLError as exc:
         raise ProfileError(_yaml_problem(exc, text, source)) from None
+    except ValueError:  # an integer longer than Python converts from text (4300 digits)
+        line = next((n.start_mark.line + 1 for n in _scalars(node) if len(str(n.value)) > 4000), None)
+        raise ProfileError(f"{source}:{line}: a number of more than 4000 digits: not a value a {what} can "
+                           "have") from None
     finally:
         if loader is not None:
             loader.dispose()
@@ -88,6 +92,21 @@ def _yaml_with_lines(text: str, source: str, what: str = "profile") -> tuple[Any
 
     walk(node, ())
     return data, lines
+
+
+def _scalars(node: Any):
+    """Every scalar node under ``node`` (YAML's node tree), in document order."""
+    import yaml
+
+    if isinstance(node, yaml.ScalarNode):
+        yield node
+    elif isinstance(node, yaml.MappingNode):
+        for k, v in node.value:
+            yield from _scalars(k)
+            yield from _scalars(v)
+    elif isinstance(node, yaml.SequenceNode):
+        for v in node.value:
+            yield from _scalars(v)
 
 
 def _yaml_problem(exc, text: str, source: str) -> str:

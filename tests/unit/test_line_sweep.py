@@ -66,7 +66,7 @@ def test_resume_runs_only_the_missing_cases(tmp_path, monkeypatch):
     assert len(calls) == 3 and ckpt.exists()
     calls.clear()
     rows = sw.run_sweep(LINE, PROFILES, CASES, None, 1, None, None, ckpt, True, tag)
-    assert len(calls) == len(CASES) - 3 and [r["key"] for r in rows] == [c.key for c in CASES]
+    assert len(calls) == len(CASES) - 3 and [r["case"] for r in rows] == [c.key for c in CASES]
     fresh = sw.run_sweep(LINE, PROFILES, CASES, None, 1, None, None, None, False, tag)
     assert [_strip(r) for r in rows] == [_strip(r) for r in fresh]  # resumed rows = rows of one uninterrupted run
     with pytest.raises(TaskError, match="the checkpoint of another sweep"):
