@@ -54,11 +54,22 @@ def profile_show(
         out.print(escape(f"description (free text, not read by the model): {prof.description}"))
     kind = prof.robot.kind
     if kind == "delta":
-        out.print(
-            f"lumped model (Codourey 1998): arm inertia I_b = {robot.arm_inertia:.5g} kg·m² per arm "
-            f"(upper arm + elbow + 2/3 forearm at L); travelling mass m_p = {robot.platform_mass:.4g} kg "
-            f"(plate + payload + 3 × 1/3 forearm pair); arm gravity moment {robot.arm_gravity_moment:.4g} kg·m"
-        )
+        if prof.robot.dynamics == "lumped":
+            out.print(
+                f"lumped model (Codourey 1998): arm inertia I_b = {robot.arm_inertia:.5g} kg·m² per arm "
+                f"(upper arm + elbow + 2/3 forearm at L); travelling mass m_p = {robot.platform_mass:.4g} kg "
+                f"(plate + payload + 3 × 1/3 forearm pair); arm gravity moment {robot.arm_gravity_moment:.4g} kg·m"
+            )
+        else:
+            m = prof.robot.masses
+            out.print(
+                f"rigid-body model: each pair's rods {robot.rod_mass:.4g} kg, inertia {robot.rod_inertia:.4g} kg·m² "
+                f"about their centre ({'uniform rods' if m.forearm_rod_inertia is None else 'as given'}), end "
+                f"fittings {m.forearm_end_elbow:g} kg at the elbow and {m.forearm_end_plate:g} kg at the plate; "
+                f"arm inertia at the motor axis I_b = {robot.arm_inertia:.5g} kg·m² per arm; mass the plate's "
+                f"acceleration drives {robot.platform_mass:.4g} kg; weight on the plate "
+                f"{robot.platform_weight_mass:.4g} kg; arm gravity moment {robot.arm_gravity_moment:.4g} kg·m"
+            )
     elif kind == "scara":
         out.print(f"carried by link 2 (z axis + payload, lumped at its end): {robot.carried_mass:.4g} kg")
     else:

@@ -134,8 +134,24 @@ class DeltaMasses(_Model):
     upper_arm_inertia: float = Field(ge=0, description="Upper arm inertia about the motor axis in kg·m²")
     upper_arm_com: float = Field(ge=0, description="Distance of the upper arm's centre of mass from the motor axis in m")
     elbow: float = Field(default=0.0, ge=0, description="Mass lumped at each elbow in kg")
-    forearm_pair: float = Field(ge=0, description="Mass of one forearm pair in kg (2/3 to the elbow, 1/3 to the plate)")
+    forearm_pair: float = Field(ge=0, description="Mass of one forearm pair (both rods with their end fittings) in kg")
+    forearm_end_elbow: float = Field(default=0.0, ge=0, description="Mass of one pair's end fittings at the elbow "
+                                     "(ball cups, springs), in kg; part of forearm_pair")
+    forearm_end_plate: float = Field(default=0.0, ge=0, description="Mass of one pair's end fittings at the plate, "
+                                     "in kg; part of forearm_pair")
+    forearm_rod_inertia: float | None = Field(default=None, ge=0, description="Moment of inertia of one pair's rods "
+                                              "(without the end fittings) about their own centre of mass, "
+                                              "perpendicular to the rods, in kg·m²; default: uniform rods, "
+                                              "m_rod·l²/12 with m_rod = forearm_pair minus the end fittings")
     plate: float = Field(ge=0, description="Travelling plate mass in kg (tool included)")
+
+    @model_validator(mode="after")
+    def _fittings(self) -> "DeltaMasses":
+        ends = self.forearm_end_elbow + self.forearm_end_plate
+        if ends > self.forearm_pair:
+            raise ValueError(f"forearm_end_elbow + forearm_end_plate = {ends:g} kg is more than forearm_pair = "
+                             f"{self.forearm_pair:g} kg: the end fittings are part of the pair")
+        return self
 
 
 class RotaryAxis(_Model):
@@ -175,11 +191,16 @@ class _ThreeJoints(_Model):
 
 
 class DeltaModel(_ThreeJoints):
-    """Clavel Delta robot, lumped-mass dynamics (Codourey 1998)."""
+    """Clavel Delta robot: rigid-body dynamics (every parallelogram rod a rigid body), or the lumped-mass model
+    of Codourey 1998 by name."""
 
     kind: Literal["delta"]
     geometry: DeltaGeometry
     masses: DeltaMasses
+    dynamics: Literal["rigid", "lumped"] = Field(default="rigid", description="Dynamic model: rigid (each "
+                                                 "parallelogram rod a rigid body that translates and turns, its end "
+                                                 "fittings point masses; the default) or lumped (each pair's mass "
+                                                 "split 2/3 to the elbow, 1/3 to the plate, as in the papers)")
     payload: float = Field(default=0.0, ge=0, description="Payload in kg")
     singularity_margin: float = Field(default=0.05, ge=0, lt=1, description="Minimum singularity measure (0 = singular, 1 = best)")
     joints: JointSpecs = Field(default_factory=JointSpec, description="One joint spec for all three arms, or a list of three")

@@ -30,6 +30,8 @@ def _delta(model: Any):
         R=g.R, r=g.r, L=g.L, l=g.l,
         upper_arm_inertia=m.upper_arm_inertia, upper_arm_mass=m.upper_arm, upper_arm_com=m.upper_arm_com,
         elbow_mass=m.elbow, forearm_mass=m.forearm_pair, plate_mass=m.plate, payload=model.payload,
+        forearm_end_elbow=m.forearm_end_elbow, forearm_end_plate=m.forearm_end_plate,
+        forearm_rod_inertia=m.forearm_rod_inertia, dynamics=model.dynamics,
     )
 
 

@@ -149,7 +149,8 @@ class _Arms:
 
 @dataclass(frozen=True)
 class DeltaRobot:
-    """Clavel Delta robot [Clavel1988] with the lumped-mass dynamic model of [Codourey1998].
+    """Clavel Delta robot [Clavel1988] with a rigid-body dynamic model (default) or the lumped-mass model of
+    [Codourey1998] (``dynamics="lumped"``).
 
     Geometry [m]: ``R`` fixed-platform radius (centre → motor axis), ``r`` moving-platform radius
     (platform centre → forearm joint line), ``L`` upper-arm length (motor axis → elbow), ``l`` forearm
@@ -158,11 +159,19 @@ class DeltaRobot:
     Dynamics: ``upper_arm_inertia`` [kg·m²] the upper arm's own inertia about its motor axis;
     ``upper_arm_mass`` [kg] with its centre of mass ``upper_arm_com`` [m] from the motor axis (used for
     gravity only, its inertia is in ``upper_arm_inertia``); ``elbow_mass`` [kg] lumped at the elbow;
-    ``forearm_mass`` [kg] of ONE forearm pair; ``plate_mass`` [kg] travelling plate; ``payload`` [kg];
-    ``g`` [m/s²]. Masses default to 0 for kinematics-only use.
+    ``forearm_mass`` [kg] of ONE forearm pair (rods and end fittings); ``forearm_end_elbow`` and
+    ``forearm_end_plate`` [kg] the part of it in the end fittings (ball cups, springs) at the elbow and at the
+    plate; ``forearm_rod_inertia`` [kg·m²] one pair's rods about their own centre of mass, perpendicular to the
+    rods (None: a uniform rod, m_rod l²/12 with m_rod = forearm_mass − the end fittings); ``plate_mass`` [kg]
+    travelling plate; ``payload`` [kg]; ``g`` [m/s²]. Masses default to 0 for kinematics-only use.
 
-    Raises ValueError (naming field, value and rule) for a non-positive/non-finite length or a
-    negative/non-finite mass, inertia, centre-of-mass distance or g.
+    ``dynamics``: "rigid" (every parallelogram rod a slender rigid body that translates and turns, its end
+    fittings point masses at the elbow and the plate: exact for the Delta's rigid bodies) or "lumped" (each pair's
+    whole mass split ⅔ to the elbow, ⅓ to the plate [Codourey1998], the model of the papers; the end-fitting
+    fields and the rod inertia are then unused).
+
+    Raises ValueError (naming field, value and rule) for a non-positive/non-finite length, a negative/non-finite
+    mass, inertia, centre-of-mass distance or g, end fittings heavier than the pair, or an unknown ``dynamics``.
     """
 
     R: float
@@ -177,6 +186,10 @@ class DeltaRobot:
     plate_mass: float = 0.0
     payload: float = 0.0
     g: float = 9.80665
+    forearm_end_elbow: float = 0.0
+    forearm_end_plate: float = 0.0
+    forearm_rod_inertia: float | None = None
+    dynamics: str = "rigid"
 
     joint_names: ClassVar[tuple[str, ...]] = ("q1", "q2", "q3")
     joint_units: ClassVar[tuple[str, ...]] = ("rad", "rad", "rad")
@@ -194,24 +207,74 @@ class DeltaRobot:
                 "plate_mass",
                 "payload",
                 "g",
+                "forearm_end_elbow",
+                "forearm_end_plate",
             ),
         )
+        if self.forearm_rod_inertia is not None:
+            _check_non_negative(self, ("forearm_rod_inertia",))
+        if self.dynamics not in ("rigid", "lumped"):
+            raise ValueError(f"DeltaRobot.dynamics = {self.dynamics!r} is not a model: must be 'rigid' or 'lumped'")
+        ends = self.forearm_end_elbow + self.forearm_end_plate
+        if ends > self.forearm_mass * (1.0 + 1e-12):
+            raise ValueError(
+                f"DeltaRobot.forearm_end_elbow + forearm_end_plate = {ends:g} kg is more than the forearm pair's mass "
+                f"{self.forearm_mass:g} kg: the end fittings are part of the pair"
+            )
 
-    # ------------------------------------------------------------------ lumped-mass parameters
+    # ------------------------------------------------------------------ mass parameters
+    @property
+    def rod_mass(self) -> float:
+        """m_rod [kg]: one pair's rods without their end fittings."""
+        return max(self.forearm_mass - self.forearm_end_elbow - self.forearm_end_plate, 0.0)
+
+    @property
+    def rod_inertia(self) -> float:
+        """I_rod [kg·m²]: one pair's rods about their centre of mass, perpendicular to the rods (uniform: m_rod l²/12)."""
+        return self.rod_mass * self.l**2 / 12.0 if self.forearm_rod_inertia is None else self.forearm_rod_inertia
+
+    @property
+    def _rod_ends(self) -> tuple[float, float]:
+        """(α, β) [kg] of a pair's rods: their kinetic energy is ½α‖v_E‖² + ½α‖v_C‖² + β v_E·v_C with v_E, v_C
+        the elbow and plate velocities (α = m_rod/4 + I_rod/l², β = m_rod/4 − I_rod/l²: the centre of mass
+        moves with (v_E + v_C)/2, the rod turns at ‖v_C − v_E‖/l). Lumped: (⅔ m, ⅓ m) at the ends, no coupling."""
+        if self.dynamics == "lumped":
+            return 0.0, 0.0
+        m4, ir = 0.25 * self.rod_mass, self.rod_inertia / self.l**2
+        return m4 + ir, m4 - ir
+
     @property
     def arm_inertia(self) -> float:
-        """I_b = I_arm + (m_elbow + ⅔ m_forearm) L² [kg·m²], arm-side inertia per arm [Codourey1998]."""
-        return self.upper_arm_inertia + (self.elbow_mass + 2.0 / 3.0 * self.forearm_mass) * self.L**2
+        """I_b [kg·m²], arm-side inertia per arm: I_arm + (m_elbow + m_end,elbow + α) L² (rigid), or
+        I_arm + (m_elbow + ⅔ m_forearm) L² (lumped [Codourey1998])."""
+        if self.dynamics == "lumped":
+            return self.upper_arm_inertia + (self.elbow_mass + 2.0 / 3.0 * self.forearm_mass) * self.L**2
+        return self.upper_arm_inertia + (self.elbow_mass + self.forearm_end_elbow + self._rod_ends[0]) * self.L**2
 
     @property
     def arm_gravity_moment(self) -> float:
-        """m_ua·L_c + (m_elbow + ⅔ m_forearm)·L [kg·m]: first mass moment of one arm about its motor axis."""
-        return self.upper_arm_mass * self.upper_arm_com + (self.elbow_mass + 2.0 / 3.0 * self.forearm_mass) * self.L
+        """First mass moment of one arm about its motor axis [kg·m]: m_ua·L_c + (m_elbow + m_end,elbow + ½ m_rod)·L
+        (rigid: half of each rod's weight on each end), m_ua·L_c + (m_elbow + ⅔ m_forearm)·L (lumped)."""
+        if self.dynamics == "lumped":
+            return self.upper_arm_mass * self.upper_arm_com + (self.elbow_mass + 2.0 / 3.0 * self.forearm_mass) * self.L
+        elbow = self.elbow_mass + self.forearm_end_elbow + 0.5 * self.rod_mass
+        return self.upper_arm_mass * self.upper_arm_com + elbow * self.L
 
     @property
     def platform_mass(self) -> float:
-        """m_p = m_plate + m_payload + 3·⅓ m_forearm [kg], the mass lumped on the travelling plate [Codourey1998]."""
-        return self.plate_mass + self.payload + self.forearm_mass
+        """m_p [kg], the mass the plate's acceleration drives: m_plate + m_payload + 3 (m_end,plate + α) (rigid),
+        m_plate + m_payload + 3·⅓ m_forearm (lumped [Codourey1998])."""
+        if self.dynamics == "lumped":
+            return self.plate_mass + self.payload + self.forearm_mass
+        return self.plate_mass + self.payload + 3.0 * (self.forearm_end_plate + self._rod_ends[0])
+
+    @property
+    def platform_weight_mass(self) -> float:
+        """The mass whose weight the plate carries [kg]: m_plate + m_payload + 3 (m_end,plate + ½ m_rod) (rigid);
+        the lumped model's m_p."""
+        if self.dynamics == "lumped":
+            return self.platform_mass
+        return self.plate_mass + self.payload + 3.0 * (self.forearm_end_plate + 0.5 * self.rod_mass)
 
     # ------------------------------------------------------------------ kinematics
     def _ik(self, p: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -480,37 +543,40 @@ class DeltaRobot:
     def inverse_dynamics(
         self, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, p: np.ndarray, a: np.ndarray
     ) -> np.ndarray:
-        """Motor torques (N, 3) [N·m] of the lumped-mass model [Codourey1998], gravity included.
+        """Motor torques (N, 3) [N·m] at the joints, gravity included: the rigid-body model (default) or the
+        lumped-mass model [Codourey1998] (``dynamics="lumped"``).
 
-        Each forearm pair's mass is split ⅔ to its elbow and ⅓ to the travelling plate, so the model is
-        three arms of constant inertia I_b (:attr:`arm_inertia`) plus a translating point mass m_p
-        (:attr:`platform_mass`):
+        By virtual power, every body's inertial and weight load acts on the motors through the point it moves
+        with: the upper arm about its axis, the elbow point E_i (velocity E_i′ q̇_i) and the plate (velocity ṗ):
 
-            τ = I_b q̈ + τ_g(q) + J⁻ᵀ F,       F = m_p (p̈ + g e_z)
+            τ_i = I_arm q̈_i − g m_ua L_c cos q_i + E_i′·f_E,i + B_ii λ_i,     Aᵀλ = F_C
 
-        * τ_g,i = ∂V_arm/∂q_i = −g (m_ua L_c + (m_elbow + ⅔ m_forearm) L) cos q_i, from
-          V_arm = −g·(m_ua L_c + (m_elbow + ⅔ m_forearm) L)·sin q_i (the masses sit at z = −L_c sin q).
-          It is NEGATIVE for a horizontal arm: the motor pulls the arm up, against q > 0 (downwards).
-          (The sign departs from a "+g·…·cos q" shorthand; it is the one consistent with τ·q̇ = dE/dt.)
-        * F is the force the arms exert on the plate; by virtual work τ·q̇ = F·ṗ with q̇ = J⁻¹ṗ,
-          (J⁻¹)ᵀ τ = F. With J⁻¹ = B⁻¹A: τ_i = B_ii λ_i where Aᵀλ = F, solved with the reciprocal basis
-          λ_i = F·(d_{i+1} × d_{i+2}) / det A.
+        * A parallelogram rod pair (mass m_rod, inertia I_rod about its centre, length l) moves its centre with
+          (v_E + v_C)/2 and turns at ω with ‖ω‖ l = ‖v_C − v_E‖ (ω ⟂ rod; a slender rod has no inertia about its
+          own axis). Its inertial power m a_c·v_c + I_rod ω̇·ω = (m/4)(a_E + a_C)·(v_E + v_C) + (I_rod/l²) d̈·ḋ
+          puts α a_E + β a_C on the elbow and β a_E + α a_C on the plate, α = m/4 + I/l², β = m/4 − I/l²
+          (uniform rod: m/3 and m/6), and half its weight on each end. The end fittings are point masses at
+          the elbow and the plate. a_E = E′q̈ + E″q̇² (E′·E″ = 0, ‖E′‖ = L), so
+            E′·f_E = (m_elbow + m_end,E + α) L² q̈ + β E′·p̈ − g (m_elbow + m_end,E + ½m_rod) L cos q,
+            F_C = m_p p̈ + β Σ_k a_E,k + m_w g e_z
+          with m_p = :attr:`platform_mass` and m_w = :attr:`platform_weight_mass`.
+        * Lumped: each pair's mass ⅔ at the elbow, ⅓ on the plate (β = 0, m_w = m_p, I_b = :attr:`arm_inertia`).
+        * F_C is the force the arms exert on the plate; by virtual work (J⁻¹)ᵀ τ = F with J⁻¹ = B⁻¹A:
+          τ_i = B_ii λ_i where Aᵀλ = F, solved with the reciprocal basis λ_i = F·(d_{i+1} × d_{i+2}) / det A.
+        * The weight terms are NEGATIVE for a horizontal arm: the motor pulls the arm up, against q > 0
+          (downwards); the sign is the one consistent with τ·q̇ = dE/dt.
 
-        ``qd`` is accepted for the Robot protocol; the lumped model has no velocity-dependent terms
-        (constant arm inertia, translating plate). ``q`` and ``p`` must belong together (p = FK(q)).
-        Power balance: Σ τ_i q̇_i = d/dt(KE + PE) (:meth:`kinetic_energy`, :meth:`potential_energy`).
+        ``q`` and ``p`` must belong together (p = FK(q)); ``qd`` enters the rigid model's rod coupling
+        (the elbows' centripetal acceleration). Power balance: Σ τ_i q̇_i = d/dt(KE + PE)
+        (:meth:`kinetic_energy`, :meth:`potential_energy`).
         """
         q = _samples(q, "q")
+        qd = _samples(qd, "qd")
         qdd = _samples(qdd, "qdd")
         p = _samples(p, "p")
         a = _samples(a, "a")
-        arms = self._arms(q, p)
-        (cx, cy, cz), det = self._reciprocal(arms)
-        mp = self.platform_mass
-        Fx, Fy, Fz = mp * a[:, 0], mp * a[:, 1], mp * (a[:, 2] + self.g)
-        lam = (Fx * cx + Fy * cy + Fz * cz) / det
-        torque = self.arm_inertia * qdd.T - (self.g * self.arm_gravity_moment) * arms.c + arms.D * lam
-        return torque.T.copy()
+        A, G, _, _ = self._dynamics(self._arms(q, p), qd.T, qdd.T, None, None, a, None, rates=False)
+        return (A + G).T.copy()
 
     def torque_rate(
         self, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, qddd: np.ndarray,
@@ -551,17 +617,30 @@ class DeltaRobot:
     def _dynamics(self, arms: _Arms, qd, qdd, qddd, v, a, j, rates: bool):
         """(A, G, dA, dG) of :meth:`split_dynamics`, arm-major (3, N), from the arm geometry; q̇, q̈, q⃛ (3, N).
 
-        The inertial load m_p p̈ and the static load m_p g e_z go through the same reciprocal basis as one
-        stacked (2 loads, 3 components, N) array (numpy's cost is per call at these sizes)."""
+        The inertial load on the plate and its static load go through the same reciprocal basis as one
+        stacked (2 loads, 3 components, N) array (numpy's cost is per call at these sizes). The rigid model's
+        rod coupling β (see :meth:`inverse_dynamics`) adds β E′·p̈ to each arm and β Σ_k a_E,k to the plate;
+        its rates, β d/dt(E′·p̈) = β (q̇ E″·p̈ + E′·p⃛) and β Σ_k ȧ_E,k with ȧ_E = E′q⃛ + 3E″q̇q̈ − E′q̇³."""
         C, det = self._reciprocal(arms)  # (3 components, 3 arms, N), (N,)
         L, mp, g, M = self.L, self.platform_mass, self.g, self.arm_gravity_moment
+        beta = self._rod_ends[1]
+        c, s = arms.c, arms.s
         F = np.zeros((2, 3, len(det)))  # forces on the plate [N]: inertial, static
         F[0] = mp * a.T
-        F[1, 2] = mp * g
+        F[1, 2] = self.platform_weight_mass * g
+        if beta:
+            ar, _, az = _local(a)
+            # elbow accelerations a_E (arm frame: radial, vertical), summed over the arms in the base frame
+            er, ez = -L * (s * qdd + c * qd * qd), L * (s * qd * qd - c * qdd)
+            F[0, 0] += beta * (er * _COS_PHI).sum(axis=0)
+            F[0, 1] += beta * (er * _SIN_PHI).sum(axis=0)
+            F[0, 2] += beta * ez.sum(axis=0)
         lam = (F[:, :, None] * C).sum(axis=1) / det  # (2, 3 arms, N): λ_i = F·c_i / det A
         Dlam = arms.D * lam
         A = self.arm_inertia * qdd + Dlam[0]
-        G = Dlam[1] - (g * M) * arms.c
+        if beta:
+            A = A - (beta * L) * (s * ar + c * az)  # β E′·p̈
+        G = Dlam[1] - (g * M) * c
         if not rates:
             return A, G, None, None
         w = qd
@@ -569,30 +648,48 @@ class DeltaRobot:
             vr, vt, vz, d1r, d1z = arms.rates
         else:
             vr, vt, vz = _local(v)
-            d1r = vr + arms.s * L * w
-            d1z = vz + arms.c * L * w
+            d1r = vr + s * L * w
+            d1z = vz + c * L * w
         d1 = np.empty((3, *d1r.shape))  # ḋ = v − E′q̇ in the base frame (3 components, 3 arms, N)
         d1[2] = d1z
-        Ddot = -L * (arms.s * d1r + arms.c * d1[2]) + arms.D2 * w
+        Ddot = -L * (s * d1r + c * d1[2]) + arms.D2 * w
         d1[0] = d1r * _COS_PHI - vt * _SIN_PHI
         d1[1] = d1r * _SIN_PHI + vt * _COS_PHI
-        # Aᵀλ̇ = Ḟ − Σ_k ḋ_k λ_k with Ḟ = m_p p⃛ (inertial) and 0 (static)
+        # Aᵀλ̇ = Ḟ − Σ_k ḋ_k λ_k with Ḟ = m_p p⃛ (+ β Σ_k ȧ_E,k) (inertial) and 0 (static)
         R = -(d1[None] * lam[:, None]).sum(axis=2)  # (2, 3 components, N)
         R[0] += mp * j.T
+        if beta:
+            w2 = w * w
+            jr, _, jz = _local(j)
+            sr = -L * (s * qddd + 3.0 * c * w * qdd - s * w2 * w)  # ȧ_E, radial and vertical (arm frame)
+            sz = L * (3.0 * s * w * qdd - c * qddd + c * w2 * w)
+            R[0, 0] += beta * (sr * _COS_PHI).sum(axis=0)
+            R[0, 1] += beta * (sr * _SIN_PHI).sum(axis=0)
+            R[0, 2] += beta * sz.sum(axis=0)
         lam_dot = (R[:, :, None] * C).sum(axis=1) / det
         rate = Ddot * lam + arms.D * lam_dot
         dA = self.arm_inertia * qddd + rate[0]
-        dG = rate[1] + (g * M) * arms.s * w
+        if beta:
+            dA = dA + (beta * L) * (w * (s * az - c * ar) - (s * jr + c * jz))  # β (q̇ E″·p̈ + E′·p⃛)
+        dG = rate[1] + (g * M) * s * w
         return A, G, dA, dG
 
     def kinetic_energy(self, q: np.ndarray, qd: np.ndarray, v: np.ndarray) -> np.ndarray:
-        """KE (N,) [J] of the lumped model: Σ_i ½ I_b q̇_i² + ½ m_p ‖v‖². (q is unused; kept for symmetry.)"""
+        """KE (N,) [J]: Σ_i ½ I_b q̇_i² + ½ m_p ‖v‖² + β Σ_i (E_i′ q̇_i)·v (the rods' coupling; 0 when lumped)."""
+        q = _samples(q, "q")
         qd = _samples(qd, "qd")
         v = _samples(v, "v")
-        return 0.5 * self.arm_inertia * np.sum(qd * qd, axis=1) + 0.5 * self.platform_mass * np.sum(v * v, axis=1)
+        ke = 0.5 * self.arm_inertia * np.sum(qd * qd, axis=1) + 0.5 * self.platform_mass * np.sum(v * v, axis=1)
+        beta = self._rod_ends[1]
+        if beta:
+            vr, _, vz = _local(v)
+            qt = q.T
+            ke = ke - beta * self.L * (qd.T * (np.sin(qt) * vr + np.cos(qt) * vz)).sum(axis=0)
+        return ke
 
     def potential_energy(self, q: np.ndarray, p: np.ndarray) -> np.ndarray:
-        """PE (N,) [J], zero at q = 0 and z = 0: −g (m_ua L_c + (m_elbow + ⅔ m_forearm) L) Σ_i sin q_i + m_p g z."""
+        """PE (N,) [J], zero at q = 0 and z = 0: −g M Σ_i sin q_i + m_w g z (M = :attr:`arm_gravity_moment`,
+        m_w = :attr:`platform_weight_mass`)."""
         q = _samples(q, "q")
         p = _samples(p, "p")
-        return -self.g * self.arm_gravity_moment * np.sum(np.sin(q), axis=1) + self.platform_mass * self.g * p[:, 2]
+        return -self.g * self.arm_gravity_moment * np.sum(np.sin(q), axis=1) + self.platform_weight_mass * self.g * p[:, 2]

@@ -6,6 +6,8 @@ from __future__ import annotations
 import json
 
 import pytest
+
+from pickplace_cli.limits.motion import EXACT_BAND
 import yaml
 from typer.testing import CliRunner
 
@@ -88,10 +90,14 @@ def test_check_own_csv_agrees_with_plan(tmp_path):
     a = {(x["joint"], x["quantity"]): x["peak"] for x in json.loads(rp.read_text())["limits"]["rows"]
          if not x["quantity"].startswith("capacity")}
     b = {(x["joint"], x["quantity"]): x["peak"] for x in json.loads(rc.read_text())["limits"]["rows"]}
+    use = {(x["joint"], x["quantity"]): x["utilisation"] for x in json.loads(rp.read_text())["limits"]["rows"]}
     for key in a:
-        # through the file's own tool motion (septic Hermite) every peak agrees to 1e-6 (12-digit values); a position
-        # is checked on the file's samples, which may miss the continuous extreme between two of them by ~1e-5
-        tol = 1e-5 if key[1].startswith(("position", "workcell")) else 1e-6
+        # through the file's own tool motion (septic Hermite) a peak near its limit (refined exactly on the
+        # continuous motion by both) agrees to 1e-6 (12-digit values); one far from it is a parabola-vertex estimate
+        # on each side's own grid, good to ZOOM_TOL = 1e-4 of the peak; a position is checked on the file's
+        # samples, which may miss the continuous extreme between two of them by ~1e-5
+        near = abs(use[key]) >= 1.0 - EXACT_BAND
+        tol = 1e-5 if key[1].startswith(("position", "workcell")) else 1e-6 if near else 1e-4
         if key[1].startswith(("position", "workcell")):  # a range row may show either side on a tie
             assert abs(b[key]) == pytest.approx(abs(a[key]), rel=tol, abs=1e-9), key
         else:
@@ -117,7 +123,9 @@ def test_profile_validate_and_show():
     assert r.exit_code == 0 and r.stdout.startswith("ok: ")
     r = run("profile", "show")
     assert r.exit_code == 0
-    assert "travelling mass m_p = 0.8 kg" in r.stdout and "arm inertia I_b = 0.061687" in r.stdout
+    # rigid-body model of uniform rods: I_b = 0.030 + (0.10 + 0.30/3) · 0.325² kg·m², plate 0.4 + 0.1 + 3 · 0.30/3 kg
+    assert "arm inertia at the motor axis I_b = 0.051125 kg·m²" in r.stdout
+    assert "mass the plate's acceleration drives 0.8 kg" in r.stdout and "weight on the plate 0.95 kg" in r.stdout
     assert "radius 0.000 … " in r.stdout and "[v] = 5 m/s" in r.stdout
     for cmd in (["check", "--help"], ["profile", "--help"], ["profile", "show", "--help"], ["profile", "validate", "--help"]):
         assert run(*cmd).exit_code == 0
@@ -172,9 +180,9 @@ def test_wildly_infeasible_move_prints_readable_percentages_and_whole_rows():
     assert r.exit_code == 3
     rows = [line for line in r.stderr.splitlines() if line.startswith("q1     motor torque rate")]
     assert len(rows) == 1 and "[N·m/s]" in rows[0] and "EXCEEDED" in rows[0]  # one line, unit included
-    assert "2.92e+07" in rows[0] and "29178779" not in r.stderr
+    assert "2.91e+07" in rows[0] and "29125" not in r.stderr
     assert "t peak [s]" in r.stderr  # the unit of the header is text, not rich markup ("[s]" = strike)
-    assert "limit exceeded: q1 motor torque rate" in r.stderr and "2.92e+07 %" in r.stderr
+    assert "limit exceeded: q1 motor torque rate" in r.stderr and "2.91e+07 %" in r.stderr
 
 
 def test_percent_format():
@@ -245,6 +253,7 @@ def test_issue19_ph_rms_is_the_rms_of_the_written_columns(tmp_path):
     report now says 0.7973 and fails (exit 3); --time fit finds a duration whose written columns keep the
     rating, and every reported RMS equals the written columns' RMS to 1e-4."""
     d = yaml.safe_load(resolve_profile_path("delta-su2018").read_text())
+    d["robot"]["dynamics"] = "lumped"  # the model the figures above were found with
     joints = d["robot"]["joints"]
     for j in joints if isinstance(joints, list) else [joints]:
         j["drive"]["rated_torque"] = 0.60

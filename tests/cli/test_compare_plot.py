@@ -190,7 +190,10 @@ def test_limit_use_agrees_with_the_limit_report():
     assert len(curves) == 9 and len(rms) == 3
     for joint, quantity, pct in curves:
         ref = 100 * rows[(joint, quantity)].utilisation
-        assert ref * 0.99 <= pct.max() <= ref * (1 + 1e-6), (joint, quantity)
+        # never above the report's peak beyond its accuracy: 1e-6 near the limit (refined exactly), ZOOM_TOL = 1e-4
+        # of the peak far from it (the parabola vertex on the check's grid)
+        slack = 1e-6 if rows[(joint, quantity)].utilisation >= 0.95 else 1e-4
+        assert ref * 0.99 <= pct.max() <= ref * (1 + slack), (joint, quantity)
     assert max(pct.max() for _, q, pct in curves if q == "motor torque rate") == pytest.approx(100, rel=5e-3)
     for joint, pct in rms:
         assert pct == pytest.approx(100 * rows[(joint, "rms motor torque")].utilisation, rel=1e-9)

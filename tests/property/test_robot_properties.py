@@ -5,6 +5,8 @@ robot dimensions. Every numeric assertion states its tolerance and why.
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
@@ -18,6 +20,8 @@ DELTA = DeltaRobot(
     upper_arm_inertia=0.030, upper_arm_mass=1.0, upper_arm_com=0.13,
     elbow_mass=0.10, forearm_mass=0.30, plate_mass=0.40, payload=0.1,
 )  # fmt: skip
+LUMPED = dataclasses.replace(DELTA, dynamics="lumped")
+FITTED = dataclasses.replace(DELTA, forearm_end_elbow=0.05, forearm_end_plate=0.1, forearm_rod_inertia=0.004)
 SCARA_MASSES = dict(m1=2.0, lc1=0.16, I1=0.020, m2=1.5, lc2=0.14, I2=0.012, m3=0.8, payload=0.1)
 SCARAS = {e: ScaraRobot(l1=0.325, l2=0.275, elbow=e, z0=0.0, **SCARA_MASSES) for e in ("left", "right")}
 
@@ -89,17 +93,41 @@ def test_delta_velocity_and_virtual_work_identities(x):
     # ṗ = J q̇: 1e-9 relative to ‖v‖·cond — round-off, loose because cond(J) grows near the workspace edge
     err = np.abs(np.einsum("nij,nj->ni", J, qd) - v).max(axis=1)
     assert np.all(err <= 1e-9 * (1 + np.abs(v).max(axis=1)) * np.linalg.cond(J))
-    # power identity of the lumped model for any state: τ·q̇ = I_b q̇·q̈ + τ_g·q̇ + F·v (virtual work, J⁻ᵀ map)
-    torque = DELTA.inverse_dynamics(q, qd, qdd, p, a)
-    F = DELTA.platform_mass * (a + [0.0, 0.0, DELTA.g])
-    expected = (
-        DELTA.arm_inertia * np.sum(qd * qdd, axis=1)
-        - DELTA.g * DELTA.arm_gravity_moment * np.sum(np.cos(q) * qd, axis=1)
-        + np.sum(F * v, axis=1)
-    )
-    scale = np.sum(np.abs(torque * qd), axis=1) + np.sum(np.abs(F * v), axis=1) + 1e-12
-    # 1e-9 relative to the sum of magnitudes: round-off of the reciprocal-basis solve amplified by cond(A)
-    assert np.all(np.abs(np.sum(torque * qd, axis=1) - expected) <= 1e-9 * scale * np.linalg.cond(J))
+    # power identity for any state, body by body: τ·q̇ = Σ (inertial + weight force)·velocity of every body
+    # (written here from first principles, not from the model's lumped parameters)
+    for robot in (DELTA, LUMPED, FITTED):
+        torque = robot.inverse_dynamics(q, qd, qdd, p, a)
+        expected, scale = _body_power(robot, q, qd, qdd, v, a)
+        # 1e-9 relative to the sum of magnitudes: round-off of the reciprocal-basis solve amplified by cond(A)
+        got = np.sum(torque * qd, axis=1)
+        assert np.all(np.abs(got - expected) <= 1e-9 * (scale + np.abs(got)) * np.linalg.cond(J)), robot.dynamics
+
+
+def _body_power(robot, q, qd, qdd, v, a):
+    """(Σ f·v over the bodies, Σ |f·v|) (N,): upper arms, elbow and plate point masses, each pair's rods as a
+    rigid body (centre at mid-rod, turning at ‖v − v_E‖/l), or the lumped ⅔/⅓ split."""
+    g = np.array([0.0, 0.0, robot.g])
+    phi = np.deg2rad([0.0, 120.0, 240.0])
+    terms = [robot.upper_arm_inertia * qd * qdd - robot.g * robot.upper_arm_mass * robot.upper_arm_com * np.cos(q) * qd]
+    lumped = robot.dynamics == "lumped"
+    m_rod = robot.forearm_mass - robot.forearm_end_elbow - robot.forearm_end_plate
+    i_rod = m_rod * robot.l**2 / 12 if robot.forearm_rod_inertia is None else robot.forearm_rod_inertia
+    plate = robot.plate_mass + robot.payload + (robot.forearm_mass if lumped else 3 * robot.forearm_end_plate)
+    terms.append((plate * np.sum((a + g) * v, axis=1))[:, None])
+    for i in range(3):
+        s, c = np.sin(q[:, i]), np.cos(q[:, i])
+        u = np.column_stack((np.cos(phi[i]) * np.ones_like(s), np.sin(phi[i]) * np.ones_like(s)))
+        dirs = lambda r, z: np.column_stack((r * u[:, 0], r * u[:, 1], z))  # noqa: E731 radial/vertical → base
+        ve = robot.L * qd[:, i, None] * dirs(-s, -c)
+        ae = robot.L * qdd[:, i, None] * dirs(-s, -c) + robot.L * qd[:, i, None] ** 2 * dirs(-c, s)
+        if lumped:
+            terms.append(((robot.elbow_mass + 2 * robot.forearm_mass / 3) * np.sum((ae + g) * ve, axis=1))[:, None])
+            continue
+        terms.append(((robot.elbow_mass + robot.forearm_end_elbow) * np.sum((ae + g) * ve, axis=1))[:, None])
+        terms.append((m_rod * np.sum(((ae + a) / 2 + g) * (ve + v) / 2, axis=1))[:, None])
+        terms.append((i_rod / robot.l**2 * np.sum((a - ae) * (v - ve), axis=1))[:, None])
+    parts = np.concatenate(terms, axis=1)
+    return parts.sum(axis=1), np.abs(parts).sum(axis=1)
 
 
 @SETTINGS

@@ -1,4 +1,5 @@
-"""Unit tests of pickplace_cli.robots.delta (Clavel Delta, lumped-mass dynamics [Codourey1998]).
+"""Unit tests of pickplace_cli.robots.delta (Clavel Delta: rigid-body dynamics, and the lumped-mass model
+[Codourey1998] by name).
 
 Dimensions: the Su 2018 prototype (R = 0.150, r = 0.051, L = 0.325, l = 0.800 m) with the shared
 masses of the project brief. Every numeric assertion states its tolerance and why.
@@ -28,6 +29,11 @@ DELTA = DeltaRobot(
     plate_mass=0.40,
     payload=0.1,
 )
+#: the same robot under the papers' lumped-mass model
+LUMPED = dataclasses.replace(DELTA, dynamics="lumped")
+#: rigid rods with end fittings: 0.06 kg ball cups at each end of a pair, a rod inertia away from the uniform one
+FITTED = dataclasses.replace(DELTA, forearm_end_elbow=0.06, forearm_end_plate=0.06, forearm_rod_inertia=0.0095)
+MODELS = pytest.mark.parametrize("robot", [DELTA, LUMPED, FITTED], ids=["rigid", "lumped", "rigid-fitted"])
 
 #: Adept cycle corners (25 mm × 305 mm × 25 mm) at the usual working height [m]
 ADEPT = np.array(
@@ -99,9 +105,26 @@ def test_frozen():
 
 def test_lumped_masses():
     # exact arithmetic on the parameters; 1e-15 absorbs the float rounding of the sums
-    assert DELTA.platform_mass == pytest.approx(0.4 + 0.1 + 0.3, abs=1e-15)
-    assert DELTA.arm_inertia == pytest.approx(0.030 + (0.10 + 0.2) * 0.325**2, abs=1e-15)
-    assert DELTA.arm_gravity_moment == pytest.approx(1.0 * 0.13 + (0.10 + 0.2) * 0.325, abs=1e-15)
+    assert LUMPED.platform_mass == pytest.approx(0.4 + 0.1 + 0.3, abs=1e-15)
+    assert LUMPED.arm_inertia == pytest.approx(0.030 + (0.10 + 0.2) * 0.325**2, abs=1e-15)
+    assert LUMPED.arm_gravity_moment == pytest.approx(1.0 * 0.13 + (0.10 + 0.2) * 0.325, abs=1e-15)
+
+
+def test_rigid_masses():
+    """Uniform rods: a third of a pair's mass moves with each end, a sixth couples them, half its weight on each end."""
+    assert DELTA.platform_mass == pytest.approx(0.4 + 0.1 + 3 * 0.3 / 3, abs=1e-15)
+    assert DELTA.platform_weight_mass == pytest.approx(0.4 + 0.1 + 3 * 0.3 / 2, abs=1e-15)
+    assert DELTA.arm_inertia == pytest.approx(0.030 + (0.10 + 0.3 / 3) * 0.325**2, abs=1e-15)
+    assert DELTA.arm_gravity_moment == pytest.approx(1.0 * 0.13 + (0.10 + 0.3 / 2) * 0.325, abs=1e-15)
+    assert DELTA.rod_inertia == pytest.approx(0.3 * 0.8**2 / 12, abs=1e-15)
+
+
+@pytest.mark.parametrize("update, rule", [({"dynamics": "stiff"}, "'rigid' or 'lumped'"),
+                                          ({"forearm_end_elbow": 0.2, "forearm_end_plate": 0.2}, "part of the pair"),
+                                          ({"forearm_rod_inertia": -1.0}, "forearm_rod_inertia")])
+def test_bad_rigid_parameters_name_the_rule(update, rule):
+    with pytest.raises(ValueError, match=rule):
+        dataclasses.replace(DELTA, **update)
 
 
 def test_bad_shape_raises_value_error():
@@ -276,7 +299,9 @@ def test_static_holding_torque_sign_and_symmetry():
     assert np.ptp(torque) < 1e-12  # symmetric pose → equal torques, to round-off
 
 
-def test_static_torque_is_gradient_of_potential_energy():
+@MODELS
+def test_static_torque_is_gradient_of_potential_energy(robot):
+    DELTA = robot  # noqa: N806
     rng = np.random.default_rng(11)
     p = np.column_stack((rng.uniform(-0.25, 0.25, (30, 2)), rng.uniform(-0.95, -0.65, 30)))
     q = DELTA.inverse_kinematics(p)
@@ -289,7 +314,9 @@ def test_static_torque_is_gradient_of_potential_energy():
     assert_rel(torque, grad, 1e-7, "static torque vs ∂V/∂q")
 
 
-def test_power_balance_against_finite_difference_of_energy():
+@MODELS
+def test_power_balance_against_finite_difference_of_energy(robot):
+    DELTA = robot  # noqa: N806
     t = T_SAMPLES
     p, v, a, j = sine_path(t)
     q, qd, qdd, _ = DELTA.joint_motion(p, v, a, j)
@@ -306,26 +333,65 @@ def test_power_balance_against_finite_difference_of_energy():
     assert_rel(power, d1(energy, t, 1e-3), 1e-6, "Σ τ q̇ vs dE/dt")
 
 
-def test_torque_matches_lagrange_equations():
-    """Independent check of every torque component: τ = d/dt ∂T/∂q̇ − ∂T/∂q + ∂V/∂q with the lumped
-    T(q, q̇) = ½ I_b ‖q̇‖² + ½ m_p ‖J(q) q̇‖², V(q) = PE(q, FK(q)), all partials by finite differences."""
+def _body_kinetic_energy(robot: DeltaRobot, qq, qqd):
+    """T(q, q̇) [J] of every body, written here from first principles (not from the model's α, β, I_b, m_p):
+    upper arms about their axes, point masses at the elbows (elbow mass + the elbow fittings), each pair's
+    rod body (centre of mass at mid-rod moving with (v_E + v_C)/2, turning at ‖v_C − v_E‖/l), the plate
+    fittings, plate and payload at the plate; or, lumped, ⅔ of each pair at its elbow and ⅓ at the plate."""
+    pp = robot.forward_kinematics(qq)
+    vc = np.einsum("nij,nj->ni", robot.jacobian(qq, pp), qqd)  # plate velocity from J = ∂p/∂q
+    phi = np.deg2rad([0.0, 120.0, 240.0])
+    ke = 0.5 * robot.upper_arm_inertia * np.sum(qqd**2, axis=1)
+    ke = ke + 0.5 * (robot.plate_mass + robot.payload) * np.sum(vc**2, axis=1)
+    for i in range(3):
+        s, c = np.sin(qq[:, i]), np.cos(qq[:, i])
+        # dE/dt of E = Rz(φ)(R + L cos q, 0, −L sin q)
+        ve = robot.L * qqd[:, i, None] * np.column_stack((-s * np.cos(phi[i]), -s * np.sin(phi[i]), -c))
+        if robot.dynamics == "lumped":
+            ke = ke + 0.5 * (robot.elbow_mass + 2 * robot.forearm_mass / 3) * np.sum(ve**2, axis=1)
+            ke = ke + 0.5 * robot.forearm_mass / 3 * np.sum(vc**2, axis=1)
+            continue
+        m_rod = robot.forearm_mass - robot.forearm_end_elbow - robot.forearm_end_plate
+        i_rod = m_rod * robot.l**2 / 12 if robot.forearm_rod_inertia is None else robot.forearm_rod_inertia
+        ke = ke + 0.5 * (robot.elbow_mass + robot.forearm_end_elbow) * np.sum(ve**2, axis=1)
+        ke = ke + 0.5 * robot.forearm_end_plate * np.sum(vc**2, axis=1)
+        ke = ke + 0.5 * m_rod * np.sum(((ve + vc) / 2) ** 2, axis=1)
+        ke = ke + 0.5 * i_rod * np.sum((vc - ve) ** 2, axis=1) / robot.l**2
+    return ke
+
+
+def _body_potential_energy(robot: DeltaRobot, qq):
+    """V(q) [J] of every body at its own height (rod bodies at mid-rod), written here independently."""
+    pp = robot.forward_kinematics(qq)
+    ze = -robot.L * np.sin(qq)  # elbow heights (N, 3)
+    zc = pp[:, 2]
+    g = robot.g
+    v = g * (robot.upper_arm_mass * -robot.upper_arm_com * np.sin(qq)).sum(axis=1)
+    v = v + g * (robot.plate_mass + robot.payload) * zc
+    if robot.dynamics == "lumped":
+        return v + g * ((robot.elbow_mass + 2 * robot.forearm_mass / 3) * ze).sum(axis=1) + g * robot.forearm_mass * zc
+    m_rod = robot.forearm_mass - robot.forearm_end_elbow - robot.forearm_end_plate
+    v = v + g * ((robot.elbow_mass + robot.forearm_end_elbow) * ze).sum(axis=1) + 3 * g * robot.forearm_end_plate * zc
+    return v + g * (m_rod * (ze + zc[:, None]) / 2).sum(axis=1)
+
+
+@MODELS
+def test_torque_matches_lagrange_equations(robot):
+    """Independent check of every torque component: τ = d/dt ∂T/∂q̇ − ∂T/∂q + ∂V/∂q with T and V written
+    body by body in this test (:func:`_body_kinetic_energy`), all partials by finite differences."""
     t = T_SAMPLES
     p, v, a, j = sine_path(t)
-    q, qd, qdd, _ = DELTA.joint_motion(p, v, a, j)
-    torque = DELTA.inverse_dynamics(q, qd, qdd, p, a)
-
-    def T(qq, qqd):
-        pv = np.einsum("nij,nj->ni", DELTA.jacobian(qq, DELTA.forward_kinematics(qq)), qqd)
-        return 0.5 * DELTA.arm_inertia * np.sum(qqd**2, axis=1) + 0.5 * DELTA.platform_mass * np.sum(pv**2, axis=1)
-
-    V = lambda qq: DELTA.potential_energy(qq, DELTA.forward_kinematics(qq))  # noqa: E731
+    q, qd, qdd, _ = robot.joint_motion(p, v, a, j)
+    torque = robot.inverse_dynamics(q, qd, qdd, p, a)
+    T = lambda qq, qqd: _body_kinetic_energy(robot, qq, qqd)  # noqa: E731
+    V = lambda qq: _body_potential_energy(robot, qq)  # noqa: E731
     E = np.eye(3)
     hv = 1e-3  # T is quadratic in q̇: the central difference is exact up to round-off
     hq = 1e-6  # rad: truncation ~1e-12, round-off eps·|T|/h ~ 1e-10
 
     def dT_dqd(tt):
         pp, vv, aa, jj = sine_path(tt)
-        qq, qqd, _, _ = DELTA.joint_motion(pp, vv, aa, jj)
+        qq, qqd, _, _ = robot.joint_motion(pp, vv, aa, jj)
         return np.stack([(T(qq, qqd + hv * e) - T(qq, qqd - hv * e)) / (2 * hv) for e in E], axis=1)
 
     dT_dq = np.stack([(T(q + hq * e, qd) - T(q - hq * e, qd)) / (2 * hq) for e in E], axis=1)
@@ -333,6 +399,27 @@ def test_torque_matches_lagrange_equations():
     lagrange = d1(dT_dqd, t, 1e-3) - dT_dq + dV_dq
     # 1e-6 relative: the sum of the FD errors above is ≲ 1e-8 of the ~10 N·m torques
     assert_rel(torque, lagrange, 1e-6, "τ vs Lagrange equations")
+    # and the energies the model states are the bodies' own
+    assert_rel(robot.kinetic_energy(q, qd, v), T(q, qd), 1e-12, "KE")
+    np.testing.assert_allclose(robot.potential_energy(q, p), V(q), rtol=0, atol=1e-12 * np.abs(V(q)).max())
+
+
+@MODELS
+def test_torque_rate_is_the_time_derivative_of_torque(robot):
+    """split_dynamics' dA + dG against a 4th-order central difference in time of inverse_dynamics along the
+    sine path (h = 1e-4 s: truncation h⁴τ⁽⁵⁾/30 ~ 1e-9, round-off eps·|τ|/h ~ 1e-11 of torque rates ~1e3 N·m/s)."""
+    t = T_SAMPLES
+
+    def torque(tt):
+        pp, vv, aa, jj = sine_path(tt)
+        qq, qqd, qqdd, _ = robot.joint_motion(pp, vv, aa, jj)
+        return robot.inverse_dynamics(qq, qqd, qqdd, pp, aa)
+
+    p, v, a, j = sine_path(t)
+    q, qd, qdd, qddd = robot.joint_motion(p, v, a, j)
+    A, G, dA, dG = robot.split_dynamics(q, qd, qdd, qddd, p, v, a, j)
+    assert_rel(A + G, torque(t), 1e-13, "split_dynamics A + G vs inverse_dynamics")
+    assert_rel(dA + dG, d1(torque, t, 1e-4), 1e-7, "torque rate vs dτ/dt")
 
 
 def test_massless_robot_needs_no_torque():
