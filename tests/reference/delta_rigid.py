@@ -386,18 +386,42 @@ def reference_torques(P: dict, q, qd, qdd, method: str = "lagrange", diagnostics
 _FD = np.array([4.0 / 5.0, -1.0 / 5.0, 4.0 / 105.0, -1.0 / 280.0])
 
 
+def reference_split(P: dict, q, qd, qdd, method: str = "lagrange") -> tuple[np.ndarray, np.ndarray]:
+    """(A, G), each (N, 3) [N·m]: the static part G = τ(q, 0, 0) (gravity) and the rest A = τ − G."""
+    total = reference_torques(P, q, qd, qdd, method)
+    zero = np.zeros_like(np.atleast_2d(np.asarray(q, float)))
+    static = reference_torques(P, q, zero, zero, method)
+    return total - static, static
+
+
+def _directional_rate(f, q, qd, qdd, qddd, step: float) -> np.ndarray:
+    """d/dε f(q + εq̇, q̇ + εq̈, q̈ + εq⃛) at ε = 0 by an 8th-order central difference (step: see below)."""
+    scale = np.maximum.reduce([np.linalg.norm(qd, axis=1), np.sqrt(np.linalg.norm(qdd, axis=1)),
+                               np.cbrt(np.linalg.norm(qddd, axis=1)), np.full(len(q), 1e-9)])
+    eps = (step / scale)[:, None]
+    rate = 0.0
+    for k, w in enumerate(_FD, start=1):
+        hi = f(q + k * eps * qd, qd + k * eps * qdd, qdd + k * eps * qddd)
+        lo = f(q - k * eps * qd, qd - k * eps * qdd, qdd - k * eps * qddd)
+        rate = rate + w * (hi - lo)
+    return rate / eps
+
+
 def reference_torque_rate(P: dict, q, qd, qdd, qddd, method: str = "lagrange", step: float = 1e-2) -> np.ndarray:
     """dτ/dt (N, 3) [N·m/s] along the motion: the derivative of τ(q + εq̇, q̇ + εq̈, q̈ + εq⃛) at ε = 0
     (= ∂τ/∂q q̇ + ∂τ/∂q̇ q̈ + ∂τ/∂q̈ q⃛ exactly), by an 8th-order central difference in ε. The step is
     ``step`` times the motion's own time scale 1/max(‖q̇‖, ‖q̈‖^½, ‖q⃛‖^⅓) per sample, so the joints move
-    ≲ ``step`` rad: truncation ~step⁸, rounding ~1e-16/step — relative error ≲ 1e-10 on the Delta."""
+    ≲ ``step`` rad: truncation ~step⁸, rounding ~1e-16/step — relative error ≲ 1e-10 on the Delta
+    (measured ≈ 1e-13: ``python -m tests.reference.measure_delta_rigid``)."""
     q, qd, qdd, qddd = (np.atleast_2d(np.asarray(x, float)) for x in (q, qd, qdd, qddd))
-    scale = np.maximum.reduce([np.linalg.norm(qd, axis=1), np.sqrt(np.linalg.norm(qdd, axis=1)),
-                               np.cbrt(np.linalg.norm(qddd, axis=1)), np.full(len(q), 1e-9)])
-    eps = (step / scale)[:, None]
-    rate = np.zeros_like(q)
-    for k, w in enumerate(_FD, start=1):
-        hi = reference_torques(P, q + k * eps * qd, qd + k * eps * qdd, qdd + k * eps * qddd, method)
-        lo = reference_torques(P, q - k * eps * qd, qd - k * eps * qdd, qdd - k * eps * qddd, method)
-        rate += w * (hi - lo)
-    return rate / eps
+    return _directional_rate(lambda a, b, c: reference_torques(P, a, b, c, method), q, qd, qdd, qddd, step)
+
+
+def reference_split_rate(P: dict, q, qd, qdd, qddd, method: str = "lagrange",
+                         step: float = 1e-2) -> tuple[np.ndarray, np.ndarray]:
+    """(dA/dt, dG/dt), each (N, 3) [N·m/s]: the time derivatives of :func:`reference_split`'s parts (same
+    difference and accuracy as :func:`reference_torque_rate`)."""
+    q, qd, qdd, qddd = (np.atleast_2d(np.asarray(x, float)) for x in (q, qd, qdd, qddd))
+    zero = np.zeros_like(q)
+    dG = _directional_rate(lambda a, b, c: reference_torques(P, a, zero, zero, method), q, qd, qdd, qddd, step)
+    return reference_torque_rate(P, q, qd, qdd, qddd, method, step) - dG, dG
