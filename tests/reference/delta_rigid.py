@@ -178,19 +178,22 @@ def cartesian_motion(P: dict, q, qd, qdd):
 
 
 # ------------------------------------------------------------------------------------------ Lagrangian
+def _gram(X, Y):
+    """Xᵀ Y per sample: (N, 3, 3) from (N, 3 xyz, 3 joints) each (no conjugation)."""
+    return np.swapaxes(X, -1, -2) @ Y
+
+
 def _mass_matrix(P: dict, q, p) -> np.ndarray:
     """M(q) (N, 3, 3) with T = ½ q̇ᵀMq̇ summed body by body (complex q, p allowed: no conjugation)."""
     J, E, E1, E2, d = _jacobian(P, q, p)
     eye = np.eye(3)
-    M = P["upper_arm_inertia"] * np.broadcast_to(eye, J.shape).astype(J.dtype)
-    M = M + (P["m_plate_total"] + 3.0 * P["forearm_end_plate"]) * np.einsum("nki,nkj->nij", J, J)
+    M = P["upper_arm_inertia"] * eye + (P["m_plate_total"] + 3.0 * P["forearm_end_plate"]) * _gram(J, J)
     for i in range(3):
         JE = E1[:, i, :, None] * eye[i]  # Ė_i = E_i′ q̇_i: (N, 3 xyz, 3 joints)
-        M = M + (P["elbow_mass"] + P["forearm_end_elbow"]) * np.einsum("nki,nkj->nij", JE, JE)
         mid = 0.5 * (JE + J)  # the rod's centre of mass
         rel = J - JE  # the rod's plate end relative to its elbow end: ω × d
-        M = M + P["m_rod"] * np.einsum("nki,nkj->nij", mid, mid)
-        M = M + P["I_rod"] / P["l"] ** 2 * np.einsum("nki,nkj->nij", rel, rel)
+        M = M + ((P["elbow_mass"] + P["forearm_end_elbow"]) * _gram(JE, JE) + P["m_rod"] * _gram(mid, mid)
+                 + P["I_rod"] / P["l"] ** 2 * _gram(rel, rel))
     return M
 
 
@@ -209,23 +212,22 @@ _H = 1e-20  # complex step
 
 
 def _lagrange_torques(P: dict, q, qd, qdd) -> np.ndarray:
+    """τ = d/dt(M q̇) − ∂T/∂q + ∂V/∂q = M q̈ + Ṁ q̇ − ½ q̇ᵀ(∂M/∂q_k)q̇ + ∂V/∂q_k, with Ṁ = ∂M/∂q·q̇ and every
+    ∂/∂q by the complex step: M and V at q + ih·δ for δ = q̇, e₁, e₂, e₃ (one stacked evaluation; the plate
+    there is p + ih·Jδ, exact to first order in h, which is all the complex step needs)."""
+    n = len(q)
     p = forward_kinematics(P, q)
     J0 = _jacobian(P, q, p)[0]
-
-    def shifted(delta):  # q + ih δ and the plate there, exact to first order in h
-        return q + 1j * _H * delta, p + 1j * _H * np.einsum("nij,nj->ni", J0, delta)
-
-    M0 = _mass_matrix(P, q, p)
-    Mdot = _mass_matrix(P, *shifted(qd)).imag / _H
-    dT = np.empty_like(q)
-    dV = np.empty_like(q)
-    for k in range(3):
-        e = np.zeros_like(q)
-        e[:, k] = 1.0
-        qc, pc = shifted(e)
-        dT[:, k] = 0.5 * np.einsum("ni,nij,nj->n", qd, _mass_matrix(P, qc, pc).imag / _H, qd)
-        dV[:, k] = _potential(P, qc, pc).imag / _H
-    return np.einsum("nij,nj->ni", M0, qdd) + np.einsum("nij,nj->ni", Mdot, qd) - dT + dV
+    units = np.broadcast_to(np.eye(3)[:, None, :], (3, n, 3))
+    delta = np.concatenate([qd[None], units])  # (4, N, 3)
+    qc = (q[None] + 1j * _H * delta).reshape(4 * n, 3)
+    pc = (p[None] + 1j * _H * np.einsum("nij,knj->kni", J0, delta)).reshape(4 * n, 3)
+    M = _mass_matrix(P, qc, pc).reshape(4, n, 3, 3)
+    V = _potential(P, qc[n:], pc[n:]).reshape(3, n)
+    M0, Mdot, dM = M[0].real, M[0].imag / _H, M[1:].imag / _H
+    dT = 0.5 * np.einsum("ni,knij,nj->nk", qd, dM, qd)
+    dV = (V.imag / _H).T
+    return (M0 @ qdd[..., None])[..., 0] + (Mdot @ qd[..., None])[..., 0] - dT + dV
 
 
 def reference_energy(P: dict, q, qd) -> tuple[np.ndarray, np.ndarray]:
@@ -395,15 +397,16 @@ def reference_split(P: dict, q, qd, qdd, method: str = "lagrange") -> tuple[np.n
 
 
 def _directional_rate(f, q, qd, qdd, qddd, step: float) -> np.ndarray:
-    """d/dε f(q + εq̇, q̇ + εq̈, q̈ + εq⃛) at ε = 0 by an 8th-order central difference (step: see below)."""
+    """d/dε f(q + εq̇, q̇ + εq̈, q̈ + εq⃛) at ε = 0 by an 8th-order central difference (step: see below; the
+    eight shifted motions in one stacked call of f)."""
+    n = len(q)
     scale = np.maximum.reduce([np.linalg.norm(qd, axis=1), np.sqrt(np.linalg.norm(qdd, axis=1)),
-                               np.cbrt(np.linalg.norm(qddd, axis=1)), np.full(len(q), 1e-9)])
+                               np.cbrt(np.linalg.norm(qddd, axis=1)), np.full(n, 1e-9)])
     eps = (step / scale)[:, None]
-    rate = 0.0
-    for k, w in enumerate(_FD, start=1):
-        hi = f(q + k * eps * qd, qd + k * eps * qdd, qdd + k * eps * qddd)
-        lo = f(q - k * eps * qd, qd - k * eps * qdd, qdd - k * eps * qddd)
-        rate = rate + w * (hi - lo)
+    k = np.array([1, 2, 3, 4, -1, -2, -3, -4], float)[:, None, None] * eps  # (8, N, 1)
+    values = f(*((x[None] + k * dx[None]).reshape(8 * n, 3) for x, dx in ((q, qd), (qd, qdd), (qdd, qddd))))
+    values = values.reshape(8, n, 3)
+    rate = sum(w * (values[i] - values[i + 4]) for i, w in enumerate(_FD))
     return rate / eps
 
 
@@ -422,6 +425,5 @@ def reference_split_rate(P: dict, q, qd, qdd, qddd, method: str = "lagrange",
     """(dA/dt, dG/dt), each (N, 3) [N·m/s]: the time derivatives of :func:`reference_split`'s parts (same
     difference and accuracy as :func:`reference_torque_rate`)."""
     q, qd, qdd, qddd = (np.atleast_2d(np.asarray(x, float)) for x in (q, qd, qdd, qddd))
-    zero = np.zeros_like(q)
-    dG = _directional_rate(lambda a, b, c: reference_torques(P, a, zero, zero, method), q, qd, qdd, qddd, step)
+    dG = _directional_rate(lambda a, b, c: reference_torques(P, a, 0.0 * a, 0.0 * a, method), q, qd, qdd, qddd, step)
     return reference_torque_rate(P, q, qd, qdd, qddd, method, step) - dG, dG

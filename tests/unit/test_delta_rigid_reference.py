@@ -126,12 +126,13 @@ def motion_at(profile, pl, tau: np.ndarray):
     return pr.q, pr.qd1 / T, pr.qdd1 / T**2, pr.qddd1 / T**3, motor, rate
 
 
-def reference_motor(profile, P, q, qd, qdd, qddd):
-    """Reference motor torque and torque rate (N, 3) from the reference joint torques and the drives."""
+def reference_motor(profile, P, q, qd, qdd, qddd, torque: bool = True, rate: bool = True):
+    """Reference motor torque and torque rate (N, 3) from the reference joint torques and the drives (None for
+    the one not asked for)."""
     N, eta, J = drives(profile)[:3]
-    torque = ref.reference_torques(P, q, qd, qdd)
-    rate = ref.reference_torque_rate(P, q, qd, qdd, qddd)
-    return torque / (N * eta) + J * N * qdd, rate / (N * eta) + J * N * qddd
+    motor = to_motor(profile, ref.reference_torques(P, q, qd, qdd), qdd) if torque else None
+    change = ref.reference_torque_rate(P, q, qd, qdd, qddd) / (N * eta) + J * N * qddd if rate else None
+    return motor, change
 
 
 def _tau_grid(pl, n: int = 801) -> np.ndarray:
@@ -141,27 +142,40 @@ def _tau_grid(pl, n: int = 801) -> np.ndarray:
     return np.unique(np.clip(np.concatenate([np.linspace(0, 1, n), near]), 0.0, 1.0))
 
 
+def _refined_peak(profile, pl, P, tau, values, which: int, rounds: int = 3, keep: float = 0.98) -> np.ndarray:
+    """max |value| per joint over the move: every local maximum on the grid within ``keep`` of the grid's
+    largest, refined by ``rounds`` rounds of a 21-point grid over its neighbourhood (all in one evaluation per
+    round). ``which``: 0 motor torque, 1 torque rate."""
+    f = np.abs(values)
+    best = f.max(axis=0)
+    boxes = []  # (joint, lo, hi)
+    for i in range(3):
+        g = np.concatenate([[-np.inf], f[:, i], [-np.inf]])
+        for k in np.flatnonzero((g[1:-1] >= g[:-2]) & (g[1:-1] >= g[2:]) & (f[:, i] >= keep * best[i])):
+            boxes.append((i, tau[max(k - 1, 0)], tau[min(k + 1, len(tau) - 1)]))
+    for _ in range(rounds):
+        fine = np.concatenate([np.linspace(lo, hi, 21) for _, lo, hi in boxes])
+        out = np.abs(reference_motor(profile, P, *motion_at(profile, pl, fine)[:4], torque=which == 0,
+                                     rate=which == 1)[which])
+        new = []
+        for b, (i, lo, hi) in enumerate(boxes):
+            x, y = fine[21 * b:21 * b + 21], out[21 * b:21 * b + 21, i]
+            m = int(y.argmax())
+            best[i] = max(best[i], y[m])
+            new.append((i, x[max(m - 1, 0)], x[min(m + 1, 20)]))
+        boxes = new
+    return best
+
+
 def reference_figures(profile, pl, P) -> dict[str, np.ndarray]:
-    """The reference's motor torque peak, torque rate peak (dense grid, then two rounds of local refinement
-    around each joint's maximum) and RMS motor torque over the duty cycle move–dwell–back–dwell
-    (limits/motion.py's docstring; Gauss–Legendre, 10 nodes on each of 200 pieces cut at the breakpoints)."""
+    """The reference's motor torque peak, torque rate peak (:func:`_refined_peak` on a 801-point grid) and RMS
+    motor torque over the duty cycle move–dwell–back–dwell (limits/motion.py's docstring; Gauss–Legendre,
+    10 nodes on each of 200 pieces cut at the breakpoints)."""
     T, dwell = pl.duration.seconds, profile.planning.dwell
     tau = _tau_grid(pl)
     q, qd, qdd, qddd, _, _ = motion_at(profile, pl, tau)
     motor, rate = reference_motor(profile, P, q, qd, qdd, qddd)
-    peaks = {}
-    for key, values, which in (("torque", motor, 0), ("rate", rate, 1)):
-        best = np.abs(values).max(axis=0)
-        for i in range(3):
-            k = int(np.abs(values[:, i]).argmax())
-            lo, hi = tau[max(k - 1, 0)], tau[min(k + 1, len(tau) - 1)]
-            for _ in range(2):
-                fine = np.linspace(lo, hi, 41)
-                f = np.abs(reference_motor(profile, P, *motion_at(profile, pl, fine)[:4])[which][:, i])
-                m = int(f.argmax())
-                best[i] = max(best[i], f[m])
-                lo, hi = fine[max(m - 1, 0)], fine[min(m + 1, 40)]
-        peaks[key] = best
+    peaks = {"torque": _refined_peak(profile, pl, P, tau, motor, 0), "rate": _refined_peak(profile, pl, P, tau, rate, 1)}
     edges = np.unique(np.concatenate([np.linspace(0, 1, 201), pl.cartesian.path.breakpoints]))
     x, w = np.polynomial.legendre.leggauss(10)
     c, h = 0.5 * (edges[1:] + edges[:-1]), 0.5 * np.diff(edges)
