@@ -36,3 +36,15 @@ def alive(pid: int) -> bool:
             return fh.read().rsplit(")", 1)[1].split()[0] != "Z"
     except OSError:
         return False
+
+
+def kill_group(proc) -> None:
+    """SIGKILL to the whole process group of ``proc`` (a Popen started with ``start_new_session=True``), gone or not,
+    then reap it: the tests' clean-up, whatever the test left running."""
+    import signal
+
+    try:
+        os.killpg(proc.pid, signal.SIGKILL)
+    except ProcessLookupError:
+        pass
+    proc.wait()

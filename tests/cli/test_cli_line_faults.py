@@ -18,26 +18,11 @@ import pytest
 from typer.testing import CliRunner
 
 from pickplace_cli.cli import app
-from tests.procs import children, group
+from tests.cli.test_cli_line import LINE  # the same two-robot line
+from tests.procs import children, group, kill_group
 
 runner = CliRunner()
 CAP = 240.0  # s: the most any wait here lasts (a busy 2-core machine)
-LINE = """\
-name: two deltas
-belt: {speed: 0.5, width: 0.3}
-robots:
-  - name: r1
-    base: [0.6, 0.0, 0.8]
-    window: [0.4, 0.8]
-    place: {points: [[0.6, 0.35, 0.0]]}
-  - name: r2
-    base: [1.4, 0.0, 0.8]
-    window: [1.2, 1.6]
-    place: {points: [[1.4, 0.35, 0.0]]}
-parts:
-  generate: {rate: 4.0, count: 12, seed: 2}
-  latency: 0.05
-"""
 DETECTIONS = "t[s],along[m],across[m],id\n0.0,0.0,0.0,a\n0.5,0.0,0.05,b\n"
 
 needs_proc = pytest.mark.skipif(not os.path.isdir("/proc"), reason="reads /proc")
@@ -91,11 +76,7 @@ def test_sweep_workers_die_with_a_killed_main_process(line_file, tmp_path):
         proc.wait(CAP)
         _wait(lambda: not group(proc.pid), "the workers to end after their parent was killed")
     finally:
-        try:
-            os.killpg(proc.pid, signal.SIGKILL)
-        except ProcessLookupError:
-            pass
-        proc.wait()
+        kill_group(proc)
     assert not out.exists()
 
 

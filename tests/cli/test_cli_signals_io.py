@@ -13,7 +13,7 @@ import time
 
 import pytest
 
-from tests.procs import alive, children, group
+from tests.procs import alive, children, group, kill_group
 
 HEADER = "from_x,from_y,from_z,to_x,to_y,to_z\n"
 ROW = "-0.1525,0,-0.8,0.1525,0,-0.8\n"
@@ -128,11 +128,7 @@ def _signal_the_group(proc, sig, code: int, line: str, out) -> None:
             assert time.monotonic() < deadline, f"processes {_group(proc.pid)} of the group outlived it"
             time.sleep(0.05)
     finally:
-        try:
-            os.killpg(proc.pid, signal.SIGKILL)
-        except ProcessLookupError:
-            pass
-        proc.wait()
+        kill_group(proc)
 
 
 @pytest.mark.skipif(not os.path.isdir("/proc"), reason="reads the process table from /proc")

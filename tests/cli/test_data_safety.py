@@ -24,7 +24,7 @@ from typer.testing import CliRunner
 
 from pickplace_cli.cli import app
 from pickplace_cli.model.profile import resolve_profile_path
-from tests.procs import alive, children
+from tests.procs import alive, children, kill_group
 
 runner = CliRunner()
 HEADER = "from_x,from_y,from_z,to_x,to_y,to_z\n"
@@ -342,11 +342,7 @@ def test_workers_die_with_their_parent(tmp_path, how):
             time.sleep(0.02)
         assert not list(tmp_path.glob(".o.csv.*")) or how == "SIGKILL"  # (SIGKILL: no handler can remove it)
     finally:
-        try:
-            os.killpg(proc.pid, signal.SIGKILL)
-        except ProcessLookupError:
-            pass
-        proc.wait()
+        kill_group(proc)
         if how == "SIGKILL":
             os.close(r)
 

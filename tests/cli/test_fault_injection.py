@@ -22,7 +22,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.procs import group
+from tests.procs import group, kill_group
 
 SEED = 33
 TRIALS = 6
@@ -89,11 +89,7 @@ def _kill_at_random(rng: random.Random, args: list[str], out: Path, cwd: Path, w
             assert err.strip().endswith("no output file was changed") or "--resume" in err, err
         return sig.name, code
     finally:
-        try:
-            os.killpg(proc.pid, signal.SIGKILL)
-        except ProcessLookupError:
-            pass
-        proc.wait()
+        kill_group(proc)
 
 
 def test_plan_batch_killed_at_random_moments(tmp_path):
