@@ -69,6 +69,14 @@ class CamMaster(str, Enum):
     belt = "belt"
 
 
+class CamObject(str, Enum):
+    """Mirror of pickplace_cli.export.cam_objects.CamVendor, plus none (one table of every joint)."""
+
+    none = "none"
+    codesys = "codesys"
+    twincat = "twincat"
+
+
 class CsvDialectName(str, Enum):
     """Mirror of pickplace_cli.export.csv.CsvDialect."""
 

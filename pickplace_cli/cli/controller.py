@@ -82,6 +82,10 @@ def check_cycle_usage(a, cycle: float | None, fmt) -> None:
         _usage(f"--cam-master applies to the cam formats, not {fmt.value}")
     if a.cam_master.value == "belt" and a.to_belt is None:
         _usage("--cam-master belt: the master is the belt's travel, which needs a conveyor move (--to-belt)")
+    if a.cam_object.value != "none" and fmt.value not in ("cam-st", "cam-table-st"):
+        _usage(f"--cam-object applies to the cam Structured Text formats (cam-st, cam-table-st), not {fmt.value}")
+    if a.cam_object.value != "none" and a.st_dialect.value != "strict":
+        _usage("--cam-object writes its own PROGRAM with the controller's cam types; drop --st-dialect")
     if a.pvt_integer and fmt.value not in ("pvt", "pvt-st"):
         _usage(f"--pvt-integer applies to the PVT formats (pvt, pvt-st), not {fmt.value}")
     if table and a.batch is not None:
@@ -117,8 +121,15 @@ def judge_table(a, prof, legs: list, track, grid):
     # the table holds the Cartesian capacity where the rule of the move holds it (not under --time fit or optimal)
     capacity = any(r.quantity.startswith("capacity") and r.held for leg in legs for r in leg.report.rows)
     retime = track is None and a.cam_master.value == "time"
+    sized = None
+    if a.cam_object.value != "none":
+        from functools import partial
+
+        from ..export.cam_objects import table_size
+
+        sized = partial(table_size, a.cam_object.value, kind)
     judged = judged_table(kind, grid, motion, tolerance, prof, 0.0 if a.round_trip else dwell, a.cycle_s,
-                          retime=retime, capacity=capacity)
+                          retime=retime, capacity=capacity, size=sized)
     code = judged.report.exit_code()
     _print_table_verdict(a, judged, legs + ([track] if track is not None else []), motion.duration, retime)
     return judged, code
@@ -176,7 +187,7 @@ def _print_table_verdict(a, judged, plans: list, planned: float, retime: bool) -
 def table_info(a, judged) -> dict:
     """What the --json summary and --report say of the table: points, tolerance, errors, re-timing and verdict."""
     t = judged.table
-    return {"format": a.fmt.value, **t.as_dict(), "master": a.cam_master.value,
+    return {"format": a.fmt.value, **t.as_dict(), "master": a.cam_master.value, "cam_object": a.cam_object.value,
             "tolerance_points": judged.tolerance_points, "duration_s": judged.duration, "stretch": judged.stretch,
             "step_cycle_s": judged.step, "limits_ok": judged.report.ok,
             "violations": [r.as_dict() for r in judged.report.violations],
@@ -196,6 +207,12 @@ def write_table(a, legs: list, judged) -> dict:
         master = Master("belt", part.speed, part.latency)
     if a.pvt_integer:
         text = _integer_text(a, table, legs, master, st)
+    elif a.cam_object.value != "none":
+        from ..export.cam_objects import format_cam_objects_st
+
+        cols = table_columns(table, a.drive, legs[0].joint.units, master)
+        text = format_cam_objects_st(table.kind, cols, a.cam_object.value, master.unit,
+                                     table_header(table, a.drive, master))
     else:
         cols = table_columns(table, a.drive, legs[0].joint.units, master)
         text = (format_table_st(table, cols, a.st_dialect.value, table_header(table, a.drive, master)) if st

@@ -19,6 +19,7 @@ from .app import (
     app,
     Compression,
     CamMaster,
+    CamObject,
     CsvDialectName,
     MAX_SHIFT,
     McapFlavor,
@@ -182,6 +183,15 @@ def plan(
     cam_master: CamMaster = typer.Option(
         CamMaster.time, "--cam-master", help="cam, cam-table: the master axis: time [s] from the start, or belt (with "
         "--to-belt): the belt's travel [m] since the part's detection.",
+    ),
+    cam_object: CamObject = typer.Option(
+        CamObject.none, "--cam-object", rich_help_panel="Controller and drive",
+        help="cam-st, cam-table-st: one cam object per joint in the controller's own types, in a PROGRAM "
+        "PRG_PickplaceCams that fills them on its first call. codesys: SoftMotion MC_CAM_REF with SMC_CAMXYVA points "
+        "(cam-st; dV, dA per master unit and unit^2) or SMC_CAMTable_LREAL_128_1/_256_1 (cam-table-st: exactly 128 or "
+        "256 equidistant points; a table needing more is exit 1). twincat: NC camming MC_CAM_REF with "
+        "MC_MotionFunctionPoint rows of type POLYNOM5_MM (cam-st) or a two-column ARRAY[0..n-1, 0..1] OF LREAL "
+        "(master [s|m], slave) equidistant table (cam-table-st, linear). none: one table of every joint.",
     ),
     batch: Optional[str] = typer.Option(
         None, "--batch", help="Plan many moves from a CSV file; '-' (stdin) or the path of a named pipe is streamed: "

@@ -183,15 +183,34 @@ def _refine_count(timeline, table, report, judge, tolerance, read):
     return table, report
 
 
+def _sized_table(timeline, table, judge, tolerance, fixed: int, size):
+    """The equidistant table of ``fixed`` points (a controller's table type), the next larger type's when that one
+    exceeds a limit as the drive rebuilds it → (table, report), the last tried when none holds."""
+    from ..export.knots import equidistant_table
+    from ..model.errors import ExportError
+
+    while True:
+        table = equidistant_table(timeline.duration, fixed, timeline, tolerance, table.samples)
+        report = judge(table)
+        if report.ok:
+            return table, report
+        try:
+            fixed = size(fixed + 1)
+        except ExportError:
+            return table, report
+
+
 def judged_table(kind: str, grid: np.ndarray, timeline: Motion, tolerance: float, profile, dwell: float,
-                 cycle: float | None, retime: bool = True, capacity: bool = False) -> JudgedTable:
+                 cycle: float | None, retime: bool = True, capacity: bool = False, size=None) -> JudgedTable:
     """The ``kind`` table of ``timeline`` (:func:`table_of`: its points from ``grid`` [s] within ``tolerance``)
     made to hold every limit of ``profile`` (at its limit use) as the drive rebuilds it
     (:func:`~pickplace_cli.limits.table.check_table`; per-cycle steps bounded over ``cycle`` [s], else over the
     grid's step): points are added where the rebuilt motion exceeds a limit, then, when ``retime`` (not for a
     conveyor move) and that is not enough, every move is slowed (``stretch``) and the table fitted again. The
     report says whether it holds; a table that cannot be made to is returned with its violations. ``capacity``: the
-    profile's Cartesian capacity is checked too (when the plan's duration rule holds it)."""
+    profile's Cartesian capacity is checked too (when the plan's duration rule holds it). ``size``: for a cam-table,
+    (points the tolerance needs) → the count a controller's table type holds (None: any), which the table then has
+    (no points added)."""
     from ..export.interpolate import rebuild
     from ..limits.table import check_table
     from ..planner import motion_model_static
@@ -221,7 +240,10 @@ def judged_table(kind: str, grid: np.ndarray, timeline: Motion, tolerance: float
         table = table_of(kind, g, line, tolerance)
         first = len(table.t) if first is None else first
         report = judge(table)
-        if kind == "cam-table":
+        fixed = size(len(table.t)) if (size is not None and kind == "cam-table") else None
+        if fixed is not None:
+            table, report = _sized_table(line, table, judge, tolerance, fixed, size)
+        elif kind == "cam-table":
             table, report = _refine_count(line, table, report, judge, tolerance, read)
         else:
             table, report = _refine_knots(kind, g, line, table, report, judge, tolerance)
