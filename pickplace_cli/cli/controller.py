@@ -144,11 +144,7 @@ def _print_table_verdict(a, judged, plans: list, planned: float, retime: bool) -
     name = a.fmt.value
     failed = not report.ok
     if not a.quiet:
-        err = max(table.max_error)
-        sys.stderr.write(f"{name} table: {len(table.t)} points for {table.samples} samples "
-                         f"({table.samples / len(table.t):.1f} x fewer; the tolerance alone needed "
-                         f"{judged.tolerance_points}); max deviation {err:.3g} (rad or m) within --tolerance "
-                         f"{table.tolerance:g}\n")
+        sys.stderr.write(_points_line(a, judged))
         traj = {}
         for p in plans:
             for r in p.report.rows:
@@ -184,12 +180,35 @@ def _print_table_verdict(a, judged, plans: list, planned: float, retime: bool) -
         sys.stderr.write(f"table verdict: all limits hold as the drive interpolates the table ({how})\n")
 
 
+def _points_line(a, judged) -> str:
+    """The table's first summary line: its points against the samples (the cycle grid with a cycle), the tolerance's
+    own count, an equidistant table's master step in cycles, and the achieved deviation."""
+    table = judged.table
+    n, samples = len(table.t), table.samples
+    grid = "the cycle grid" if a.cycle_s is not None else "the samples"
+    ratio = (f"{samples / n:.1f} x fewer points than {grid}" if samples >= n
+             else f"{n / samples:.2f} x more points than {grid}")
+    step = ""
+    if judged.step_cycles is not None:
+        k = judged.step_cycles
+        step = f"; master step {k} cycle{'s' if k > 1 else ''} ({k * judged.step * 1e3:.6g} ms)"
+    err = max(table.max_error)
+    if err <= table.tolerance:
+        dev = f"max deviation {err:.3g} (rad or m) within --tolerance {table.tolerance:g}"
+    else:  # one point a cycle and the tolerance needs a finer step: the drive's cycle, not the table, sets it
+        dev = (f"max deviation between the points {err:.3g} (rad or m), over --tolerance {table.tolerance:g}: it needs a "
+               "step finer than the cycle the drive reads the table at, and between two cycles the drive runs a "
+               "straight line whatever the table's step")
+    return (f"{a.fmt.value} table: {n} points for {samples} samples ({ratio}; the tolerance alone needed "
+            f"{judged.tolerance_points}{step}); {dev}\n")
+
+
 def table_info(a, judged) -> dict:
     """What the --json summary and --report say of the table: points, tolerance, errors, re-timing and verdict."""
     t = judged.table
     return {"format": a.fmt.value, **t.as_dict(), "master": a.cam_master.value, "cam_object": a.cam_object.value,
             "tolerance_points": judged.tolerance_points, "duration_s": judged.duration, "stretch": judged.stretch,
-            "step_cycle_s": judged.step, "limits_ok": judged.report.ok,
+            "step_cycle_s": judged.step, "master_step_cycles": judged.step_cycles, "limits_ok": judged.report.ok,
             "violations": [r.as_dict() for r in judged.report.violations],
             "rows": [r.as_dict() for r in judged.report.rows]}
 

@@ -114,7 +114,8 @@ class JudgedTable:
     """A table fitted to a tolerance and then made to hold every limit as the drive rebuilds it: ``table`` (a
     KnotTable), ``report`` (the LimitReport of the rebuilt motion), ``stretch`` (the moves' durations over the
     planned ones: 1 unless re-timed), ``tolerance_points`` (what the tolerance alone needed), ``duration`` [s] of the
-    table's timeline and ``step`` [s] (the cycle the per-cycle steps are bounded by)."""
+    table's timeline, ``step`` [s] (the cycle the per-cycle steps are bounded by) and, for an equidistant table on a
+    known controller cycle, ``step_cycles``: its master step in whole cycles."""
 
     table: object
     report: object
@@ -122,6 +123,7 @@ class JudgedTable:
     tolerance_points: int
     duration: float
     step: float
+    step_cycles: int | None = None
 
 
 def _segments_at(t: np.ndarray, times: list[float]) -> set[int]:
@@ -183,6 +185,31 @@ def _refine_count(timeline, table, report, judge, tolerance, read):
     return table, report
 
 
+def _cycle_step_table(timeline, table, judge, tolerance, cycle: float):
+    """An equidistant table read every ``cycle`` [s] (the timeline whole cycles long, K of them): its master step is
+    the largest whole number of cycles k that divides K and is at most the step the tolerance needs (``table``: the
+    tolerance's own count), and at least one cycle — the drive reads one point a cycle and runs straight between
+    its setpoints, so points closer than a cycle change nothing it runs (a point on every setpoint already puts the
+    setpoints on the trajectory); a step that breaks a limit as the drive rebuilds it is halved (down to one cycle).
+    → (table, report, k)."""
+    from ..export.knots import equidistant_table
+
+    K = max(1, int(round(timeline.duration / cycle)))
+    wanted = (timeline.duration / max(1, len(table.t) - 1)) / cycle  # the tolerance's step in cycles
+    k = max(1, min(K, int(np.floor(wanted + 1e-9))))
+    samples = table.samples
+    while True:
+        while K % k:
+            k -= 1
+        table = equidistant_table(timeline.duration, K // k + 1, timeline, tolerance, samples)
+        report = judge(table)
+        # between the points the setpoints are off the trajectory (by up to the tolerance, magnified over a cycle
+        # into acceleration): a step of fewer cycles, down to one (every setpoint on the trajectory)
+        if report.ok or k == 1:
+            return table, report, k
+        k = max(1, k // 2)
+
+
 def _sized_table(timeline, table, judge, tolerance, fixed: int, size):
     """The equidistant table of ``fixed`` points (a controller's table type), the next larger type's when that one
     exceeds a limit as the drive rebuilds it → (table, report), the last tried when none holds."""
@@ -228,6 +255,7 @@ def judged_table(kind: str, grid: np.ndarray, timeline: Motion, tolerance: float
     k = 1.0
     line, g = timeline, grid
     first = None
+    per = None
     used = 1.0
     for attempt in range(RETIMES + 1):
         used = k
@@ -243,6 +271,8 @@ def judged_table(kind: str, grid: np.ndarray, timeline: Motion, tolerance: float
         fixed = size(len(table.t)) if (size is not None and kind == "cam-table") else None
         if fixed is not None:
             table, report = _sized_table(line, table, judge, tolerance, fixed, size)
+        elif kind == "cam-table" and cycle is not None:
+            table, report, per = _cycle_step_table(line, table, judge, tolerance, read)
         elif kind == "cam-table":
             table, report = _refine_count(line, table, report, judge, tolerance, read)
         else:
@@ -252,4 +282,4 @@ def judged_table(kind: str, grid: np.ndarray, timeline: Motion, tolerance: float
             break
         worst = max(r.utilisation / r.target for r in failing)
         k *= max(worst, 1.0 + 1e-4) ** 0.5 * (1.0 + 1e-4)
-    return JudgedTable(table, report, used, first, line.duration, read)
+    return JudgedTable(table, report, used, first, line.duration, read, per)

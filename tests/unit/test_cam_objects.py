@@ -229,3 +229,48 @@ def _judged_as_rebuilt(kind, x, p, v, a, at, info: dict, mine: np.ndarray) -> No
     report = check_table(motion, robot, specs, read, prof.planning.dwell, margin, box,
                          capacity=prof.capacity).rated(prof.limit_use)
     assert report.ok, [r.as_dict() for r in report.violations]
+
+
+def test_a_codesys_table_larger_than_its_types_is_refused_in_one_line(tmp_path):
+    """At the default tolerance (1e-6 rad) the equidistant table needs more points than SMC_CAMTable_LREAL_256_1
+    holds: exit 1, one line naming the count and the limit, nothing written."""
+    out = tmp_path / "cams.st"
+    res = CliRunner().invoke(app, ["plan", *ADEPT, "-f", "cam-table-st", "--cam-object", "codesys", "-q", "-o",
+                                   str(out)])
+    assert res.exit_code == 1
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and re.search(r"cam-table: \d+ points needed; .* at most 256 \(SMC_CAMTable_LREAL_256_1\)",
+                                         lines[0]), lines
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("args", [("-f", "cam", "--cam-object", "codesys"),
+                                  ("-f", "pvt-st", "--cam-object", "twincat"),
+                                  ("-f", "cam-st", "--cam-object", "twincat", "--st-dialect", "codesys")])
+def test_cam_object_usage_errors(args, tmp_path):
+    """--cam-object outside cam-st/cam-table-st, or with --st-dialect codesys: usage (exit 2), nothing written."""
+    out = tmp_path / ("x.csv" if args[1] == "cam" else "x.st")
+    res = CliRunner().invoke(app, ["plan", *ADEPT, *args, "-q", "-o", str(out)])
+    assert res.exit_code == 2 and "--cam-object" in res.stderr and not out.exists()
+
+
+def test_table_summary_says_more_points_when_there_are_more():
+    """Without a cycle an equidistant table at 1e-5 rad needs more points than the 1 kHz samples: the summary says
+    '<n/samples> x more points than the samples' (not 'x fewer'), the ratio from the JSON's own counts."""
+    res = CliRunner().invoke(app, ["plan", *ADEPT, "-f", "cam-table", "--tolerance", "1e-5", "-o", "/dev/null",
+                                   "--json"])
+    assert res.exit_code == 0, res.stderr
+    info = json.loads(res.stdout)["table"]
+    assert info["points"] > info["samples"] and info["master_step_cycles"] is None
+    assert f"({info['points'] / info['samples']:.2f} x more points than the samples;" in res.stderr
+
+
+def test_equidistant_table_on_a_cycle_has_one_point_per_cycle():
+    """On a 1 ms cycle at the default tolerance (1e-6 rad: a ~0.2 ms step alone) the table's master step is one
+    cycle: K + 1 points for a move of K cycles (K from the JSON's duration), not the tolerance's count."""
+    res = CliRunner().invoke(app, ["plan", *ADEPT, "--cycle", "0.001", "-f", "cam-table", "-o", "/dev/null", "--json"])
+    assert res.exit_code == 0, res.stderr
+    info = json.loads(res.stdout)["table"]
+    K = round(info["duration_s"] / 0.001)
+    assert info["points"] == K + 1 and info["master_step_cycles"] == 1
+    assert info["tolerance_points"] > 4 * info["points"]
