@@ -86,6 +86,8 @@ def check_cycle_usage(a, cycle: float | None, fmt) -> None:
         _usage(f"--cam-object applies to the cam Structured Text formats (cam-st, cam-table-st), not {fmt.value}")
     if a.cam_object.value != "none" and a.st_dialect.value != "strict":
         _usage("--cam-object writes its own PROGRAM with the controller's cam types; drop --st-dialect")
+    if a.plcopen_xml and not fmt.value.endswith("-st"):
+        _usage(f"--plcopen-xml applies to the Structured Text formats (pvt-st, cam-st, cam-table-st), not {fmt.value}")
     if a.pvt_integer and fmt.value not in ("pvt", "pvt-st"):
         _usage(f"--pvt-integer applies to the PVT formats (pvt, pvt-st), not {fmt.value}")
     if table and a.batch is not None:
@@ -236,6 +238,10 @@ def write_table(a, legs: list, judged) -> dict:
         cols = table_columns(table, a.drive, legs[0].joint.units, master)
         text = (format_table_st(table, cols, a.st_dialect.value, table_header(table, a.drive, master)) if st
                 else format_table_csv(cols))
+    if a.plcopen_xml:
+        from ..export.plcopen import st_to_plcopen
+
+        text = st_to_plcopen(text)
     with atomic_output(a.output) as stream:
         stream.write(text)
     return table_info(a, judged)

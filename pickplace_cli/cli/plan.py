@@ -193,6 +193,14 @@ def plan(
         "MC_MotionFunctionPoint rows of type POLYNOM5_MM (cam-st) or a two-column ARRAY[0..n-1, 0..1] OF LREAL "
         "(master [s|m], slave) equidistant table (cam-table-st, linear). none: one table of every joint.",
     ),
+    plcopen_xml: bool = typer.Option(
+        False, "--plcopen-xml", rich_help_panel="Output",
+        help="pvt-st, cam-st, cam-table-st: write the Structured Text as a PLCopen XML project (TC6 XML v2.01: its "
+        "function blocks and programs as POUs with typed variables, initial values and the ST body; a codesys "
+        "global constant list as a configuration's constant globalVars), for CODESYS (Project > Import PLCopenXML), "
+        "TwinCAT 3 (PLC project > Import PLCopenXML) and Beremiz (a project's plc.xml). Deterministic: a fixed "
+        "creationDateTime (2000-01-01T00:00:00), no clock read.",
+    ),
     batch: Optional[str] = typer.Option(
         None, "--batch", help="Plan many moves from a CSV file; '-' (stdin) or the path of a named pipe is streamed: "
         "each row answered and flushed as soon as it is read. Columns from_x,from_y,from_z,to_x,to_y,to_z "
