@@ -268,7 +268,10 @@ def judged_table(kind: str, grid: np.ndarray, timeline: Motion, tolerance: float
         table = table_of(kind, g, line, tolerance)
         first = len(table.t) if first is None else first
         report = judge(table)
-        fixed = size(len(table.t)) if (size is not None and kind == "cam-table") else None
+        needed = len(table.t)
+        if cycle is not None:  # on a known cycle one point a cycle is all the drive reads (_cycle_step_table)
+            needed = min(needed, int(round(line.duration / read)) + 1)
+        fixed = size(needed) if (size is not None and kind == "cam-table") else None
         if fixed is not None:
             table, report = _sized_table(line, table, judge, tolerance, fixed, size)
         elif kind == "cam-table" and cycle is not None:
