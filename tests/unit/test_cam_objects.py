@@ -274,3 +274,11 @@ def test_equidistant_table_on_a_cycle_has_one_point_per_cycle():
     K = round(info["duration_s"] / 0.001)
     assert info["points"] == K + 1 and info["master_step_cycles"] == 1
     assert info["tolerance_points"] > 4 * info["points"]
+
+
+def test_cli_cam_object_mirrors_the_library():
+    """The CLI's --cam-object choices (kept numpy-free for --help) are the library's vendors plus none."""
+    from pickplace_cli.cli.app import CamObject
+    from pickplace_cli.export.cam_objects import CamVendor
+
+    assert [c.value for c in CamObject] == ["none"] + [v.value for v in CamVendor]
