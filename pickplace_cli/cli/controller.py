@@ -188,8 +188,11 @@ def _points_line(a, judged) -> str:
     table = judged.table
     n, samples = len(table.t), table.samples
     grid = "the cycle grid" if a.cycle_s is not None else "the samples"
-    ratio = (f"{samples / n:.1f} x fewer points than {grid}" if samples >= n
-             else f"{n / samples:.2f} x more points than {grid}")
+    if samples == n:
+        ratio = f"as many points as {grid}"
+    else:
+        ratio = (f"{samples / n:.1f} x fewer points than {grid}" if samples > n
+                 else f"{n / samples:.2f} x more points than {grid}")
     step = ""
     if judged.step_cycles is not None:
         k = judged.step_cycles
