@@ -17,7 +17,7 @@ Structured Text (:func:`format_table_st`): ``strict`` (IEC 61131-3, the default)
 outputs hold the table as initialised arrays (``nPoints``, ``fMaster`` or ``fTime``/``fDt``, ``NAME_pos``,
 ``NAME_vel``, ``NAME_acc``), which any compiler accepts; ``codesys`` is a ``VAR_GLOBAL CONSTANT`` list of the same
 arrays prefixed ``PP_<KIND>_`` (a CODESYS/TwinCAT global variable list). Either is copied into the kernel's own
-structure by a loop (README: "Tables for a motion kernel").
+structure by a loop, or written in the kernel's own cam types per joint (:mod:`~pickplace_cli.export.cam_objects`).
 """
 
 from __future__ import annotations

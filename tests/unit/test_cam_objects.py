@@ -188,6 +188,16 @@ def test_cam_objects_compile_fill_and_rebuild_within_tolerance(vendor, kind, tmp
         pos.append(y)
         vel.append(v)
         acc.append(a)
+    # what the program filled is the ST's constants (parsed here from the text), to the bit: the fill code copies
+    # every value to its field (compared within 1e-12 relative, and in fact equal)
+    const = {n: np.array([float(v) for v in re.sub(r"\(\*.*?\*\)", "", body, flags=re.S).split(",")])
+             for n, body in re.findall(r"^    (\w+) : ARRAY\[[^\]]*\] OF LREAL := \[(.*?)\];", text, re.M | re.S)}
+    for j, y, v, a in zip(joints, pos, vel, acc):
+        pairs = [(y, const[f"{j}_y"])] + ([] if v is None else [(v, const[f"{j}_v"]), (a, const[f"{j}_a"])])
+        if "fMaster" in const:
+            pairs.append((x, const["fMaster"]))
+        for got, want in pairs:
+            assert np.allclose(got, want, rtol=1e-12, atol=0) and np.array_equal(got, want)
     scale, offset = drive_scale("delta-su2018")
     p = np.column_stack(pos) / scale + offset
     vv = None if kind == "cam-table" else np.column_stack(vel) / scale
