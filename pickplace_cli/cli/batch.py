@@ -272,9 +272,6 @@ def _plan_schedule(items, name, streamed, prof, options, height, eta, fail_fast,
     from ..model.errors import TaskError
     from ..pipelines.schedule import ScheduleSummary, check_order, plan_schedule
 
-    if options.cycle is not None:
-        _usage("--cycle (or the profile's controller.cycle): a belt schedule keeps the detection clock; plan its rows "
-               "without a controller cycle (--cycle off), or as independent belt rows (no t_detect column)")
     if belt.get("method_given") and options.method != "bspline-vel":
         raise TaskError(f"method = {options.method}: a belt schedule meets each part with its velocity; it "
                         "needs --method bspline-vel (the default for a schedule)")
@@ -286,7 +283,7 @@ def _plan_schedule(items, name, streamed, prof, options, height, eta, fail_fast,
     params = {k: v for k, v in options.method_params.items() if k in ("solver", "table") and v is not None}
     results = plan_schedule(items, prof, options.time, height, eta, options.rate, belt.get("latency") or 0.0,
                             params, name, fail_fast, report_only, bool(belt.get("angles")), options.turn,
-                            options.turn_during)
+                            options.turn_during, options.cycle)
     report_rows: list = []  # --report: every row, its segments' summaries and limit reports
     codes: list[int] = []
     summary = ScheduleSummary()

@@ -1,0 +1,221 @@
+"""The whole belt cycle on a controller's cycle: ``plan --to-belt … --round-trip --cycle`` (pick from the moving belt,
+track, place back at the start, dwell) and a belt schedule under ``--cycle``.
+
+The 4-axis cell of the manual: profile delta-4axis, a 0.5 m/s belt along +y, a 1 ms cycle. Everything is judged from
+the written file, independently of the planner: the time stamps as decimals; the tool's position from the written
+joint angles through the test's own Delta forward kinematics (``tests/reference/delta_rigid.py``, trilateration), set
+against the part's position on the belt at that time (detected position + belt velocity · (latency + t)); velocities
+by finite differences of those positions; every limit by ``pickplace check`` on the written file.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+from decimal import Decimal
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from pickplace_cli.cli import app
+from tests.reference.delta_rigid import forward_kinematics, params
+
+runner = CliRunner()
+CYCLE = 0.001
+START = (-0.1525, 0.0, -0.8)
+PART = (0.1525, -0.2, -0.8)
+BELT = (0.0, 0.5, 0.0)
+LATENCY = 0.05
+CELL = ("-p", "delta-4axis", "--from", "-0.1525,0,-0.8", "--to", "0.1525,-0.2,-0.8", "--to-belt", "0,0.5,0",
+        "--latency", "0.05", "--cycle", "0.001")
+#: geometry of delta-4axis (R, r, L, l as the profile gives them: the reference's defaults)
+GEOMETRY = params(R=0.150, r=0.051, L=0.325, l=0.800)
+
+
+def run(*args, input=None):
+    return runner.invoke(app, list(args), input=input, catch_exceptions=False)
+
+
+def _table(path) -> tuple[list[str], list[list[str]]]:
+    rows = list(csv.reader(io.StringIO(path.read_text())))
+    return rows[0], rows[1:]
+
+
+def _column(head, rows, name) -> np.ndarray:
+    i = next(k for k, h in enumerate(head) if h.split("[")[0] == name)
+    return np.array([float(r[i]) for r in rows])
+
+
+def _tool(head, rows) -> np.ndarray:
+    """FK of the written q1, q2, q3 (the reference's trilateration, not the planner's)."""
+    q = np.stack([_column(head, rows, f"q{i}") for i in (1, 2, 3)], axis=1)
+    return forward_kinematics(GEOMETRY, q)
+
+
+def _part_at(t, latency=LATENCY, position=PART, belt=BELT) -> np.ndarray:
+    return np.asarray(position) + np.multiply.outer(np.asarray(t) + latency, np.asarray(belt))
+
+
+@pytest.fixture(scope="module")
+def belt_cycle(tmp_path_factory):
+    """The cycle written once as CSV (every column) with its --json summary."""
+    out = tmp_path_factory.mktemp("belt") / "cycle.csv"
+    res = run("plan", *CELL, "--round-trip", "-o", str(out), "--json")
+    assert res.exit_code == 0, res.stderr
+    return out, json.loads(res.stdout)
+
+
+def test_every_step_is_one_cycle_and_every_segment_whole_cycles(belt_cycle):
+    out, doc = belt_cycle
+    head, rows = _table(out)
+    t = [Decimal(r[1]) for r in rows]
+    # every written stamp is k·1 ms exactly (decimal), one sample per cycle from 0 to the cycle's end
+    assert all(s == k * Decimal("0.001") for k, s in enumerate(t))
+    c = doc["belt_cycle"]
+    for name in ("t_meet_s", "t_place_s", "t_end_s", "pick_duration_s", "place_duration_s", "dwell_s"):
+        k = c[name] / CYCLE
+        assert abs(c[name] - round(k) * CYCLE) <= 1e-12, (name, c[name])
+    # pick, track (the dwell, gripping), place back at the start, dwell at rest: 0 … t_end
+    assert c["t_end_s"] == pytest.approx(c["pick_duration_s"] + 2 * c["dwell_s"] + c["place_duration_s"], abs=1e-12)
+    assert float(t[-1]) == pytest.approx(c["t_end_s"], abs=1e-12)
+    assert doc["exit_code"] == 0 and doc["limits_ok"] is True and c["limits_ok"] is True
+    move = _column(head, rows, "move")
+    tn = np.array([float(x) for x in t])
+    assert set(move[tn <= c["t_meet_s"] + c["dwell_s"] + 1e-9]) == {1}  # pick and tracking
+    assert set(move[tn > c["t_meet_s"] + c["dwell_s"] + 1e-9]) == {2}  # place and its dwell
+
+
+def test_the_rounded_cycle_meets_the_part_and_tracks_it(belt_cycle):
+    """After rounding, the tool is on the part within 1e-6 m and moves with the belt within 1e-6 m/s: over the whole
+    tracking segment (positions from FK of the written joints; velocity by forward differences, exact for the
+    straight line at the belt's speed up to the file's 12 digits / 1 ms ≈ 1e-9 m/s), and arriving (a quintic through
+    the last six pick samples, exact inside the path's last polynomial piece, differentiated at the meeting)."""
+    out, doc = belt_cycle
+    head, rows = _table(out)
+    t = _column(head, rows, "t")
+    p = _tool(head, rows)
+    c = doc["belt_cycle"]
+    T, D = c["t_meet_s"], c["dwell_s"]
+    track = (t >= T - 1e-9) & (t <= T + D + 1e-9)
+    assert track.sum() == round(D / CYCLE) + 1
+    assert np.abs(p[track] - _part_at(t[track])).max() <= 1e-6
+    v = np.diff(p[track], axis=0) / CYCLE
+    assert np.abs(v - np.asarray(BELT)).max() <= 1e-6
+    k = int(np.flatnonzero(track)[0])
+    tt = t[k - 5: k + 1] - T
+    arrive = [np.polyval(np.polyder(np.polyfit(tt, p[k - 5: k + 1, i], 5)), 0.0) for i in range(3)]
+    assert np.abs(np.array(arrive) - np.asarray(BELT)).max() <= 1e-6
+    # the JSON's meeting point is where the part is at the (rounded) meeting time
+    assert np.abs(np.array(c["meeting_point_m"]) - _part_at(T)).max() <= 1e-9
+    # the place leg leaves with the belt velocity and the cycle ends at rest at the start
+    assert np.abs(p[-1] - np.asarray(START)).max() <= 1e-6
+    assert np.abs(np.diff(p[-3:], axis=0)).max() <= 1e-12
+
+
+def test_check_accepts_what_plan_wrote(belt_cycle):
+    out, _ = belt_cycle
+    res = run("check", str(out), "-p", "delta-4axis", "-q")
+    assert res.exit_code == 0, res.stderr
+
+
+def test_drive_units_plc_columns_and_check(belt_cycle, tmp_path):
+    """--columns plc: t and the drive's counts d = k·q with k = gear · counts/rev / 2π (by hand from the profile:
+    25 and 10 gear, 2^20 counts), the same samples as the full file; check reads the drive's file and accepts it."""
+    full, _ = belt_cycle
+    fh, frows = _table(full)
+    out = tmp_path / "plc.csv"
+    res = run("plan", *CELL, "--round-trip", "--columns", "plc", "-o", str(out), "-q")
+    assert res.exit_code == 0, res.stderr
+    head, rows = _table(out)
+    assert [h.split("[")[0] for h in head] == ["move", "t", "A1", "A2", "A3", "A4"]
+    assert np.array_equal(_column(head, rows, "t"), _column(fh, frows, "t"))
+    for i, gear in ((1, 25.0), (2, 25.0), (3, 25.0), (4, 10.0)):
+        k = gear * 2**20 / (2 * math.pi)
+        # counts are written to the file's precision: within 1e-3 count of k·q (q has 12 significant digits)
+        assert np.abs(_column(head, rows, f"A{i}") - k * _column(fh, frows, f"q{i}")).max() <= 1e-3 * max(1, k * 1e-6)
+    res = run("check", str(out), "-p", "delta-4axis", "-q")
+    assert res.exit_code == 0, res.stderr
+
+
+def test_mcap_stamps_are_whole_cycles(tmp_path):
+    from mcap.reader import make_reader
+
+    out = tmp_path / "cycle.mcap"
+    res = run("plan", *CELL, "--round-trip", "-o", str(out), "-q")
+    assert res.exit_code == 0, res.stderr
+    with open(out, "rb") as fh:
+        stamps = sorted({m.log_time for _, ch, m in make_reader(fh).iter_messages() if ch.topic == "/joint_states"})
+    # nanoseconds from the file's fixed epoch: every stamp k·1,000,000 ns after the first, one per cycle without a
+    # gap, as many as the CSV's samples (pick 0 … t_end)
+    rel = [s - stamps[0] for s in stamps]
+    assert all(s % 1_000_000 == 0 for s in rel) and np.all(np.diff(stamps) == 1_000_000)
+    res = run("plan", *CELL, "--round-trip", "--json", "-q")
+    assert len(stamps) == round(json.loads(res.stdout)["belt_cycle"]["t_end_s"] / CYCLE) + 1
+
+
+def test_belt_travel_per_sample_for_a_cam_with_the_belt_as_master():
+    """The library's belt cycle carries the belt's travel since the detection per sample (a cam's master)."""
+    from pickplace_cli.model.profile import load_profile
+    from pickplace_cli.pipelines.rendezvous import Part
+    from pickplace_cli.pipelines.schedule import plan_belt_cycle
+
+    part = Part(np.array(PART), np.array(BELT), LATENCY)
+    cyc = plan_belt_cycle(np.array(START), part, np.array(START), load_profile("delta-4axis"), cycle=CYCLE)
+    tl = cyc.timeline(numbered=True)
+    assert np.allclose(tl.belt_m, 0.5 * (tl.t + LATENCY), rtol=0, atol=1e-12)
+    assert np.all(np.abs(tl.t / CYCLE - np.rint(tl.t / CYCLE)) <= 1e-9) and tl.cycle == CYCLE
+
+
+def test_schedule_on_the_cycle(tmp_path):
+    """Two parts, detections off the 1 ms grid: every row starts on the grid (not before its detection + latency),
+    every sample k·1 ms, each part met within 1e-6 m with the belt velocity within 1e-6 m/s, check accepts it."""
+    parts = tmp_path / "parts.csv"
+    parts.write_text("t_detect,to_x,to_y,to_z,to_belt_vx,to_belt_vy,to_belt_vz,place_x,place_y,place_z,"
+                     "from_x,from_y,from_z\n"
+                     "0.0003,0.15,-0.30,-0.8,0,0.5,0,-0.1525,0,-0.8,-0.1525,0,-0.8\n"
+                     "0.1234,0.10,-0.30,-0.8,0,0.5,0,-0.1525,0,-0.8,,,\n")
+    out = tmp_path / "schedule.csv"
+    res = run("plan", "-p", "delta-4axis", "--batch", str(parts), "--latency", "0.0505", "--cycle", "0.001",
+              "-o", str(out), "--json")
+    assert res.exit_code == 0, res.stderr
+    docs = [json.loads(x) for x in res.stdout.splitlines()]
+    head, rows = _table(out)
+    t = [Decimal(r[1]) for r in rows]
+    assert all(s % Decimal("0.001") == 0 for s in t)
+    tn = _column(head, rows, "t")
+    p = _tool(head, rows)
+    move = _column(head, rows, "move")
+    detected = {1: (0.0003, (0.15, -0.30, -0.8)), 2: (0.1234, (0.10, -0.30, -0.8))}
+    for doc in docs[:2]:
+        row = doc["row"]
+        t_detect, where = detected[row]
+        assert doc["t_start_s"] >= t_detect + 0.0505 - 1e-12
+        for name in ("t_start_s", "t_meet_s", "t_place_s", "t_end_s"):
+            assert abs(doc[name] - round(doc[name] / CYCLE) * CYCLE) <= 1e-12, (row, name)
+        mine = move == row
+        track = mine & (tn >= doc["t_meet_s"] - 1e-9) & (tn <= doc["t_meet_s"] + doc["dwell_s"] + 1e-9)
+        on_belt = _part_at(tn[track] - t_detect, 0.0, where)
+        assert np.abs(p[track] - on_belt).max() <= 1e-6
+        assert np.abs(np.diff(p[track], axis=0) / CYCLE - np.asarray(BELT)).max() <= 1e-6
+        steps = np.diff(tn[mine])
+        assert np.abs(steps - CYCLE).max() <= 1e-12  # within a row: one sample per cycle
+    assert docs[2]["schedule"]["picks"] == 2
+    res = run("check", str(out), "-p", "delta-4axis", "-q")
+    assert res.exit_code == 0, res.stderr
+
+
+@pytest.mark.parametrize("args, code, words", [
+    (("--round-trip", "--v-from", "0.1,0,0"), 2, "--round-trip"),
+    (("--round-trip", "--cycle", "0"), 1, "cycle = "),
+    (("--round-trip", "--cycle", "0.001", "--rate", "500"), 2, "--rate"),
+])
+def test_bad_inputs_one_line_exit_code_nothing_written(args, code, words, tmp_path):
+    out = tmp_path / "t.csv"
+    out.write_text("old\n")
+    res = run("plan", *CELL[:-2], *args, "-o", str(out), "-q")
+    assert res.exit_code == code, res.stderr
+    assert res.stderr.count("\n") == 1 and words in res.stderr and "Traceback" not in res.stderr
+    assert out.read_text() == "old\n"
