@@ -93,7 +93,8 @@ def plan(
     to_belt: Optional[str] = typer.Option(
         None, "--to-belt", help="Conveyor rendezvous: the part at --to (m, when it was detected) moves at VX,VY,VZ m/s "
         "(base frame); the move meets it where it is after --latency + T and arrives with this velocity, then tracks it "
-        "for the profile's dwell (s). Selects --method bspline-vel.",
+        "for the profile's dwell (s). Selects --method bspline-vel. With --round-trip: the whole belt cycle (pick, track, "
+        "place back at --from, dwell at rest).",
     ),
     latency: Optional[float] = typer.Option(
         None, "--latency", help="With --to-belt: seconds (>= 0) from the part's detection to the start of the move "
@@ -163,7 +164,9 @@ def plan(
         None, "--cycle", metavar="SECONDS|off", help="The controller's cycle in s (e.g. 0.001): the duration and the "
         "dwell are rounded up to whole cycles, the limits checked again on the rounded move (a cycle more when it "
         "breaks one that held), one sample per cycle at t = k*cycle (the tsv dialect writes k); the summary says what "
-        "the rounding cost. off: sample at --rate. [default: profile controller.cycle, else off]",
+        "the rounding cost. A conveyor move's meeting is solved again for its rounded duration; a belt cycle "
+        "(--to-belt --round-trip) or belt schedule has every leg, dwell and start on whole cycles. off: sample at "
+        "--rate. [default: profile controller.cycle, else off]",
     ),
     tolerance: Optional[float] = typer.Option(
         None, "--tolerance", help="pvt, cam, cam-table: the largest deviation in rad (revolute joint) or m (linear) of "
@@ -209,7 +212,9 @@ def plan(
         "one at a time in this process (-j 1).",
     ),
     round_trip: bool = typer.Option(
-        False, "--round-trip", help="Write there, dwell, back, dwell (the profile's dwell in s) as one trajectory."
+        False, "--round-trip", help="Write there, dwell, back, dwell (the profile's dwell in s) as one trajectory. With "
+        "--to-belt: the belt cycle: pick from the belt, track the part for the dwell, place back at --from (leaving "
+        "with the belt velocity), dwell at rest."
     ),
     fmt: OutputFormat = typer.Option(
         OutputFormat.csv, "--format", "-f", help="Output format: samples as csv, json or mcap; or a table a motion "
