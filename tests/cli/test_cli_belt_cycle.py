@@ -219,3 +219,84 @@ def test_bad_inputs_one_line_exit_code_nothing_written(args, code, words, tmp_pa
     assert res.exit_code == code, res.stderr
     assert res.stderr.count("\n") == 1 and words in res.stderr and "Traceback" not in res.stderr
     assert out.read_text() == "old\n"
+
+
+def test_the_profiles_controller_cycle_is_the_same_as_the_option(belt_cycle, tmp_path):
+    """A profile with controller.cycle 0.001 s plans the belt cycle as --cycle 0.001 does; --cycle off leaves it."""
+    from pathlib import Path
+
+    import pickplace_cli
+
+    text = (Path(pickplace_cli.__file__).parent.parent / "profiles" / "delta-4axis.yaml").read_text()
+    if "controller:" not in text:  # pragma: no cover - the shipped profile names its drives
+        pytest.skip("delta-4axis has no controller section")
+    prof = tmp_path / "cell.yaml"
+    prof.write_text(text.replace("controller:", "controller:\n  cycle: 0.001", 1))
+    out = tmp_path / "cycle.csv"
+    args = [a for a in CELL if a not in ("--cycle", "0.001")]
+    args[args.index("delta-4axis")] = str(prof)
+    res = run("plan", *args, "--round-trip", "-o", str(out), "-q")
+    assert res.exit_code == 0, res.stderr
+    assert out.read_text() == belt_cycle[0].read_text()
+    res = run("plan", *args, "--round-trip", "--cycle", "off", "--json", "-q")
+    doc = json.loads(res.stdout)
+    assert res.exit_code == 0 and "cycle" not in doc["moves"][0]
+    assert abs(doc["belt_cycle"]["t_meet_s"] / CYCLE - round(doc["belt_cycle"]["t_meet_s"] / CYCLE)) > 1e-6
+
+
+def test_a_rounded_pick_that_breaks_a_limit_gets_whole_cycles_more():
+    """The loop of the rendezvous on a cycle, with the meeting and the plan given as functions: a rule duration of
+    0.1834 s (184 cycles) whose rounded moves break a limit below 0.1865 s gets 3 cycles more (0.187 s), the meeting
+    solved again for each; one that did not hold at its own duration is not lengthened; none past the window."""
+    from dataclasses import dataclass
+
+    from pickplace_cli.pipelines.rendezvous import _on_cycle
+
+    @dataclass(frozen=True)
+    class Report:
+        ok: bool
+        violations: tuple = ()
+        notes: tuple = ()
+
+    @dataclass(frozen=True)
+    class Got:
+        report: Report
+        cycle: object = None
+
+    @dataclass(frozen=True)
+    class Duration:
+        seconds: float
+
+    @dataclass(frozen=True)
+    class Found:
+        duration: Duration
+        window_s: tuple = (0.01, 1.3)
+
+        @property
+        def seconds(self) -> float:
+            return self.duration.seconds
+
+    solved = []
+
+    def solve(T, dwell):
+        solved.append((round(T / CYCLE), round(dwell / CYCLE)))
+        return Found(Duration(T))
+
+    def make_planned(threshold, held_at_rule=True):
+        def planned(found, on_cycle=True):
+            T = found.duration.seconds
+            ok = T >= threshold if on_cycle else held_at_rule
+            return Got(Report(ok))
+        return planned
+
+    rv = Found(Duration(0.1834))
+    found, got, note = _on_cycle(rv, make_planned(0.1865), CYCLE, solve, 0.1003)
+    assert found.duration.seconds == pytest.approx(0.187, abs=1e-15) and got.report.ok
+    assert solved == [(184, 101), (185, 101), (186, 101), (187, 101)]  # solved again for each, dwell 101 cycles
+    assert "3 more cycles" in note
+    solved.clear()
+    found, got, note = _on_cycle(rv, make_planned(0.1865, held_at_rule=False), CYCLE, solve, 0.1)
+    assert found.duration.seconds == pytest.approx(0.184, abs=1e-15) and not got.report.ok and note == ""
+    solved.clear()
+    found, got, _ = _on_cycle(Found(Duration(0.1834), (0.01, 0.1851)), make_planned(0.1865), CYCLE, solve, 0.1)
+    assert not got.report.ok and max(n for n, _ in solved) == 185  # 0.186 s would meet the part past the window
