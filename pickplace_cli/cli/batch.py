@@ -270,7 +270,7 @@ def _plan_schedule(items, name, streamed, prof, options, height, eta, fail_fast,
     from contextlib import ExitStack
 
     from ..model.errors import TaskError
-    from ..pipelines.schedule import ScheduleSummary, check_order, plan_schedule
+    from ..pipelines.schedule import CycleStream, ScheduleSummary, check_order, plan_schedule
 
     if belt.get("method_given") and options.method != "bspline-vel":
         raise TaskError(f"method = {options.method}: a belt schedule meets each part with its velocity; it "
@@ -288,6 +288,7 @@ def _plan_schedule(items, name, streamed, prof, options, height, eta, fail_fast,
     codes: list[int] = []
     summary = ScheduleSummary()
     kept: list = []
+    stream = CycleStream(options.cycle)  # the picked cycles as written (on a cycle: one sample per cycle)
     csv_out = output is not None and writer.csv_dialect is not None
     header_done = False
     try:
@@ -295,7 +296,6 @@ def _plan_schedule(items, name, streamed, prof, options, height, eta, fail_fast,
             out = None
             if csv_out:
                 from ..export import atomic_output
-                from ..export.csv import csv_header, csv_rows
 
                 out = stack.enter_context(atomic_output(output))
             for res in results:
@@ -318,15 +318,8 @@ def _plan_schedule(items, name, streamed, prof, options, height, eta, fail_fast,
                     _emit_json(res.as_dict())
                 written = res.code == 0 or (report_only and res.code == 3 and res.cycle is not None)
                 if written and output is not None:
-                    timeline = res.cycle.timeline()
-                    if out is not None:
-                        if not header_done:
-                            out.write(csv_header(timeline, writer.csv_dialect, move=True))
-                            header_done = True
-                        out.write(csv_rows(timeline, writer.csv_dialect))
-                        out.flush()
-                    else:
-                        kept.append(timeline)
+                    header_done = _write_pieces(stream.pieces(res.cycle), out, writer, kept, header_done)
+            header_done = _write_pieces(stream.close(), out, writer, kept, header_done)
             _keep_unless_empty(out, output, header_done)
     except _NothingWritten:
         pass
@@ -352,6 +345,23 @@ def _plan_schedule(items, name, streamed, prof, options, height, eta, fail_fast,
         sys.stderr.write("pickplace: no part was picked: nothing written\n")
     if summary.worst and not (report_only and all(c == 3 for c in codes if c)):
         raise typer.Exit(summary.worst)
+
+
+def _write_pieces(pieces: list, out, writer, kept: list, header_done: bool) -> bool:
+    """Write a belt schedule's timelines to the CSV stream ``out`` (the header before the first), or keep them for a
+    one-timeline writer (MCAP, JSON); → whether the header is written."""
+    from ..export.csv import csv_header, csv_rows
+
+    for timeline in pieces:
+        if out is not None:
+            if not header_done:
+                out.write(csv_header(timeline, writer.csv_dialect, move=True))
+                header_done = True
+            out.write(csv_rows(timeline, writer.csv_dialect))
+            out.flush()
+        else:
+            kept.append(timeline)
+    return header_done
 
 
 class _NothingWritten(Exception):

@@ -23,6 +23,10 @@ A part the robot cannot meet inside the workspace and the belt window (exit 4), 
 (exit 3) or cannot be planned (exit 1) is a result of that row with its reason; the robot does not move (its
 position and ``t_free`` stay) and the next row is planned from the same state. Rows are therefore planned one
 after another, never in parallel.
+
+**On a controller cycle** (``cycle`` [s]): ``t_start`` is rounded up to a whole number of cycles of the detection
+clock, every leg and dwell is whole cycles (:func:`plan_belt_cycle`), and :class:`CycleStream` writes the picked
+cycles as one sample per cycle, the waits between them at rest.
 """
 
 from __future__ import annotations
@@ -374,3 +378,56 @@ def plan_schedule(rows: Iterable, profile, time: str = "limits", height: float |
         yield res
         if fail_fast and res.code:
             return
+
+
+class CycleStream:
+    """The picked cycles as they are written, one after another on the detection clock. Without a controller cycle
+    each cycle's :meth:`Cycle.timeline` as it is (the robot waits at rest between cycles with no samples). On a
+    ``cycle`` [s] one sample per cycle from the first cycle's start to the last one's end: a cycle's last sample is
+    held back until the next cycle comes; the robot's wait at rest at the place point in between is written as
+    samples of the earlier row (segment "wait"), and a cycle that starts as the previous one ends takes the shared
+    time stamp as its first sample (no time stamp twice)."""
+
+    def __init__(self, cycle: float | None) -> None:
+        self.cycle = cycle
+        self.last: Cycle | None = None
+
+    def pieces(self, cyc: Cycle) -> list:
+        """The Timelines to write for the picked cycle ``cyc`` (in order)."""
+        whole = cyc.timeline()
+        if self.cycle is None:
+            return [whole]
+        out = []
+        if self.last is not None:
+            k0, k1 = round(self.last.t_end / self.cycle), round(cyc.t_start / self.cycle)
+            if k1 > k0:
+                out.append(self._wait(np.arange(k0, k1) * self.cycle))
+        self.last = cyc
+        return out + [_samples(whole, slice(0, len(whole.t) - 1))]
+
+    def close(self) -> list:
+        """The last cycle's held-back final sample (nothing without a cycle or a cycle written)."""
+        if self.cycle is None or self.last is None:
+            return []
+        k = round(self.last.t_end / self.cycle)
+        return [self._wait(np.array([k * self.cycle]))]
+
+    def _wait(self, t: np.ndarray):
+        from .timeline import Segment, _hold, _join
+
+        c = self.last
+        return _join([_hold(c.place, True, t)], [c.row], c.move.joint, [Segment(c.row, "wait", float(t[0]),
+                                                                                 float(t[-1]))], [])
+
+
+def _samples(timeline, sl: slice):
+    """The samples ``sl`` of ``timeline`` (a Timeline of one move number)."""
+    from .timeline import _join
+
+    piece = {k: getattr(timeline, k)[sl] for k in ("t", "p", "v", "a", "j")}
+    piece["joint"] = {n: None if getattr(timeline.joint, n) is None else getattr(timeline.joint, n)[sl]
+                      for n in ("q", "qd", "qdd", "qddd", "torque", "motor_speed", "motor_torque")}
+    out = _join([piece], [int(timeline.move[0])], timeline.joint, timeline.segments, timeline.summaries)
+    from dataclasses import replace as _replace
+
+    return _replace(out, cycle=timeline.cycle, belt_m=None if timeline.belt_m is None else timeline.belt_m[sl])

@@ -170,26 +170,36 @@ def test_belt_travel_per_sample_for_a_cam_with_the_belt_as_master():
 
 
 def test_schedule_on_the_cycle(tmp_path):
-    """Two parts, detections off the 1 ms grid: every row starts on the grid (not before its detection + latency),
-    every sample k·1 ms, each part met within 1e-6 m with the belt velocity within 1e-6 m/s, check accepts it."""
+    """Three parts, detections off the 1 ms grid, the second met as soon as the robot is free, the third after a wait:
+    every row starts on the grid (not before its detection + latency), the file is one sample per cycle from the first
+    start to the last end (no stamp twice, the waits at rest), each part met within 1e-6 m with the belt velocity
+    within 1e-6 m/s, check accepts it."""
     parts = tmp_path / "parts.csv"
     parts.write_text("t_detect,to_x,to_y,to_z,to_belt_vx,to_belt_vy,to_belt_vz,place_x,place_y,place_z,"
                      "from_x,from_y,from_z\n"
                      "0.0003,0.15,-0.30,-0.8,0,0.5,0,-0.1525,0,-0.8,-0.1525,0,-0.8\n"
-                     "0.1234,0.10,-0.30,-0.8,0,0.5,0,-0.1525,0,-0.8,,,\n")
+                     "0.1234,0.10,-0.30,-0.8,0,0.5,0,-0.1525,0,-0.8,,,\n"
+                     "1.50017,0.12,-0.30,-0.8,0,0.5,0,-0.1525,0,-0.8,,,\n")
     out = tmp_path / "schedule.csv"
     res = run("plan", "-p", "delta-4axis", "--batch", str(parts), "--latency", "0.0505", "--cycle", "0.001",
               "-o", str(out), "--json")
     assert res.exit_code == 0, res.stderr
     docs = [json.loads(x) for x in res.stdout.splitlines()]
     head, rows = _table(out)
+    move = _column(head, rows, "move")
     t = [Decimal(r[1]) for r in rows]
-    assert all(s % Decimal("0.001") == 0 for s in t)
+    first = Decimal(str(docs[0]["t_start_s"])).quantize(Decimal("0.001"))
+    assert all(s == first + k * Decimal("0.001") for k, s in enumerate(t))  # every step one cycle, no gap
+    assert float(t[-1]) == pytest.approx(docs[2]["t_end_s"], abs=1e-12)
     tn = _column(head, rows, "t")
     p = _tool(head, rows)
-    move = _column(head, rows, "move")
-    detected = {1: (0.0003, (0.15, -0.30, -0.8)), 2: (0.1234, (0.10, -0.30, -0.8))}
-    for doc in docs[:2]:
+    detected = {1: (0.0003, (0.15, -0.30, -0.8)), 2: (0.1234, (0.10, -0.30, -0.8)), 3: (1.50017, (0.12, -0.30, -0.8))}
+    assert docs[1]["t_start_s"] == pytest.approx(docs[0]["t_end_s"], abs=1e-12)  # free at once: no wait
+    assert docs[2]["t_start_s"] == pytest.approx(1.551, abs=1e-12)  # ⌈1.50017 + 0.0505⌉ on the 1 ms grid
+    wait = (tn > docs[1]["t_end_s"] + 1e-9) & (tn < docs[2]["t_start_s"] - 1e-9)
+    assert wait.sum() == round((docs[2]["t_start_s"] - docs[1]["t_end_s"]) / CYCLE) - 1
+    assert set(move[wait]) == {2} and np.abs(p[wait] - np.array(START)).max() <= 1e-6  # at rest at the place point
+    for doc in docs[:3]:
         row = doc["row"]
         t_detect, where = detected[row]
         assert doc["t_start_s"] >= t_detect + 0.0505 - 1e-12
@@ -200,9 +210,7 @@ def test_schedule_on_the_cycle(tmp_path):
         on_belt = _part_at(tn[track] - t_detect, 0.0, where)
         assert np.abs(p[track] - on_belt).max() <= 1e-6
         assert np.abs(np.diff(p[track], axis=0) / CYCLE - np.asarray(BELT)).max() <= 1e-6
-        steps = np.diff(tn[mine])
-        assert np.abs(steps - CYCLE).max() <= 1e-12  # within a row: one sample per cycle
-    assert docs[2]["schedule"]["picks"] == 2
+    assert docs[3]["schedule"]["picks"] == 3
     res = run("check", str(out), "-p", "delta-4axis", "-q")
     assert res.exit_code == 0, res.stderr
 
@@ -300,3 +308,18 @@ def test_a_rounded_pick_that_breaks_a_limit_gets_whole_cycles_more():
     solved.clear()
     found, got, _ = _on_cycle(Found(Duration(0.1834), (0.01, 0.1851)), make_planned(0.1865), CYCLE, solve, 0.1)
     assert not got.report.ok and max(n for n, _ in solved) == 185  # 0.186 s would meet the part past the window
+
+
+def test_schedule_mcap_is_one_sample_per_cycle(tmp_path):
+    from mcap.reader import make_reader
+
+    parts = tmp_path / "parts.csv"
+    parts.write_text("t_detect,to_x,to_y,to_z,to_belt_vx,to_belt_vy,to_belt_vz,place_x,place_y,place_z\n"
+                     "0.0003,0.15,-0.30,-0.8,0,0.5,0,-0.1525,0,-0.8\n"
+                     "0.9,0.10,-0.30,-0.8,0,0.5,0,-0.1525,0,-0.8\n")
+    out = tmp_path / "schedule.mcap"
+    res = run("plan", "-p", "delta-4axis", "--batch", str(parts), "--cycle", "0.001", "-o", str(out), "-q")
+    assert res.exit_code == 0, res.stderr
+    with open(out, "rb") as fh:
+        stamps = [m.log_time for _, ch, m in make_reader(fh).iter_messages() if ch.topic == "/joint_states"]
+    assert np.all(np.diff(stamps) == 1_000_000)  # ns: every step one cycle, the wait included, no stamp twice
