@@ -323,3 +323,23 @@ def test_schedule_mcap_is_one_sample_per_cycle(tmp_path):
     with open(out, "rb") as fh:
         stamps = [m.log_time for _, ch, m in make_reader(fh).iter_messages() if ch.topic == "/joint_states"]
     assert np.all(np.diff(stamps) == 1_000_000)  # ns: every step one cycle, the wait included, no stamp twice
+
+
+def test_tool_angle_turned_to_the_part_held_while_tracking_and_back(tmp_path):
+    """With tool angles (delta-4axis: tool angle = q4, sign 1) under --time fit: q4 = the part's 1 rad over the
+    tracking (1e-9 rad: the written digits), 0 at both ends of the cycle; check accepts the file under the same rule."""
+    out = tmp_path / "angles.csv"
+    args = list(CELL)
+    args[args.index("--from") + 1] += ",0"
+    args[args.index("--to") + 1] += ",1.0"
+    res = run("plan", *args, "--round-trip", "--time", "fit", "-o", str(out), "--json", "-q")
+    assert res.exit_code == 0, res.stderr
+    c = json.loads(res.stdout)["belt_cycle"]
+    head, rows = _table(out)
+    t, q4 = _column(head, rows, "t"), _column(head, rows, "q4")
+    track = (t >= c["t_meet_s"] - 1e-9) & (t <= c["t_meet_s"] + c["dwell_s"] + 1e-9)
+    assert np.abs(q4[track] - 1.0).max() <= 1e-9
+    assert abs(q4[0]) <= 1e-12 and abs(q4[-1]) <= 1e-9
+    assert all(abs(c[n] - round(c[n] / CYCLE) * CYCLE) <= 1e-12 for n in ("t_meet_s", "t_place_s", "t_end_s"))
+    res = run("check", str(out), "-p", "delta-4axis", "--no-hold-capacity", "-q")
+    assert res.exit_code == 0, res.stderr
