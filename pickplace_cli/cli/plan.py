@@ -450,11 +450,10 @@ def _render_legs(a, prof, legs: list, rendezvous, track) -> tuple[int, float]:
     dwell = legs[0].report.dwell  # the profile's (on a controller's cycle: rounded up to whole cycles)
     cycle = sum(leg.report.duration for leg in legs) + len(legs) * dwell if round_trip else legs[0].report.round_trip
     if round_trip and not quiet:
-        what = "track" if rendezvous is not None else "dwell"
+        dwells = f"{dwell:g} s track + {dwell:g} s dwell" if rendezvous is not None else f"2 × {dwell:g} s dwell"
         sys.stderr.write(
-            f"round trip: {legs[0].report.duration:.4f} s + {legs[1].report.duration:.4f} s + {dwell:g} s {what} + "
-            f"{dwell:g} s dwell = {cycle:.4f} s, {60.0 / cycle:.1f} picks/min; "
-            f"{'all limits hold' if code == 0 else 'LIMITS EXCEEDED'}\n"
+            f"round trip: {legs[0].report.duration:.4f} s + {legs[1].report.duration:.4f} s + {dwells} "
+            f"= {cycle:.4f} s, {60.0 / cycle:.1f} picks/min; {'all limits hold' if code == 0 else 'LIMITS EXCEEDED'}\n"
         )
     from .controller import print_cycle_line
 

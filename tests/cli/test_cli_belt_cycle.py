@@ -343,3 +343,23 @@ def test_tool_angle_turned_to_the_part_held_while_tracking_and_back(tmp_path):
     assert all(abs(c[n] - round(c[n] / CYCLE) * CYCLE) <= 1e-12 for n in ("t_meet_s", "t_place_s", "t_end_s"))
     res = run("check", str(out), "-p", "delta-4axis", "--no-hold-capacity", "-q")
     assert res.exit_code == 0, res.stderr
+
+
+def test_pvt_table_of_the_belt_cycle(belt_cycle, tmp_path):
+    """-f pvt: the table spans the whole cycle (pick, track, place, dwell: last point at t_end), every point on a
+    whole cycle, the drive's counts at the ends those of the written samples; check judges it as the drive
+    interpolates it and accepts it."""
+    _, doc = belt_cycle
+    out = tmp_path / "cycle.pvt.csv"
+    res = run("plan", *CELL, "--round-trip", "-f", "pvt", "-o", str(out), "-q")
+    assert res.exit_code == 0, res.stderr
+    head, rows = _table(out)
+    t = _column(head, rows, "t")
+    assert t[0] == 0 and t[-1] == pytest.approx(doc["belt_cycle"]["t_end_s"], abs=1e-12)
+    assert np.abs(t / CYCLE - np.rint(t / CYCLE)).max() <= 1e-9
+    k = 25.0 * 2**20 / (2 * math.pi)
+    fh, frows = _table(belt_cycle[0])
+    q1 = _column(fh, frows, "q1")
+    assert abs(_column(head, rows, "A1")[0] - k * q1[0]) <= 1e-3 and abs(_column(head, rows, "A1")[-1] - k * q1[-1]) <= 1e-3
+    res = run("check", str(out), "-p", "delta-4axis", "-q")
+    assert res.exit_code == 0, res.stderr
