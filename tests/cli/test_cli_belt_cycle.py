@@ -363,3 +363,21 @@ def test_pvt_table_of_the_belt_cycle(belt_cycle, tmp_path):
     assert abs(_column(head, rows, "A1")[0] - k * q1[0]) <= 1e-3 and abs(_column(head, rows, "A1")[-1] - k * q1[-1]) <= 1e-3
     res = run("check", str(out), "-p", "delta-4axis", "-q")
     assert res.exit_code == 0, res.stderr
+
+
+def test_streamed_schedule_on_the_cycle_writes_what_the_file_does(tmp_path):
+    """--batch - (rows answered as they are read, a row's last sample held back until the next) writes the same
+    file as the schedule read whole."""
+    text = ("t_detect,to_x,to_y,to_z,to_belt_vx,to_belt_vy,to_belt_vz,place_x,place_y,place_z\n"
+            "0.0003,0.15,-0.30,-0.8,0,0.5,0,-0.1525,0,-0.8\n"
+            "0.9,0.10,-0.30,-0.8,0,0.5,0,-0.1525,0,-0.8\n")
+    parts = tmp_path / "parts.csv"
+    parts.write_text(text)
+    whole, streamed = tmp_path / "whole.csv", tmp_path / "streamed.csv"
+    res = run("plan", "-p", "delta-4axis", "--batch", str(parts), "--cycle", "0.001", "-o", str(whole), "-q")
+    assert res.exit_code == 0, res.stderr
+    res = run("plan", "-p", "delta-4axis", "--batch", "-", "--cycle", "0.001", "-o", str(streamed), "-q", input=text)
+    assert res.exit_code == 0, res.stderr
+    assert streamed.read_text() == whole.read_text()
+    t = [Decimal(r[1]) for r in _table(whole)[1]]
+    assert all(b - a == Decimal("0.001") for a, b in zip(t, t[1:]))
