@@ -682,4 +682,12 @@ def _on_cycle(rv: Rendezvous, planned, cycle: float, solve, dwell: float):
             held = T_c != T_rule and planned(rv, on_cycle=False).report.ok
             if not held:
                 break
-    return (*first, "")
+    found, got = first
+    if got.cycle is not None and got.cycle.extra_cycles:  # its own extra cycles moved the meeting: never written
+        from ..model.errors import NoFeasibleDuration
+
+        raise NoFeasibleDuration(
+            f"{rv.part.label()}: on the {cycle * 1e3:g} ms cycle a pick of {n} cycles breaks a limit with the dwell "
+            f"rounded to {d_c:.6g} s, and so do the longer picks tried: no whole-cycle pick meets the part within "
+            "the limits (another --cycle or --time)")
+    return found, got, ""

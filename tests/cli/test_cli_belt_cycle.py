@@ -288,7 +288,7 @@ def test_a_rounded_pick_that_breaks_a_limit_gets_whole_cycles_more():
 
     def solve(T, dwell):
         solved.append((round(T / CYCLE), round(dwell / CYCLE)))
-        return Found(Duration(T))
+        return Found(Duration(T))  # (the fields the loop replaces: duration, window_s)
 
     def make_planned(threshold, held_at_rule=True):
         def planned(found, on_cycle=True):
@@ -308,6 +308,29 @@ def test_a_rounded_pick_that_breaks_a_limit_gets_whole_cycles_more():
     solved.clear()
     found, got, _ = _on_cycle(Found(Duration(0.1834), (0.01, 0.1851)), make_planned(0.1865), CYCLE, solve, 0.1)
     assert not got.report.ok and max(n for n, _ in solved) == 185  # 0.186 s would meet the part past the window
+
+    # a plan that lengthened itself (its rounded dwell broke a limit) arrives at the old meeting point late: it is
+    # never returned as holding, and when no whole-cycle pick is left the rendezvous fails (exit 3), one line
+    @dataclass(frozen=True)
+    class Rounding:
+        extra_cycles: int
+
+    @dataclass(frozen=True)
+    class Labelled(Found):
+        part: object = None
+
+    class Named:
+        def label(self):
+            return "part (test)"
+
+    def self_lengthened(found, on_cycle=True):
+        return Got(Report(True), Rounding(1) if on_cycle else None)
+
+    from pickplace_cli.model.errors import NoFeasibleDuration
+
+    with pytest.raises(NoFeasibleDuration) as err:
+        _on_cycle(Labelled(Duration(0.1834), (0.01, 1.3), Named()), self_lengthened, CYCLE, solve, 0.1003)
+    assert err.value.exit_code == 3 and "part (test)" in str(err.value) and "\n" not in str(err.value)
 
 
 def test_schedule_mcap_is_one_sample_per_cycle(tmp_path):
