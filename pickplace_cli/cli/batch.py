@@ -270,11 +270,8 @@ def _plan_schedule(items, name, streamed, prof, options, height, eta, fail_fast,
     from contextlib import ExitStack
 
     from ..model.errors import TaskError
-    from ..pipelines.schedule import ScheduleSummary, check_order, plan_schedule
+    from ..pipelines.schedule import CycleStream, ScheduleSummary, check_order, plan_schedule
 
-    if options.cycle is not None:
-        _usage("--cycle (or the profile's controller.cycle): a belt schedule keeps the detection clock; plan its rows "
-               "without a controller cycle (--cycle off), or as independent belt rows (no t_detect column)")
     if belt.get("method_given") and options.method != "bspline-vel":
         raise TaskError(f"method = {options.method}: a belt schedule meets each part with its velocity; it "
                         "needs --method bspline-vel (the default for a schedule)")
@@ -286,11 +283,12 @@ def _plan_schedule(items, name, streamed, prof, options, height, eta, fail_fast,
     params = {k: v for k, v in options.method_params.items() if k in ("solver", "table") and v is not None}
     results = plan_schedule(items, prof, options.time, height, eta, options.rate, belt.get("latency") or 0.0,
                             params, name, fail_fast, report_only, bool(belt.get("angles")), options.turn,
-                            options.turn_during)
+                            options.turn_during, options.cycle)
     report_rows: list = []  # --report: every row, its segments' summaries and limit reports
     codes: list[int] = []
     summary = ScheduleSummary()
     kept: list = []
+    stream = CycleStream(options.cycle)  # the picked cycles as written (on a cycle: one sample per cycle)
     csv_out = output is not None and writer.csv_dialect is not None
     header_done = False
     try:
@@ -298,7 +296,6 @@ def _plan_schedule(items, name, streamed, prof, options, height, eta, fail_fast,
             out = None
             if csv_out:
                 from ..export import atomic_output
-                from ..export.csv import csv_header, csv_rows
 
                 out = stack.enter_context(atomic_output(output))
             for res in results:
@@ -321,15 +318,8 @@ def _plan_schedule(items, name, streamed, prof, options, height, eta, fail_fast,
                     _emit_json(res.as_dict())
                 written = res.code == 0 or (report_only and res.code == 3 and res.cycle is not None)
                 if written and output is not None:
-                    timeline = res.cycle.timeline()
-                    if out is not None:
-                        if not header_done:
-                            out.write(csv_header(timeline, writer.csv_dialect, move=True))
-                            header_done = True
-                        out.write(csv_rows(timeline, writer.csv_dialect))
-                        out.flush()
-                    else:
-                        kept.append(timeline)
+                    header_done = _write_pieces(stream.pieces(res.cycle), out, writer, kept, header_done)
+            header_done = _write_pieces(stream.close(), out, writer, kept, header_done)
             _keep_unless_empty(out, output, header_done)
     except _NothingWritten:
         pass
@@ -355,6 +345,23 @@ def _plan_schedule(items, name, streamed, prof, options, height, eta, fail_fast,
         sys.stderr.write("pickplace: no part was picked: nothing written\n")
     if summary.worst and not (report_only and all(c == 3 for c in codes if c)):
         raise typer.Exit(summary.worst)
+
+
+def _write_pieces(pieces: list, out, writer, kept: list, header_done: bool) -> bool:
+    """Write a belt schedule's timelines to the CSV stream ``out`` (the header before the first), or keep them for a
+    one-timeline writer (MCAP, JSON); → whether the header is written."""
+    from ..export.csv import csv_header, csv_rows
+
+    for timeline in pieces:
+        if out is not None:
+            if not header_done:
+                out.write(csv_header(timeline, writer.csv_dialect, move=True))
+                header_done = True
+            out.write(csv_rows(timeline, writer.csv_dialect))
+            out.flush()
+        else:
+            kept.append(timeline)
+    return header_done
 
 
 class _NothingWritten(Exception):

@@ -94,7 +94,8 @@ def plan(
     to_belt: Optional[str] = typer.Option(
         None, "--to-belt", help="Conveyor rendezvous: the part at --to (m, when it was detected) moves at VX,VY,VZ m/s "
         "(base frame); the move meets it where it is after --latency + T and arrives with this velocity, then tracks it "
-        "for the profile's dwell (s). Selects --method bspline-vel.",
+        "for the profile's dwell (s). Selects --method bspline-vel. With --round-trip: the whole belt cycle (pick, track, "
+        "place back at --from, dwell at rest).",
     ),
     latency: Optional[float] = typer.Option(
         None, "--latency", help="With --to-belt: seconds (>= 0) from the part's detection to the start of the move "
@@ -164,7 +165,9 @@ def plan(
         None, "--cycle", metavar="SECONDS|off", help="The controller's cycle in s (e.g. 0.001): the duration and the "
         "dwell are rounded up to whole cycles, the limits checked again on the rounded move (a cycle more when it "
         "breaks one that held), one sample per cycle at t = k*cycle (the tsv dialect writes k); the summary says what "
-        "the rounding cost. off: sample at --rate. [default: profile controller.cycle, else off]",
+        "the rounding cost. A conveyor move's meeting is solved again for its rounded duration; a belt cycle "
+        "(--to-belt --round-trip) or belt schedule has every leg, dwell and start on whole cycles. off: sample at "
+        "--rate. [default: profile controller.cycle, else off]",
     ),
     tolerance: Optional[float] = typer.Option(
         None, "--tolerance", help="pvt, cam, cam-table: the largest deviation in rad (revolute joint) or m (linear) of "
@@ -227,7 +230,9 @@ def plan(
         "one at a time in this process (-j 1).",
     ),
     round_trip: bool = typer.Option(
-        False, "--round-trip", help="Write there, dwell, back, dwell (the profile's dwell in s) as one trajectory."
+        False, "--round-trip", help="Write there, dwell, back, dwell (the profile's dwell in s) as one trajectory. With "
+        "--to-belt: the belt cycle: pick from the belt, track the part for the dwell, place back at --from (leaving "
+        "with the belt velocity), dwell at rest."
     ),
     fmt: OutputFormat = typer.Option(
         OutputFormat.csv, "--format", "-f", help="Output format: samples as csv, json or mcap; or a table a motion "
@@ -357,13 +362,14 @@ def plan(
         return
     task, workspace_fit, vel_from = _single_task(a, prof, params)
     rendezvous = track = None
-    a.rendezvous = None
+    a.rendezvous = a.belt_cycle = None
     if to_belt is not None:
-        legs, rendezvous, track = _plan_to_belt(task, to_belt, latency, prof, a.time, vel_from, params, rate, options)
+        legs, rendezvous, track, a.belt_cycle = _plan_to_belt(task, to_belt, latency, prof, a.time, vel_from, params,
+                                                             rate, options, round_trip)
         a.rendezvous = rendezvous
     else:
         legs = [_run_plan(task, prof, options)]
-    if round_trip:  # back the same way: from the angle reached to the start's, retracing the turn
+    if round_trip and a.belt_cycle is None:  # back the same way: from the angle reached to the start's, retracing the turn
         from dataclasses import replace
 
         from ..model.task import Task
@@ -380,6 +386,8 @@ def plan(
     note_exit(0 if forgiven else code)
     if json_summary:
         doc = _plan_json(legs, cycle, code, forgiven, workspace_fit, rendezvous, track)
+        if a.belt_cycle is not None:
+            doc["belt_cycle"] = a.belt_cycle.as_dict()
         if a.cycle_s is not None:
             from .controller import cycle_cost
 
@@ -440,28 +448,29 @@ def _render_legs(a, prof, legs: list, rendezvous, track) -> tuple[int, float]:
     """Summary, limit table and verdict of every leg (and of the tracking segment) on stderr; (exit code,
     cycle time [s])."""
     quiet, round_trip = a.quiet, a.round_trip
+    names = ("pick from the belt", "place at the start") if rendezvous is not None else ("there", "back")
     for i, leg in enumerate(legs):
         if not quiet:
             if round_trip:
-                sys.stderr.write(f"--- move {i + 1} ({'there' if i == 0 else 'back'}) ---\n")
+                sys.stderr.write(f"--- move {i + 1} ({names[i]}) ---\n")
             _print_summary(leg)
             if rendezvous is not None and i == 0:
                 _print_rendezvous(rendezvous)
             _print_limit_table(leg.report)
         _print_verdict(leg.report, quiet, with_cycle=not round_trip)
-    code = max(leg.report.exit_code() for leg in legs)
-    if track is not None:  # the tracking segment after the rendezvous: checked like a move
-        if not quiet:
-            sys.stderr.write(f"--- tracking the part: t = {rendezvous.seconds:.4f} … "
-                             f"{rendezvous.seconds + track.duration.seconds:.4f} s at the belt velocity ---\n")
-            _print_limit_table(track.report)
-        _print_verdict(track.report, quiet, with_cycle=False)
-        code = max(code, track.report.exit_code())
+        if track is not None and i == 0:  # the tracking segment after the rendezvous: checked like a move
+            if not quiet:
+                sys.stderr.write(f"--- tracking the part: t = {rendezvous.seconds:.4f} … "
+                                 f"{rendezvous.seconds + track.duration.seconds:.4f} s at the belt velocity ---\n")
+                _print_limit_table(track.report)
+            _print_verdict(track.report, quiet, with_cycle=False)
+    code = max(leg.report.exit_code() for leg in legs + ([track] if track is not None else []))
     dwell = legs[0].report.dwell  # the profile's (on a controller's cycle: rounded up to whole cycles)
     cycle = sum(leg.report.duration for leg in legs) + len(legs) * dwell if round_trip else legs[0].report.round_trip
     if round_trip and not quiet:
+        dwells = f"{dwell:g} s track + {dwell:g} s dwell" if rendezvous is not None else f"2 × {dwell:g} s dwell"
         sys.stderr.write(
-            f"round trip: {legs[0].report.duration:.4f} s + {legs[1].report.duration:.4f} s + 2 × {dwell:g} s dwell "
+            f"round trip: {legs[0].report.duration:.4f} s + {legs[1].report.duration:.4f} s + {dwells} "
             f"= {cycle:.4f} s, {60.0 / cycle:.1f} picks/min; {'all limits hold' if code == 0 else 'LIMITS EXCEEDED'}\n"
         )
     from .controller import print_cycle_line
@@ -495,7 +504,9 @@ def _write_plan_outputs(a, prof, writer, legs: list, track, code: int) -> int:
     if judged is not None:  # a table the controller interpolates itself
         a.table_info = write_table(a, legs, judged)
         return code
-    if a.round_trip:
+    if a.belt_cycle is not None:
+        samples = a.belt_cycle.timeline(numbered=True)
+    elif a.round_trip:
         from ..pipelines.timeline import round_trip as make_round_trip
 
         rate_hz = a.rate if a.rate is not None else prof.planning.rate
@@ -516,6 +527,8 @@ def _written_times(a, prof, legs: list, track):
     """The time stamps [s] of the samples the plan writes (the round trip with its dwells, the move and its tracking)."""
     from ..pipelines.timeline import on_cycle
 
+    if a.belt_cycle is not None:
+        return a.belt_cycle.timeline(numbered=True).t
     if a.round_trip:
         from ..pipelines.timeline import round_trip as make_round_trip
 
@@ -548,7 +561,7 @@ def _belt_method(ctx, method, to_belt, latency, v_to, batch, round_trip, fit_ws,
     if to_belt is None:
         _usage("--latency only applies with --to-belt (the part's detection time)")
     for given, what in ((v_to is not None, "--v-to (the belt velocity is the arrival velocity)"),
-                        (batch is not None, "--batch"), (round_trip, "--round-trip"), (fit_ws, "--fit-workspace"),
+                        (batch is not None, "--batch"), (fit_ws, "--fit-workspace"),
                         (optimize != OptimizeWhat.none, "--optimize")):
         if given:
             _usage(f"--to-belt: not available with {what}")
@@ -563,21 +576,29 @@ def _belt_method(ctx, method, to_belt, latency, v_to, batch, round_trip, fit_ws,
                     "--method bspline-vel (the default with --to-belt)")
 
 
-def _plan_to_belt(task, to_belt, latency, prof, time, v_from, params, rate, options):
-    """The rendezvous move and its tracking segment (the profile's dwell; None when 0): ([plan], Rendezvous, track).
-    The part lies on the belt at the tool angle ``task.theta_to`` (rad; None: no angle), the move starts at
-    ``task.theta_from``."""
+def _plan_to_belt(task, to_belt, latency, prof, time, v_from, params, rate, options, round_trip: bool = False):
+    """The rendezvous move and its tracking segment (the profile's dwell; None when 0): ([plan], Rendezvous, track,
+    None); with ``round_trip`` the whole belt cycle (pick, track, place back at the start, dwell):
+    ([pick, place], Rendezvous, track, Cycle). The part lies on the belt at the tool angle ``task.theta_to`` (rad;
+    None: no angle), the move starts (and the round trip ends) at ``task.theta_from``."""
     from ..pipelines.rendezvous import Part, plan_rendezvous
 
     part = Part(task.p_to, _parse_point("to-belt", to_belt, "m/s"), 0.0 if latency is None else latency,
                 angle=task.theta_to)
+    if round_trip:
+        from ..pipelines.schedule import plan_belt_cycle
+
+        cyc = plan_belt_cycle(task.p_from, part, task.p_from, prof, time, task.height, task.eta, rate, params,
+                              task.theta_from, task.theta_from, options.turn, TurnName.as_given.value,
+                              options.turn_during, options.cycle)
+        return [cyc.move, cyc.place], cyc.rendezvous, cyc.track, cyc
     from ..pipelines.tracking import plan_tracking
 
     plan, rv = plan_rendezvous(task.p_from, part, prof, time, task.height, task.eta, v_from, params, rate,
                                start_angle=task.theta_from, turn=options.turn, turn_during=options.turn_during,
                                cycle=options.cycle)
     track = plan_tracking(plan, part, prof, rate=rate, cycle=options.cycle) if prof.planning.dwell > 0 else None
-    return [plan], rv, track
+    return [plan], rv, track, None
 
 
 def _run_plan(task, prof, options):

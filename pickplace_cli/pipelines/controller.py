@@ -65,17 +65,20 @@ class Motion:
 
 def timeline_of(legs: list, profile, dwell: float, round_trip: bool, track=None) -> Motion:
     """The continuous trajectory that ``plan`` writes: one move; with ``round_trip`` there, dwell, back, dwell
-    (``dwell`` [s]); with ``track`` the move then the tracking segment."""
+    (``dwell`` [s]); with ``track`` the move then the tracking segment; with both the belt cycle: the pick, the
+    tracking segment, the place move and the dwell at rest."""
     pieces: list[Piece] = []
     t0 = 0.0
-    for k, leg in enumerate(legs):
+    belt = round_trip and track is not None
+    seq = [legs[0], track, *legs[1:]] if belt else list(legs)
+    for k, leg in enumerate(seq):
         T = float(leg.cartesian.duration)
         pieces.append(Piece(t0, T, leg))
         t0 += T
-        if round_trip and dwell > 0:
+        if round_trip and dwell > 0 and (not belt or k == len(seq) - 1):
             pieces.append(Piece(t0, dwell, hold=np.asarray(leg.joint.q[-1], float)))
             t0 += dwell
-    if track is not None:
+    if track is not None and not belt:
         pieces.append(Piece(t0, float(track.cartesian.duration), track))
     return Motion(pieces, profile)
 

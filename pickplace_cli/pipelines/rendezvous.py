@@ -613,20 +613,81 @@ def plan_rendezvous(start, part: Part, profile, time: str | float = "limits", he
     rv = find_rendezvous(start, part, profile, time, height, eta, v_from, method_params, dwell, start_angle, turn,
                          turn_during)
     T_rule = rv.seconds
-    if cycle is not None:  # the meeting moves with the rounded duration: solved again for it (exit 4 past the window)
-        from ..timing.cycle import whole_cycles
 
-        d = profile.planning.dwell if dwell is None else dwell
-        T_c = whole_cycles(T_rule, cycle) * cycle
-        if T_c != T_rule:
-            again = find_rendezvous(start, part, profile, T_c, height, eta, v_from, method_params,
-                                    whole_cycles(d, cycle) * cycle, start_angle, turn, turn_during)
-            rv = replace(again, duration=replace(rv.duration, seconds=T_c))
-    shape = [rv.path.parameters[k] for k in ("tau6", "tau7", "tau9", "tau10", "lambda1", "lambda2", "lambda3")]
-    options = PlanOptions(method="bspline-vel", method_params={"params": shape}, time=rv.seconds, rate=rate, fit=False,
-                          cycle=cycle, capacity_rows=parse_time(time) != "fit",
-                          turn="as-given", turn_during=turn_during)  # the task's end angle is resolved already
-    got = plan(rv.task, profile, options)
+    def planned(found: Rendezvous, on_cycle: bool = True):
+        shape = [found.path.parameters[k] for k in ("tau6", "tau7", "tau9", "tau10", "lambda1", "lambda2", "lambda3")]
+        options = PlanOptions(method="bspline-vel", method_params={"params": shape}, time=found.seconds, rate=rate,
+                              fit=False, cycle=cycle if on_cycle else None, capacity_rows=parse_time(time) != "fit",
+                              turn="as-given", turn_during=turn_during)  # the task's end angle is resolved already
+        return plan(found.task, profile, options)
+
+    if cycle is None:
+        got = planned(rv)
+    else:
+        rv, got, note = _on_cycle(rv, planned, cycle, lambda T, d: find_rendezvous(
+            start, part, profile, T, height, eta, v_from, method_params, d, start_angle, turn, turn_during),
+            profile.planning.dwell if dwell is None else dwell)
+        got = replace(got, cycle=replace(got.cycle, requested_s=T_rule, extra_cycles=got.cycle.cycles - _whole(
+            T_rule, cycle), note=note or got.cycle.note))
     parameters = {**rv.path.parameters, "rendezvous": rv.as_dict()}
-    extra = {} if got.cycle is None else {"cycle": replace(got.cycle, requested_s=T_rule)}
-    return replace(got, duration=rv.duration, parameters=parameters, **extra), rv
+    return replace(got, duration=rv.duration, parameters=parameters), rv
+
+
+def _whole(seconds: float, cycle: float) -> int:
+    from ..timing.cycle import whole_cycles
+
+    return whole_cycles(seconds, cycle)
+
+
+def _on_cycle(rv: Rendezvous, planned, cycle: float, solve, dwell: float):
+    """The rendezvous ``rv`` (duration T by its rule) on a controller's ``cycle`` [s]: T rounded up to n whole
+    cycles and the meeting solved again for n·cycle (``solve(T, dwell)``: the part met where it is then, the
+    tracking ``dwell`` [s] rounded up to whole cycles inside the window); ``planned(rendezvous)`` → its Plan on the
+    cycle. When the rounded move breaks a limit that held at T, a cycle more is tried (the meeting solved again each
+    time; at most :data:`~pickplace_cli.timing.cycle.MAX_EXTRA_CYCLES`), never past the last allowed meeting.
+    → (Rendezvous, Plan, note: what was added and why, else ""); the Plan's report says what fails when nothing
+    holds (exit 3)."""
+    from ..timing.cycle import MAX_EXTRA_CYCLES
+
+    T_rule = rv.seconds
+    n = _whole(T_rule, cycle)
+    d_c = _whole(dwell, cycle) * cycle
+    held = None  # whether every limit held at T_rule (planned only when a rounded move breaks one)
+    first = None
+    for extra in range(MAX_EXTRA_CYCLES + 1):
+        T_c = (n + extra) * cycle
+        if extra and T_c > rv.window_s[1] + 1e-12:
+            break  # the part would be past the last allowed meeting
+        try:
+            found = rv if T_c == T_rule else solve(T_c, d_c)
+        except UnreachableError:
+            if not extra:
+                raise
+            break  # the tracking would leave the window or the workspace
+        found = replace(found, duration=replace(rv.duration, seconds=T_c), window_s=rv.window_s)
+        got = planned(found)
+        # a plan that added cycles of its own (its dwell rounded) no longer meets the part: counted as not holding
+        ok = got.report.ok and (got.cycle is None or got.cycle.extra_cycles == 0)
+        if first is None:
+            first = (found, got)
+        if ok:
+            if extra:
+                broken = ", ".join(f"{r.joint} {r.quantity}" for r in first[1].report.violations) or "a limit"
+                note = (f"{n} cycles broke {broken} (held at T = {T_rule:.6g} s): {extra} more "
+                        f"cycle{'s' if extra > 1 else ''} added, the meeting solved again for each")
+                got = replace(got, report=replace(got.report, notes=got.report.notes + (note,)))
+                return found, got, note
+            return found, got, ""
+        if held is None:
+            held = T_c != T_rule and planned(rv, on_cycle=False).report.ok
+            if not held:
+                break
+    found, got = first
+    if got.cycle is not None and got.cycle.extra_cycles:  # its own extra cycles moved the meeting: never written
+        from ..model.errors import NoFeasibleDuration
+
+        raise NoFeasibleDuration(
+            f"{rv.part.label()}: on the {cycle * 1e3:g} ms cycle a pick of {n} cycles breaks a limit with the dwell "
+            f"rounded to {d_c:.6g} s, and so do the longer picks tried: no whole-cycle pick meets the part within "
+            "the limits (another --cycle or --time)")
+    return found, got, ""

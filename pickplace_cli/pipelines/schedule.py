@@ -23,12 +23,16 @@ A part the robot cannot meet inside the workspace and the belt window (exit 4), 
 (exit 3) or cannot be planned (exit 1) is a result of that row with its reason; the robot does not move (its
 position and ``t_free`` stay) and the next row is planned from the same state. Rows are therefore planned one
 after another, never in parallel.
+
+**On a controller cycle** (``cycle`` [s]): ``t_start`` is rounded up to a whole number of cycles of the detection
+clock, every leg and dwell is whole cycles (:func:`plan_belt_cycle`), and :class:`CycleStream` writes the picked
+cycles as one sample per cycle, the waits between them at rest.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, Iterable, Iterator
 
 import numpy as np
@@ -59,6 +63,7 @@ class Cycle:
     rendezvous: Any
     track: Any
     place: Any
+    cycle: float | None = None  # s: the controller cycle every leg, dwell and start is a whole number of (None: off)
 
     @property
     def latency(self) -> float:
@@ -109,14 +114,25 @@ class Cycle:
         names = ["pick"] + (["track"] if self.track is not None else []) + ["place"]
         return [{"segment": n, "summary": leg.summary(), "limits": leg.report.as_dict()} for n, leg in zip(names, self.legs)]
 
-    def timeline(self):
-        """The cycle's samples on the detection clock: pick move, tracking, place move, place dwell at rest
-        (a :class:`~pickplace_cli.pipelines.timeline.Timeline`, every sample in move = ``row``)."""
-        from .timeline import Segment, _hold, _join, _pieces_of
+    def belt_travel(self, t: np.ndarray) -> np.ndarray:
+        """The belt's travel [m] since the part's detection at times ``t`` [s, the timeline's clock]: the master
+        position of a cam that follows the belt (|belt velocity| · (t − t_detect))."""
+        return self.rendezvous.part.speed * (np.asarray(t, float) - self.t_detect)
 
-        pieces, segs = [], []
+    def timeline(self, numbered: bool = False):
+        """The cycle's samples on the detection clock: pick move, tracking, place move, place dwell at rest
+        (a :class:`~pickplace_cli.pipelines.timeline.Timeline`, every sample in move = ``row``; ``numbered``: move 1
+        the pick and its tracking, 2 the place and its dwell, as a round trip numbers its legs). On a controller
+        cycle every time stamp is the exact multiple k·cycle. Its ``belt_m`` is :meth:`belt_travel` per sample."""
+        from dataclasses import replace as _replace
+
+        from .timeline import Segment, _hold, _join, _pieces_of, on_cycle
+
+        pieces, segs, moves = [], [], []
         t0 = self.t_start
         rate = 1.0 / float(np.median(np.diff(self.move.t))) if len(self.move.t) > 1 else 1000.0
+        if self.cycle is not None:
+            rate = 1.0 / self.cycle
         for k, (label, leg) in enumerate(zip(("move", "track", "place"), (self.move, self.track, self.place))):
             if leg is None:
                 continue
@@ -125,14 +141,19 @@ class Cycle:
                 piece = {n: ({j: None if a is None else a[1:] for j, a in v.items()} if n == "joint" else v[1:])
                          for n, v in piece.items()}
             pieces.append(piece)
+            m = (1 if k < 2 else 2) if numbered else self.row
+            moves.append(m)
             T = float(leg.t[-1])
-            segs.append(Segment(self.row, label, t0, t0 + T))
+            segs.append(Segment(m, label, t0, t0 + T))
             t0 += T
         if self.dwell > 0:
             steps = np.append(np.arange(1, int(np.ceil(self.dwell * rate - 1e-9))) / rate, self.dwell)
             pieces.append(_hold(self.place, True, t0 + steps))
-            segs.append(Segment(self.row, "dwell", t0, t0 + self.dwell))
-        return _join(pieces, [self.row] * len(pieces), self.move.joint, segs, [self.move.summary()])
+            moves.append(2 if numbered else self.row)
+            segs.append(Segment(moves[-1], "dwell", t0, t0 + self.dwell))
+        summaries = [self.move.summary()] + ([self.place.summary()] if numbered else [])
+        out = on_cycle(_join(pieces, moves, self.move.joint, segs, summaries), self.cycle)
+        return _replace(out, belt_m=self.belt_travel(out.t))
 
 
 @dataclass(frozen=True)
@@ -248,72 +269,101 @@ def check_order(rows: Iterable, source: str = "batch") -> Iterator:
         yield r
 
 
+def plan_belt_cycle(start, part, place, profile, time: str | float = "limits", height: float | None = None,
+                    eta: float | None = None, rate: float | None = None, method_params: dict | None = None,
+                    start_angle: float | None = None, place_angle: float | None = None, turn: str = "shortest",
+                    place_turn: str | None = None, turn_during: str = "transfer", cycle: float | None = None,
+                    t_start: float = 0.0, row: int = 1) -> Cycle:
+    """The whole belt cycle from rest at ``start`` [m] (the move starting at ``t_start`` [s], the part detected
+    ``part.latency`` s before): the rendezvous move to ``part`` (duration by ``time``), tracking it for the
+    profile's dwell, the place move (``bspline-vel``, leaving with the belt velocity) to ``place`` [m] arriving at
+    rest, and the dwell there (release) — every segment checked against every limit. ``start_angle``,
+    ``place_angle`` [rad]: the tool angle at the start and at the place point (None: the part's as picked), the
+    pick turned by ``turn``, the place by ``place_turn`` (default ``turn``), over ``turn_during``. ``cycle`` [s]: on
+    a controller's cycle — each leg and each dwell a whole number of cycles (one sample per cycle), the meeting
+    solved again for the rounded pick and every leg checked again on its rounded motion (a leg that breaks a limit
+    that held gets more cycles: :func:`~pickplace_cli.pipelines.rendezvous.plan_rendezvous`,
+    :func:`~pickplace_cli.planner.plan`); ``t_start`` should then be a whole number of cycles too."""
+    from ..model.task import Task
+    from ..planner import PlanOptions, plan
+    from .rendezvous import plan_rendezvous
+    from .tracking import plan_tracking
+
+    move, rv = plan_rendezvous(start, part, profile, time, height, eta, np.zeros(3), method_params, rate, None,
+                               start_angle, turn, turn_during, cycle=cycle)
+    dwell = float(profile.planning.dwell)
+    if cycle is not None:
+        from ..timing.cycle import whole_cycles
+
+        dwell = whole_cycles(dwell, cycle) * cycle
+    track = plan_tracking(move, part, profile, rate=rate, cycle=cycle) if dwell > 0 else None
+    leave = part.at(rv.seconds + dwell) if track is not None else rv.meeting_point
+    held = move.task.theta_to  # the part's angle as the tool holds it (None without angles)
+    place_task = Task(leave, np.asarray(place, float), height if height is not None else profile.planning.height,
+                      eta if eta is not None else profile.planning.eta, v_from=part.velocity, v_to=np.zeros(3),
+                      theta_from=held, theta_to=None if held is None else (held if place_angle is None else place_angle))
+    placed = plan(place_task, profile, PlanOptions(method="bspline-vel", method_params=dict(method_params or {}),
+                                                   time=time, rate=rate, fit=time == "fit", cycle=cycle,
+                                                   turn=place_turn or turn, turn_during=turn_during))
+    return Cycle(row, t_start - part.latency, t_start, dwell, move, rv, track, placed, cycle)
+
+
 def plan_cycle(state: RobotState, r, profile, time: str = "limits", height: float | None = None,
                eta: float | None = None, rate: float | None = None, latency: float = 0.0,
                method_params: dict | None = None, source: str = "batch", turn: str = "shortest",
-               turn_during: str = "transfer") -> ScheduleRow:
+               turn_during: str = "transfer", cycle: float | None = None) -> ScheduleRow:
     """One row of the schedule from ``state`` (see the module docstring): a ScheduleRow with its Cycle, or the
     reason the part is missed (exit 4) or the cycle fails (1, 3). With tool angles (``state.angle`` not None) the
     pick turns the tool to the part's ``to_theta`` (empty: no turn) by ``turn`` over ``turn_during``, the tool
-    holds it while tracking, and the place turns it to ``place_theta`` (empty: the part's angle)."""
-    from ..planner import PlanOptions, plan
-    from .rendezvous import Part, plan_rendezvous
-    from .tracking import plan_tracking
-    from ..model.task import Task
+    holds it while tracking, and the place turns it to ``place_theta`` (empty: the part's angle). ``cycle`` [s]:
+    on a controller's cycle (:func:`plan_belt_cycle`), the move's start rounded up to a whole number of cycles of
+    the detection clock."""
+    from .rendezvous import Part
 
     v = r.values
     t_detect = float(v["t_detect"])
     t_start = max(state.t_free, t_detect + float(v.get("latency", latency)))
+    if cycle is not None:  # every time stamp k·cycle on the detection clock: the start too
+        t_start = math.ceil(t_start / cycle - 1e-9) * cycle
     where = f"row {r.row} ({source}:{r.line})"
     try:
         angle = state.angle
         part = Part(_xyz(v, "to_"), np.array([v[f"to_belt_v{c}"] for c in "xyz"], float), t_start - t_detect,
                     name=f"part of row {r.row}", angle=None if angle is None else v.get("to_theta", angle))
-        time_rule = v.get("time", time)
         from ..model.headroom import apply_limit_use
 
-        profile = apply_limit_use(profile, v.get("limit_use"))
-        h = v.get("height", height)
-        e = v.get("eta", eta)
-        move, rv = plan_rendezvous(state.position, part, profile, time_rule, h, e, np.zeros(3), method_params, rate,
-                                   None, angle, turn, turn_during)
-        dwell = float(profile.planning.dwell)
-        track = plan_tracking(move, part, profile, rate=rate) if dwell > 0 else None
-        leave = part.at(rv.seconds + dwell) if track is not None else rv.meeting_point
-        held = move.task.theta_to  # the part's angle as the tool holds it (None without angles)
-        place_task = Task(leave, _xyz(v, "place_"), h if h is not None else profile.planning.height,
-                          e if e is not None else profile.planning.eta, v_from=part.velocity, v_to=np.zeros(3),
-                          theta_from=held, theta_to=None if held is None else v.get("place_theta", held))
-        place = plan(place_task, profile, PlanOptions(method="bspline-vel", method_params=dict(method_params or {}),
-                                                      time=time_rule, rate=rate, fit=time_rule == "fit", turn=turn,
-                                                      turn_during=turn_during))
+        cyc = plan_belt_cycle(state.position, part, _xyz(v, "place_"), apply_limit_use(profile, v.get("limit_use")),
+                              v.get("time", time), v.get("height", height), v.get("eta", eta), rate, method_params,
+                              angle, v.get("place_theta"), turn, None, turn_during, cycle, t_start, r.row)
     except PickplaceError as exc:
         busy = f"robot busy until t = {state.t_free:.4f} s, " if state.t_free > t_detect + v.get("latency", latency) else ""
         return ScheduleRow(r.row, t_detect, t_start,
                            error=f"{where}: move from t = {t_start:.4f} s ({busy}latency {t_start - t_detect:.4f} s): {exc}",
                            code=exc.exit_code)
-    cycle = Cycle(r.row, t_detect, t_start, dwell, move, rv, track, place)
+    cyc = replace(cyc, t_detect=t_detect)  # the row's own stamp (t_start − latency up to round-off)
     error = None
-    if cycle.code:
+    if cyc.code:
         from .batch import violation_text
 
         error = "\n".join(f"{where}: {name}: {violation_text(x)}" for name, leg in
-                          zip(("pick", "track", "place") if track is not None else ("pick", "place"), cycle.legs)
+                          zip(("pick", "track", "place") if cyc.track is not None else ("pick", "place"), cyc.legs)
                           for x in leg.report.violations)
-    return ScheduleRow(r.row, t_detect, t_start, cycle, error, cycle.code)
+    return ScheduleRow(r.row, t_detect, t_start, cyc, error, cyc.code)
 
 
 def plan_schedule(rows: Iterable, profile, time: str = "limits", height: float | None = None, eta: float | None = None,
                   rate: float | None = None, latency: float = 0.0, method_params: dict | None = None,
                   source: str = "batch", fail_fast: bool = False, report_only: bool = False, angles: bool = False,
-                  turn: str = "shortest", turn_during: str = "transfer") -> Iterator[ScheduleRow]:
+                  turn: str = "shortest", turn_during: str = "transfer",
+                  cycle: float | None = None) -> Iterator[ScheduleRow]:
     """Plan the rows (BatchRows from :func:`~pickplace_cli.pipelines.batch.iter_batch`, lazily: a streamed row is answered
     as soon as it is read) one after another, the robot's state carried from each picked part to the next;
     yields a ScheduleRow per row. Input errors (order, a bad row) raise TaskError at that row. ``report_only``:
     a cycle that only exceeds a limit (exit 3) is run as planned (the robot's state goes on from it), so the
     schedule is the one the robot would run if the limits were not checked. ``angles``: the schedule has tool angle
     columns (``to_theta``, ``place_theta``, ``from_theta``; rad): the robot's tool angle is carried too, each turn
-    by ``turn`` over ``turn_during`` (:func:`plan_cycle`)."""
+    by ``turn`` over ``turn_during`` (:func:`plan_cycle`). ``cycle`` [s]: every start, leg and dwell on a
+    controller's cycle (:func:`plan_cycle`)."""
     state = None
     for r in check_order(rows, source):
         if state is None:
@@ -321,9 +371,63 @@ def plan_schedule(rows: Iterable, profile, time: str = "limits", height: float |
                 state = start_state(r.values, angles)
             except TaskError as exc:
                 raise TaskError(f"row {r.row} ({source}:{r.line}): {exc}") from None
-        res = plan_cycle(state, r, profile, time, height, eta, rate, latency, method_params, source, turn, turn_during)
+        res = plan_cycle(state, r, profile, time, height, eta, rate, latency, method_params, source, turn, turn_during,
+                         cycle)
         if res.code == 0 or (report_only and res.code == 3 and res.cycle is not None):
             state = RobotState(res.cycle.place.task.p_to, res.cycle.t_end, res.cycle.place.task.theta_to)
         yield res
         if fail_fast and res.code:
             return
+
+
+class CycleStream:
+    """The picked cycles as they are written, one after another on the detection clock. Without a controller cycle
+    each cycle's :meth:`Cycle.timeline` as it is (the robot waits at rest between cycles with no samples). On a
+    ``cycle`` [s] one sample per cycle from the first cycle's start to the last one's end: a cycle's last sample is
+    held back until the next cycle comes; the robot's wait at rest at the place point in between is written as
+    samples of the earlier row (segment "wait"), and a cycle that starts as the previous one ends takes the shared
+    time stamp as its first sample (no time stamp twice)."""
+
+    def __init__(self, cycle: float | None) -> None:
+        self.cycle = cycle
+        self.last: Cycle | None = None
+
+    def pieces(self, cyc: Cycle) -> list:
+        """The Timelines to write for the picked cycle ``cyc`` (in order)."""
+        whole = cyc.timeline()
+        if self.cycle is None:
+            return [whole]
+        out = []
+        if self.last is not None:
+            k0, k1 = round(self.last.t_end / self.cycle), round(cyc.t_start / self.cycle)
+            if k1 > k0:
+                out.append(self._wait(np.arange(k0, k1) * self.cycle))
+        self.last = cyc
+        return out + [_samples(whole, slice(0, len(whole.t) - 1))]
+
+    def close(self) -> list:
+        """The last cycle's held-back final sample (nothing without a cycle or a cycle written)."""
+        if self.cycle is None or self.last is None:
+            return []
+        k = round(self.last.t_end / self.cycle)
+        return [self._wait(np.array([k * self.cycle]))]
+
+    def _wait(self, t: np.ndarray):
+        from .timeline import Segment, _hold, _join
+
+        c = self.last
+        return _join([_hold(c.place, True, t)], [c.row], c.move.joint, [Segment(c.row, "wait", float(t[0]),
+                                                                                 float(t[-1]))], [])
+
+
+def _samples(timeline, sl: slice):
+    """The samples ``sl`` of ``timeline`` (a Timeline of one move number)."""
+    from .timeline import _join
+
+    piece = {k: getattr(timeline, k)[sl] for k in ("t", "p", "v", "a", "j")}
+    piece["joint"] = {n: None if getattr(timeline.joint, n) is None else getattr(timeline.joint, n)[sl]
+                      for n in ("q", "qd", "qdd", "qddd", "torque", "motor_speed", "motor_torque")}
+    out = _join([piece], [int(timeline.move[0])], timeline.joint, timeline.segments, timeline.summaries)
+    from dataclasses import replace as _replace
+
+    return _replace(out, cycle=timeline.cycle, belt_m=None if timeline.belt_m is None else timeline.belt_m[sl])

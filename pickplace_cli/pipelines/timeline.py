@@ -48,6 +48,8 @@ class Timeline:
     segments: tuple[Segment, ...]
     summaries: tuple[dict[str, Any], ...] = ()
     cycle: float | None = None  # s: the controller cycle every time stamp is a whole multiple of (None: any times)
+    belt_m: np.ndarray | None = None  # m: a belt cycle's belt travel since the part's detection per sample (a cam's
+    # master position with the belt as master); None: not a belt cycle
 
     def __post_init__(self) -> None:
         n = len(self.t)
@@ -56,6 +58,8 @@ class Timeline:
                 raise ValueError(f"{name} must have shape ({n}, 3), got {np.shape(getattr(self, name))}")
         if np.shape(self.move) != (n,):
             raise ValueError(f"move must have shape ({n},), got {np.shape(self.move)}")
+        if self.belt_m is not None and np.shape(self.belt_m) != (n,):
+            raise ValueError(f"belt_m must have shape ({n},), got {np.shape(self.belt_m)}")
 
 
 def _hold(plan, at_end: bool, t: np.ndarray) -> dict[str, Any]:

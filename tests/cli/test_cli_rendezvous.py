@@ -81,7 +81,8 @@ def test_bad_input_one_line_nothing_written(tmp_path, extra, code, message):
 
 
 @pytest.mark.parametrize("extra", [["--latency", "0.1"], ["--to-belt", "0,0.5,0", "--v-to", "0,0.5,0"],
-                                   ["--to-belt", "0,0.5,0", "--round-trip"], ["--to-belt", "0,0.5,0", "--fit-workspace"]])
+                                   ["--to-belt", "0,0.5,0", "--round-trip", "--v-from", "0.1,0,0"],
+                                   ["--to-belt", "0,0.5,0", "--fit-workspace"]])
 def test_usage_errors(extra):
     r = run("plan", "--from", "-0.1525,0,-0.8", "--to", "0.1525,-0.1,-0.8", *extra)
     assert r.exit_code == 2

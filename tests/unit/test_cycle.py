@@ -176,9 +176,7 @@ def test_bad_cycle_is_one_line_exit_1_nothing_written(bad, tmp_path):
 def test_cycle_usage_errors():
     res = run("plan", *ADEPT, "--cycle", "0.001", "--rate", "500")
     assert res.exit_code == 2 and "--rate" in res.stderr and res.stderr.count("\n") == 1
-    schedule = "t_detect,to_x,to_y,to_z,to_belt_vx,to_belt_vy,to_belt_vz,place_x,place_y,place_z\n0,0,0,-0.8,0.3,0,0,0.15,0,-0.8\n"
-    res = run("plan", "--batch", "-", "--cycle", "0.001", input=schedule)
-    assert res.exit_code == 2 and "belt schedule" in res.stderr
+    # (a belt schedule on a cycle: tests/cli/test_cli_belt_cycle.py)
 
 
 def test_rounding_dataclass_costs():
