@@ -53,10 +53,39 @@ def check_k(name: str, k: float) -> None:
         raise TaskError(f"{name} = {k!r}: time-ratio factors must lie in [{K_RANGE[0]:g}, {K_RANGE[1]:g}]")
 
 
+#: the largest arch accepted, as a multiple of the clearance h (a path 50 h tall is no pick-and-place move)
+ARCH_MAX = 50.0
+
+
+def check_arch(task: Task, arch: float) -> float:
+    """The arch height [m] as a float; TaskError unless finite and in [0, ARCH_MAX·h]."""
+    a = float(arch)
+    if not (np.isfinite(a) and 0.0 <= a <= ARCH_MAX * task.height):
+        raise TaskError(f"arch = {arch!r} m: the apex's height above the clearance must lie in [0, "
+                        f"{ARCH_MAX:g}·h = {ARCH_MAX * task.height:g}] m")
+    return a
+
+
+def arched_via(task: Task, arch: float) -> np.ndarray:
+    """The via points P1 … P5 (5, 3) [m, displacement from P1] of the widened family: [Li2018, Eq. (11)] with the
+    midpoint P3 raised by ``arch`` [m] above the clearance; P2, P4 stay at η of the rise to the clearance
+    (η·h over equal end heights), so the lift-off/set-down heights keep their meaning. ``arch = 0`` is the
+    Li path's own via points, bitwise."""
+    via = task.via_points() - task.p_from
+    if arch:
+        via[2, 2] += arch
+    return via
+
+
 def plan_bspline(
-    task: Task, k1: float | None = None, k2: float | None = None, table: str | Path | None = None
+    task: Task, k1: float | None = None, k2: float | None = None, table: str | Path | None = None,
+    arch: float = 0.0,
 ) -> CartesianPath:
-    """CartesianPath of the B-spline method; k1, k2 from the look-up table at λ unless both are given."""
+    """CartesianPath of the B-spline method; k1, k2 from the look-up table at λ unless both are given.
+
+    ``arch`` [m] ≥ 0 raises the path's midpoint P3 above the clearance (the clearance becomes a lower bound, not
+    the apex: :func:`arched_via`); 0 (the default) is Li's path, bitwise. ``--optimize shape`` chooses it."""
+    arch = check_arch(task, arch)
     if (k1 is None) != (k2 is None):
         raise TaskError("k1/k2: give both time-ratio factors or neither (then they come from the table)")
     source = "given"
@@ -79,7 +108,7 @@ def plan_bspline(
         check_k(name, k)
     # numpy only (no scipy import on the online path), and the very arithmetic of the batch verdict
     # engine (P = 1): control points, the exact polynomial of every piece, the exact peaks
-    via = (task.via_points() - task.p_from)[None]
+    via = arched_via(task, arch)[None]
     k1a, k2a = np.array([float(k1)]), np.array([float(k2)])
     route = np.array([_route_one(k1a[0], k2a[0], via[0])])  # _route's decision, on floats (one move)
     b_all, c_all, pk_all = batch_paths(k1a, k2a, via, route=route)
@@ -134,7 +163,8 @@ def plan_bspline(
         evaluate=evaluate,
         evaluate_all=evaluate_all,
         method="bspline",
-        parameters={"k1": float(k1), "k2": float(k2), "k_source": source, "lambda": task.lam, "eta": task.eta},
+        parameters={"k1": float(k1), "k2": float(k2), "k_source": source, "lambda": task.lam, "eta": task.eta,
+                    **({"arch": arch} if arch else {})},
         peaks=peaks,  # type: ignore[arg-type]
         breakpoints=breaks,
         jumps=(),  # a quintic B-spline on simple knots is C⁴: nothing steps at its knots
