@@ -29,6 +29,10 @@ SHAPE_SAMPLES = 101
 #: default range searched for η (Li 2018 uses 0.5; the λ × η table covers 0.1 … 0.9); k1, k2 in K_SEARCH
 ETA_RANGE = (0.1, 0.9)
 K_SEARCH = (0.01, 0.99)
+#: range searched for the arch (the midpoint P3's height above the clearance), as a multiple of the clearance h;
+#: (0, 0) keeps Li's path (apex at h). Nelder-Mead searches it from ARCH_START·h at every start
+ARCH_RANGE = (0.0, 1.0)
+ARCH_START = 0.1
 #: the coarse grid: points per axis (k1, k2, η)
 SHAPE_GRID = (5, 5, 3)
 #: Nelder-Mead runs from this many best grid points (plus the table's shape); bench/bench_shape.py compares
@@ -105,16 +109,20 @@ class ShapeResult:
     t_table_screen: float | None
     evaluations: int
     note: str
+    arch: float = 0.0  # [m] the midpoint's height above the clearance (0: Li's path)
 
 
 @single_blas_thread
 def optimise_shape(task, profile, model_of, eta_fixed: float | None = None,
                    eta_range: tuple[float, float] = ETA_RANGE,
-                   table_shape: tuple[float, float, float] | None = None, capacity=None) -> ShapeResult:
+                   table_shape: tuple[float, float, float] | None = None, capacity=None,
+                   arch_range: tuple[float, float] = ARCH_RANGE) -> ShapeResult:
     """The (k1, k2, η) of the B-spline path of ``task`` with the smallest screened ``--time fit`` duration on
     ``profile`` (module docstring). ``model_of(path)``: the path's motion model on the profile's robot.
     ``eta_fixed``: hold η (search k1, k2 only). ``table_shape``: (k1, k2, η) of the look-up table, screened
-    and used as one more start. ``capacity``: also hold the Cartesian capacity (T ≥ Eq. 26's auto)."""
+    and used as one more start. ``capacity``: also hold the Cartesian capacity (T ≥ Eq. 26's auto).
+    ``arch_range``: the arch searched, as multiples of the clearance h ((0, 0): Li's path only); the grid
+    screens Li's path (arch 0), Nelder-Mead searches the arch from every start."""
     from scipy.optimize import minimize
 
     from ..model.errors import PickplaceError
@@ -127,14 +135,17 @@ def optimise_shape(task, profile, model_of, eta_fixed: float | None = None,
     seen: dict[tuple, float] = {}
     last_t = [0.1]
 
-    def screen(k1: float, k2: float, eta: float) -> float:
-        key = (round(k1, 12), round(k2, 12), round(eta, 12))
+    arch_lo, arch_hi = (a * task.height for a in arch_range)
+    with_arch = arch_hi > arch_lo
+
+    def screen(k1: float, k2: float, eta: float, arch: float = 0.0) -> float:
+        key = (round(k1, 12), round(k2, 12), round(eta, 12), round(arch, 15))
         hit = seen.get(key)
         if hit is not None:
             return hit
         try:
             t = Task(task.p_from, task.p_to, task.height, eta)
-            path = plan_path(t, "bspline", k1=k1, k2=k2)
+            path = plan_path(t, "bspline", k1=k1, k2=k2, arch=arch)
             model = model_of(path)
             tau = _extra_points(path.breakpoints, path.jumps, SHAPE_SAMPLES)
             found = _worst_utilisation(model, dwell, tau)
@@ -187,28 +198,47 @@ def optimise_shape(task, profile, model_of, eta_fixed: float | None = None,
     if not np.isfinite(best[0]):  # pragma: no cover - the starts are finite by construction
         best = (np.inf, starts[0])
     bounds = [K_SEARCH, K_SEARCH] + ([] if eta_fixed is not None else [(lo_e, hi_e)])
-    for s in starts:
-        x0 = np.array(s[:2] if eta_fixed is not None else s)
+    na = len(bounds)  # the arch, when searched, follows (k1, k2[, η]), in units of h
 
-        def f(x: np.ndarray) -> float:
-            e = eta_fixed if eta_fixed is not None else float(x[2])
-            v = screen(float(x[0]), float(x[1]), e)
-            return v if np.isfinite(v) else 1e12
+    def shape_of(x: np.ndarray) -> tuple[float, float, float, float]:
+        e = eta_fixed if eta_fixed is not None else float(x[2])
+        a = float(np.clip(x[na], *arch_range)) * task.height if len(x) > na else 0.0
+        return float(x[0]), float(x[1]), e, a
 
-        res = minimize(f, x0, method="Nelder-Mead", bounds=bounds,
+    def f(x: np.ndarray) -> float:
+        v = screen(*shape_of(x))
+        return v if np.isfinite(v) else 1e12
+
+    for s in starts:  # Li's path (arch 0) from every start
+        res = minimize(f, np.array(s[:na]), method="Nelder-Mead", bounds=bounds,
                        options={"xatol": SHAPE_XATOL, "fatol": SHAPE_FATOL, "maxfev": SHAPE_MAXFEV})
-        x = res.x
-        cand = (float(x[0]), float(x[1]), eta_fixed if eta_fixed is not None else float(x[2]))
+        cand = shape_of(res.x)
         v = screen(*cand)
         if v < best[0]:
             best = (v, cand)
-    t_best, (k1, k2, eta) = best
+    best = (best[0], tuple(best[1]) + (0.0,) * (4 - len(best[1])))  # (k1, k2, η, arch)
+    if with_arch:  # then the arch from the best: a simplex whose first step raises the apex by ARCH_START·h
+        x0 = np.array(list(best[1][:na]) + [arch_range[0]])
+        simplex = [x0] + [x0 + np.eye(na + 1)[i] * (ARCH_START if i == na else 0.05) for i in range(na + 1)]
+        simplex = [np.clip(x, [b[0] for b in bounds + [arch_range]], [b[1] for b in bounds + [arch_range]])
+                   for x in simplex]
+        res = minimize(f, x0, method="Nelder-Mead", bounds=bounds + [tuple(arch_range)],
+                       options={"xatol": SHAPE_XATOL, "fatol": SHAPE_FATOL, "maxfev": SHAPE_MAXFEV,
+                                "initial_simplex": np.array(simplex)})
+        cand = shape_of(res.x)
+        v = screen(*cand)
+        if v < best[0]:
+            best = (v, cand)
+    t_best, (k1, k2, eta, arch) = best
     if t_best >= INFEASIBLE:
         note_static = ("; no shape keeps the joint ranges, the workcell box and the singularity margin: the one "
                        "that breaks them least is planned and the check reports it")
     else:
         note_static = ""
     what = "k1, k2" if eta_fixed is not None else f"k1, k2, η ∈ [{lo_e:g}, {hi_e:g}]"
+    if with_arch:
+        what += f", arch ∈ [{arch_range[0]:g}, {arch_range[1]:g}]·h"
     note = f"{what} searched: {len(seen)} shapes screened, {len(starts)} Nelder-Mead starts{note_static}"
     return ShapeResult(float(k1), float(k2), float(eta), float(t_best) if t_best < INFEASIBLE else None,
-                       table_shape, None if t_table is None or t_table >= INFEASIBLE else float(t_table), len(seen), note)
+                       table_shape, None if t_table is None or t_table >= INFEASIBLE else float(t_table), len(seen), note,
+                       float(arch))

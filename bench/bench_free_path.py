@@ -1,0 +1,136 @@
+"""The free-path minimum time of a move against ``plan --optimize shape --time optimal``.
+
+    python bench/bench_free_path.py                 # Adept cycle, delta-su2018, with and without the capacity (~3 min)
+    python bench/bench_free_path.py --n-phase 8     # coarser transcription, quicker
+
+The reference (``tests/reference/free_path.py``): direct transcription with CasADi + IPOPT, the tool path free
+(piecewise-constant jerk on 4 × n_phase intervals), the via points of ``--optimize shape`` (lift-off and
+set-down straight above the ends at η·h, η ∈ [0.1, 0.9]; the midpoint at or above the clearance h), the rigid
+Delta written independently in CasADi symbols, every motor limit (speed, torque, torque rate, round-trip RMS),
+the joint range, and optionally the profile's capacity (‖v‖ ≤ [v], ‖a‖ ≤ [a]). It is solved from several
+initial shapes (smooth arches of different heights and lift-off ratios, timed over different durations); the
+best and the spread of the starts are reported, and the largest utilisation of the best solution on a dense
+sampling between the nodes (the limits are imposed at the nodes only: > 1 by a little means the reference is a
+slight under-estimate).
+
+pickplace: ``plan --optimize shape --time optimal`` (and with ``--hold-capacity``) on the same move, its ratio
+to the reference, and the same with the widened family's arch searched under the optimal law by Nelder-Mead
+from the shipped result (slow: a law solve per shape; shows what the family can reach at all).
+Results go to ``bench/results/free_path.json``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from pickplace_cli import PlanOptions, Task, load_profile, plan  # noqa: E402
+from tests.reference import delta_rigid as D  # noqa: E402
+from tests.reference import free_path as F  # noqa: E402
+
+P_FROM, P_TO, HEIGHT = [-0.1525, 0.0, -0.8], [0.1525, 0.0, -0.8], 0.025
+#: initial shapes: (η of the guess, lift of its apex above the clearance [m], duration of the guess [s])
+STARTS = ((0.5, 0.0, 0.15), (0.1, 0.02, 0.12), (0.3, 0.04, 0.10), (0.1, 0.0, 0.20))
+
+
+def reference(prof, capacity: bool, n_phase: int) -> dict:
+    lim = F.limits_from_profile(prof, capacity=capacity)
+    P = D.params_from_robot(_robot(prof))
+    p0, p1 = np.array(P_FROM), np.array(P_TO)
+    rows = []
+    for eta, lift, tg in STARTS:
+        t0 = time.perf_counter()
+        r = F.solve_free_path(p0, p1, HEIGHT, lim, P, n_phase=n_phase, t_guess=tg,
+                              guess=F._default_guess(p0, p1, max(p0[2], p1[2]) + HEIGHT, eta, lift))
+        dt = time.perf_counter() - t0
+        rows.append({"start": [eta, lift, tg], "T": r.T, "eta": r.eta, "arch": r.arch, "status": r.status,
+                     "dense_utilisation": r.dense_utilisation, "seconds": dt})
+        print(f"  start η {eta:.1f} lift {lift * 1e3:4.0f} mm T0 {tg:.2f} s: T {r.T:.5f} s  η {r.eta:.3f}  apex "
+              f"{r.arch * 1e3:+.1f} mm over h  {r.status}  dense utilisation {r.dense_utilisation:.4f}  {dt:.0f} s",
+              flush=True)
+    ok = [r for r in rows if r["status"] == "solved"]
+    best = min(ok or rows, key=lambda r: r["T"])
+    spread = max(r["T"] for r in ok) / best["T"] - 1 if ok else float("nan")
+    return {"best": best, "spread": spread, "starts": rows}
+
+
+def _robot(prof):
+    from pickplace_cli.planner import motion_model_static
+
+    return motion_model_static(prof)[0]
+
+
+def shipped(prof, capacity: bool) -> dict:
+    task = Task(P_FROM, P_TO, HEIGHT, 0.5)
+    times = []
+    for _ in range(3):
+        t0 = time.perf_counter()
+        got = plan(task, prof, PlanOptions(time="optimal", shape=True, hold_capacity=capacity))
+        times.append(time.perf_counter() - t0)
+    sh = got.parameters["shape"]
+    return {"T": got.duration.seconds, "ok": bool(got.report.ok), "median_ms": statistics.median(times) * 1e3,
+            "shape": {k: sh[k] for k in ("k1", "k2", "eta")} | {"arch": sh.get("arch", 0.0)}}
+
+
+def family_best(prof, capacity: bool, x0) -> dict:
+    """Nelder-Mead over (k1, k2, η, arch) with the optimal law's duration as the objective (slow)."""
+    from scipy.optimize import minimize
+
+    def T(x):
+        k1, k2, eta, arch = (float(v) for v in x)
+        if not (0.01 <= k1 <= 0.99 and 0.01 <= k2 <= 0.99 and 0.1 <= eta <= 0.9 and 0 <= arch <= 0.1):
+            return 1.0
+        try:
+            p = plan(Task(P_FROM, P_TO, HEIGHT, eta), prof,
+                     PlanOptions(time="optimal", method_params={"k1": k1, "k2": k2, "arch": arch},
+                                 hold_capacity=capacity))
+        except Exception:  # noqa: BLE001 - a shape the planner refuses ranks last
+            return 1.0
+        return p.duration.seconds if p.report.ok else 1.0
+
+    best = None
+    for start in (x0, [x0[0], x0[1], x0[2], 0.01]):
+        res = minimize(T, start, method="Nelder-Mead", options={"maxfev": 100, "xatol": 1e-3, "fatol": 1e-6})
+        if best is None or res.fun < best.fun:
+            best = res
+    return {"T": float(best.fun), "shape": [float(v) for v in best.x]}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--n-phase", type=int, default=12, help="intervals per phase of the transcription")
+    ap.add_argument("--no-family", action="store_true", help="skip the slow search of the family under the law")
+    ap.add_argument("-o", "--output", default=str(Path(__file__).parent / "results" / "free_path.json"))
+    args = ap.parse_args()
+    prof = load_profile("delta-su2018")
+    out = {}
+    for capacity in (False, True):
+        label = "with the capacity" if capacity else "motors alone"
+        print(f"Adept cycle, delta-su2018, rigid, {label}: free-path reference (n_phase {args.n_phase})", flush=True)
+        ref = reference(prof, capacity, args.n_phase)
+        got = shipped(prof, capacity)
+        row = {"reference": ref, "shipped": got, "ratio": got["T"] / ref["best"]["T"]}
+        print(f"  reference T {ref['best']['T']:.5f} s (spread of the starts {ref['spread'] * 100:.2f} %); "
+              f"--optimize shape --time optimal: T {got['T']:.5f} s = {row['ratio']:.4f} × reference, ok {got['ok']}, "
+              f"median {got['median_ms']:.0f} ms", flush=True)
+        if not args.no_family:
+            sh = got["shape"]
+            fam = family_best(prof, capacity, [sh["k1"], sh["k2"], sh["eta"], sh["arch"]])
+            row["family"] = fam
+            print(f"  family (k1, k2, η, arch) searched under the optimal law: T {fam['T']:.5f} s = "
+                  f"{fam['T'] / ref['best']['T']:.4f} × reference at {np.round(fam['shape'], 4).tolist()}", flush=True)
+        out["capacity" if capacity else "motors"] = row
+    Path(args.output).parent.mkdir(parents=True, exist_ok=True)
+    Path(args.output).write_text(json.dumps(out, indent=1))
+
+
+if __name__ == "__main__":
+    main()
