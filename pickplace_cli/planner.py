@@ -242,10 +242,10 @@ def _optimised_shape(task: Task, profile: Profile, options: PlanOptions) -> tupl
         raise UsageError(f"--optimize shape minimises the fitted duration: use it with time limits, fit or optimal "
                          f"(not {options.time})")
     hold = options.hold_capacity or options.time == "limits"
-    given = {k for k, v in options.method_params.items() if v is not None and k in ("k1", "k2", "arch")}
+    given = {k for k, v in options.method_params.items() if v is not None and k in ("k1", "k2", "arch", "k3", "k4", "mid")}
     if given:
-        raise UsageError(f"--optimize shape chooses k1, k2 and the arch itself: drop --{'/--'.join(sorted(given))}")
-    base = {k: v for k, v in options.method_params.items() if v is not None and k not in ("k1", "k2", "arch")}
+        raise UsageError(f"--optimize shape chooses k1, k2, the arch and k3, k4, mid itself: drop --{'/--'.join(sorted(given))}")
+    base = {k: v for k, v in options.method_params.items() if v is not None and k not in ("k1", "k2", "arch", "k3", "k4", "mid")}
 
     def model_of(p):
         return motion_model(turned(p, task, options.turn_during), profile)
@@ -263,11 +263,13 @@ def _optimised_shape(task: Task, profile: Profile, options: PlanOptions) -> tupl
     found = optimise_shape(task, profile, model_of, eta_fixed=task.eta if options.hold_eta else None,
                            table_shape=table_shape, capacity=profile.capacity if hold else None)
     shaped = replace(task, eta=found.eta)
-    info = {"k1": found.k1, "k2": found.k2, "eta": found.eta, "arch": found.arch, "screened_fit_s": found.t_screen,
+    info = {"k1": found.k1, "k2": found.k2, "eta": found.eta, "arch": found.arch, "k3": found.k3, "k4": found.k4,
+            "mid": found.mid, "screened_fit_s": found.t_screen,
             "shapes_screened": found.evaluations, "note": found.note,
             "table": None if table_shape is None else {"k1": table_shape[0], "k2": table_shape[1],
                                                         "eta": table_shape[2], "fit_s": t_table}}
-    arch = {"arch": found.arch} if found.arch else {}  # 0: Li's path, planned as without --optimize's arch
+    arch = {"arch": found.arch} if found.arch else {}  # 0 and None: Li's path, planned as without them
+    arch.update({} if found.k3 is None else {"k3": found.k3, "k4": found.k4, "mid": found.mid})
     return shaped, replace(options, method_params={**base, "k1": found.k1, "k2": found.k2, **arch}, shape=False), info
 
 

@@ -33,6 +33,11 @@ K_SEARCH = (0.01, 0.99)
 #: (0, 0) keeps Li's path (apex at h). Nelder-Mead searches it from ARCH_START·h at every start
 ARCH_RANGE = (0.0, 1.0)
 ARCH_START = 0.1
+#: the widened family's other parameters: the set-down side's k3, k4 (in K_SEARCH) and P3's knot τ9 (Li: 1/2);
+#: Nelder-Mead budget per run and restarts from its own result (bench/bench_free_path.py measures the gain)
+MID_SEARCH = (0.35, 0.65)
+WIDE_MAXFEV = 150
+WIDE_RESTARTS = 1
 #: the coarse grid: points per axis (k1, k2, η)
 SHAPE_GRID = (5, 5, 3)
 #: Nelder-Mead runs from this many best grid points (plus the table's shape); bench/bench_shape.py compares
@@ -95,6 +100,56 @@ def _log_secant_root(worst, start: float, xtol: float = 1e-7, iterations: int = 
     return None
 
 
+def _widened(f, shape_of, screen, best: tuple, bounds: list, arch_range: tuple) -> tuple:
+    """The widened family from Li's best ``best`` = (T, (k1, k2, η, 0, None, None, None)): Nelder-Mead over
+    (k1, k2[, η], arch/h, k3, k4, mid) from the symmetric shape (k3 = k1, k4 = k2, mid = 1/2, arch 0), restarted
+    ``WIDE_RESTARTS`` times from its own result (a simplex in 7-D stalls); kept only when it screens faster."""
+    from scipy.optimize import minimize
+
+    from ..paths.bspline import MID_RANGE
+
+    k1, k2, eta = best[1][:3]
+    na = len(bounds)
+    x = np.array([k1, k2, eta][:na] + [arch_range[0], k1, k2, 0.5])
+    wide = bounds + [tuple(arch_range), K_SEARCH, K_SEARCH, MID_SEARCH]
+    lo, hi = np.array([b[0] for b in wide]), np.array([b[1] for b in wide])
+    steps = np.array([0.05] * na + [ARCH_START, 0.05, 0.05, 0.03])
+    for _ in range(1 + WIDE_RESTARTS):
+        simplex = np.array([x] + [np.clip(x + np.eye(len(x))[i] * steps[i] * (1 if x[i] + steps[i] <= hi[i] else -1),
+                                          lo, hi) for i in range(len(x))])
+        res = minimize(f, x, method="Nelder-Mead", bounds=wide,
+                       options={"xatol": SHAPE_XATOL, "fatol": SHAPE_FATOL, "maxfev": WIDE_MAXFEV,
+                                "initial_simplex": simplex})
+        cand = shape_of(res.x)
+        v = screen(*cand)
+        if v < best[0]:
+            best = (v, cand)
+            x = np.clip(res.x, lo, hi)
+    assert MID_RANGE[0] <= MID_SEARCH[0] and MID_SEARCH[1] <= MID_RANGE[1]
+    return best
+
+
+def _grid_starts(screen, eta_fixed: float | None, lo_e: float, hi_e: float) -> list[tuple[float, float, float]]:
+    """The best ``SHAPE_STARTS`` points of the coarse (k1, k2, η) grid that are not neighbours of one another."""
+    n1, n2, ne = SHAPE_GRID
+    k_axis, k2_axis = _AXIS(n1), _AXIS(n2)
+    e_axis = np.linspace(lo_e, hi_e, ne) if eta_fixed is None else np.array([eta_fixed])
+    grid = [(a, b, e) for e in e_axis for a in k_axis for b in k2_axis]
+    vals = np.array([screen(*g) for g in grid])
+    order = np.argsort(vals)
+    starts: list[tuple[float, float, float]] = []
+    for i in order:  # the best grid points that are not neighbours of a start already taken
+        if not np.isfinite(vals[i]):
+            break  # sorted: the rest cannot be planned at all
+        g = np.array(grid[i])
+        step = np.array([k_axis[1] - k_axis[0], k2_axis[1] - k2_axis[0], (e_axis[1] - e_axis[0]) if len(e_axis) > 1 else 1.0])
+        if all(np.any(np.abs(g - np.array(s)) > 1.01 * step) for s in starts):
+            starts.append(tuple(g))
+        if len(starts) >= SHAPE_STARTS:
+            break
+    return starts
+
+
 @dataclass(frozen=True)
 class ShapeResult:
     """The chosen (k1, k2, η), its screened fit duration [s] (None when no shape keeps the duration-independent
@@ -110,6 +165,9 @@ class ShapeResult:
     evaluations: int
     note: str
     arch: float = 0.0  # [m] the midpoint's height above the clearance (0: Li's path)
+    k3: float | None = None  # the set-down side's time-ratio factors and P3's knot (None: Li's symmetric knots)
+    k4: float | None = None
+    mid: float | None = None
 
 
 @single_blas_thread
@@ -135,17 +193,17 @@ def optimise_shape(task, profile, model_of, eta_fixed: float | None = None,
     seen: dict[tuple, float] = {}
     last_t = [0.1]
 
-    arch_lo, arch_hi = (a * task.height for a in arch_range)
-    with_arch = arch_hi > arch_lo
+    widen = arch_range[1] > arch_range[0]
 
-    def screen(k1: float, k2: float, eta: float, arch: float = 0.0) -> float:
-        key = (round(k1, 12), round(k2, 12), round(eta, 12), round(arch, 15))
+    def screen(k1: float, k2: float, eta: float, arch: float = 0.0, k3=None, k4=None, mid=None) -> float:
+        key = (round(k1, 12), round(k2, 12), round(eta, 12), round(arch, 15), k3, k4, mid)
         hit = seen.get(key)
         if hit is not None:
             return hit
         try:
             t = Task(task.p_from, task.p_to, task.height, eta)
-            path = plan_path(t, "bspline", k1=k1, k2=k2, arch=arch)
+            path = plan_path(t, "bspline", k1=k1, k2=k2, arch=arch, **(
+                {} if k3 is None else {"k3": k3, "k4": k4, "mid": mid}))
             model = model_of(path)
             tau = _extra_points(path.breakpoints, path.jumps, SHAPE_SAMPLES)
             found = _worst_utilisation(model, dwell, tau)
@@ -167,22 +225,7 @@ def optimise_shape(task, profile, model_of, eta_fixed: float | None = None,
         return val
 
     lo_e, hi_e = (eta_fixed, eta_fixed) if eta_fixed is not None else eta_range
-    n1, n2, ne = SHAPE_GRID
-    k_axis, k2_axis = _AXIS(n1), _AXIS(n2)
-    e_axis = np.linspace(lo_e, hi_e, ne) if eta_fixed is None else np.array([eta_fixed])
-    grid = [(a, b, e) for e in e_axis for a in k_axis for b in k2_axis]
-    vals = np.array([screen(*g) for g in grid])
-    order = np.argsort(vals)
-    starts: list[tuple[float, float, float]] = []
-    for i in order:  # the best grid points that are not neighbours of a start already taken
-        if not np.isfinite(vals[i]):
-            break  # sorted: the rest cannot be planned at all
-        g = np.array(grid[i])
-        step = np.array([k_axis[1] - k_axis[0], k2_axis[1] - k2_axis[0], (e_axis[1] - e_axis[0]) if len(e_axis) > 1 else 1.0])
-        if all(np.any(np.abs(g - np.array(s)) > 1.01 * step) for s in starts):
-            starts.append(tuple(g))
-        if len(starts) >= SHAPE_STARTS:
-            break
+    starts = _grid_starts(screen, eta_fixed, lo_e, hi_e)
     t_table = None
     if table_shape is not None:
         t_table = screen(*table_shape) if eta_fixed is None else screen(table_shape[0], table_shape[1], eta_fixed)
@@ -198,47 +241,41 @@ def optimise_shape(task, profile, model_of, eta_fixed: float | None = None,
     if not np.isfinite(best[0]):  # pragma: no cover - the starts are finite by construction
         best = (np.inf, starts[0])
     bounds = [K_SEARCH, K_SEARCH] + ([] if eta_fixed is not None else [(lo_e, hi_e)])
-    na = len(bounds)  # the arch, when searched, follows (k1, k2[, η]), in units of h
+    na = len(bounds)
 
-    def shape_of(x: np.ndarray) -> tuple[float, float, float, float]:
+    def shape_of(x: np.ndarray) -> tuple:
+        """(k1, k2, η, arch [m], k3, k4, mid) of a search vector (k1, k2[, η][, arch/h, k3, k4, mid])."""
         e = eta_fixed if eta_fixed is not None else float(x[2])
-        a = float(np.clip(x[na], *arch_range)) * task.height if len(x) > na else 0.0
-        return float(x[0]), float(x[1]), e, a
+        if len(x) == na:
+            return float(x[0]), float(x[1]), e, 0.0, None, None, None
+        a = float(np.clip(x[na], *arch_range)) * task.height
+        return (float(x[0]), float(x[1]), e, a, *(float(v) for v in x[na + 1:]))
 
     def f(x: np.ndarray) -> float:
         v = screen(*shape_of(x))
         return v if np.isfinite(v) else 1e12
 
-    for s in starts:  # Li's path (arch 0) from every start
+    for s in starts:  # Li's family from every start
         res = minimize(f, np.array(s[:na]), method="Nelder-Mead", bounds=bounds,
                        options={"xatol": SHAPE_XATOL, "fatol": SHAPE_FATOL, "maxfev": SHAPE_MAXFEV})
         cand = shape_of(res.x)
         v = screen(*cand)
         if v < best[0]:
             best = (v, cand)
-    best = (best[0], tuple(best[1]) + (0.0,) * (4 - len(best[1])))  # (k1, k2, η, arch)
-    if with_arch:  # then the arch from the best: a simplex whose first step raises the apex by ARCH_START·h
-        x0 = np.array(list(best[1][:na]) + [arch_range[0]])
-        simplex = [x0] + [x0 + np.eye(na + 1)[i] * (ARCH_START if i == na else 0.05) for i in range(na + 1)]
-        simplex = [np.clip(x, [b[0] for b in bounds + [arch_range]], [b[1] for b in bounds + [arch_range]])
-                   for x in simplex]
-        res = minimize(f, x0, method="Nelder-Mead", bounds=bounds + [tuple(arch_range)],
-                       options={"xatol": SHAPE_XATOL, "fatol": SHAPE_FATOL, "maxfev": SHAPE_MAXFEV,
-                                "initial_simplex": np.array(simplex)})
-        cand = shape_of(res.x)
-        v = screen(*cand)
-        if v < best[0]:
-            best = (v, cand)
-    t_best, (k1, k2, eta, arch) = best
+    best = (best[0], tuple(best[1][:3]) + (0.0, None, None, None))
+    if widen:
+        best = _widened(f, shape_of, screen, best, bounds, arch_range)
+    t_best, (k1, k2, eta, arch, k3, k4, mid) = best
     if t_best >= INFEASIBLE:
         note_static = ("; no shape keeps the joint ranges, the workcell box and the singularity margin: the one "
                        "that breaks them least is planned and the check reports it")
     else:
         note_static = ""
     what = "k1, k2" if eta_fixed is not None else f"k1, k2, η ∈ [{lo_e:g}, {hi_e:g}]"
-    if with_arch:
-        what += f", arch ∈ [{arch_range[0]:g}, {arch_range[1]:g}]·h"
+    if widen:
+        what += (f", arch ∈ [{arch_range[0]:g}, {arch_range[1]:g}]·h and the asymmetric knots (k3, k4, mid) from "
+                 "Li's best")
     note = f"{what} searched: {len(seen)} shapes screened, {len(starts)} Nelder-Mead starts{note_static}"
     return ShapeResult(float(k1), float(k2), float(eta), float(t_best) if t_best < INFEASIBLE else None,
                        table_shape, None if t_table is None or t_table >= INFEASIBLE else float(t_table), len(seen), note,
-                       float(arch))
+                       float(arch), k3, k4, mid)
