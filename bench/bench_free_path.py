@@ -14,8 +14,8 @@ sampling between the nodes (the limits are imposed at the nodes only: > 1 by a l
 slight under-estimate).
 
 pickplace: ``plan --optimize shape --time optimal`` (and with ``--hold-capacity``) on the same move, its ratio
-to the reference, and the same with the widened family's arch searched under the optimal law by Nelder-Mead
-from the shipped result (slow: a law solve per shape; shows what the family can reach at all).
+to the reference, and the same with ``--law-evals`` more shapes of the widened family judged by the optimal law
+itself (``timing.shape.LAW_POLISH_EVALS``; off in the shipped search: a law solve per shape).
 Results go to ``bench/results/free_path.json``.
 """
 
@@ -77,37 +77,30 @@ def shipped(prof, capacity: bool) -> dict:
         times.append(time.perf_counter() - t0)
     sh = got.parameters["shape"]
     return {"T": got.duration.seconds, "ok": bool(got.report.ok), "median_ms": statistics.median(times) * 1e3,
-            "shape": {k: sh[k] for k in ("k1", "k2", "eta")} | {"arch": sh.get("arch", 0.0)}}
+            "shape": {k: sh.get(k) for k in ("k1", "k2", "eta", "arch", "k3", "k4", "mid")}}
 
 
-def family_best(prof, capacity: bool, x0) -> dict:
-    """Nelder-Mead over (k1, k2, η, arch) with the optimal law's duration as the objective (slow)."""
-    from scipy.optimize import minimize
+def polished(prof, capacity: bool, evals: int) -> dict:
+    """The shipped search, then ``evals`` shapes judged by the optimal law itself (timing.shape.LAW_POLISH_EVALS)."""
+    from pickplace_cli.timing import shape as S
 
-    def T(x):
-        k1, k2, eta, arch = (float(v) for v in x)
-        if not (0.01 <= k1 <= 0.99 and 0.01 <= k2 <= 0.99 and 0.1 <= eta <= 0.9 and 0 <= arch <= 0.1):
-            return 1.0
-        try:
-            p = plan(Task(P_FROM, P_TO, HEIGHT, eta), prof,
-                     PlanOptions(time="optimal", method_params={"k1": k1, "k2": k2, "arch": arch},
-                                 hold_capacity=capacity))
-        except Exception:  # noqa: BLE001 - a shape the planner refuses ranks last
-            return 1.0
-        return p.duration.seconds if p.report.ok else 1.0
-
-    best = None
-    for start in (x0, [x0[0], x0[1], x0[2], 0.01]):
-        res = minimize(T, start, method="Nelder-Mead", options={"maxfev": 100, "xatol": 1e-3, "fatol": 1e-6})
-        if best is None or res.fun < best.fun:
-            best = res
-    return {"T": float(best.fun), "shape": [float(v) for v in best.x]}
+    old, S.LAW_POLISH_EVALS = S.LAW_POLISH_EVALS, evals
+    try:
+        t0 = time.perf_counter()
+        got = plan(Task(P_FROM, P_TO, HEIGHT, 0.5), prof, PlanOptions(time="optimal", shape=True, hold_capacity=capacity))
+        dt = time.perf_counter() - t0
+    finally:
+        S.LAW_POLISH_EVALS = old
+    sh = got.parameters["shape"]
+    return {"T": got.duration.seconds, "ok": bool(got.report.ok), "seconds": dt,
+            "shape": {k: sh.get(k) for k in ("k1", "k2", "eta", "arch", "k3", "k4", "mid")}}
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--n-phase", type=int, default=12, help="intervals per phase of the transcription")
-    ap.add_argument("--no-family", action="store_true", help="skip the slow search of the family under the law")
+    ap.add_argument("--law-evals", type=int, default=60,
+                    help="shapes judged by the optimal law after the shipped search (0: skip; slow, ~1 s each)")
     ap.add_argument("-o", "--output", default=str(Path(__file__).parent / "results" / "free_path.json"))
     args = ap.parse_args()
     prof = load_profile("delta-su2018")
@@ -121,12 +114,13 @@ def main() -> None:
         print(f"  reference T {ref['best']['T']:.5f} s (spread of the starts {ref['spread'] * 100:.2f} %); "
               f"--optimize shape --time optimal: T {got['T']:.5f} s = {row['ratio']:.4f} × reference, ok {got['ok']}, "
               f"median {got['median_ms']:.0f} ms", flush=True)
-        if not args.no_family:
-            sh = got["shape"]
-            fam = family_best(prof, capacity, [sh["k1"], sh["k2"], sh["eta"], sh["arch"]])
-            row["family"] = fam
-            print(f"  family (k1, k2, η, arch) searched under the optimal law: T {fam['T']:.5f} s = "
-                  f"{fam['T'] / ref['best']['T']:.4f} × reference at {np.round(fam['shape'], 4).tolist()}", flush=True)
+        print(f"  shipped shape {got['shape']}", flush=True)
+        if args.law_evals:
+            pol = polished(prof, capacity, args.law_evals)
+            row["law_polished"] = pol
+            print(f"  + {args.law_evals} shapes judged by the optimal law: T {pol['T']:.5f} s = "
+                  f"{pol['T'] / ref['best']['T']:.4f} × reference, ok {pol['ok']}, {pol['seconds']:.0f} s; shape "
+                  f"{pol['shape']}", flush=True)
         out["capacity" if capacity else "motors"] = row
     Path(args.output).parent.mkdir(parents=True, exist_ok=True)
     Path(args.output).write_text(json.dumps(out, indent=1))

@@ -233,6 +233,7 @@ def _optimised_shape(task: Task, profile: Profile, options: PlanOptions) -> tupl
     (:func:`pickplace_cli.timing.shape.optimise_shape`), and what the search found for the path parameters
     (``shape``: the chosen shape, its screened duration, the table's shape and its exact fit duration)."""
     from .model.errors import PickplaceError, UsageError
+    from .timing import shape as shape_module
     from .timing.shape import optimise_shape
 
     if Method(options.method) is not Method.bspline:
@@ -262,6 +263,8 @@ def _optimised_shape(task: Task, profile: Profile, options: PlanOptions) -> tupl
                                   model=model_of(ref), dwell=profile.planning.dwell, hold_capacity=hold).seconds
     found = optimise_shape(task, profile, model_of, eta_fixed=task.eta if options.hold_eta else None,
                            table_shape=table_shape, capacity=profile.capacity if hold else None)
+    if options.time == "optimal":  # the screen ranks by the uniform law: the law judges the winner and the table's
+        found = shape_module.judge_by_law(task, profile, found, model_of, hold, shape_module.LAW_POLISH_EVALS)
     shaped = replace(task, eta=found.eta)
     info = {"k1": found.k1, "k2": found.k2, "eta": found.eta, "arch": found.arch, "k3": found.k3, "k4": found.k4,
             "mid": found.mid, "screened_fit_s": found.t_screen,

@@ -168,6 +168,7 @@ class ShapeResult:
     k3: float | None = None  # the set-down side's time-ratio factors and P3's knot (None: Li's symmetric knots)
     k4: float | None = None
     mid: float | None = None
+    symmetric: tuple[float, float, float] | None = None  # (k1, k2, η): the best of Li's family, before the widening
 
 
 @single_blas_thread
@@ -263,6 +264,7 @@ def optimise_shape(task, profile, model_of, eta_fixed: float | None = None,
         if v < best[0]:
             best = (v, cand)
     best = (best[0], tuple(best[1][:3]) + (0.0, None, None, None))
+    li_best = tuple(float(v) for v in best[1][:3])
     if widen:
         best = _widened(f, shape_of, screen, best, bounds, arch_range)
     t_best, (k1, k2, eta, arch, k3, k4, mid) = best
@@ -278,4 +280,67 @@ def optimise_shape(task, profile, model_of, eta_fixed: float | None = None,
     note = f"{what} searched: {len(seen)} shapes screened, {len(starts)} Nelder-Mead starts{note_static}"
     return ShapeResult(float(k1), float(k2), float(eta), float(t_best) if t_best < INFEASIBLE else None,
                        table_shape, None if t_table is None or t_table >= INFEASIBLE else float(t_table), len(seen), note,
-                       float(arch), k3, k4, mid)
+                       float(arch), k3, k4, mid, li_best)
+
+
+#: ``--time optimal``: shapes judged by the optimal law itself after the screened search, besides the screened
+#: winner and the table's shape (each costs a law solve, ~0.15 s on the Adept cycle): 0 = none (the default).
+#: bench/bench_free_path.py measures what a budget buys against the free-path minimum time
+LAW_POLISH_EVALS = 0
+
+
+def judge_by_law(task, profile, found: ShapeResult, model_of, hold_capacity: bool, evals: int = 0) -> ShapeResult:
+    """``--time optimal``: the screened winner ``found``, Li's family's best and the table's shape judged by the duration of the
+    optimal law on each (the screen ranks shapes by the uniform law's fit, with the capacity by Eq. 26's auto: a
+    shape faster for the uniform law can be slower for the optimal one), the faster kept; then, with ``evals`` > 0,
+    Nelder-Mead over the widened family (k1, k2, η, arch/h, k3, k4, mid) from it with the law's duration as the
+    objective (at most ``evals`` more law solves)."""
+    from scipy.optimize import minimize
+
+    from ..model.errors import PickplaceError
+    from ..model.task import Task
+    from ..paths import plan_path
+    from . import choose_optimal
+
+    dwell = profile.planning.dwell
+    seen: dict = {}
+
+    def law_time(x: np.ndarray) -> float:
+        key = tuple(np.round(x, 12))
+        if key not in seen:
+            k1, k2, eta, arch, k3, k4, mid = (float(v) for v in x)
+            wide = {} if (k3, k4, mid) == (k1, k2, 0.5) else {"k3": k3, "k4": k4, "mid": mid}
+            try:
+                path = plan_path(Task(task.p_from, task.p_to, task.height, eta), "bspline", k1=k1, k2=k2,
+                                 arch=arch * task.height, **wide)
+                seen[key] = choose_optimal(path, profile, model_of(path), dwell, model_of,
+                                           hold_capacity=hold_capacity)[0].seconds
+            except PickplaceError:
+                seen[key] = 1e12
+        return seen[key]
+
+    bounds = [K_SEARCH, K_SEARCH, ETA_RANGE, ARCH_RANGE, K_SEARCH, K_SEARCH, MID_SEARCH]
+    x0 = np.array([found.k1, found.k2, found.eta, found.arch / task.height,
+                   found.k1 if found.k3 is None else found.k3, found.k2 if found.k4 is None else found.k4,
+                   0.5 if found.mid is None else found.mid])
+    cands, names = [x0], ["the screened shape"]
+    for other, name in ((found.symmetric, "Li's family's best"), (found.table, "the table's shape")):
+        if other is not None:
+            k1, k2, eta = other
+            cands.append(np.array([k1, k2, eta, 0.0, k1, k2, 0.5]))
+            names.append(name)
+    x = min(cands, key=law_time)
+    if evals > 0:
+        lo, hi = np.array([b[0] for b in bounds]), np.array([b[1] for b in bounds])
+        res = minimize(law_time, np.clip(x, lo, hi), method="Nelder-Mead", bounds=bounds,
+                       options={"xatol": SHAPE_XATOL, "fatol": SHAPE_FATOL, "maxfev": evals})
+        if law_time(res.x) < law_time(x):
+            x = res.x
+    if x is x0:
+        return found
+    k1, k2, eta, arch, k3, k4, mid = (float(v) for v in x)
+    sym = (k3, k4, mid) == (k1, k2, 0.5)
+    which = next((name for c, name in zip(cands, names) if x is c), "a shape")
+    return ShapeResult(k1, k2, eta, found.t_screen, found.table, found.t_table_screen, found.evaluations + len(seen),
+                       f"{found.note}; {which} judged faster by the optimal law itself ({len(seen)} law solves)",
+                       arch * task.height, None if sym else k3, None if sym else k4, None if sym else mid)
