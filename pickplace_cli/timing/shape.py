@@ -175,12 +175,13 @@ class ShapeResult:
 def optimise_shape(task, profile, model_of, eta_fixed: float | None = None,
                    eta_range: tuple[float, float] = ETA_RANGE,
                    table_shape: tuple[float, float, float] | None = None, capacity=None,
-                   arch_range: tuple[float, float] = ARCH_RANGE) -> ShapeResult:
+                   arch_range: tuple[float, float] | None = None) -> ShapeResult:
     """The (k1, k2, η) of the B-spline path of ``task`` with the smallest screened ``--time fit`` duration on
     ``profile`` (module docstring). ``model_of(path)``: the path's motion model on the profile's robot.
     ``eta_fixed``: hold η (search k1, k2 only). ``table_shape``: (k1, k2, η) of the look-up table, screened
     and used as one more start. ``capacity``: also hold the Cartesian capacity (T ≥ Eq. 26's auto).
-    ``arch_range``: the arch searched, as multiples of the clearance h ((0, 0): Li's path only); the grid
+    ``arch_range``: the arch searched, as multiples of the clearance h (default ``ARCH_RANGE``; (0, 0): Li's
+    family only, no widening); the grid
     screens Li's path (arch 0), Nelder-Mead searches the arch from every start."""
     from scipy.optimize import minimize
 
@@ -194,6 +195,7 @@ def optimise_shape(task, profile, model_of, eta_fixed: float | None = None,
     seen: dict[tuple, float] = {}
     last_t = [0.1]
 
+    arch_range = ARCH_RANGE if arch_range is None else arch_range
     widen = arch_range[1] > arch_range[0]
 
     def screen(k1: float, k2: float, eta: float, arch: float = 0.0, k3=None, k4=None, mid=None) -> float:
