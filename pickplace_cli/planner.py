@@ -233,6 +233,7 @@ def _optimised_shape(task: Task, profile: Profile, options: PlanOptions) -> tupl
     (:func:`pickplace_cli.timing.shape.optimise_shape`), and what the search found for the path parameters
     (``shape``: the chosen shape, its screened duration, the table's shape and its exact fit duration)."""
     from .model.errors import PickplaceError, UsageError
+    from .timing import shape as shape_module
     from .timing.shape import optimise_shape
 
     if Method(options.method) is not Method.bspline:
@@ -242,10 +243,10 @@ def _optimised_shape(task: Task, profile: Profile, options: PlanOptions) -> tupl
         raise UsageError(f"--optimize shape minimises the fitted duration: use it with time limits, fit or optimal "
                          f"(not {options.time})")
     hold = options.hold_capacity or options.time == "limits"
-    given = {k for k, v in options.method_params.items() if v is not None and k in ("k1", "k2")}
+    given = {k for k, v in options.method_params.items() if v is not None and k in ("k1", "k2", "arch", "k3", "k4", "mid")}
     if given:
-        raise UsageError(f"--optimize shape chooses k1, k2 itself: drop --{'/--'.join(sorted(given))}")
-    base = {k: v for k, v in options.method_params.items() if v is not None and k not in ("k1", "k2")}
+        raise UsageError(f"--optimize shape chooses k1, k2, the arch and k3, k4, mid itself: drop --{'/--'.join(sorted(given))}")
+    base = {k: v for k, v in options.method_params.items() if v is not None and k not in ("k1", "k2", "arch", "k3", "k4", "mid")}
 
     def model_of(p):
         return motion_model(turned(p, task, options.turn_during), profile)
@@ -262,12 +263,17 @@ def _optimised_shape(task: Task, profile: Profile, options: PlanOptions) -> tupl
                                   model=model_of(ref), dwell=profile.planning.dwell, hold_capacity=hold).seconds
     found = optimise_shape(task, profile, model_of, eta_fixed=task.eta if options.hold_eta else None,
                            table_shape=table_shape, capacity=profile.capacity if hold else None)
+    if options.time == "optimal":  # the screen ranks by the uniform law: the law judges the winner and the table's
+        found = shape_module.judge_by_law(task, profile, found, model_of, hold, shape_module.LAW_POLISH_EVALS)
     shaped = replace(task, eta=found.eta)
-    info = {"k1": found.k1, "k2": found.k2, "eta": found.eta, "screened_fit_s": found.t_screen,
+    info = {"k1": found.k1, "k2": found.k2, "eta": found.eta, "arch": found.arch, "k3": found.k3, "k4": found.k4,
+            "mid": found.mid, "screened_fit_s": found.t_screen,
             "shapes_screened": found.evaluations, "note": found.note,
             "table": None if table_shape is None else {"k1": table_shape[0], "k2": table_shape[1],
                                                         "eta": table_shape[2], "fit_s": t_table}}
-    return shaped, replace(options, method_params={**base, "k1": found.k1, "k2": found.k2}, shape=False), info
+    arch = {"arch": found.arch} if found.arch else {}  # 0 and None: Li's path, planned as without them
+    arch.update({} if found.k3 is None else {"k3": found.k3, "k4": found.k4, "mid": found.mid})
+    return shaped, replace(options, method_params={**base, "k1": found.k1, "k2": found.k2, **arch}, shape=False), info
 
 
 class PlanInterrupted(Exception):

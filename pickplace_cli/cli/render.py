@@ -298,7 +298,9 @@ def _print_summary(result) -> None:
     d = result.duration
     par = result.parameters
     if "k1" in par:
-        ks = f"k1 = {par['k1']:.4f}, k2 = {par['k2']:.4f} ({par['k_source']})"
+        wide = "".join(f", {k} = {par[k]:.4f}" for k in ("k3", "k4", "mid") if k in par)
+        wide += f", arch = {par['arch'] * 1e3:.2f} mm" if "arch" in par else ""  # the widened family's
+        ks = f"k1 = {par['k1']:.4f}, k2 = {par['k2']:.4f}{wide} ({par['k_source']})"
     else:  # the method's scalar shape parameters (e.g. ph m, r; bspline-vel τ6 … λ3 and F)
         skip = {"continuity", "eta", "height_m", "duration_s", "margin", "a_min", "j_min", "paper_time_factor"}
         ks = ", ".join(

@@ -53,10 +53,56 @@ def check_k(name: str, k: float) -> None:
         raise TaskError(f"{name} = {k!r}: time-ratio factors must lie in [{K_RANGE[0]:g}, {K_RANGE[1]:g}]")
 
 
+#: the largest arch accepted, as a multiple of the clearance h (a path 50 h tall is no pick-and-place move)
+ARCH_MAX = 50.0
+
+
+def check_arch(task: Task, arch: float) -> float:
+    """The arch height [m] as a float; TaskError unless finite and in [0, ARCH_MAX·h]."""
+    a = float(arch)
+    if not (np.isfinite(a) and 0.0 <= a <= ARCH_MAX * task.height):
+        raise TaskError(f"arch = {arch!r} m: the apex's height above the clearance must lie in [0, "
+                        f"{ARCH_MAX:g}·h = {ARCH_MAX * task.height:g}] m")
+    return a
+
+
+def arched_via(task: Task, arch: float) -> np.ndarray:
+    """The via points P1 … P5 (5, 3) [m, displacement from P1] of the widened family: [Li2018, Eq. (11)] with the
+    midpoint P3 raised by ``arch`` [m] above the clearance; P2, P4 stay at η of the rise to the clearance
+    (η·h over equal end heights), so the lift-off/set-down heights keep their meaning. ``arch = 0`` is the
+    Li path's own via points, bitwise."""
+    via = task.via_points() - task.p_from
+    if arch:
+        via[2, 2] += arch
+    return via
+
+
+#: range of the midpoint's knot τ9 (Li: 1/2) of the asymmetric family
+MID_RANGE = (0.2, 0.8)
+
+
+def general_knots(k1: float, k2: float, k3: float, k4: float, mid: float) -> np.ndarray:
+    """The 17 knots of the asymmetric family: P3 at τ9 = ``mid``, the lift-off side's knots from k1 = τ8/τ9,
+    k2 = τ7/τ8 as [Li2018, Eq. (13)], the set-down side's mirrored, k3 = (1 − τ10)/(1 − τ9), k4 = (1 − τ11)/(1 − τ10).
+    k3 = k1, k4 = k2, mid = 1/2 are Li's knots (Eq. 14)."""
+    return np.array([0.0] * 6 + [k1 * k2 * mid, k1 * mid, mid, 1 - k3 * (1 - mid), 1 - k3 * k4 * (1 - mid)]
+                    + [1.0] * 6)
+
+
 def plan_bspline(
-    task: Task, k1: float | None = None, k2: float | None = None, table: str | Path | None = None
+    task: Task, k1: float | None = None, k2: float | None = None, table: str | Path | None = None,
+    arch: float = 0.0, k3: float | None = None, k4: float | None = None, mid: float | None = None,
 ) -> CartesianPath:
-    """CartesianPath of the B-spline method; k1, k2 from the look-up table at λ unless both are given."""
+    """CartesianPath of the B-spline method; k1, k2 from the look-up table at λ unless both are given.
+
+    The widened family (``--optimize shape`` chooses its parameters; the defaults are Li's path, bitwise):
+    ``arch`` [m] ≥ 0 raises the path's midpoint P3 above the clearance (the clearance becomes a lower bound, not
+    the apex: :func:`arched_via`); ``k3``, ``k4`` (the set-down side's time-ratio factors, default k1, k2) and
+    ``mid`` (P3's knot τ9, default 1/2) make the knots asymmetric (:func:`general_knots`), a departure from
+    [Li2018], whose path is symmetric in time: a Delta's arms are not placed symmetrically about a move, so its
+    fastest path is not either."""
+    arch = check_arch(task, arch)
+    general = not (k3 is None and k4 is None and mid is None)
     if (k1 is None) != (k2 is None):
         raise TaskError("k1/k2: give both time-ratio factors or neither (then they come from the table)")
     source = "given"
@@ -77,12 +123,23 @@ def plan_bspline(
                                              two_d=table is None)
     for name, k in (("k1", k1), ("k2", k2)):
         check_k(name, k)
+    if general:
+        k3 = k1 if k3 is None else k3
+        k4 = k2 if k4 is None else k4
+        mid = 0.5 if mid is None else float(mid)
+        for name, k in (("k3", k3), ("k4", k4)):
+            check_k(name, k)
+        if not (np.isfinite(mid) and MID_RANGE[0] <= mid <= MID_RANGE[1]):
+            raise TaskError(f"mid = {mid!r}: the midpoint's knot must lie in [{MID_RANGE[0]:g}, {MID_RANGE[1]:g}]")
     # numpy only (no scipy import on the online path), and the very arithmetic of the batch verdict
     # engine (P = 1): control points, the exact polynomial of every piece, the exact peaks
-    via = (task.via_points() - task.p_from)[None]
+    via = arched_via(task, arch)[None]
     k1a, k2a = np.array([float(k1)]), np.array([float(k2)])
-    route = np.array([_route_one(k1a[0], k2a[0], via[0])])  # _route's decision, on floats (one move)
-    b_all, c_all, pk_all = batch_paths(k1a, k2a, via, route=route)
+    if general:  # asymmetric knots: the batched de Boor recursion on them
+        b_all, c_all, pk_all = _deboor_knots(general_knots(k1, k2, k3, k4, mid)[None], via)
+    else:
+        route = np.array([_route_one(k1a[0], k2a[0], via[0])])  # _route's decision, on floats (one move)
+        b_all, c_all, pk_all = batch_paths(k1a, k2a, via, route=route)
     breaks, coef = b_all[0], c_all[0]  # (m+1,), (m, 3, 6): the exact polynomial of each piece
     peaks = tuple(pk_all[0].tolist())
     # the end states exactly (clamped ends, Eq. 9: Q1 = … = Q4 and Q8 = … = Q11, so the derivatives there
@@ -134,7 +191,9 @@ def plan_bspline(
         evaluate=evaluate,
         evaluate_all=evaluate_all,
         method="bspline",
-        parameters={"k1": float(k1), "k2": float(k2), "k_source": source, "lambda": task.lam, "eta": task.eta},
+        parameters={"k1": float(k1), "k2": float(k2), "k_source": source, "lambda": task.lam, "eta": task.eta,
+                    **({"arch": arch} if arch else {}),
+                    **({"k3": float(k3), "k4": float(k4), "mid": mid} if general else {})},
         peaks=peaks,  # type: ignore[arg-type]
         breakpoints=breaks,
         jumps=(),  # a quintic B-spline on simple knots is C⁴: nothing steps at its knots
@@ -394,7 +453,11 @@ def _li_breaks(k1: np.ndarray, k2: np.ndarray) -> np.ndarray:
 
 def _deboor_paths(k1: np.ndarray, k2: np.ndarray, via: np.ndarray):
     """:func:`batch_paths` by the batched Cox–de Boor recursion (any via points)."""
-    knots = batch_li_knots(k1, k2)
+    return _deboor_knots(batch_li_knots(k1, k2), via)
+
+
+def _deboor_knots(knots: np.ndarray, via: np.ndarray):
+    """:func:`batch_paths` on any knot vectors (P, 17) by the batched Cox–de Boor recursion."""
     q = batch_control_points(knots, via)
     breaks, derivs = batch_pieces(knots, q)
     peaks = batch_norm_peaks(breaks, [batch_piece_coefficients(derivs, r) for r in (1, 2, 3)])

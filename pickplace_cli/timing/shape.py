@@ -29,6 +29,15 @@ SHAPE_SAMPLES = 101
 #: default range searched for η (Li 2018 uses 0.5; the λ × η table covers 0.1 … 0.9); k1, k2 in K_SEARCH
 ETA_RANGE = (0.1, 0.9)
 K_SEARCH = (0.01, 0.99)
+#: range searched for the arch (the midpoint P3's height above the clearance), as a multiple of the clearance h;
+#: (0, 0) keeps Li's path (apex at h). Nelder-Mead searches it from ARCH_START·h at every start
+ARCH_RANGE = (0.0, 1.0)
+ARCH_START = 0.1
+#: the widened family's other parameters: the set-down side's k3, k4 (in K_SEARCH) and P3's knot τ9 (Li: 1/2);
+#: Nelder-Mead budget per run and restarts from its own result (bench/bench_free_path.py measures the gain)
+MID_SEARCH = (0.35, 0.65)
+WIDE_MAXFEV = 150
+WIDE_RESTARTS = 1
 #: the coarse grid: points per axis (k1, k2, η)
 SHAPE_GRID = (5, 5, 3)
 #: Nelder-Mead runs from this many best grid points (plus the table's shape); bench/bench_shape.py compares
@@ -91,6 +100,56 @@ def _log_secant_root(worst, start: float, xtol: float = 1e-7, iterations: int = 
     return None
 
 
+def _widened(f, shape_of, screen, best: tuple, bounds: list, arch_range: tuple) -> tuple:
+    """The widened family from Li's best ``best`` = (T, (k1, k2, η, 0, None, None, None)): Nelder-Mead over
+    (k1, k2[, η], arch/h, k3, k4, mid) from the symmetric shape (k3 = k1, k4 = k2, mid = 1/2, arch 0), restarted
+    ``WIDE_RESTARTS`` times from its own result (a simplex in 7-D stalls); kept only when it screens faster."""
+    from scipy.optimize import minimize
+
+    from ..paths.bspline import MID_RANGE
+
+    k1, k2, eta = best[1][:3]
+    na = len(bounds)
+    x = np.array([k1, k2, eta][:na] + [arch_range[0], k1, k2, 0.5])
+    wide = bounds + [tuple(arch_range), K_SEARCH, K_SEARCH, MID_SEARCH]
+    lo, hi = np.array([b[0] for b in wide]), np.array([b[1] for b in wide])
+    steps = np.array([0.05] * na + [ARCH_START, 0.05, 0.05, 0.03])
+    for _ in range(1 + WIDE_RESTARTS):
+        simplex = np.array([x] + [np.clip(x + np.eye(len(x))[i] * steps[i] * (1 if x[i] + steps[i] <= hi[i] else -1),
+                                          lo, hi) for i in range(len(x))])
+        res = minimize(f, x, method="Nelder-Mead", bounds=wide,
+                       options={"xatol": SHAPE_XATOL, "fatol": SHAPE_FATOL, "maxfev": WIDE_MAXFEV,
+                                "initial_simplex": simplex})
+        cand = shape_of(res.x)
+        v = screen(*cand)
+        if v < best[0]:
+            best = (v, cand)
+            x = np.clip(res.x, lo, hi)
+    assert MID_RANGE[0] <= MID_SEARCH[0] and MID_SEARCH[1] <= MID_RANGE[1]
+    return best
+
+
+def _grid_starts(screen, eta_fixed: float | None, lo_e: float, hi_e: float) -> list[tuple[float, float, float]]:
+    """The best ``SHAPE_STARTS`` points of the coarse (k1, k2, η) grid that are not neighbours of one another."""
+    n1, n2, ne = SHAPE_GRID
+    k_axis, k2_axis = _AXIS(n1), _AXIS(n2)
+    e_axis = np.linspace(lo_e, hi_e, ne) if eta_fixed is None else np.array([eta_fixed])
+    grid = [(a, b, e) for e in e_axis for a in k_axis for b in k2_axis]
+    vals = np.array([screen(*g) for g in grid])
+    order = np.argsort(vals)
+    starts: list[tuple[float, float, float]] = []
+    for i in order:  # the best grid points that are not neighbours of a start already taken
+        if not np.isfinite(vals[i]):
+            break  # sorted: the rest cannot be planned at all
+        g = np.array(grid[i])
+        step = np.array([k_axis[1] - k_axis[0], k2_axis[1] - k2_axis[0], (e_axis[1] - e_axis[0]) if len(e_axis) > 1 else 1.0])
+        if all(np.any(np.abs(g - np.array(s)) > 1.01 * step) for s in starts):
+            starts.append(tuple(g))
+        if len(starts) >= SHAPE_STARTS:
+            break
+    return starts
+
+
 @dataclass(frozen=True)
 class ShapeResult:
     """The chosen (k1, k2, η), its screened fit duration [s] (None when no shape keeps the duration-independent
@@ -105,16 +164,25 @@ class ShapeResult:
     t_table_screen: float | None
     evaluations: int
     note: str
+    arch: float = 0.0  # [m] the midpoint's height above the clearance (0: Li's path)
+    k3: float | None = None  # the set-down side's time-ratio factors and P3's knot (None: Li's symmetric knots)
+    k4: float | None = None
+    mid: float | None = None
+    symmetric: tuple[float, float, float] | None = None  # (k1, k2, η): the best of Li's family, before the widening
 
 
 @single_blas_thread
 def optimise_shape(task, profile, model_of, eta_fixed: float | None = None,
                    eta_range: tuple[float, float] = ETA_RANGE,
-                   table_shape: tuple[float, float, float] | None = None, capacity=None) -> ShapeResult:
+                   table_shape: tuple[float, float, float] | None = None, capacity=None,
+                   arch_range: tuple[float, float] | None = None) -> ShapeResult:
     """The (k1, k2, η) of the B-spline path of ``task`` with the smallest screened ``--time fit`` duration on
     ``profile`` (module docstring). ``model_of(path)``: the path's motion model on the profile's robot.
     ``eta_fixed``: hold η (search k1, k2 only). ``table_shape``: (k1, k2, η) of the look-up table, screened
-    and used as one more start. ``capacity``: also hold the Cartesian capacity (T ≥ Eq. 26's auto)."""
+    and used as one more start. ``capacity``: also hold the Cartesian capacity (T ≥ Eq. 26's auto).
+    ``arch_range``: the arch searched, as multiples of the clearance h (default ``ARCH_RANGE``; (0, 0): Li's
+    family only, no widening); the grid
+    screens Li's path (arch 0), Nelder-Mead searches the arch from every start."""
     from scipy.optimize import minimize
 
     from ..model.errors import PickplaceError
@@ -127,14 +195,18 @@ def optimise_shape(task, profile, model_of, eta_fixed: float | None = None,
     seen: dict[tuple, float] = {}
     last_t = [0.1]
 
-    def screen(k1: float, k2: float, eta: float) -> float:
-        key = (round(k1, 12), round(k2, 12), round(eta, 12))
+    arch_range = ARCH_RANGE if arch_range is None else arch_range
+    widen = arch_range[1] > arch_range[0]
+
+    def screen(k1: float, k2: float, eta: float, arch: float = 0.0, k3=None, k4=None, mid=None) -> float:
+        key = (round(k1, 12), round(k2, 12), round(eta, 12), round(arch, 15), k3, k4, mid)
         hit = seen.get(key)
         if hit is not None:
             return hit
         try:
             t = Task(task.p_from, task.p_to, task.height, eta)
-            path = plan_path(t, "bspline", k1=k1, k2=k2)
+            path = plan_path(t, "bspline", k1=k1, k2=k2, arch=arch, **(
+                {} if k3 is None else {"k3": k3, "k4": k4, "mid": mid}))
             model = model_of(path)
             tau = _extra_points(path.breakpoints, path.jumps, SHAPE_SAMPLES)
             found = _worst_utilisation(model, dwell, tau)
@@ -156,22 +228,7 @@ def optimise_shape(task, profile, model_of, eta_fixed: float | None = None,
         return val
 
     lo_e, hi_e = (eta_fixed, eta_fixed) if eta_fixed is not None else eta_range
-    n1, n2, ne = SHAPE_GRID
-    k_axis, k2_axis = _AXIS(n1), _AXIS(n2)
-    e_axis = np.linspace(lo_e, hi_e, ne) if eta_fixed is None else np.array([eta_fixed])
-    grid = [(a, b, e) for e in e_axis for a in k_axis for b in k2_axis]
-    vals = np.array([screen(*g) for g in grid])
-    order = np.argsort(vals)
-    starts: list[tuple[float, float, float]] = []
-    for i in order:  # the best grid points that are not neighbours of a start already taken
-        if not np.isfinite(vals[i]):
-            break  # sorted: the rest cannot be planned at all
-        g = np.array(grid[i])
-        step = np.array([k_axis[1] - k_axis[0], k2_axis[1] - k2_axis[0], (e_axis[1] - e_axis[0]) if len(e_axis) > 1 else 1.0])
-        if all(np.any(np.abs(g - np.array(s)) > 1.01 * step) for s in starts):
-            starts.append(tuple(g))
-        if len(starts) >= SHAPE_STARTS:
-            break
+    starts = _grid_starts(screen, eta_fixed, lo_e, hi_e)
     t_table = None
     if table_shape is not None:
         t_table = screen(*table_shape) if eta_fixed is None else screen(table_shape[0], table_shape[1], eta_fixed)
@@ -187,28 +244,105 @@ def optimise_shape(task, profile, model_of, eta_fixed: float | None = None,
     if not np.isfinite(best[0]):  # pragma: no cover - the starts are finite by construction
         best = (np.inf, starts[0])
     bounds = [K_SEARCH, K_SEARCH] + ([] if eta_fixed is not None else [(lo_e, hi_e)])
-    for s in starts:
-        x0 = np.array(s[:2] if eta_fixed is not None else s)
+    na = len(bounds)
 
-        def f(x: np.ndarray) -> float:
-            e = eta_fixed if eta_fixed is not None else float(x[2])
-            v = screen(float(x[0]), float(x[1]), e)
-            return v if np.isfinite(v) else 1e12
+    def shape_of(x: np.ndarray) -> tuple:
+        """(k1, k2, η, arch [m], k3, k4, mid) of a search vector (k1, k2[, η][, arch/h, k3, k4, mid])."""
+        e = eta_fixed if eta_fixed is not None else float(x[2])
+        if len(x) == na:
+            return float(x[0]), float(x[1]), e, 0.0, None, None, None
+        a = float(np.clip(x[na], *arch_range)) * task.height
+        return (float(x[0]), float(x[1]), e, a, *(float(v) for v in x[na + 1:]))
 
-        res = minimize(f, x0, method="Nelder-Mead", bounds=bounds,
+    def f(x: np.ndarray) -> float:
+        v = screen(*shape_of(x))
+        return v if np.isfinite(v) else 1e12
+
+    for s in starts:  # Li's family from every start
+        res = minimize(f, np.array(s[:na]), method="Nelder-Mead", bounds=bounds,
                        options={"xatol": SHAPE_XATOL, "fatol": SHAPE_FATOL, "maxfev": SHAPE_MAXFEV})
-        x = res.x
-        cand = (float(x[0]), float(x[1]), eta_fixed if eta_fixed is not None else float(x[2]))
+        cand = shape_of(res.x)
         v = screen(*cand)
         if v < best[0]:
             best = (v, cand)
-    t_best, (k1, k2, eta) = best
+    best = (best[0], tuple(best[1][:3]) + (0.0, None, None, None))
+    li_best = tuple(float(v) for v in best[1][:3])
+    if widen:
+        best = _widened(f, shape_of, screen, best, bounds, arch_range)
+    t_best, (k1, k2, eta, arch, k3, k4, mid) = best
     if t_best >= INFEASIBLE:
         note_static = ("; no shape keeps the joint ranges, the workcell box and the singularity margin: the one "
                        "that breaks them least is planned and the check reports it")
     else:
         note_static = ""
     what = "k1, k2" if eta_fixed is not None else f"k1, k2, η ∈ [{lo_e:g}, {hi_e:g}]"
+    if widen:
+        what += (f", arch ∈ [{arch_range[0]:g}, {arch_range[1]:g}]·h and the asymmetric knots (k3, k4, mid) from "
+                 "Li's best")
     note = f"{what} searched: {len(seen)} shapes screened, {len(starts)} Nelder-Mead starts{note_static}"
     return ShapeResult(float(k1), float(k2), float(eta), float(t_best) if t_best < INFEASIBLE else None,
-                       table_shape, None if t_table is None or t_table >= INFEASIBLE else float(t_table), len(seen), note)
+                       table_shape, None if t_table is None or t_table >= INFEASIBLE else float(t_table), len(seen), note,
+                       float(arch), k3, k4, mid, li_best)
+
+
+#: ``--time optimal``: shapes judged by the optimal law itself after the screened search, besides the screened
+#: winner and the table's shape (each costs a law solve, ~0.15 s on the Adept cycle): 0 = none (the default).
+#: bench/bench_free_path.py measures what a budget buys against the free-path minimum time
+LAW_POLISH_EVALS = 0
+
+
+def judge_by_law(task, profile, found: ShapeResult, model_of, hold_capacity: bool, evals: int = 0) -> ShapeResult:
+    """``--time optimal``: the screened winner ``found``, Li's family's best and the table's shape judged by the duration of the
+    optimal law on each (the screen ranks shapes by the uniform law's fit, with the capacity by Eq. 26's auto: a
+    shape faster for the uniform law can be slower for the optimal one), the faster kept; then, with ``evals`` > 0,
+    Nelder-Mead over the widened family (k1, k2, η, arch/h, k3, k4, mid) from it with the law's duration as the
+    objective (at most ``evals`` more law solves)."""
+    from scipy.optimize import minimize
+
+    from ..model.errors import PickplaceError
+    from ..model.task import Task
+    from ..paths import plan_path
+    from . import choose_optimal
+
+    dwell = profile.planning.dwell
+    seen: dict = {}
+
+    def law_time(x: np.ndarray) -> float:
+        key = tuple(np.round(x, 12))
+        if key not in seen:
+            k1, k2, eta, arch, k3, k4, mid = (float(v) for v in x)
+            wide = {} if (k3, k4, mid) == (k1, k2, 0.5) else {"k3": k3, "k4": k4, "mid": mid}
+            try:
+                path = plan_path(Task(task.p_from, task.p_to, task.height, eta), "bspline", k1=k1, k2=k2,
+                                 arch=arch * task.height, **wide)
+                seen[key] = choose_optimal(path, profile, model_of(path), dwell, model_of,
+                                           hold_capacity=hold_capacity)[0].seconds
+            except PickplaceError:
+                seen[key] = 1e12
+        return seen[key]
+
+    bounds = [K_SEARCH, K_SEARCH, ETA_RANGE, ARCH_RANGE, K_SEARCH, K_SEARCH, MID_SEARCH]
+    x0 = np.array([found.k1, found.k2, found.eta, found.arch / task.height,
+                   found.k1 if found.k3 is None else found.k3, found.k2 if found.k4 is None else found.k4,
+                   0.5 if found.mid is None else found.mid])
+    cands, names = [x0], ["the screened shape"]
+    for other, name in ((found.symmetric, "Li's family's best"), (found.table, "the table's shape")):
+        if other is not None:
+            k1, k2, eta = other
+            cands.append(np.array([k1, k2, eta, 0.0, k1, k2, 0.5]))
+            names.append(name)
+    x = min(cands, key=law_time)
+    if evals > 0:
+        lo, hi = np.array([b[0] for b in bounds]), np.array([b[1] for b in bounds])
+        res = minimize(law_time, np.clip(x, lo, hi), method="Nelder-Mead", bounds=bounds,
+                       options={"xatol": SHAPE_XATOL, "fatol": SHAPE_FATOL, "maxfev": evals})
+        if law_time(res.x) < law_time(x):
+            x = res.x
+    if x is x0:
+        return found
+    k1, k2, eta, arch, k3, k4, mid = (float(v) for v in x)
+    sym = (k3, k4, mid) == (k1, k2, 0.5)
+    which = next((name for c, name in zip(cands, names) if x is c), "a shape")
+    return ShapeResult(k1, k2, eta, found.t_screen, found.table, found.t_table_screen, found.evaluations + len(seen),
+                       f"{found.note}; {which} judged faster by the optimal law itself ({len(seen)} law solves)",
+                       arch * task.height, None if sym else k3, None if sym else k4, None if sym else mid)
