@@ -156,7 +156,8 @@ def _one_warning(state: dict):
 def _on_sigterm(signum, frame) -> None:  # noqa: ARG001 - signal handler signature
     """SIGTERM (``kill``, ``timeout``, ``docker stop``, systemd; to the process or its whole group): stop at once, in
     the handler, whatever the main thread is doing — remove the temporary ``-o`` files being written
-    (:data:`pickplace_cli.export.PENDING`), say so in one line, kill the worker processes and exit 143. Not by
+    (:data:`pickplace_cli.export.PENDING`), say so in one line, kill the worker processes, reap them (so none outlives this
+    process, even as a zombie that a slow init collects seconds later) and exit 143. Not by
     unwinding: a pool worker killed while sending a result leaves the pool's result pipe half-written, and a pool
     shut down in an orderly way then waits forever for the rest of it. A forked worker whose parent is alive
     leaves the signal to the parent (which kills it); an orphaned one dies of it."""
@@ -179,8 +180,11 @@ def _on_sigterm(signum, frame) -> None:  # noqa: ARG001 - signal handler signatu
         sys.stderr.flush()
         import multiprocessing
 
-        for child in multiprocessing.active_children():
+        children = multiprocessing.active_children()
+        for child in children:
             child.kill()
+        for child in children:  # reap them: gone when this process is, not zombies left for init to collect
+            child.join(5.0)
     finally:
         os._exit(143)
 

@@ -86,6 +86,7 @@ def build_table_cmd(
     """
     from ..model.errors import TableError
     from ..lookup.bspline_build import run_build
+    from .guards import cap_workers
     from ..lookup.bspline_optimum import TableSettings
     from ..lookup.bspline_table import format_table
 
@@ -96,6 +97,8 @@ def build_table_cmd(
     if st_dialect != StDialect.strict and table_format != TableFormat.st:
         _usage(f"--st-dialect applies to --format st, not {table_format.value}")
     _ST_DIALECT[0] = st_dialect.value
+    if not scheduler:
+        workers = cap_workers(workers)
     if table_method == TableMethod.bspline_vel:
         if scheduler or resume or table_format != TableFormat.csv:
             _usage("--method bspline-vel builds on local processes into a CSV (no --scheduler, --resume, --format)")
@@ -255,8 +258,6 @@ def _checkpointed_rows(ckpt, settings) -> int:
 
 def _build_vel_table(eta: float, workers: int, output: str, quiet: bool) -> None:
     """build-table --method bspline-vel: Yang 2022 optima on the default dimensionless grid."""
-    import os
-
     from ..model.errors import TableError
     from ..export import atomic_output, check_writable
     from ..lookup.vel_table import VelGrid, build_vel_table, format_vel_table
@@ -265,7 +266,9 @@ def _build_vel_table(eta: float, workers: int, output: str, quiet: bool) -> None
         raise TableError(f"workers = {workers}: must be 0 (all cores) or a positive number")
     check_writable(output)
     grid = VelGrid(eta=eta)
-    n_workers = workers or os.cpu_count() or 1
+    from .guards import available_cores
+
+    n_workers = workers or available_cores()
     if quiet:
         table = build_vel_table(grid, workers=n_workers)
     else:
@@ -314,9 +317,9 @@ def _engine(stack: contextlib.ExitStack, scheduler, workers: int, quiet: bool, t
     """(executor or None, workers, progress callback or None) of a build (or a line sweep: ``label``): a Dask
     cluster when ``scheduler`` is given, else ``workers`` local processes (0: all cores); a rich progress bar on
     stderr unless ``quiet``."""
-    import os
+    from .guards import available_cores
 
-    n_workers = workers or os.cpu_count() or 1
+    n_workers = workers or available_cores()
     executor = None
     if scheduler:
         from ..lookup.executors import dask_executor

@@ -332,6 +332,9 @@ def plan(
             from ..model.errors import TaskError
 
             raise TaskError(f"workers = {workers}: must be 0 (automatic) or a positive number of processes")
+        from .guards import cap_workers
+
+        workers = cap_workers(workers)
         source = ctx.get_parameter_source("method")
         belt = {"latency": latency, "method_given": source is not None and source.name != "DEFAULT"}
         _plan_batch(batch, prof, options, height, eta, fail_fast, writer, a.output, report, write_anyway, json_summary,
