@@ -163,9 +163,14 @@ def iter_batch(stream: IO[str], source: str = "batch", info: dict | None = None)
         )
 
 
+#: the dimensionless columns: unit ``1`` (also written ``[-]`` or ``[]``)
+DIMENSIONLESS = ("eta", "limit_use")
+
+
 def _unit_of(name: str) -> str:
-    """The SI unit of a batch column (``1`` for η), as a header may write it: ``from_x[m]``, ``time[s]``."""
-    if name == "eta":
+    """The SI unit of a batch column (``1`` for η and limit_use), as a header may write it: ``from_x[m]``,
+    ``time[s]``, ``limit_use[1]``."""
+    if name in DIMENSIONLESS:
         return "1"
     if name in ("time", "latency", "t_detect"):
         return "s"
@@ -185,7 +190,7 @@ def _without_unit(name: str, source: str, line: int) -> str:
     base, unit = base.strip(), unit.strip()
     if base not in REQUIRED + OPTIONAL + SCHEDULE_REQUIRED + SCHEDULE_OPTIONAL:
         return name  # an unknown column: reported as such, with its text
-    if unit != _unit_of(base) and not (base == "eta" and unit in ("", "-")):
+    if unit != _unit_of(base) and not (base in DIMENSIONLESS and unit in ("", "-")):
         raise TaskError(f"{source}:{line}: column {name!r}: {base} is read in {_unit_of(base)} "
                         f"(write {base} or {base}[{_unit_of(base)}])")
     return base
