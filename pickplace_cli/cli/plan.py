@@ -84,11 +84,12 @@ def plan(
     ),
     v_from: Optional[str] = typer.Option(
         None, "--v-from", "--from-belt", help="Tool velocity VX,VY,VZ in m/s (base frame) leaving the pick point, e.g. the pick "
-        "conveyor's (--method bspline-vel). [default: profile workcell.conveyor_pick_velocity, else 0]"
+        "conveyor's; a velocity other than 0 selects --method bspline-vel unless -m names one. [default: profile "
+        "workcell.conveyor_pick_velocity, else 0]"
     ),
     v_to: Optional[str] = typer.Option(
-        None, "--v-to", help="Tool velocity VX,VY,VZ in m/s arriving at the place point (--method bspline-vel). "
-        "[default: profile workcell.conveyor_place_velocity, else 0]"
+        None, "--v-to", help="Tool velocity VX,VY,VZ in m/s arriving at the place point; a velocity other than 0 "
+        "selects --method bspline-vel unless -m names one. [default: profile workcell.conveyor_place_velocity, else 0]"
     ),
     to_belt: Optional[str] = typer.Option(
         None, "--to-belt", help="Conveyor rendezvous: the part at --to (m, when it was detected) moves at VX,VY,VZ m/s "
@@ -169,7 +170,8 @@ def plan(
         None, "--tolerance", help="pvt, cam, cam-table: the largest deviation in rad (revolute joint) or m (linear) of "
         "the controller's interpolation of the table from the planned trajectory; the table has the fewest points that "
         "hold it and, as the drive interpolates it, every limit (more points, else a slower table; exit 3 when it "
-        "cannot; PVT steps bounded by the torque rate over one cycle). The achieved error is reported. [default: 1e-6]",
+        "cannot; PVT steps bounded by the torque rate over one cycle). The achieved error is reported. At most 0.001 "
+        "(1 mrad or 1 mm). [default: 1e-6]",
     ),
     st_dialect: StDialect = typer.Option(
         StDialect.strict, "--st-dialect", help="pvt-st, cam-st, cam-table-st: strict (IEC 61131-3: a FUNCTION_BLOCK "
@@ -307,6 +309,8 @@ def plan(
         _finite_latency(latency)
     elif to_belt is not None or latency is not None:
         a.method = _belt_method(ctx, method, to_belt, latency, v_to, batch, round_trip, fit_ws, optimize)
+    elif batch is None and (v_from is not None or v_to is not None):
+        a.method = _moving_ends_method(ctx, method, v_from, v_to)
     from ..model.headroom import apply_limit_use
 
     prof = apply_limit_use(load_profile(profile), limit_use)  # --limit-use, else the profile's planning.limit_use
@@ -546,6 +550,17 @@ def _belt_method(ctx, method, to_belt, latency, v_to, batch, round_trip, fit_ws,
 
     raise TaskError(f"to-belt: method {method.value} plans moves from rest to rest; a moving end needs "
                     "--method bspline-vel (the default with --to-belt)")
+
+
+def _moving_ends_method(ctx, method, v_from, v_to):
+    """--from-belt/--v-from, --v-to with a velocity other than zero: the method that supports moving ends
+    (bspline-vel), as --to-belt chooses it, unless -m names one (a rest-to-rest method is then refused)."""
+    source = ctx.get_parameter_source("method")
+    if source is not None and source.name != "DEFAULT":
+        return method
+    moving = any(any(_parse_point(name, text, "m/s")) for name, text in (("v-from", v_from), ("v-to", v_to))
+                 if text is not None)
+    return MethodName.bspline_vel if moving else method
 
 
 def _plan_to_belt(task, to_belt, latency, prof, time, v_from, params, rate, options):
