@@ -17,7 +17,9 @@ def _usage_error_line(self, file=None) -> None:  # noqa: ARG001 - click's signat
     like every other error: ``pickplace: error: MESSAGE (see COMMAND --help)``, instead of click's four."""
     ctx = getattr(self, "ctx", None)
     hint = f" (see {ctx.command_path if ctx is not None else 'pickplace'} --help)"
-    typer.echo(f"pickplace: error: {self.format_message()}{hint}", err=True)
+    from ..model.text import shorten_quoted
+
+    typer.echo(f"pickplace: error: {shorten_quoted(self.format_message())}{hint}", err=True)
 
 
 def _one_line_usage_errors() -> None:
@@ -129,8 +131,11 @@ class TurnDuring(str, Enum):
 
 
 def _err(message: str) -> None:
-    """``pickplace: error: MESSAGE`` on stderr; a message of several problems (a profile's): one line each."""
-    sys.stderr.write("".join(f"pickplace: error: {line}\n" for line in message.splitlines() or [""]))
+    """``pickplace: error: MESSAGE`` on stderr; a message of several problems (a profile's): one line each; a
+    quoted value longer than 60 characters cut (:func:`~pickplace_cli.model.text.shorten_quoted`)."""
+    from ..model.text import shorten_quoted
+
+    sys.stderr.write("".join(f"pickplace: error: {shorten_quoted(line)}\n" for line in message.splitlines() or [""]))
 
 
 def _one_warning(state: dict):
@@ -274,6 +279,9 @@ _CLICK_EXCEPTIONS = tuple({c for e in (typer.Exit, typer.Abort, typer.BadParamet
 
 def _fail_json(code: int, message: str) -> None:
     """One error line (and the JSON document of ``--json``), then exit ``code``."""
+    from ..model.text import shorten_quoted
+
+    message = shorten_quoted(message)
     _err(message)
     if _JSON_ERRORS[0]:
         import json
@@ -323,23 +331,24 @@ def _usage(message: str) -> None:
 
 def _parse_point(name: str, text: str, unit: str = "m"):
     from ..model.errors import TaskError
+    from ..model.text import quoted
 
     words = "metres" if unit == "m" else unit
     what = "coordinates" if unit == "m" else "components"
     parts = [p.strip() for p in text.split(",")]
     if len(parts) != 3 or not all(parts):
         example = "-0.1525,0,-0.8" if unit == "m" else "0,0.2,0"
-        raise TaskError(f"{name} = {text!r}: give three {what} X,Y,Z in {words}, e.g. {example}")
+        raise TaskError(f"{name} = {quoted(text)}: give three {what} X,Y,Z in {words}, e.g. {example}")
     from ..model.text import plain_float
 
     try:
         values = [plain_float(p) for p in parts]
     except ValueError:
-        raise TaskError(f"{name} = {text!r}: every {what[:-1]} must be a number in {words}") from None
+        raise TaskError(f"{name} = {quoted(text)}: every {what[:-1]} must be a number in {words}") from None
     import math
 
     if not all(math.isfinite(v) for v in values):
-        raise TaskError(f"{name} = {text!r}: every coordinate must be a finite number (no NaN or inf)")
+        raise TaskError(f"{name} = {quoted(text)}: every coordinate must be a finite number (no NaN or inf)")
     return values
 
 
@@ -347,6 +356,7 @@ def _parse_pose(name: str, text: str) -> tuple[list, Optional[float]]:
     """--from/--to: X,Y,Z in m, optionally a fourth number THETA, the tool angle in rad about the base z axis (a
     robot with a rotary fourth axis) → (xyz, theta or None); TaskError naming the option, the text and the rule."""
     from ..model.errors import TaskError
+    from ..model.text import quoted
 
     parts = [p.strip() for p in text.split(",")]
     if len(parts) == 4 and all(parts):
@@ -355,14 +365,14 @@ def _parse_pose(name: str, text: str) -> tuple[list, Optional[float]]:
         try:
             theta = plain_float(parts[3])
         except ValueError:
-            raise TaskError(f"{name} = {text!r}: the fourth number, the tool angle THETA, must be a number in rad") from None
+            raise TaskError(f"{name} = {quoted(text)}: the fourth number, the tool angle THETA, must be a number in rad") from None
         import math
 
         if not math.isfinite(theta):
-            raise TaskError(f"{name} = {text!r}: the tool angle THETA must be a finite number of radians (no NaN or inf)")
+            raise TaskError(f"{name} = {quoted(text)}: the tool angle THETA must be a finite number of radians (no NaN or inf)")
         return _parse_point(name, ",".join(parts[:3])), theta
     if len(parts) > 4 or (len(parts) == 4 and not all(parts)):
-        raise TaskError(f"{name} = {text!r}: give X,Y,Z in metres and optionally the tool angle THETA in rad, e.g. "
+        raise TaskError(f"{name} = {quoted(text)}: give X,Y,Z in metres and optionally the tool angle THETA in rad, e.g. "
                         "-0.1525,0,-0.8,1.5708")
     return _parse_point(name, text), None
 

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from typing import IO, Any, Iterator
 
 from ..model.errors import PickplaceError, TaskError
-from ..model.text import plain_float, utf16_hint
+from ..model.text import plain_float, quoted, utf16_hint
 
 REQUIRED = ("from_x", "from_y", "from_z", "to_x", "to_y", "to_z")
 #: a belt row of a plain batch (no ``t_detect``): the part was at ``to`` [m] when detected and moves at
@@ -272,11 +272,11 @@ def _row(number: int, line: int, text: str, header: list[str], sep: str, source:
                     hint += " (plain ASCII digits: no '_' separators, no other scripts' or full-width digits)"
                 if name == "time":
                     hint += "; give seconds, or limits, auto, fit or optimal"
-                raise TaskError(f"{name} = {cell!r}: not a number{hint}") from None
+                raise TaskError(f"{name} = {quoted(cell)}: not a number{hint}") from None
             if not math.isfinite(x):
-                raise TaskError(f"{name} = {cell!r}: must be finite")
+                raise TaskError(f"{name} = {quoted(cell)}: must be finite")
             if name == "latency" and x < 0:
-                raise TaskError(f"latency = {cell!r}: must be >= 0 s (the earliest move start after the detection)")
+                raise TaskError(f"latency = {quoted(cell)}: must be >= 0 s (the earliest move start after the detection)")
             if name == "limit_use":
                 from ..model.headroom import check_limit_use
 

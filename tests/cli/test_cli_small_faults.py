@@ -73,3 +73,31 @@ def test_from_belt_chooses_the_conveyor_method_as_to_belt_does(tmp_path):
     assert r.exit_code == 1 and "method lame plans moves from rest to rest" in r.output
     r = _run("plan", *ADEPT, "--from-belt", "0,0,0", "-o", str(tmp_path / "b.csv"))
     assert r.exit_code == 0 and r.output.startswith("delta-su2018 / bspline:"), r.output
+
+
+BIG = "1" * 5000
+
+
+@pytest.mark.parametrize("args, says", [
+    (["plan", *ADEPT, "--time", BIG], "time = '" + "1" * 60 + "' … (5,000 characters)"),
+    (["plan", "--from", BIG + ",0,-0.8", "--to", "0.1525,0,-0.8"], "from = '" + "1" * 60 + "' … (5,007 characters)"),
+    (["plan", *ADEPT, "-m", BIG], "'" + "1" * 60 + "' … (5,000 characters)"),
+    (["build-table", "--weights", BIG], "weights = '" + "1" * 60 + "' … (5,000 characters)"),
+])
+def test_a_5000_digit_value_is_one_short_error_line(args, says):
+    """A 5,000-digit number pasted into an option: one line that shows the value cut to 60 characters with its
+    length (the whole value was echoed, a 5,000-character line)."""
+    r = _run(*args)
+    assert r.exit_code in (1, 2), r.output
+    lines = r.output.splitlines()
+    assert len(lines) == 1 and len(lines[0]) < 300 and says in lines[0], r.output[:300]
+    assert "internal error" not in r.output
+
+
+def test_a_5000_digit_cell_of_a_batch_is_one_short_error(tmp_path):
+    src = tmp_path / "m.csv"
+    src.write_text("from_x,from_y,from_z,to_x,to_y,to_z\n" + BIG + ",0,-0.8,0.1525,0,-0.8\n")
+    r = _run("plan", "--batch", str(src), "--json", "-q")
+    assert r.exit_code == 1
+    assert "from_x = '" + "1" * 60 + "' … (5,000 characters): must be finite" in r.output
+    assert max(len(line) for line in r.output.splitlines()) < 300
