@@ -32,6 +32,45 @@ def _one_line_usage_errors() -> None:
 
 _one_line_usage_errors()
 
+
+class Panel:
+    """The groups of a command's options in ``--help``, in the order they are shown (the common ones first); every
+    option names one (``typer.Option(…, rich_help_panel=Panel.MOVE)``; tests/cli/test_help_panels.py)."""
+
+    MOVE = "Move"
+    METHOD = "Method and duration"
+    BELT = "Belt and conveyor"
+    OUTPUT = "Output"
+    CONTROLLER = "Controller and drive"
+    LIMITS = "Limits and checks"
+    BATCH = "Batch and performance"
+    STUDY = "Plot and study"
+    ORDER = (MOVE, METHOD, BELT, OUTPUT, CONTROLLER, LIMITS, BATCH, STUDY)
+
+
+def _options_by_panel(self, ctx, formatter) -> None:
+    """A command's ``--help`` options in sections, one per :class:`Panel` in its order (plain text: the help is
+    printed without rich), then ``Options`` for those without a panel (``--help``)."""
+    args, panels = [], {}
+    for param in self.get_params(ctx):
+        record = param.get_help_record(ctx)
+        if record is None:
+            continue
+        if param.param_type_name == "argument":
+            args.append(record)
+        elif param.param_type_name == "option":
+            panels.setdefault(getattr(param, "rich_help_panel", None) or "Options", []).append(record)
+    if args:
+        with formatter.section("Arguments"):
+            formatter.write_dl(args)
+    order = [p for p in Panel.ORDER if p in panels] + [p for p in panels if p not in Panel.ORDER]
+    for name in order:
+        with formatter.section(name):
+            formatter.write_dl(panels[name])
+
+
+typer.core.TyperCommand.format_options = _options_by_panel  # type: ignore[method-assign]
+
 app = typer.Typer(
     name="pickplace",
     help=(

@@ -6,7 +6,7 @@ from typing import Optional
 
 import typer
 
-from .app import _finite, _handle_errors, app
+from .app import Panel, _finite, _handle_errors, app
 
 
 profile_app = typer.Typer(help="Validate, inspect, list or copy robot/workcell profiles.", no_args_is_help=True)
@@ -33,7 +33,7 @@ def profile_validate(
 @_handle_errors
 def profile_show(
     profile: str = typer.Argument("delta-su2018", help="Profile YAML file or shipped name."),
-    z: Optional[float] = typer.Option(None, "--z", help="Working height in m for the workspace extent. [default: middle of the workcell box, or the robot's home height]"),
+    z: Optional[float] = typer.Option(None, "--z", help="Working height in m for the workspace extent. [default: middle of the workcell box, or the robot's home height]", rich_help_panel=Panel.STUDY),
 ) -> None:
     """Show a profile with its derived values: lumped masses, workspace extent at the working height, limits."""
     from .render import console
