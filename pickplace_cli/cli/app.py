@@ -222,15 +222,57 @@ def _on_sigterm(signum, frame) -> None:  # noqa: ARG001 - signal handler signatu
         for note in _TERM_NOTES:
             sys.stderr.write(note)
         sys.stderr.flush()
-        import multiprocessing
-
-        children = multiprocessing.active_children()
-        for child in children:
-            child.kill()
-        for child in children:  # reap them: gone when this process is, not zombies left for init to collect
-            child.join(5.0)
+        _kill_and_reap_children()
     finally:
         os._exit(143)
+
+
+def _child_pids() -> set:
+    """This process's child processes: the pool's workers multiprocessing knows of and, from /proc, any other (a
+    worker forked the instant SIGTERM came, before the pool recorded it)."""
+    import multiprocessing
+    import os
+
+    pids = {c.pid for c in multiprocessing.active_children() if c.pid}
+    me = str(os.getpid())
+    try:
+        entries = [e for e in os.listdir("/proc") if e.isdigit()]
+    except OSError:  # no /proc (not Linux): the ones multiprocessing knows
+        return pids
+    for entry in entries:
+        try:
+            with open(f"/proc/{entry}/stat") as fh:
+                if fh.read().rsplit(")", 1)[1].split()[1] == me:
+                    pids.add(int(entry))
+        except (OSError, IndexError):
+            continue
+    return pids
+
+
+def _kill_and_reap_children(timeout: float = 5.0) -> None:
+    """SIGKILL to every child process, then reap them (within ``timeout`` s): gone when this process is, none left
+    running or as a zombie for a slow init to collect seconds later."""
+    import os
+    import signal
+    import time
+
+    pids = _child_pids()
+    for pid in pids:
+        try:
+            os.kill(pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+    deadline = time.monotonic() + timeout
+    for pid in pids:
+        while True:
+            try:
+                if os.waitpid(pid, os.WNOHANG)[0]:
+                    break
+            except ChildProcessError:  # reaped already (by the pool's own thread)
+                break
+            if time.monotonic() > deadline:
+                return
+            time.sleep(0.002)
 
 
 _MAIN_PID = [0]

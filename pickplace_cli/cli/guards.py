@@ -89,10 +89,16 @@ def available_cores() -> int:
         return os.cpu_count() or 1
 
 
-def cap_workers(workers: int) -> int:
+def cap_workers(workers: int, refuse_negative: str = "") -> int:
     """``-j N`` capped at the cores this process may use (more processes only share them), with a one-line note on
-    stderr; 0 (automatic) and negative values (refused by the command) are returned as they are."""
+    stderr; 0 (automatic) is returned as it is, a negative value too or, given ``refuse_negative`` (the rule), a
+    TaskError (exit 1)."""
     import sys
+
+    if workers < 0 and refuse_negative:
+        from ..model.errors import TaskError
+
+        raise TaskError(f"workers = {workers}: {refuse_negative}")
 
     cores = available_cores()
     if workers > cores:

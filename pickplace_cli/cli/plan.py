@@ -355,13 +355,9 @@ def plan(
                           law_coefficients=_law_coefficients(law_coefficients), limit_use=limit_use,
                           cycle=a.cycle_s, turn=turn.value, turn_during=turn_during.value)
     if batch is not None:
-        if workers < 0:
-            from ..model.errors import TaskError
-
-            raise TaskError(f"workers = {workers}: must be 0 (automatic) or a positive number of processes")
         from .guards import cap_workers
 
-        workers = cap_workers(workers)
+        workers = cap_workers(workers, "must be 0 (automatic) or a positive number of processes")
         source = ctx.get_parameter_source("method")
         belt = {"latency": latency, "method_given": source is not None and source.name != "DEFAULT"}
         _plan_batch(batch, prof, options, height, eta, fail_fast, writer, a.output, report, write_anyway, json_summary,
