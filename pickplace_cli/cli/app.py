@@ -10,6 +10,7 @@ from typing import Callable, Optional
 import typer
 
 from .. import __version__
+from ..model.methods import Method
 
 
 def _usage_error_line(self, file=None) -> None:  # noqa: ARG001 - click's signature
@@ -137,15 +138,8 @@ class Compression(str, Enum):
     zstd = "zstd"
 
 
-class MethodName(str, Enum):
-    """Mirror of pickplace_cli.paths.Method (kept here so --help needs no numpy)."""
-
-    bspline = "bspline"
-    ph = "ph"
-    superposition = "superposition"
-    lame = "lame"
-    piecewise_poly = "piecewise-poly"
-    bspline_vel = "bspline-vel"
+#: --method: the library's own list of methods (its module imports no numpy, so --help stays fast)
+MethodName = Method
 
 
 class OptimizeWhat(str, Enum):
