@@ -141,10 +141,13 @@ def controller_lines(prof) -> list[str]:
     if c is None:
         return ["controller: none (no cycle: samples at planning.rate; drive columns in the model's units)"]
     cycle = "no cycle (samples at planning.rate)" if c.cycle is None else f"cycle {c.cycle:g} s"
+    from ..model.controller import joint_kinds
+
     lines = [f"controller: {cycle}"]
-    for j in c.joints or ():
+    for j, kind in zip(c.joints or (), joint_kinds(prof.robot)):
         extra = f", {j.counts_per_rev} counts per motor revolution" if j.counts_per_rev is not None else ""
-        lines.append(f"    drive joint {j.name}: unit {j.unit}{extra}, sign {j.sign:+d}, offset {j.offset:g} (rad or m)")
+        unit = "rad" if kind == "revolute" else "m"
+        lines.append(f"    drive joint {j.name}: unit {j.unit}{extra}, sign {j.sign:+d}, offset {j.offset:g} {unit}")
     return lines
 
 

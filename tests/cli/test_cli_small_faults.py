@@ -47,7 +47,9 @@ def test_profile_show_prints_the_workcell_and_the_controller():
     assert r.exit_code == 0, r.output
     assert "workcell: box (-0.6, -0.6, -1.1) … (0.6, 0.6, -0.55) m (the tool stays inside)" in r.output
     assert "controller: no cycle (samples at planning.rate)" in r.output
-    assert "drive joint A4: unit counts, 1048576 counts per motor revolution, sign +1, offset 0 (rad or m)" in r.output
+    assert "drive joint A4: unit counts, 1048576 counts per motor revolution, sign +1, offset 0 rad" in r.output
+    r = _run("profile", "show", "scara-600")
+    assert "drive joint J3: unit mm, sign -1, offset 0 m" in r.output
     r = _run("profile", "show", "gantry")
     assert "workcell: no box" in r.output and "drive joint AxisX: unit mm" in r.output
 
