@@ -10,6 +10,7 @@ from typing import Callable, Optional
 import typer
 
 from .. import __version__
+from ..model.methods import Method
 
 
 def _usage_error_line(self, file=None) -> None:  # noqa: ARG001 - click's signature
@@ -17,7 +18,9 @@ def _usage_error_line(self, file=None) -> None:  # noqa: ARG001 - click's signat
     like every other error: ``pickplace: error: MESSAGE (see COMMAND --help)``, instead of click's four."""
     ctx = getattr(self, "ctx", None)
     hint = f" (see {ctx.command_path if ctx is not None else 'pickplace'} --help)"
-    typer.echo(f"pickplace: error: {self.format_message()}{hint}", err=True)
+    from ..model.text import shorten_quoted
+
+    typer.echo(f"pickplace: error: {shorten_quoted(self.format_message())}{hint}", err=True)
 
 
 def _one_line_usage_errors() -> None:
@@ -29,6 +32,45 @@ def _one_line_usage_errors() -> None:
 
 
 _one_line_usage_errors()
+
+
+class Panel:
+    """The groups of a command's options in ``--help``, in the order they are shown (the common ones first); every
+    option names one (``typer.Option(…, rich_help_panel=Panel.MOVE)``; tests/cli/test_help_panels.py)."""
+
+    MOVE = "Move"
+    METHOD = "Method and duration"
+    BELT = "Belt and conveyor"
+    OUTPUT = "Output"
+    CONTROLLER = "Controller and drive"
+    LIMITS = "Limits and checks"
+    BATCH = "Batch and performance"
+    STUDY = "Plot and study"
+    ORDER = (MOVE, METHOD, BELT, OUTPUT, CONTROLLER, LIMITS, BATCH, STUDY)
+
+
+def _options_by_panel(self, ctx, formatter) -> None:
+    """A command's ``--help`` options in sections, one per :class:`Panel` in its order (plain text: the help is
+    printed without rich), then ``Options`` for those without a panel (``--help``)."""
+    args, panels = [], {}
+    for param in self.get_params(ctx):
+        record = param.get_help_record(ctx)
+        if record is None:
+            continue
+        if param.param_type_name == "argument":
+            args.append(record)
+        elif param.param_type_name == "option":
+            panels.setdefault(getattr(param, "rich_help_panel", None) or "Options", []).append(record)
+    if args:
+        with formatter.section("Arguments"):
+            formatter.write_dl(args)
+    order = [p for p in Panel.ORDER if p in panels] + [p for p in panels if p not in Panel.ORDER]
+    for name in order:
+        with formatter.section(name):
+            formatter.write_dl(panels[name])
+
+
+typer.core.TyperCommand.format_options = _options_by_panel  # type: ignore[method-assign]
 
 app = typer.Typer(
     name="pickplace",
@@ -104,15 +146,8 @@ class Compression(str, Enum):
     zstd = "zstd"
 
 
-class MethodName(str, Enum):
-    """Mirror of pickplace_cli.paths.Method (kept here so --help needs no numpy)."""
-
-    bspline = "bspline"
-    ph = "ph"
-    superposition = "superposition"
-    lame = "lame"
-    piecewise_poly = "piecewise-poly"
-    bspline_vel = "bspline-vel"
+#: --method: the library's own list of methods (its module imports no numpy, so --help stays fast)
+MethodName = Method
 
 
 class OptimizeWhat(str, Enum):
@@ -137,8 +172,11 @@ class TurnDuring(str, Enum):
 
 
 def _err(message: str) -> None:
-    """``pickplace: error: MESSAGE`` on stderr; a message of several problems (a profile's): one line each."""
-    sys.stderr.write("".join(f"pickplace: error: {line}\n" for line in message.splitlines() or [""]))
+    """``pickplace: error: MESSAGE`` on stderr; a message of several problems (a profile's): one line each; a
+    quoted value longer than 60 characters cut (:func:`~pickplace_cli.model.text.shorten_quoted`)."""
+    from ..model.text import shorten_quoted
+
+    sys.stderr.write("".join(f"pickplace: error: {shorten_quoted(line)}\n" for line in message.splitlines() or [""]))
 
 
 def _one_warning(state: dict):
@@ -164,7 +202,8 @@ def _one_warning(state: dict):
 def _on_sigterm(signum, frame) -> None:  # noqa: ARG001 - signal handler signature
     """SIGTERM (``kill``, ``timeout``, ``docker stop``, systemd; to the process or its whole group): stop at once, in
     the handler, whatever the main thread is doing — remove the temporary ``-o`` files being written
-    (:data:`pickplace_cli.export.PENDING`), say so in one line, kill the worker processes and exit 143. Not by
+    (:data:`pickplace_cli.export.PENDING`), say so in one line, kill the worker processes, reap them (so none outlives this
+    process, even as a zombie that a slow init collects seconds later) and exit 143. Not by
     unwinding: a pool worker killed while sending a result leaves the pool's result pipe half-written, and a pool
     shut down in an orderly way then waits forever for the rest of it. A forked worker whose parent is alive
     leaves the signal to the parent (which kills it); an orphaned one dies of it."""
@@ -185,12 +224,57 @@ def _on_sigterm(signum, frame) -> None:  # noqa: ARG001 - signal handler signatu
         for note in _TERM_NOTES:
             sys.stderr.write(note)
         sys.stderr.flush()
-        import multiprocessing
-
-        for child in multiprocessing.active_children():
-            child.kill()
+        _kill_and_reap_children()
     finally:
         os._exit(143)
+
+
+def _child_pids() -> set:
+    """This process's child processes: the pool's workers multiprocessing knows of and, from /proc, any other (a
+    worker forked the instant SIGTERM came, before the pool recorded it)."""
+    import multiprocessing
+    import os
+
+    pids = {c.pid for c in multiprocessing.active_children() if c.pid}
+    me = str(os.getpid())
+    try:
+        entries = [e for e in os.listdir("/proc") if e.isdigit()]
+    except OSError:  # no /proc (not Linux): the ones multiprocessing knows
+        return pids
+    for entry in entries:
+        try:
+            with open(f"/proc/{entry}/stat") as fh:
+                if fh.read().rsplit(")", 1)[1].split()[1] == me:
+                    pids.add(int(entry))
+        except (OSError, IndexError):
+            continue
+    return pids
+
+
+def _kill_and_reap_children(timeout: float = 5.0) -> None:
+    """SIGKILL to every child process, then reap them (within ``timeout`` s): gone when this process is, none left
+    running or as a zombie for a slow init to collect seconds later."""
+    import os
+    import signal
+    import time
+
+    pids = _child_pids()
+    for pid in pids:
+        try:
+            os.kill(pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+    deadline = time.monotonic() + timeout
+    for pid in pids:
+        while True:
+            try:
+                if os.waitpid(pid, os.WNOHANG)[0]:
+                    break
+            except ChildProcessError:  # reaped already (by the pool's own thread)
+                break
+            if time.monotonic() > deadline:
+                return
+            time.sleep(0.002)
 
 
 _MAIN_PID = [0]
@@ -278,6 +362,9 @@ _CLICK_EXCEPTIONS = tuple({c for e in (typer.Exit, typer.Abort, typer.BadParamet
 
 def _fail_json(code: int, message: str) -> None:
     """One error line (and the JSON document of ``--json``), then exit ``code``."""
+    from ..model.text import shorten_quoted
+
+    message = shorten_quoted(message)
     _err(message)
     if _JSON_ERRORS[0]:
         import json
@@ -327,23 +414,24 @@ def _usage(message: str) -> None:
 
 def _parse_point(name: str, text: str, unit: str = "m"):
     from ..model.errors import TaskError
+    from ..model.text import quoted
 
     words = "metres" if unit == "m" else unit
     what = "coordinates" if unit == "m" else "components"
     parts = [p.strip() for p in text.split(",")]
     if len(parts) != 3 or not all(parts):
         example = "-0.1525,0,-0.8" if unit == "m" else "0,0.2,0"
-        raise TaskError(f"{name} = {text!r}: give three {what} X,Y,Z in {words}, e.g. {example}")
+        raise TaskError(f"{name} = {quoted(text)}: give three {what} X,Y,Z in {words}, e.g. {example}")
     from ..model.text import plain_float
 
     try:
         values = [plain_float(p) for p in parts]
     except ValueError:
-        raise TaskError(f"{name} = {text!r}: every {what[:-1]} must be a number in {words}") from None
+        raise TaskError(f"{name} = {quoted(text)}: every {what[:-1]} must be a number in {words}") from None
     import math
 
     if not all(math.isfinite(v) for v in values):
-        raise TaskError(f"{name} = {text!r}: every coordinate must be a finite number (no NaN or inf)")
+        raise TaskError(f"{name} = {quoted(text)}: every coordinate must be a finite number (no NaN or inf)")
     return values
 
 
@@ -351,6 +439,7 @@ def _parse_pose(name: str, text: str) -> tuple[list, Optional[float]]:
     """--from/--to: X,Y,Z in m, optionally a fourth number THETA, the tool angle in rad about the base z axis (a
     robot with a rotary fourth axis) → (xyz, theta or None); TaskError naming the option, the text and the rule."""
     from ..model.errors import TaskError
+    from ..model.text import quoted
 
     parts = [p.strip() for p in text.split(",")]
     if len(parts) == 4 and all(parts):
@@ -359,14 +448,14 @@ def _parse_pose(name: str, text: str) -> tuple[list, Optional[float]]:
         try:
             theta = plain_float(parts[3])
         except ValueError:
-            raise TaskError(f"{name} = {text!r}: the fourth number, the tool angle THETA, must be a number in rad") from None
+            raise TaskError(f"{name} = {quoted(text)}: the fourth number, the tool angle THETA, must be a number in rad") from None
         import math
 
         if not math.isfinite(theta):
-            raise TaskError(f"{name} = {text!r}: the tool angle THETA must be a finite number of radians (no NaN or inf)")
+            raise TaskError(f"{name} = {quoted(text)}: the tool angle THETA must be a finite number of radians (no NaN or inf)")
         return _parse_point(name, ",".join(parts[:3])), theta
     if len(parts) > 4 or (len(parts) == 4 and not all(parts)):
-        raise TaskError(f"{name} = {text!r}: give X,Y,Z in metres and optionally the tool angle THETA in rad, e.g. "
+        raise TaskError(f"{name} = {quoted(text)}: give X,Y,Z in metres and optionally the tool angle THETA in rad, e.g. "
                         "-0.1525,0,-0.8,1.5708")
     return _parse_point(name, text), None
 

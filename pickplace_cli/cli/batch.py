@@ -82,11 +82,10 @@ def _file_outcomes(rows, prof, options, height, eta, fail_fast, name, workers, w
                    json_summary):
     """The RowResults of a file batch's good rows, in row order, on ``workers`` processes (0: all cores for 100
     rows or more): the verdict engine for a verdicts-only batch where it applies, else plan()."""
-    import os
-
     from ..pipelines.batch import plan_rows_parallel
+    from .guards import available_cores
 
-    n_workers = workers or ((os.cpu_count() or 1) if len(rows) >= 100 else 1)
+    n_workers = workers or (available_cores() if len(rows) >= 100 else 1)
     if json_summary and output is None and report is None:
         from ..pipelines.verdicts import engine_applies, verdict_rows_parallel
 

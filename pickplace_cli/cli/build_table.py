@@ -10,7 +10,7 @@ from typing import Optional
 import typer
 
 from .. import __version__
-from .app import _handle_errors, _usage, app, StDialect, TableMethod
+from .app import Panel, _handle_errors, _usage, app, StDialect, TableMethod
 
 #: the --st-dialect of the running build-table (strict or codesys), read where the table is formatted
 _ST_DIALECT = ["strict"]
@@ -36,48 +36,53 @@ class TableFormat(str, Enum):
 @_handle_errors
 def build_table_cmd(
     ctx: typer.Context,
-    lambda_min: float = typer.Option(1.0, "--lambda-min", help="Smallest width/height ratio λ = b/h."),
-    lambda_max: float = typer.Option(40.0, "--lambda-max", help="Largest λ."),
-    lambda_step: float = typer.Option(0.5, "--lambda-step", help="Step of the λ grid."),
+    lambda_min: float = typer.Option(1.0, "--lambda-min", help="Smallest width/height ratio λ = b/h.", rich_help_panel=Panel.METHOD),
+    lambda_max: float = typer.Option(40.0, "--lambda-max", help="Largest λ.", rich_help_panel=Panel.METHOD),
+    lambda_step: float = typer.Option(0.5, "--lambda-step", help="Step of the λ grid.", rich_help_panel=Panel.METHOD),
     lambda_points: int = typer.Option(
         0, "--lambda-points", help="N values of λ spaced evenly in log λ from --lambda-min to --lambda-max "
-        "(instead of --lambda-step; 0 = use the step)."),
-    eta: float = typer.Option(0.5, "--eta", help="Lift-off/set-down ratio η, 0 < η < 1."),
+        "(instead of --lambda-step; 0 = use the step).", rich_help_panel=Panel.METHOD),
+    eta: float = typer.Option(0.5, "--eta", help="Lift-off/set-down ratio η, 0 < η < 1.", rich_help_panel=Panel.METHOD),
     eta_min: Optional[float] = typer.Option(
-        None, "--eta-min", help="Build the 2-D (λ, η) table: smallest η of its η axis (with --eta-max, --eta-step)."),
-    eta_max: Optional[float] = typer.Option(None, "--eta-max", help="2-D table: largest η (default: --eta-min)."),
-    eta_step: float = typer.Option(0.05, "--eta-step", help="2-D table: step of the η axis."),
+        None, "--eta-min", help="Build the 2-D (λ, η) table: smallest η of its η axis (with --eta-max, --eta-step).", rich_help_panel=Panel.METHOD),
+    eta_max: Optional[float] = typer.Option(None, "--eta-max", help="2-D table: largest η (default: --eta-min).", rich_help_panel=Panel.METHOD),
+    eta_step: float = typer.Option(0.05, "--eta-step", help="2-D table: step of the η axis.", rich_help_panel=Panel.METHOD),
     eta_list: Optional[str] = typer.Option(
-        None, "--eta-list", help="2-D table: the η axis as increasing values, e.g. 0.1,0.2,0.5 (instead of --eta-min …)."),
-    weights: str = typer.Option("0.5,0.5", "--weights", help="Weights WA,WJ of F_a and F_j in F (Li 2018 Eq. 22); WA + WJ = 1."),
-    grid_step: float = typer.Option(0.01, "--grid-step", help="Step of the coarse (k1, k2) search grid."),
-    fit_min: float = typer.Option(5.0, "--fit-min", help="Fit the Eq. 23 cubic on rows with λ ≥ this (no cubic follows λ < 5)."),
-    workers: int = typer.Option(0, "--workers", "-j", help="Local worker processes (0 = all cores; 1 = in this process)."),
+        None, "--eta-list", help="2-D table: the η axis as increasing values, e.g. 0.1,0.2,0.5 (instead of --eta-min …).", rich_help_panel=Panel.METHOD),
+    weights: str = typer.Option("0.5,0.5", "--weights", help="Weights WA,WJ of F_a and F_j in F (Li 2018 Eq. 22); WA + WJ = 1.", rich_help_panel=Panel.METHOD),
+    grid_step: float = typer.Option(0.01, "--grid-step", help="Step of the coarse (k1, k2) search grid.", rich_help_panel=Panel.METHOD),
+    fit_min: float = typer.Option(5.0, "--fit-min", help="Fit the Eq. 23 cubic on rows with λ ≥ this (no cubic follows λ < 5).", rich_help_panel=Panel.METHOD),
+    workers: int = typer.Option(0, "--workers", "-j", help="Local worker processes (0 = all cores; 1 = in this process).", rich_help_panel=Panel.BATCH),
     scheduler: Optional[str] = typer.Option(
         None, "--scheduler", metavar="tcp://HOST:PORT",
         help="Run the rows on this Dask distributed scheduler instead of local processes (extra pickplace-cli[dask]).",
+        rich_help_panel=Panel.BATCH,
     ),
     resume: bool = typer.Option(
         False, "--resume",
         help="Continue an interrupted build from OUTPUT.partial.jsonl (rows already finished are not recomputed; needs -o FILE).",
+        rich_help_panel=Panel.BATCH,
     ),
-    output: str = typer.Option("-", "--output", "-o", help="Output file ('-' = stdout). Written atomically."),
+    output: str = typer.Option("-", "--output", "-o", help="Output file ('-' = stdout). Written atomically.", rich_help_panel=Panel.OUTPUT),
     table_format: TableFormat = typer.Option(
         TableFormat.csv, "--format", "-f",
         help="csv (the table file plan --table reads), json, or st (IEC 61131-3 Structured Text with a look-up "
         "function). [default: from -o's suffix (.csv, .json, .st), else csv]",
+        rich_help_panel=Panel.OUTPUT,
     ),
     st_dialect: StDialect = typer.Option(
         StDialect.strict, "--st-dialect", help="With --format st: strict (IEC 61131-3: the table is a constant block "
         "of the look-up FUNCTION; any compiler, matiec included) or codesys (a VAR_GLOBAL CONSTANT list beside the "
         "FUNCTION, for a CODESYS/TwinCAT global variable list).",
+        rich_help_panel=Panel.CONTROLLER,
     ),
     table_method: TableMethod = typer.Option(
         TableMethod.bspline, "--method", "-m",
         help="bspline: Li 2018's λ → (k1, k2) table; bspline-vel: Yang 2022's conveyor-tracking table over the "
         "dimensionless groups (h/b, v·T/b along and across; local processes and CSV only).",
+        rich_help_panel=Panel.METHOD,
     ),
-    quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar."),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="No progress bar.", rich_help_panel=Panel.OUTPUT),
 ) -> None:
     """Compute the optimal (k1*, k2*) of the B-spline method for a grid of λ, with the Eq. 23 cubic fit.
 
@@ -86,6 +91,7 @@ def build_table_cmd(
     """
     from ..model.errors import TableError
     from ..lookup.bspline_build import run_build
+    from .guards import cap_workers
     from ..lookup.bspline_optimum import TableSettings
     from ..lookup.bspline_table import format_table
 
@@ -96,6 +102,8 @@ def build_table_cmd(
     if st_dialect != StDialect.strict and table_format != TableFormat.st:
         _usage(f"--st-dialect applies to --format st, not {table_format.value}")
     _ST_DIALECT[0] = st_dialect.value
+    if not scheduler:
+        workers = cap_workers(workers)
     if table_method == TableMethod.bspline_vel:
         if scheduler or resume or table_format != TableFormat.csv:
             _usage("--method bspline-vel builds on local processes into a CSV (no --scheduler, --resume, --format)")
@@ -255,8 +263,6 @@ def _checkpointed_rows(ckpt, settings) -> int:
 
 def _build_vel_table(eta: float, workers: int, output: str, quiet: bool) -> None:
     """build-table --method bspline-vel: Yang 2022 optima on the default dimensionless grid."""
-    import os
-
     from ..model.errors import TableError
     from ..export import atomic_output, check_writable
     from ..lookup.vel_table import VelGrid, build_vel_table, format_vel_table
@@ -265,7 +271,9 @@ def _build_vel_table(eta: float, workers: int, output: str, quiet: bool) -> None
         raise TableError(f"workers = {workers}: must be 0 (all cores) or a positive number")
     check_writable(output)
     grid = VelGrid(eta=eta)
-    n_workers = workers or os.cpu_count() or 1
+    from .guards import available_cores
+
+    n_workers = workers or available_cores()
     if quiet:
         table = build_vel_table(grid, workers=n_workers)
     else:
@@ -314,9 +322,9 @@ def _engine(stack: contextlib.ExitStack, scheduler, workers: int, quiet: bool, t
     """(executor or None, workers, progress callback or None) of a build (or a line sweep: ``label``): a Dask
     cluster when ``scheduler`` is given, else ``workers`` local processes (0: all cores); a rich progress bar on
     stderr unless ``quiet``."""
-    import os
+    from .guards import available_cores
 
-    n_workers = workers or os.cpu_count() or 1
+    n_workers = workers or available_cores()
     executor = None
     if scheduler:
         from ..lookup.executors import dask_executor

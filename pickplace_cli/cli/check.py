@@ -7,7 +7,7 @@ from typing import Optional
 
 import typer
 
-from .app import _handle_errors, app
+from .app import Panel, _handle_errors, app
 from .render import _print_limit_table, _print_verdict
 
 
@@ -21,23 +21,26 @@ def check(
         "their units (plan --columns plc, any dialect with a header), or a pvt, cam or cam-table table, CSV or "
         "Structured Text (plan --format pvt|cam|cam-table and their -st forms, time master); '-' = stdin.",
     ),
-    profile: Optional[str] = typer.Option(None, "--profile", "-p", help="Profile YAML file or shipped name. [default: delta-su2018]"),
+    profile: Optional[str] = typer.Option(None, "--profile", "-p", help="Profile YAML file or shipped name. [default: delta-su2018]", rich_help_panel=Panel.LIMITS),
     smoothing: str = typer.Option(
         "0", "--smoothing", metavar="M2|auto",
         help="Smoothing factor per sample, in m² of the tool position (0 = interpolate exactly, for planned "
         "trajectories; for measured, noisy data 'auto' takes the square of the noise level estimated from the "
         "samples). Smoothing lowers the peaks of rates: each peak's accuracy then includes the gap to the "
         "unsmoothed data's, and a rate peak the data cannot pin down is reported as not resolved.",
+        rich_help_panel=Panel.LIMITS,
     ),
     limit_use: Optional[float] = typer.Option(
         None, "--limit-use", metavar="FRACTION", help="Hold every timed limit to this fraction of its rating, in "
         "(0, 1] (as plan --limit-use). [default: profile planning.limit_use, else 1]",
+        rich_help_panel=Panel.LIMITS,
     ),
     strict: bool = typer.Option(
         False, "--strict", help="Exit 3 also when a peak is not resolved by the samples (its accuracy is worse than "
         "1 % of the limit and it may be beyond it), not only when the data shows a limit exceeded; and exit 1 for a "
         "file whose derivative columns (vx … jz) disagree with its positions, instead of judging it from its "
         "positions with a warning.",
+        rich_help_panel=Panel.LIMITS,
     ),
     hold_capacity: bool = typer.Option(
         True, "--hold-capacity/--no-hold-capacity",
@@ -46,10 +49,11 @@ def check(
         "columns (else forward kinematics of the joints), at the limit use. --no-hold-capacity: a trajectory "
         "planned with plan --time fit or optimal (joint and motor limits alone): the capacity rows are still "
         "reported, marked not held, and an exceeded capacity does not fail the check (exit 0).",
+        rich_help_panel=Panel.LIMITS,
     ),
-    report: Optional[str] = typer.Option(None, "--report", help="Also write the limit report as JSON to this file."),
-    report_only: bool = typer.Option(False, "--report-only", help="Exit 0 even when a limit is exceeded."),
-    quiet: bool = typer.Option(False, "--quiet", "-q", help="Only violations and errors on stderr."),
+    report: Optional[str] = typer.Option(None, "--report", help="Also write the limit report as JSON to this file.", rich_help_panel=Panel.OUTPUT),
+    report_only: bool = typer.Option(False, "--report-only", help="Exit 0 even when a limit is exceeded.", rich_help_panel=Panel.OUTPUT),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="Only violations and errors on stderr.", rich_help_panel=Panel.OUTPUT),
 ) -> None:
     """Check an existing joint trajectory against a profile's limits (exit 3 if a limit is exceeded).
 

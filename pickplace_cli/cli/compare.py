@@ -8,7 +8,7 @@ from typing import Optional
 
 import typer
 
-from .app import _err, _handle_errors, _task_from_options, app
+from .app import Panel, _err, _handle_errors, _task_from_options, app
 from .render import _print_comparison
 
 
@@ -22,19 +22,19 @@ class CompareFormat(str, Enum):
 @_handle_errors
 def compare(
     ctx: typer.Context,
-    from_: str = typer.Option(..., "--from", help="Pick point X,Y,Z in m (base frame)."),
-    to: str = typer.Option(..., "--to", help="Place point X,Y,Z in m (base frame)."),
-    methods: str = typer.Option("all", "--methods", "-m", help="'all' or method names separated by commas."),
-    profile: Optional[str] = typer.Option(None, "--profile", "-p", help="Profile YAML file or shipped name. [default: delta-su2018]"),
-    height: Optional[float] = typer.Option(None, "--height", help="Clearance h in m above the higher end point. [default: profile]"),
-    eta: Optional[float] = typer.Option(None, "--eta", help="Lift-off/set-down ratio η, 0 < η < 1. [default: profile]"),
+    from_: str = typer.Option(..., "--from", help="Pick point X,Y,Z in m (base frame).", rich_help_panel=Panel.MOVE),
+    to: str = typer.Option(..., "--to", help="Place point X,Y,Z in m (base frame).", rich_help_panel=Panel.MOVE),
+    methods: str = typer.Option("all", "--methods", "-m", help="'all' or method names separated by commas.", rich_help_panel=Panel.STUDY),
+    profile: Optional[str] = typer.Option(None, "--profile", "-p", help="Profile YAML file or shipped name. [default: delta-su2018]", rich_help_panel=Panel.MOVE),
+    height: Optional[float] = typer.Option(None, "--height", help="Clearance h in m above the higher end point. [default: profile]", rich_help_panel=Panel.MOVE),
+    eta: Optional[float] = typer.Option(None, "--eta", help="Lift-off/set-down ratio η, 0 < η < 1. [default: profile]", rich_help_panel=Panel.MOVE),
     time: str = typer.Option("limits", "--time", "-t", help="Duration for the peaks and torques: 'limits' (every limit "
                              "of the profile holds: joint and motor limits and the Cartesian capacity), 'auto' (the "
                              "capacity alone, Li 2018 Eq. 26), 'fit' (joint and motor limits alone), 'optimal' "
-                             "(non-uniform time law) or seconds."),
-    fmt: CompareFormat = typer.Option(CompareFormat.table, "--format", "-f", help="table (stderr only), csv or json (stdout or -o). [default: from -o's suffix (.csv, .json), else table]"),
-    output: str = typer.Option("-", "--output", "-o", help="Output file for csv/json ('-' = stdout). Written atomically."),
-    quiet: bool = typer.Option(False, "--quiet", "-q", help="No table on stderr with csv/json (errors still print)."),
+                             "(non-uniform time law) or seconds.", rich_help_panel=Panel.METHOD),
+    fmt: CompareFormat = typer.Option(CompareFormat.table, "--format", "-f", help="table (stderr only), csv or json (stdout or -o). [default: from -o's suffix (.csv, .json), else table]", rich_help_panel=Panel.OUTPUT),
+    output: str = typer.Option("-", "--output", "-o", help="Output file for csv/json ('-' = stdout). Written atomically.", rich_help_panel=Panel.OUTPUT),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="No table on stderr with csv/json (errors still print).", rich_help_panel=Panel.OUTPUT),
 ) -> None:
     """Compare every planning method on one move: durations (auto, fit, the paper's formula), normalised
     and true peaks, joint torque and torque-rate use, height, overshoot, drift, continuity class, residual

@@ -77,3 +77,32 @@ def suffix_format(ctx, fmt, output: Optional[str], suffixes: dict[str, str], opt
         _usage(f"-f {fmt.value} -o {output}: the file's suffix says {named}; give -o with a suffix of "
                f"{fmt.value} or -f {named}")
     return type(fmt)(named)
+
+
+def available_cores() -> int:
+    """The cores this process may run on (its CPU affinity, which a container or ``taskset`` narrows), at least 1."""
+    import os
+
+    try:
+        return max(len(os.sched_getaffinity(0)), 1)
+    except (AttributeError, OSError):  # pragma: no cover - a platform without affinity
+        return os.cpu_count() or 1
+
+
+def cap_workers(workers: int, refuse_negative: str = "") -> int:
+    """``-j N`` capped at the cores this process may use (more processes only share them), with a one-line note on
+    stderr; 0 (automatic) is returned as it is, a negative value too or, given ``refuse_negative`` (the rule), a
+    TaskError (exit 1)."""
+    import sys
+
+    if workers < 0 and refuse_negative:
+        from ..model.errors import TaskError
+
+        raise TaskError(f"workers = {workers}: {refuse_negative}")
+
+    cores = available_cores()
+    if workers > cores:
+        sys.stderr.write(f"pickplace: note: -j {workers}: {cores} core{'s' if cores > 1 else ''} available; running "
+                         f"{cores} worker process{'es' if cores > 1 else ''}\n")
+        return cores
+    return workers

@@ -8,6 +8,7 @@ from typing import Optional
 import typer
 
 from .app import (
+    Panel,
     _complete_profile,
     _finite,
     _handle_errors,
@@ -60,59 +61,66 @@ def plan(
     ctx: typer.Context,
     from_: Optional[str] = typer.Option(None, "--from", help="Pick point X,Y,Z in m (base frame), e.g. -0.1525,0,-0.8; "
                                         "X,Y,Z,THETA adds the tool angle THETA in rad about the base z axis (a profile "
-                                        "with a rotary fourth axis; three numbers: the tool does not turn)."),
+                                        "with a rotary fourth axis; three numbers: the tool does not turn).", rich_help_panel=Panel.MOVE),
     to: Optional[str] = typer.Option(None, "--to", help="Place point X,Y,Z in m (base frame), or X,Y,Z,THETA with the "
-                                     "tool angle in rad (give it with --from too)."),
+                                     "tool angle in rad (give it with --from too).", rich_help_panel=Panel.MOVE),
     turn: TurnName = typer.Option(
         TurnName.shortest, "--turn", help="With tool angles (--from/--to X,Y,Z,THETA, or batch columns from_theta, "
         "to_theta [rad]): the way round to the end angle: shortest (at most half a turn), ccw or cw (always "
         "counter-clockwise or clockwise seen from above), as-given (to exactly THETA, even beyond a turn).",
+        rich_help_panel=Panel.MOVE,
     ),
     turn_during: TurnDuring = typer.Option(
         TurnDuring.transfer, "--turn-during", help="With tool angles: when the tool turns: transfer (between lift-off "
         "and set-down, the heights of η of the rise: the part is not turned while the gripper engages it at either "
         "end) or whole (over the whole move: lower peaks on the fourth axis).",
+        rich_help_panel=Panel.MOVE,
     ),
     profile: Optional[str] = typer.Option(
         None, "--profile", "-p", help="Profile YAML file, or the name of a shipped profile. [default: delta-su2018]",
         autocompletion=_complete_profile,
+        rich_help_panel=Panel.MOVE,
     ),
     height: Optional[float] = typer.Option(
-        None, "--height", help="Clearance h in m of the path's midpoint above the higher end point. [default: profile]"
+        None, "--height", help="Clearance h in m of the path's midpoint above the higher end point. [default: profile]", rich_help_panel=Panel.MOVE
     ),
     eta: Optional[float] = typer.Option(
-        None, "--eta", help="Lift-off/set-down ratio η, 0 < η < 1 (dimensionless). [default: profile]"
+        None, "--eta", help="Lift-off/set-down ratio η, 0 < η < 1 (dimensionless). [default: profile]", rich_help_panel=Panel.MOVE
     ),
     v_from: Optional[str] = typer.Option(
         None, "--v-from", "--from-belt", help="Tool velocity VX,VY,VZ in m/s (base frame) leaving the pick point, e.g. the pick "
-        "conveyor's (--method bspline-vel). [default: profile workcell.conveyor_pick_velocity, else 0]"
+        "conveyor's; a velocity other than 0 selects --method bspline-vel unless -m names one. [default: profile "
+        "workcell.conveyor_pick_velocity, else 0]", rich_help_panel=Panel.BELT
     ),
     v_to: Optional[str] = typer.Option(
-        None, "--v-to", help="Tool velocity VX,VY,VZ in m/s arriving at the place point (--method bspline-vel). "
-        "[default: profile workcell.conveyor_place_velocity, else 0]"
+        None, "--v-to", help="Tool velocity VX,VY,VZ in m/s arriving at the place point; a velocity other than 0 "
+        "selects --method bspline-vel unless -m names one. [default: profile workcell.conveyor_place_velocity, else 0]", rich_help_panel=Panel.BELT
     ),
     to_belt: Optional[str] = typer.Option(
         None, "--to-belt", help="Conveyor rendezvous: the part at --to (m, when it was detected) moves at VX,VY,VZ m/s "
         "(base frame); the move meets it where it is after --latency + T and arrives with this velocity, then tracks it "
         "for the profile's dwell (s). Selects --method bspline-vel. With --round-trip: the whole belt cycle (pick, track, "
         "place back at --from, dwell at rest).",
+        rich_help_panel=Panel.BELT,
     ),
     latency: Optional[float] = typer.Option(
         None, "--latency", help="With --to-belt: seconds (>= 0) from the part's detection to the start of the move "
         "(vision + planning + bus); the trajectory's t = 0 is the start of the move. With a belt schedule (--batch "
         "with t_detect): the rows' earliest move start after their detection. [default: 0]",
+        rich_help_panel=Panel.BELT,
     ),
-    method: MethodName = typer.Option(MethodName.bspline, "--method", "-m", help="Planning method."),
-    k1: Optional[float] = typer.Option(None, "--k1", help="B-spline time-ratio factor k1 = τ8/τ9 (overrides the table)."),
-    k2: Optional[float] = typer.Option(None, "--k2", help="B-spline time-ratio factor k2 = τ7/τ8 (overrides the table)."),
+    method: MethodName = typer.Option(MethodName.bspline, "--method", "-m", help="Planning method.", rich_help_panel=Panel.METHOD),
+    k1: Optional[float] = typer.Option(None, "--k1", help="B-spline time-ratio factor k1 = τ8/τ9 (overrides the table).", rich_help_panel=Panel.METHOD),
+    k2: Optional[float] = typer.Option(None, "--k2", help="B-spline time-ratio factor k2 = τ7/τ8 (overrides the table).", rich_help_panel=Panel.METHOD),
     table: Optional[str] = typer.Option(
         None, "--table", help="bspline: λ → (k1, k2) table CSV; bspline-vel: conveyor table that seeds the exact "
-        "solve. [default: shipped table]"
+        "solve. [default: shipped table]", rich_help_panel=Panel.METHOD
     ),
     param: Optional[list[str]] = typer.Option(
         None, "--param", help="A method parameter NAME=VALUE (repeatable): ph m=, r= (corner extents in m); "
         "lame m= (exponent, >= 3); piecewise-poly ratio= (τv/τu); bspline-vel margin=, tau6= … lambda3=. "
         "[default: the paper's values]",
+        rich_help_panel=Panel.METHOD,
     ),
     time: str = typer.Option(
         "limits",
@@ -125,18 +133,21 @@ def plan(
         "same joint and motor limits, RMS included; ~0.05-1 s more; not for bspline-vel). Names in any case. fit "
         "and optimal do not hold the Cartesian capacity: its rows are reported as not held and a move beyond it "
         "exits 0 with the verdict saying so (--hold-capacity holds it).",
+        rich_help_panel=Panel.METHOD,
     ),
     limit_use: Optional[float] = typer.Option(
         None, "--limit-use", metavar="FRACTION", help="Headroom: plan and check every timed limit (joint speed, "
         "acceleration, jerk, motor speed, torque, torque rate, RMS torque, Cartesian capacity) to at most this "
         "fraction of its rating, in (0, 1], e.g. 0.9 keeps 10 % in reserve. The limit table shows use against the "
         "rating and this target. [default: profile planning.limit_use, else 1]",
+        rich_help_panel=Panel.LIMITS,
     ),
     optimize: OptimizeWhat = typer.Option(
         OptimizeWhat.none, "--optimize", help="'shape' (--method bspline): also choose the path's k1, k2 and η "
         "(η within [0.1, 0.9]; give --eta to hold it) for the smallest duration on this robot's limits, instead of "
         "the table's values (Li 2018's Cartesian optimum); with --time fit or optimal (the fit and the law are then "
         "those of the chosen shape). The summary compares it with the table's shape. ~0.5-1 s more.",
+        rich_help_panel=Panel.METHOD,
     ),
     law_coefficients: str = typer.Option(
         "auto", "--law-coefficients", metavar="auto|N", help="With --time optimal: coefficients of the time law's "
@@ -146,6 +157,7 @@ def plan(
         "the shorter kept (the summary's time law says which). N (8 ... 80): N coefficients; above 20 always solved from the 20-coefficient law "
         "the same way, which is kept if the refinement fits longer. More: closer to the continuous optimum, slower "
         "(Adept cycle: 40 ms at 20, ~0.25 s at 40, ~1.4 s at 80).",
+        rich_help_panel=Panel.METHOD,
     ),
     hold_capacity: bool = typer.Option(
         False, "--hold-capacity", help="With --time fit or optimal (and --optimize shape): also hold the profile's "
@@ -154,13 +166,15 @@ def plan(
         "and optimal hold the joint and motor limits only (auto holds the capacity only): the capacity's rows are "
         "still in the limit table and JSON, marked not held, and an exceeded capacity is said on stderr and in the "
         "verdict (exit 0).",
+        rich_help_panel=Panel.LIMITS,
     ),
     show_fit: bool = typer.Option(
         False, "--show-fit", help="With --time auto or seconds: also compute the fitted duration (the smallest at "
         "which every joint and motor limit holds) and report it next to the chosen one (fit_s in --json). Costs "
         "~0.5 s of start-up (scipy.optimize); --time fit always computes it.",
+        rich_help_panel=Panel.METHOD,
     ),
-    rate: Optional[float] = typer.Option(None, "--rate", help="Samples per second in Hz. [default: profile]"),
+    rate: Optional[float] = typer.Option(None, "--rate", help="Samples per second in Hz. [default: profile]", rich_help_panel=Panel.METHOD),
     cycle: Optional[str] = typer.Option(
         None, "--cycle", metavar="SECONDS|off", help="The controller's cycle in s (e.g. 0.001): the duration and the "
         "dwell are rounded up to whole cycles, the limits checked again on the rounded move (a cycle more when it "
@@ -168,27 +182,32 @@ def plan(
         "the rounding cost. A conveyor move's meeting is solved again for its rounded duration; a belt cycle "
         "(--to-belt --round-trip) or belt schedule has every leg, dwell and start on whole cycles. off: sample at "
         "--rate. [default: profile controller.cycle, else off]",
+        rich_help_panel=Panel.CONTROLLER,
     ),
     tolerance: Optional[float] = typer.Option(
         None, "--tolerance", help="pvt, cam, cam-table: the largest deviation in rad (revolute joint) or m (linear) of "
         "the controller's interpolation of the table from the planned trajectory; the table has the fewest points that "
         "hold it and, as the drive interpolates it, every limit (more points, else a slower table; exit 3 when it "
-        "cannot; PVT steps bounded by the torque rate over one cycle). The achieved error is reported. [default: 1e-6]",
+        "cannot; PVT steps bounded by the torque rate over one cycle). The achieved error is reported. At most 0.001 "
+        "(1 mrad or 1 mm). [default: 1e-6]",
+        rich_help_panel=Panel.CONTROLLER,
     ),
     st_dialect: StDialect = typer.Option(
         StDialect.strict, "--st-dialect", help="pvt-st, cam-st, cam-table-st: strict (IEC 61131-3: a FUNCTION_BLOCK "
         "holding the tables, for any compiler) or codesys (a VAR_GLOBAL CONSTANT list, CODESYS/TwinCAT).",
+        rich_help_panel=Panel.CONTROLLER,
     ),
     pvt_integer: bool = typer.Option(
         False, "--pvt-integer", help="pvt, pvt-st: the drive's integer units: segment times in whole ms (1-255; a "
         "longer segment is split on its own cubic; needs a whole-ms --cycle), positions in encoder counts and "
-        "velocities in counts/s as int32 (every profile controller.joints unit counts). A value past int32 is exit 1."),
+        "velocities in counts/s as int32 (every profile controller.joints unit counts). A value past int32 is exit 1.", rich_help_panel=Panel.CONTROLLER),
     cam_master: CamMaster = typer.Option(
         CamMaster.time, "--cam-master", help="cam, cam-table: the master axis: time [s] from the start, or belt (with "
         "--to-belt): the belt's travel [m] since the part's detection.",
+        rich_help_panel=Panel.CONTROLLER,
     ),
     cam_object: CamObject = typer.Option(
-        CamObject.none, "--cam-object", rich_help_panel="Controller and drive",
+        CamObject.none, "--cam-object", rich_help_panel=Panel.CONTROLLER,
         help="cam-st, cam-table-st: one cam object per joint in the controller's own types, in a PROGRAM "
         "PRG_PickplaceCams that fills them on its first call. codesys: SoftMotion MC_CAM_REF with SMC_CAMXYVA points "
         "(cam-st; dV, dA per master unit and unit^2) or SMC_CAMTable_LREAL_128_1/_256_1 (cam-table-st: exactly 128 or "
@@ -197,7 +216,7 @@ def plan(
         "(master [s|m], slave) equidistant table (cam-table-st, linear). none: one table of every joint.",
     ),
     plcopen_xml: bool = typer.Option(
-        False, "--plcopen-xml", rich_help_panel="Output",
+        False, "--plcopen-xml", rich_help_panel=Panel.OUTPUT,
         help="pvt-st, cam-st, cam-table-st: write the Structured Text as a PLCopen XML project (TC6 XML v2.01: its "
         "function blocks and programs as POUs with typed variables, initial values and the ST body; a codesys "
         "global constant list as a configuration's constant globalVars), for CODESYS (Project > Import PLCopenXML), "
@@ -214,12 +233,12 @@ def plan(
         "carried over): t_detect [s], to_x,to_y,to_z [m, where the part was seen], to_belt_vx,to_belt_vy,to_belt_vz "
         "[m/s], place_x,place_y,place_z [m], optional latency [s >= 0, default --latency], height, eta, time, "
         "from_x,from_y,from_z [m, row 1 only: the robot's start], to_theta [rad, the part's angle as detected], "
-        "place_theta [rad], from_theta [rad, row 1 only]."
+        "place_theta [rad], from_theta [rad, row 1 only].", rich_help_panel=Panel.BATCH
     ),
-    fail_fast: bool = typer.Option(False, "--fail-fast", help="With --batch: stop at the first row that fails."),
+    fail_fast: bool = typer.Option(False, "--fail-fast", help="With --batch: stop at the first row that fails.", rich_help_panel=Panel.BATCH),
     workers: int = typer.Option(
         0, "--workers", "-j", help="With --batch: planner processes (0 = all cores for 100 rows or more, else 1). "
-        "Results are the same and in row order whatever the number."
+        "Results are the same and in row order whatever the number.", rich_help_panel=Panel.BATCH
     ),
     keep_warm: float = typer.Option(
         0.0, "--keep-warm", metavar="SECONDS",
@@ -228,11 +247,12 @@ def plan(
         "rows 100 ms apart, for CPU time while idle (~40 % of a core at 0.002, ~25 % at 0.005, ~10 % at 0.02). "
         "0 = off; 0.001 ... 10 s. Warming stops 60 s after the last row, until the next. Rows are then planned "
         "one at a time in this process (-j 1).",
+        rich_help_panel=Panel.BATCH,
     ),
     round_trip: bool = typer.Option(
         False, "--round-trip", help="Write there, dwell, back, dwell (the profile's dwell in s) as one trajectory. With "
         "--to-belt: the belt cycle: pick from the belt, track the part for the dwell, place back at --from (leaving "
-        "with the belt velocity), dwell at rest."
+        "with the belt velocity), dwell at rest.", rich_help_panel=Panel.MOVE
     ),
     fmt: OutputFormat = typer.Option(
         OutputFormat.csv, "--format", "-f", help="Output format: samples as csv, json or mcap; or a table a motion "
@@ -241,10 +261,12 @@ def plan(
         "as CSV or, with -st, IEC 61131-3 Structured Text. Drive names and units from profile controller.joints. "
         "Without -f: the one -o FILE's suffix names (.csv, .tsv, .txt: csv; .json; .mcap), else csv. A -f that "
         "contradicts the suffix is refused, and so is MCAP to a terminal.",
+        rich_help_panel=Panel.OUTPUT,
     ),
     csv_dialect: CsvDialectName = typer.Option(
         CsvDialectName.default, "--csv-dialect",
         help="CSV flavour: default (',' LF, header), twincat (';' CRLF, header), tsv (tab, no header).",
+        rich_help_panel=Panel.OUTPUT,
     ),
     columns: Optional[str] = typer.Option(
         None, "--columns", help="CSV: write only these columns, in this order: header names without units "
@@ -253,18 +275,19 @@ def plan(
         "t,q1,q2,q3 for a PLC's position feed. The drive's view of each joint (profile controller.joints: NAME[unit], "
         "NAME_vel[unit/s]) by name or by the sets drive, drive_vel and plc (= t,drive): --columns plc. A batch's move "
         "column stays first. Default: every column but the drive's.",
+        rich_help_panel=Panel.OUTPUT,
     ),
     mcap_flavor: McapFlavor = typer.Option(
-        McapFlavor.ros2, "--mcap-flavor", help="MCAP: ros2 (CDR, ROS 2 messages) or foxglove (JSON, Foxglove schemas)."
+        McapFlavor.ros2, "--mcap-flavor", help="MCAP: ros2 (CDR, ROS 2 messages) or foxglove (JSON, Foxglove schemas).", rich_help_panel=Panel.OUTPUT
     ),
-    compression: Compression = typer.Option(Compression.none, "--compression", help="MCAP chunk compression."),
+    compression: Compression = typer.Option(Compression.none, "--compression", help="MCAP chunk compression.", rich_help_panel=Panel.OUTPUT),
     rosbag2: bool = typer.Option(
         False, "--rosbag2", help="MCAP (ros2 flavour; implies -f mcap): write -o DIR as a rosbag2 directory, "
-        "DIR/DIR_0.mcap and DIR/metadata.yaml, as ros2 bag play and ros2 bag info read it. DIR must be new or empty."),
+        "DIR/DIR_0.mcap and DIR/metadata.yaml, as ros2 bag play and ros2 bag info read it. DIR must be new or empty.", rich_help_panel=Panel.OUTPUT),
     output: Optional[str] = typer.Option(
-        None, "--output", "-o", help="Output file ('-' = stdout, the default without --json). Written atomically."
+        None, "--output", "-o", help="Output file ('-' = stdout, the default without --json). Written atomically.", rich_help_panel=Panel.OUTPUT
     ),
-    report: Optional[str] = typer.Option(None, "--report", help="Also write the limit report as JSON to this file."),
+    report: Optional[str] = typer.Option(None, "--report", help="Also write the limit report as JSON to this file.", rich_help_panel=Panel.OUTPUT),
     write_anyway: bool = typer.Option(
         False,
         "--write-anyway",
@@ -272,25 +295,27 @@ def plan(
         "rate, RMS torque or the Cartesian capacity; the report still says so), also for the rows of a batch. "
         "Never for a position: a move past a joint's range, the singularity margin or the workcell box (exit 4) is "
         "not written, nor is an unreachable or invalid one; --fail-fast still exits with the row it stopped at.",
+        rich_help_panel=Panel.LIMITS,
     ),
     report_only: bool = typer.Option(False, "--report-only", hidden=True,
-                                     help="Deprecated name of --write-anyway (warns once)."),
+                                     help="Deprecated name of --write-anyway (warns once).", rich_help_panel=Panel.OUTPUT),
     json_summary: bool = typer.Option(
         False, "--json", help="Print a JSON summary (durations in s, cycle time, picks/min, verdict) on stdout "
         "instead of the trajectory (one line per row with --batch); the trajectory then goes only to -o FILE.",
+        rich_help_panel=Panel.OUTPUT,
     ),
     fit_ws: bool = typer.Option(
         False, "--fit-workspace", help="If the path leaves the workcell box or the reachable set, lower the height "
-        "in 1 mm steps until it fits (Su 2018 Sec. II.E) and say what changed."
+        "in 1 mm steps until it fits (Su 2018 Sec. II.E) and say what changed.", rich_help_panel=Panel.LIMITS
     ),
     adjust_points: bool = typer.Option(
         False, "--adjust-points", help="With --fit-workspace: move a pick/place point that lies outside to the nearest "
-        "inside point by Su 2018's potential field (Eq. 25), and report the distance. Never done silently."
+        "inside point by Su 2018's potential field (Eq. 25), and report the distance. Never done silently.", rich_help_panel=Panel.LIMITS
     ),
     max_shift: float = typer.Option(
-        MAX_SHIFT, "--max-shift", help="With --adjust-points: the largest allowed move of a point in m (farther: exit 4)."
+        MAX_SHIFT, "--max-shift", help="With --adjust-points: the largest allowed move of a point in m (farther: exit 4).", rich_help_panel=Panel.LIMITS
     ),
-    quiet: bool = typer.Option(False, "--quiet", "-q", help="Nothing on stderr but errors and exceeded limits."),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="Nothing on stderr but errors and exceeded limits.", rich_help_panel=Panel.OUTPUT),
 ) -> None:
     """Plan one move (or a round trip, or a batch), check it against the robot's limits, write the samples.
 
@@ -330,6 +355,8 @@ def plan(
         _finite_latency(latency)
     elif to_belt is not None or latency is not None:
         a.method = _belt_method(ctx, method, to_belt, latency, v_to, batch, round_trip, fit_ws, optimize)
+    elif batch is None and (v_from is not None or v_to is not None):
+        a.method = _moving_ends_method(ctx, method, v_from, v_to)
     from ..model.headroom import apply_limit_use
 
     prof = apply_limit_use(load_profile(profile), limit_use)  # --limit-use, else the profile's planning.limit_use
@@ -351,10 +378,9 @@ def plan(
                           law_coefficients=_law_coefficients(law_coefficients), limit_use=limit_use,
                           cycle=a.cycle_s, turn=turn.value, turn_during=turn_during.value)
     if batch is not None:
-        if workers < 0:
-            from ..model.errors import TaskError
+        from .guards import cap_workers
 
-            raise TaskError(f"workers = {workers}: must be 0 (automatic) or a positive number of processes")
+        workers = cap_workers(workers, "must be 0 (automatic) or a positive number of processes")
         source = ctx.get_parameter_source("method")
         belt = {"latency": latency, "method_given": source is not None and source.name != "DEFAULT"}
         _plan_batch(batch, prof, options, height, eta, fail_fast, writer, a.output, report, write_anyway, json_summary,
@@ -574,6 +600,17 @@ def _belt_method(ctx, method, to_belt, latency, v_to, batch, round_trip, fit_ws,
 
     raise TaskError(f"to-belt: method {method.value} plans moves from rest to rest; a moving end needs "
                     "--method bspline-vel (the default with --to-belt)")
+
+
+def _moving_ends_method(ctx, method, v_from, v_to):
+    """--from-belt/--v-from, --v-to with a velocity other than zero: the method that supports moving ends
+    (bspline-vel), as --to-belt chooses it, unless -m names one (a rest-to-rest method is then refused)."""
+    source = ctx.get_parameter_source("method")
+    if source is not None and source.name != "DEFAULT":
+        return method
+    moving = any(any(_parse_point(name, text, "m/s")) for name, text in (("v-from", v_from), ("v-to", v_to))
+                 if text is not None)
+    return MethodName.bspline_vel if moving else method
 
 
 def _plan_to_belt(task, to_belt, latency, prof, time, v_from, params, rate, options, round_trip: bool = False):

@@ -18,6 +18,11 @@ from .app import (
 )
 
 
+#: the largest --tolerance of a table [rad or m]: 1 mrad or 1 mm (a larger one let a table of two points stand for
+#: the move, 0.13 rad off it)
+MAX_TOLERANCE = 1e-3
+
+
 def _check_plan_values(a) -> None:
     """Values (exit 1): the time rule (normalised: any case and spacing), height, rate, k1/k2, η, limit use."""
     from ..model.errors import TaskError
@@ -43,6 +48,9 @@ def _check_plan_values(a) -> None:
     if not (a.keep_warm == 0.0 or 0.001 <= a.keep_warm <= 10.0):  # (nan fails both)
         raise TaskError(f"keep_warm = {a.keep_warm!r} s: must be 0 (off) or in 0.001 ... 10 s (the pause between "
                         "two warm-ups; below 1 ms they would take the whole core)")
+    if a.tolerance is not None and not (0 < a.tolerance <= MAX_TOLERANCE):  # (nan fails)
+        raise TaskError(f"tolerance = {a.tolerance!r} (rad or m): a table's deviation must lie in (0, {MAX_TOLERANCE:g}] "
+                        "(at most 1 mrad or 1 mm from the planned trajectory)")
     if a.eta is not None and not (0 < a.eta < 1):
         raise TaskError(f"eta = {a.eta!r}: the lift-off/set-down ratio η must lie strictly between 0 and 1")
 

@@ -7,27 +7,27 @@ from typing import Optional
 
 import typer
 
-from .app import _err, _handle_errors, _task_from_options, _usage, app
+from .app import Panel, _err, _handle_errors, _task_from_options, _usage, app
 
 
 @app.command()
 @_handle_errors
 def plot(
-    from_: str = typer.Option(..., "--from", help="Pick point X,Y,Z in m (base frame)."),
-    to: str = typer.Option(..., "--to", help="Place point X,Y,Z in m (base frame)."),
-    output: str = typer.Option(..., "--output", "-o", help="Figure file (.png or .svg), written atomically; '-' = stdout with --format."),
-    methods: str = typer.Option("all", "--methods", "-m", help="'all' or method names separated by commas."),
-    profile: Optional[str] = typer.Option(None, "--profile", "-p", help="Profile YAML file or shipped name. [default: delta-su2018]"),
-    height: Optional[float] = typer.Option(None, "--height", help="Clearance h in m above the higher end point. [default: profile]"),
-    eta: Optional[float] = typer.Option(None, "--eta", help="Lift-off/set-down ratio η, 0 < η < 1. [default: profile]"),
+    from_: str = typer.Option(..., "--from", help="Pick point X,Y,Z in m (base frame).", rich_help_panel=Panel.MOVE),
+    to: str = typer.Option(..., "--to", help="Place point X,Y,Z in m (base frame).", rich_help_panel=Panel.MOVE),
+    output: str = typer.Option(..., "--output", "-o", help="Figure file (.png or .svg), written atomically; '-' = stdout with --format.", rich_help_panel=Panel.OUTPUT),
+    methods: str = typer.Option("all", "--methods", "-m", help="'all' or method names separated by commas.", rich_help_panel=Panel.STUDY),
+    profile: Optional[str] = typer.Option(None, "--profile", "-p", help="Profile YAML file or shipped name. [default: delta-su2018]", rich_help_panel=Panel.MOVE),
+    height: Optional[float] = typer.Option(None, "--height", help="Clearance h in m above the higher end point. [default: profile]", rich_help_panel=Panel.MOVE),
+    eta: Optional[float] = typer.Option(None, "--eta", help="Lift-off/set-down ratio η, 0 < η < 1. [default: profile]", rich_help_panel=Panel.MOVE),
     time: str = typer.Option("limits", "--time", "-t", help="Duration of each method's move: 'limits' (every limit of the "
                              "profile holds), 'auto' (the Cartesian capacity alone), 'fit' (joint and motor limits "
-                             "alone), 'optimal' (non-uniform time law, same path) or seconds."),
-    normalised: bool = typer.Option(False, "--normalised", help="Plot with b = 1 and T = 1 against τ (like Li 2018 Fig. 5)."),
+                             "alone), 'optimal' (non-uniform time law, same path) or seconds.", rich_help_panel=Panel.METHOD),
+    normalised: bool = typer.Option(False, "--normalised", help="Plot with b = 1 and T = 1 against τ (like Li 2018 Fig. 5).", rich_help_panel=Panel.STUDY),
     motors: bool = typer.Option(
         False, "--motors", help="Add each motor's speed, torque and torque rate against time in % of its limit "
-        "(line style per joint), and the round trip's RMS motor torque in % of rated: where the motors idle."),
-    fmt: Optional[str] = typer.Option(None, "--format", "-f", help="png or svg. [default: from the file's suffix]"),
+        "(line style per joint), and the round trip's RMS motor torque in % of rated: where the motors idle.", rich_help_panel=Panel.STUDY),
+    fmt: Optional[str] = typer.Option(None, "--format", "-f", help="png or svg. [default: from the file's suffix]", rich_help_panel=Panel.OUTPUT),
 ) -> None:
     """Draw the path in the vertical plane (u along the move, z) and |v|, |a|, |j| against time for one or
     several methods, and with --motors how hard each motor works (PNG or SVG; needs the optional extra:

@@ -6,7 +6,7 @@ from typing import Optional
 
 import typer
 
-from .app import _finite, _handle_errors, app
+from .app import Panel, _finite, _handle_errors, app
 
 
 profile_app = typer.Typer(help="Validate, inspect, list or copy robot/workcell profiles.", no_args_is_help=True)
@@ -33,7 +33,7 @@ def profile_validate(
 @_handle_errors
 def profile_show(
     profile: str = typer.Argument("delta-su2018", help="Profile YAML file or shipped name."),
-    z: Optional[float] = typer.Option(None, "--z", help="Working height in m for the workspace extent. [default: middle of the workcell box, or the robot's home height]"),
+    z: Optional[float] = typer.Option(None, "--z", help="Working height in m for the workspace extent. [default: middle of the workcell box, or the robot's home height]", rich_help_panel=Panel.STUDY),
 ) -> None:
     """Show a profile with its derived values: lumped masses, workspace extent at the working height, limits."""
     from .render import console
@@ -88,6 +88,8 @@ def profile_show(
     ))
     pl = prof.planning
     out.print(f"planning: height {pl.height:g} m, η = {pl.eta:g}, rate {pl.rate:g} Hz, dwell {pl.dwell:g} s")
+    for line in workcell_lines(prof) + controller_lines(prof):
+        out.print(escape(line))
     if z is None:
         box = prof.workcell.box
         z = (box.min[2] + box.max[2]) / 2 if box else (-0.8 if kind == "delta" else (robot.z0 - 0.1 if kind == "scara" else 0.0))
@@ -113,6 +115,40 @@ def profile_show(
                 f"rated {g(d.rated_torque, ' N·m')}, peak {g(d.peak_torque, ' N·m')}, speed {g(d.max_speed, ' rad/s')}, "
                 f"torque rate {g(d.torque_rate, ' N·m/s')}"
             ))
+
+
+def _xyz(v) -> str:
+    return "(" + ", ".join(f"{c:g}" for c in v) + ")"
+
+
+def workcell_lines(prof) -> list[str]:
+    """The workcell section as ``profile show`` prints it: the box, the conveyor velocities and the belt window."""
+    w = prof.workcell
+    box = w.box
+    lines = [f"workcell: box {_xyz(box.min)} … {_xyz(box.max)} m (the tool stays inside)" if box is not None
+             else "workcell: no box (the robot's reach and joint ranges bound the tool)"]
+    for what, v in (("pick", w.conveyor_pick_velocity), ("place", w.conveyor_place_velocity)):
+        if v is not None:
+            lines.append(f"    {what} conveyor velocity {_xyz(v)} m/s")
+    if w.belt_window is not None:
+        lines.append(f"    belt window {_xyz(w.belt_window.min)} … {_xyz(w.belt_window.max)} m")
+    return lines
+
+
+def controller_lines(prof) -> list[str]:
+    """The controller section as ``profile show`` prints it: the cycle and each joint's drive view."""
+    c = prof.controller
+    if c is None:
+        return ["controller: none (no cycle: samples at planning.rate; drive columns in the model's units)"]
+    cycle = "no cycle (samples at planning.rate)" if c.cycle is None else f"cycle {c.cycle:g} s"
+    from ..model.controller import joint_kinds
+
+    lines = [f"controller: {cycle}"]
+    for j, kind in zip(c.joints or (), joint_kinds(prof.robot)):
+        extra = f", {j.counts_per_rev} counts per motor revolution" if j.counts_per_rev is not None else ""
+        unit = "rad" if kind == "revolute" else "m"
+        lines.append(f"    drive joint {j.name}: unit {j.unit}{extra}, sign {j.sign:+d}, offset {j.offset:g} {unit}")
+    return lines
 
 
 def model_lines(robot) -> list[str]:

@@ -328,7 +328,9 @@ def _print_summary(result) -> None:
     rule = d.mode
     if d.mode == "limits":  # the default: say what the capacity costs against the motors alone
         rule = "limits: every limit of the profile"
+        timed = any(r.kind == "limit" and r.joint != "tool" for r in result.report.rows)
         fit = (f"; fit (joint and motor limits alone) {d.t_fit:.4f} s" if d.t_fit is not None
+               else "" if timed  # (a belt's rendezvous chooses its duration without the fit of one move)
                else "; fit: no joint or motor limit depends on the duration")
     loose = sorted({r.not_held for r in result.report.rows if r.not_held})
     if loose:  # fit / optimal: the joint and motor limits alone

@@ -11,7 +11,7 @@ Rules (each one line on stderr; a refusal exits 1 before any work):
   samples): a slow move can be meant (commissioning at low speed) and is planned as asked.
 * ``--rate`` [Hz]: a warning when a move gets fewer than :data:`FEW_SAMPLES` samples (``--rate 10`` for a 0.18 s
   move: 3): the file is a correct sampling, but a drive that interpolates it follows another motion; a preview at a
-  low rate can be meant.
+  low rate can be meant. Without ``--rate`` (the profile's rate) the warning names the short move, not a rate.
 """
 
 from __future__ import annotations
@@ -57,8 +57,12 @@ def warn_few_samples(legs, rate) -> None:
     for leg in legs:
         n = len(leg.t)
         if n < FEW_SAMPLES:
-            hz = rate if rate is not None else (n - 1) / max(leg.report.duration, 1e-12)
-            sys.stderr.write(f"pickplace: warning: --rate {hz:g} Hz: {n} samples for a {leg.report.duration:.4g} s "
+            if rate is None:  # the profile's rate: the move is what is short, not a rate the user gave
+                sys.stderr.write(f"pickplace: warning: a {leg.report.duration:.4g} s move: {n} samples at the "
+                                 "profile's planning.rate (a drive interpolating them follows another motion); the "
+                                 "duration is in s\n")
+                return
+            sys.stderr.write(f"pickplace: warning: --rate {rate:g} Hz: {n} samples for a {leg.report.duration:.4g} s "
                              f"move (a drive interpolating them follows another motion); kHz meant? --rate "
-                             f"{hz * 1000:g} (the rate is in Hz)\n")
+                             f"{rate * 1000:g} (the rate is in Hz)\n")
             return

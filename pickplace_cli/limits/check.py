@@ -96,19 +96,8 @@ def _zoom_peak(model: "MotionModel", T: float, x: np.ndarray, data: np.ndarray, 
     pr = model.parts(np.clip(s[:, 1:-1].ravel(), 0.0, 1.0), derivatives=rates, singularity=False)
     vals = model.columns(pr, T)[1][:, sub].reshape(len(key), ZOOM_POINTS, ncol)[which, :, col]  # (candidates, Z)
     y = np.concatenate([data[lo, col][:, None], vals, data[hi, col][:, None]], axis=1)
-    s, h = s[which], ((b - a) / (ZOOM_POINTS + 1))[which]
-    rows = np.arange(len(idx))
-    j = np.argmax(y, axis=1)
-    top, at = y[rows, j], s[rows, j]
-    k = np.minimum(np.maximum(j, 1), ZOOM_POINTS)
-    y0, y1, y2 = y[rows, k - 1], y[rows, k], y[rows, k + 1]
-    den = y0 - 2.0 * y1 + y2
-    ok = (den < 0) & (k == j) & (h > 0)
-    safe = np.where(ok, den, -1.0)
-    yv = y1 - (y2 - y0) ** 2 / (8.0 * safe)
-    xv = s[rows, k] + h * (y0 - y2) / (2.0 * safe)
-    use = ok & (yv >= top)
-    top, at = np.where(use, yv, top), np.where(use, xv, at)
+    s, g = s[which], ZOOM_POINTS + 2  # each candidate's own grid of g points: one stacked call
+    top, at = (v[:, 0] for v in parabolic_peak(s.ravel(), y.reshape(-1, 1), np.arange(0, len(s) * g + 1, g)))
     peak, where = top[:ncol].copy(), at[:ncol].copy()
     for r in np.flatnonzero(rival):  # a rival that zooms higher wins
         c = ncol + int(np.sum(rival[:r]))

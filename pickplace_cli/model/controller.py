@@ -21,6 +21,7 @@ from typing import Literal
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from .iec import st_identifier_problem
+from .numbers import Num, OptInt, OptNum
 
 #: drive position units → (joint kinds it applies to, what it is)
 UNITS: dict[str, tuple[tuple[str, ...], str]] = {
@@ -52,10 +53,10 @@ class DriveJoint(_Model):
         default="joint", description="Drive position unit: joint (rad or m, as the model), rad, deg (revolute), m, mm "
         "(linear), motor_rad, motor_rev, counts (through the drive's gear_ratio; counts need counts_per_rev)")
     sign: Literal[1, -1] = Field(default=1, description="+1: the drive counts with the model's joint; -1: against it")
-    offset: float = Field(default=0.0, description="The model joint position in rad (revolute) or m (linear) at which "
+    offset: Num = Field(default=0.0, description="The model joint position in rad (revolute) or m (linear) at which "
                           "the drive reads zero")
-    counts_per_rev: int | None = Field(default=None, gt=0, description="Encoder counts per motor revolution (unit "
-                                       "counts only), e.g. 1048576 for a 20-bit encoder")
+    counts_per_rev: OptInt = Field(default=None, gt=0, le=2**40, description="Encoder counts per motor "
+                                       "revolution (unit counts only; at most 2^40), e.g. 1048576 for a 20-bit encoder")
 
     @field_validator("name")
     @classmethod
@@ -81,7 +82,7 @@ class DriveJoint(_Model):
 class Controller(_Model):
     """The controller the trajectory is for: its cycle and each joint's drive view (both optional)."""
 
-    cycle: float | None = Field(default=None, gt=0, le=1.0, description="Controller cycle in s (e.g. 0.001): the "
+    cycle: OptNum = Field(default=None, gt=0, le=1.0, description="Controller cycle in s (e.g. 0.001): the "
                                 "duration and dwell are rounded up to whole cycles and every output step is one cycle")
     joints: tuple[DriveJoint, ...] | None = Field(default=None, description="One entry per joint, in the robot's "
                                                   "joint order: name, unit, sign, offset [rad or m]")

@@ -13,6 +13,7 @@ from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationError,
 
 from .controller import Controller
 from .errors import ProfileError
+from .numbers import NUMBER, Num, OptNum
 from .yamlsafe import PROFILE_MAX_BYTES, _prune_union_branches, _show, _yaml_with_lines, locate
 
 DEFAULT_PROFILE = "delta-su2018"
@@ -25,12 +26,12 @@ class _Model(BaseModel):
 class JointLimits(_Model):
     """Kinematic limits of one joint. Units follow the joint: rad (revolute) or m (prismatic)."""
 
-    position: tuple[float, float] | None = Field(
+    position: tuple[Num, Num] | None = Field(
         default=None, description="Joint range [min, max] in rad or m (None: not limited; gantry: the axis travel)"
     )
-    velocity: float | None = Field(default=None, gt=0, description="Max |joint velocity| in rad/s or m/s")
-    acceleration: float | None = Field(default=None, gt=0, description="Max |joint acceleration| in rad/s² or m/s²")
-    jerk: float | None = Field(default=None, gt=0, description="Max |joint jerk| in rad/s³ or m/s³ (optional)")
+    velocity: OptNum = Field(default=None, gt=0, description="Max |joint velocity| in rad/s or m/s")
+    acceleration: OptNum = Field(default=None, gt=0, description="Max |joint acceleration| in rad/s² or m/s²")
+    jerk: OptNum = Field(default=None, gt=0, description="Max |joint jerk| in rad/s³ or m/s³ (optional)")
 
     @model_validator(mode="after")
     def _ordered(self) -> "JointLimits":
@@ -42,13 +43,13 @@ class JointLimits(_Model):
 class Drive(_Model):
     """Motor + gearbox of one joint. Motor speed = N·q̇; motor torque = torque/(N·efficiency) + J_rotor·N·q̈."""
 
-    gear_ratio: float = Field(gt=0, description="N: motor angle per joint unit (rad/rad, or rad/m for a linear axis)")
-    efficiency: float = Field(default=1.0, gt=0, le=1, description="Gearbox efficiency (0, 1]")
-    rotor_inertia: float = Field(default=0.0, ge=0, description="Rotor (+ gearbox input) inertia in kg·m², motor side")
-    rated_torque: float | None = Field(default=None, gt=0, description="Continuous (rated) motor torque in N·m; limits the RMS over the duty cycle")
-    peak_torque: float | None = Field(default=None, gt=0, description="Peak motor torque in N·m")
-    max_speed: float | None = Field(default=None, gt=0, description="Max motor speed in rad/s (6000 rpm = 628.3 rad/s)")
-    torque_rate: float | None = Field(default=None, gt=0, description="Max |d(motor torque)/dt| in N·m/s (Yang 2022 Eq. 38)")
+    gear_ratio: Num = Field(gt=0, description="N: motor angle per joint unit (rad/rad, or rad/m for a linear axis)")
+    efficiency: Num = Field(default=1.0, gt=0, le=1, description="Gearbox efficiency (0, 1]")
+    rotor_inertia: Num = Field(default=0.0, ge=0, description="Rotor (+ gearbox input) inertia in kg·m², motor side")
+    rated_torque: OptNum = Field(default=None, gt=0, description="Continuous (rated) motor torque in N·m; limits the RMS over the duty cycle")
+    peak_torque: OptNum = Field(default=None, gt=0, description="Peak motor torque in N·m")
+    max_speed: OptNum = Field(default=None, gt=0, description="Max motor speed in rad/s (6000 rpm = 628.3 rad/s)")
+    torque_rate: OptNum = Field(default=None, gt=0, description="Max |d(motor torque)/dt| in N·m/s (Yang 2022 Eq. 38)")
 
     @model_validator(mode="after")
     def _rated_within_peak(self) -> "Drive":
@@ -82,8 +83,8 @@ class GantryAxis(_Model):
     """One Cartesian axis of a gantry; joint q_i is the tool coordinate along that axis."""
 
     name: Literal["x", "y", "z"] = Field(description="Cartesian axis this joint drives")
-    travel: tuple[float, float] = Field(description="Joint travel [min, max] in m (base frame)")
-    mass: float = Field(default=0.0, ge=0.0, description="Mass moved by this axis in kg")
+    travel: tuple[Num, Num] = Field(description="Joint travel [min, max] in m (base frame)")
+    mass: Num = Field(default=0.0, ge=0.0, description="Mass moved by this axis in kg")
     limits: JointLimits = Field(default_factory=JointLimits, description="Velocity/acceleration/jerk limits (m/s, m/s², m/s³)")
     drive: Drive | None = Field(default=None, description="Motor and gearbox; gear_ratio in rad/m (2π / lead)")
 
@@ -99,7 +100,7 @@ class GantryModel(_Model):
 
     kind: Literal["gantry"]
     axes: tuple[GantryAxis, GantryAxis, GantryAxis] = Field(description="The x, y and z axes, in that order")
-    payload: float = Field(default=0.0, ge=0, description="Payload in kg (added to every axis' moved mass)")
+    payload: Num = Field(default=0.0, ge=0, description="Payload in kg (added to every axis' moved mass)")
 
     @model_validator(mode="after")
     def _xyz(self) -> "GantryModel":
@@ -116,9 +117,9 @@ class GantryModel(_Model):
 
 class DeltaGeometry(_Model):
     R: float = Field(gt=0, description="Fixed platform radius: centre to motor axis, in m")
-    r: float = Field(gt=0, description="Moving platform radius: centre to forearm joint line, in m")
+    r: Num = Field(gt=0, description="Moving platform radius: centre to forearm joint line, in m")
     L: float = Field(gt=0, description="Upper arm length, motor axis to elbow, in m")
-    l: float = Field(gt=0, description="Forearm (parallelogram) length, elbow to platform, in m")  # noqa: E741
+    l: Num = Field(gt=0, description="Forearm (parallelogram) length, elbow to platform, in m")  # noqa: E741
 
     @model_validator(mode="after")
     def _physical(self) -> "DeltaGeometry":
@@ -130,20 +131,20 @@ class DeltaGeometry(_Model):
 
 
 class DeltaMasses(_Model):
-    upper_arm: float = Field(ge=0, description="Upper arm mass in kg")
-    upper_arm_inertia: float = Field(ge=0, description="Upper arm inertia about the motor axis in kg·m²")
-    upper_arm_com: float = Field(ge=0, description="Distance of the upper arm's centre of mass from the motor axis in m")
-    elbow: float = Field(default=0.0, ge=0, description="Mass lumped at each elbow in kg")
-    forearm_pair: float = Field(ge=0, description="Mass of one forearm pair (both rods with their end fittings) in kg")
-    forearm_end_elbow: float = Field(default=0.0, ge=0, description="Mass of one pair's end fittings at the elbow "
+    upper_arm: Num = Field(ge=0, description="Upper arm mass in kg")
+    upper_arm_inertia: Num = Field(ge=0, description="Upper arm inertia about the motor axis in kg·m²")
+    upper_arm_com: Num = Field(ge=0, description="Distance of the upper arm's centre of mass from the motor axis in m")
+    elbow: Num = Field(default=0.0, ge=0, description="Mass lumped at each elbow in kg")
+    forearm_pair: Num = Field(ge=0, description="Mass of one forearm pair (both rods with their end fittings) in kg")
+    forearm_end_elbow: Num = Field(default=0.0, ge=0, description="Mass of one pair's end fittings at the elbow "
                                      "(ball cups, springs), in kg; part of forearm_pair")
-    forearm_end_plate: float = Field(default=0.0, ge=0, description="Mass of one pair's end fittings at the plate, "
+    forearm_end_plate: Num = Field(default=0.0, ge=0, description="Mass of one pair's end fittings at the plate, "
                                      "in kg; part of forearm_pair")
-    forearm_rod_inertia: float | None = Field(default=None, ge=0, description="Moment of inertia of one pair's rods "
+    forearm_rod_inertia: OptNum = Field(default=None, ge=0, description="Moment of inertia of one pair's rods "
                                               "(without the end fittings) about their own centre of mass, "
                                               "perpendicular to the rods, in kg·m²; default: uniform rods, "
                                               "m_rod·l²/12 with m_rod = forearm_pair minus the end fittings")
-    plate: float = Field(ge=0, description="Travelling plate mass in kg (tool included)")
+    plate: Num = Field(ge=0, description="Travelling plate mass in kg (tool included)")
 
     @model_validator(mode="after")
     def _fittings(self) -> "DeltaMasses":
@@ -161,11 +162,11 @@ class RotaryAxis(_Model):
 
     sign: Literal[1, -1] = Field(default=1, description="Direction of q4 [1]: +1 when a positive q4 turns the tool "
                                  "counter-clockwise seen from above, -1 when clockwise")
-    shaft_inertia: float = Field(default=0.0, ge=0, description="Inertia of the shaft the axis turns (telescopic or "
+    shaft_inertia: Num = Field(default=0.0, ge=0, description="Inertia of the shaft the axis turns (telescopic or "
                                  "spline shaft) about its axis, in kg·m²")
-    tool_inertia: float = Field(default=0.0, ge=0, description="Inertia of the tool (gripper, flange) about the tool "
+    tool_inertia: Num = Field(default=0.0, ge=0, description="Inertia of the tool (gripper, flange) about the tool "
                                 "axis, in kg·m²")
-    payload_inertia: float = Field(default=0.0, ge=0, description="Inertia of the payload about the tool axis, in "
+    payload_inertia: Num = Field(default=0.0, ge=0, description="Inertia of the payload about the tool axis, in "
                                    "kg·m² (its mass is robot.payload)")
     joint: JointSpec = Field(default_factory=JointSpec, description="Limits of q4 (rad, rad/s, …) and its drive "
                              "(motor + gearbox; gear_ratio in motor rad per tool rad)")
@@ -201,18 +202,18 @@ class DeltaModel(_ThreeJoints):
                                                  "parallelogram rod a rigid body that translates and turns, its end "
                                                  "fittings point masses; the default) or lumped (each pair's mass "
                                                  "split 2/3 to the elbow, 1/3 to the plate, as in the papers)")
-    payload: float = Field(default=0.0, ge=0, description="Payload in kg")
-    singularity_margin: float = Field(default=0.05, ge=0, lt=1, description="Minimum singularity measure (0 = singular, 1 = best)")
+    payload: Num = Field(default=0.0, ge=0, description="Payload in kg")
+    singularity_margin: Num = Field(default=0.05, ge=0, lt=1, description="Minimum singularity measure (0 = singular, 1 = best)")
     joints: JointSpecs = Field(default_factory=JointSpec, description="One joint spec for all three arms, or a list of three")
     rotary: RotaryAxis | None = Field(default=None, description="The rotary fourth axis q4 on the base, turning the "
                                       "tool through a telescopic shaft (optional; without it the tool does not turn)")
 
 
 class ScaraLink(_Model):
-    length: float = Field(gt=0, description="Link length in m")
-    mass: float = Field(default=0.0, ge=0, description="Link mass in kg")
-    com: float = Field(default=0.0, ge=0, description="Centre of mass from the proximal joint in m")
-    inertia: float = Field(default=0.0, ge=0, description="Inertia about its own centre of mass (vertical axis) in kg·m²")
+    length: Num = Field(gt=0, description="Link length in m")
+    mass: Num = Field(default=0.0, ge=0, description="Link mass in kg")
+    com: Num = Field(default=0.0, ge=0, description="Centre of mass from the proximal joint in m")
+    inertia: Num = Field(default=0.0, ge=0, description="Inertia about its own centre of mass (vertical axis) in kg·m²")
 
 
 class ScaraModel(_ThreeJoints):
@@ -222,10 +223,10 @@ class ScaraModel(_ThreeJoints):
     link1: ScaraLink
     link2: ScaraLink
     elbow: Literal["left", "right"] = Field(default="right", description="Elbow branch: left = q2 > 0 (counter-clockwise seen from above)")
-    z0: float = Field(default=0.0, description="Tool height at q3 = 0 in m (base frame)")
-    z_mass: float = Field(default=0.0, ge=0, description="Mass moved by the z axis (quill + tool) in kg")
-    payload: float = Field(default=0.0, ge=0, description="Payload in kg")
-    singularity_margin: float = Field(default=0.05, ge=0, lt=1, description="Minimum |sin q2| (0 at full stretch or fold)")
+    z0: Num = Field(default=0.0, description="Tool height at q3 = 0 in m (base frame)")
+    z_mass: Num = Field(default=0.0, ge=0, description="Mass moved by the z axis (quill + tool) in kg")
+    payload: Num = Field(default=0.0, ge=0, description="Payload in kg")
+    singularity_margin: Num = Field(default=0.05, ge=0, lt=1, description="Minimum |sin q2| (0 at full stretch or fold)")
     joints: JointSpecs = Field(default_factory=JointSpec, description="One joint spec for all joints, or a list of three (q1, q2 rad; q3 m)")
     rotary: RotaryAxis | None = Field(default=None, description="J4, the rotary fourth axis at the end of link 2 "
                                       "(optional; without it the tool's angle is held fixed)")
@@ -237,8 +238,8 @@ RobotModel = Annotated[Union[GantryModel, DeltaModel, ScaraModel], Field(discrim
 class Box(_Model):
     """Axis-aligned box in the base frame, m."""
 
-    min: tuple[float, float, float] = Field(description="Lower corner x, y, z in m")
-    max: tuple[float, float, float] = Field(description="Upper corner x, y, z in m")
+    min: tuple[Num, Num, Num] = Field(description="Lower corner x, y, z in m")
+    max: tuple[Num, Num, Num] = Field(description="Upper corner x, y, z in m")
 
     @model_validator(mode="after")
     def _ordered(self) -> "Box":
@@ -249,12 +250,12 @@ class Box(_Model):
 
 class Workcell(_Model):
     box: Box | None = Field(default=None, description="The tool must stay inside this box (optional)")
-    conveyor_pick_velocity: tuple[float, float, float] | None = Field(
+    conveyor_pick_velocity: tuple[Num, Num, Num] | None = Field(
         default=None,
         description="Velocity of the pick conveyor in m/s (base frame): the tool leaves the pick point with it "
         "(method bspline-vel, Yang 2022; --v-from overrides it)",
     )
-    conveyor_place_velocity: tuple[float, float, float] | None = Field(
+    conveyor_place_velocity: tuple[Num, Num, Num] | None = Field(
         default=None,
         description="Velocity of the place conveyor in m/s (base frame): the tool arrives at the place point with "
         "it (method bspline-vel; --v-to overrides it)",
@@ -280,19 +281,19 @@ class Workcell(_Model):
 class Capacity(_Model):
     """Cartesian movement capacity of the tool over the task workspace [Li2018, Eq. (24)–(25)]."""
 
-    velocity: float = Field(gt=0, description="[v]: allowed tool speed in m/s")
-    acceleration: float = Field(gt=0, description="[a]: allowed tool acceleration norm in m/s²")
-    jerk: float | None = Field(default=None, gt=0, description="[j]: allowed tool jerk norm in m/s³ (optional)")
+    velocity: Num = Field(gt=0, description="[v]: allowed tool speed in m/s")
+    acceleration: Num = Field(gt=0, description="[a]: allowed tool acceleration norm in m/s²")
+    jerk: OptNum = Field(default=None, gt=0, description="[j]: allowed tool jerk norm in m/s³ (optional)")
 
 
 class Planning(_Model):
     """Defaults for ``pickplace plan`` (each can be overridden on the command line)."""
 
-    height: float = Field(gt=0, description="Clearance of the path's midpoint above the higher end point, in m")
-    eta: float = Field(default=0.5, gt=0, lt=1, description="Lift-off/set-down ratio η (dimensionless, 0 < η < 1)")
-    rate: float = Field(default=1000.0, gt=0, le=1e6, description="Output sample rate in Hz")
-    dwell: float = Field(default=0.1, ge=0, description="Dwell at pick and at place in s (duty cycle: move, dwell, move back, dwell)")
-    limit_use: float = Field(
+    height: Num = Field(gt=0, description="Clearance of the path's midpoint above the higher end point, in m")
+    eta: Num = Field(default=0.5, gt=0, lt=1, description="Lift-off/set-down ratio η (dimensionless, 0 < η < 1)")
+    rate: Num = Field(default=1000.0, gt=0, le=1e6, description="Output sample rate in Hz")
+    dwell: Num = Field(default=0.1, ge=0, description="Dwell at pick and at place in s (duty cycle: move, dwell, move back, dwell)")
+    limit_use: Num = Field(
         default=1.0, gt=0, le=1, description="Limit-use fraction (headroom), dimensionless in (0, 1]: the default "
         "duration, fit, optimal and --optimize shape plan every timed limit (joint velocity, acceleration, jerk, "
         "motor speed, torque, torque rate, RMS torque, Cartesian capacity) to at most this fraction of its rating, "
@@ -305,10 +306,10 @@ class Vibration(_Model):
     """One flexible mode per base-frame axis x, y, z, excited by the tool acceleration (residual vibration:
     ẍ + 2ζωẋ + ω²x = −a(t), ω = 2π·frequency; see ``pickplace_cli.studies.vibration``)."""
 
-    frequency: tuple[Annotated[float, Field(gt=0)], Annotated[float, Field(gt=0)], Annotated[float, Field(gt=0)]] = Field(
+    frequency: tuple[Annotated[float, Field(gt=0), NUMBER], Annotated[float, Field(gt=0), NUMBER], Annotated[float, Field(gt=0), NUMBER]] = Field(
         description="Natural frequency f_n of the mode along x, y, z in Hz"
     )
-    damping: tuple[Annotated[float, Field(ge=0, lt=1)], Annotated[float, Field(ge=0, lt=1)], Annotated[float, Field(ge=0, lt=1)]] = Field(
+    damping: tuple[Annotated[float, Field(ge=0, lt=1), NUMBER], Annotated[float, Field(ge=0, lt=1), NUMBER], Annotated[float, Field(ge=0, lt=1), NUMBER]] = Field(
         description="Damping ratio ζ of the mode along x, y, z (dimensionless, 0 <= ζ < 1)"
     )
 

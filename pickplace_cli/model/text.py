@@ -40,3 +40,17 @@ def decode_text(raw: bytes, source: str, kind: str, error: type, csv: bool = Tru
         return raw.decode("utf-8")
     except UnicodeDecodeError:
         raise error(f"{source}: not a text (UTF-8) file") from None
+
+
+def quoted(text: str, most: int = 60) -> str:
+    """``text`` quoted, cut to ``most`` characters with its length (a value pasted by mistake, a 5,000-digit number,
+    stays one short line of an error message)."""
+    return repr(text) if len(text) <= most else repr(text[:most]) + f" … ({len(text):,} characters)"
+
+
+def shorten_quoted(message: str, longer_than: int = 200, most: int = 60) -> str:
+    """``message`` with every quoted value longer than ``longer_than`` characters cut to ``most`` as :func:`quoted`
+    cuts it (an error line that names a 5,000-digit number stays one short line; a file's path is left whole)."""
+    import re
+
+    return re.sub(r"'([^'\n]{%d,})'" % (longer_than + 1), lambda m: quoted(m.group(1), most), message)

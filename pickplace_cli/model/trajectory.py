@@ -81,7 +81,7 @@ class CartesianTrajectory:
     Attributes
     ----------
     path : CartesianPath
-        The path, a function of τ ∈ [0, 1] [m].
+        The path, a function of τ ∈ `[0, 1]`, in m.
     duration : float
         T [s].
 

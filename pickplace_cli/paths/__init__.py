@@ -2,24 +2,12 @@
 
 from __future__ import annotations
 
-from enum import Enum
 from typing import Any, Callable
 
 from ..model.errors import TaskError
+from ..model.methods import Method
 from ..model.task import Task
 from ..model.trajectory import CartesianPath
-
-
-class Method(str, Enum):
-    """The planning methods (``--method``): ``bspline`` [Li2018], ``ph`` and ``superposition`` [Su2018], ``lame`` and
-    ``piecewise-poly`` (Li 2018's baselines), ``bspline-vel`` [Yang2022]."""
-
-    bspline = "bspline"
-    ph = "ph"
-    superposition = "superposition"
-    lame = "lame"
-    piecewise_poly = "piecewise-poly"
-    bspline_vel = "bspline-vel"
 
 
 def _bspline(task: Task, **params: Any) -> CartesianPath:

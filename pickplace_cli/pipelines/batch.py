@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from typing import IO, Any, Iterator
 
 from ..model.errors import PickplaceError, TaskError
-from ..model.text import plain_float, utf16_hint
+from ..model.text import plain_float, quoted, utf16_hint
 
 REQUIRED = ("from_x", "from_y", "from_z", "to_x", "to_y", "to_z")
 #: a belt row of a plain batch (no ``t_detect``): the part was at ``to`` [m] when detected and moves at
@@ -163,9 +163,14 @@ def iter_batch(stream: IO[str], source: str = "batch", info: dict | None = None)
         )
 
 
+#: the dimensionless columns: unit ``1`` (also written ``[-]`` or ``[]``)
+DIMENSIONLESS = ("eta", "limit_use")
+
+
 def _unit_of(name: str) -> str:
-    """The SI unit of a batch column (``1`` for η), as a header may write it: ``from_x[m]``, ``time[s]``."""
-    if name == "eta":
+    """The SI unit of a batch column (``1`` for η and limit_use), as a header may write it: ``from_x[m]``,
+    ``time[s]``, ``limit_use[1]``."""
+    if name in DIMENSIONLESS:
         return "1"
     if name in ("time", "latency", "t_detect"):
         return "s"
@@ -185,7 +190,7 @@ def _without_unit(name: str, source: str, line: int) -> str:
     base, unit = base.strip(), unit.strip()
     if base not in REQUIRED + OPTIONAL + SCHEDULE_REQUIRED + SCHEDULE_OPTIONAL:
         return name  # an unknown column: reported as such, with its text
-    if unit != _unit_of(base) and not (base == "eta" and unit in ("", "-")):
+    if unit != _unit_of(base) and not (base in DIMENSIONLESS and unit in ("", "-")):
         raise TaskError(f"{source}:{line}: column {name!r}: {base} is read in {_unit_of(base)} "
                         f"(write {base} or {base}[{_unit_of(base)}])")
     return base
@@ -267,11 +272,11 @@ def _row(number: int, line: int, text: str, header: list[str], sep: str, source:
                     hint += " (plain ASCII digits: no '_' separators, no other scripts' or full-width digits)"
                 if name == "time":
                     hint += "; give seconds, or limits, auto, fit or optimal"
-                raise TaskError(f"{name} = {cell!r}: not a number{hint}") from None
+                raise TaskError(f"{name} = {quoted(cell)}: not a number{hint}") from None
             if not math.isfinite(x):
-                raise TaskError(f"{name} = {cell!r}: must be finite")
+                raise TaskError(f"{name} = {quoted(cell)}: must be finite")
             if name == "latency" and x < 0:
-                raise TaskError(f"latency = {cell!r}: must be >= 0 s (the earliest move start after the detection)")
+                raise TaskError(f"latency = {quoted(cell)}: must be >= 0 s (the earliest move start after the detection)")
             if name == "limit_use":
                 from ..model.headroom import check_limit_use
 

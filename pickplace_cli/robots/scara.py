@@ -255,7 +255,7 @@ class ScaraRobot:
 
     # ------------------------------------------------------------------ dynamics
     def mass_matrix(self, q: np.ndarray) -> np.ndarray:
-        """M(q) (N, 3, 3) [kg·m², kg] [Spong2006, Ch. 7], carried mass m_t = m3 + payload as a point at l2:
+        """M(q) (N, 3, 3) in kg·m² and kg `[Spong2006, Ch. 7]`, carried mass m_t = m3 + payload as a point at l2:
 
             M11 = m1 lc1² + I1 + m2 (l1² + lc2² + 2 l1 lc2 c2) + I2 + m_t (l1² + l2² + 2 l1 l2 c2)
             M12 = m2 (lc2² + l1 lc2 c2) + I2 + m_t (l2² + l1 l2 c2)

@@ -306,9 +306,14 @@ def test_batch_on_two_processes_writes_the_same_bytes(tmp_path):
 
 
 def test_end_velocities_need_the_velocity_method():
+    """Moving ends are planned by bspline-vel: chosen when -m is not given (as --to-belt does), a rest-to-rest
+    method named with -m refused."""
     moving = ["--from", "0,0,-0.8", "--to", "0.28,-0.2,-0.8", "--height", "0.04", "--v-from", "0,0.2,0", "--v-to", "0,0.2,0"]
-    r = run("plan", *moving)
+    r = run("plan", *moving, "--method", "bspline")
     assert r.exit_code == 1 and "use --method bspline-vel" in r.stderr
+    r = run("plan", *moving, "--time", "0.25", "--report-only", "-q")
+    assert r.exit_code == 0 and r.stdout == run("plan", *moving, "--method", "bspline-vel", "--time", "0.25",
+                                                "--report-only", "-q").stdout
     r = run("plan", *moving, "--method", "bspline-vel", "--time", "0.25", "--report-only", "-q")
     assert r.exit_code == 0, r.stderr
     header, data = parse(r.stdout)

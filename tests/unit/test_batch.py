@@ -132,6 +132,17 @@ def test_header_names_may_carry_their_si_units():
             read_batch_text(header + "\n-0.1525,0,-0.8,0.1525,0,-0.8" + ",1" * (header.count(",") - 5) + "\n", "m")
 
 
+def test_a_dimensionless_column_takes_the_unit_1():
+    """limit_use is a fraction, like η: `limit_use[1]` (the unit of a dimensionless quantity, as the tool's own CSV
+    writes it) reads as limit_use, and `limit_use[m]` is refused (it was the other way round)."""
+    row = "\n-0.1525,0,-0.8,0.1525,0,-0.8,0.9\n"
+    for unit in ("1", "-", ""):
+        assert parsed(f"from_x,from_y,from_z,to_x,to_y,to_z,limit_use[{unit}]" + row)[0][2]["limit_use"] == 0.9
+    with pytest.raises(TaskError, match=r"column 'limit_use\[m\]': limit_use is read in 1 \(write limit_use or "
+                                        r"limit_use\[1\]\)"):
+        read_batch_text("from_x,from_y,from_z,to_x,to_y,to_z,limit_use[m]" + row, "m")
+
+
 def test_a_row_without_quotes_is_split_as_the_csv_module_splits_it(monkeypatch):
     """_row splits a line without quotes with str.split (issue 16's latency) and leaves quoted lines, empty ones
     and NUL bytes to the csv module: on 6,000 seeded random lines every cell and every error is the same as with

@@ -107,6 +107,16 @@ def _edit(name: str, old: str, new: str) -> str:
         ("scara-600", "velocity: 4.0", "velocity: {a: 1}", "capacity.velocity = {a: 1}: must be a number, not a mapping"),
         ("scara-600", "  payload: 1.0 ", "  payload: true ", "<p>:16: robot.payload = true: must be a number, not a flag"),
         ("scara-600", "elbow: right", "elbow: yes", "robot.elbow = true: must be text (quote it), not a flag"),
+        ("scara-600", "  payload: 1.0 ", "  payload: '0.5' ",
+         "<p>:16: robot.payload = '0.5': must be a number, not text (write the number without quotes)"),
+        ("delta-4axis", "rate: 1000.0", 'rate: "1000"', "planning.rate = '1000': must be a number, not text"),
+        ("delta-4axis", "{name: A1, unit: counts, counts_per_rev: 1048576}",
+         "{name: A1, unit: counts, counts_per_rev: '1048576'}",
+         "controller.joints.0.counts_per_rev = '1048576': must be a number, not text"),
+        ("delta-4axis", "{name: A1, unit: counts, counts_per_rev: 1048576}",
+         "{name: A1, unit: counts, counts_per_rev: " + "1" * 400 + "}",
+         "controller.joints.0.counts_per_rev = 1111"),  # an int beyond a float's range was an internal error
+        ("delta-4axis", "box: {min: [-0.6,", "box: {min: ['-0.6',", "workcell.box.min.0 = '-0.6': must be a number, not"),
         ("scara-600", "kind: scara", "kind: robot", "<p>:10: robot.kind = 'robot': must be one of 'gantry', 'delta', 'scara'"),
         ("scara-600", "  z_mass: 1.5", "  z_mass: 1.5\n  colour: red",
          "unknown key 'robot.colour': not a field of this section (check spelling; keys are case-sensitive; fields here: kind, link1"),
@@ -132,3 +142,21 @@ def test_rated_torque_above_peak_is_refused(rated, peak, ok):
     msg = str(ei.value)
     assert "robot.joints.drive: rated_torque = 20 N·m is above peak_torque = 8.36 N·m" in msg
     assert "cannot exceed its peak" in msg and "\n" not in msg
+
+
+def test_number_fields_are_strict_in_the_library_too():
+    """The models themselves take an int or a float for a number field and refuse a flag or text (pydantic's lax
+    mode took ``True`` as 1.0 and ``'0.5'`` as 0.5), whoever builds them."""
+    from pydantic import ValidationError
+
+    from pickplace_cli.model.controller import Controller, DriveJoint
+    from pickplace_cli.model.profile import Capacity
+
+    assert Capacity(velocity=5, acceleration=100.0).velocity == 5.0
+    for bad in (True, "5", b"5", "fast"):
+        with pytest.raises(ValidationError, match="must be a number"):
+            Capacity(velocity=bad, acceleration=100.0)
+    with pytest.raises(ValidationError, match="must be a number, not text"):
+        DriveJoint(name="A1", unit="counts", counts_per_rev="1048576")
+    with pytest.raises(ValidationError, match="must be a number, not a flag"):
+        Controller(cycle=True)
