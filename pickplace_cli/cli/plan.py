@@ -411,22 +411,28 @@ def plan(
     forgiven = write_anyway and code == 3
     note_exit(0 if forgiven else code)
     if json_summary:
-        doc = _plan_json(legs, cycle, code, forgiven, workspace_fit, rendezvous, track)
-        if a.belt_cycle is not None:
-            doc["belt_cycle"] = a.belt_cycle.as_dict()
-        if a.cycle_s is not None:
-            from .controller import cycle_cost
-
-            doc["cycle_rounding_cost_s"] = cycle_cost(legs, round_trip)
-        if getattr(a, "table_info", None) is not None:
-            doc["table"] = a.table_info
-        _emit_json(doc)
+        _emit_json(_single_json(a, legs, cycle, code, forgiven, workspace_fit, rendezvous, track))
     if code and not forgiven:
         if a.output is not None:
             from .hints import not_written
 
             sys.stderr.write(f"pickplace: {not_written(legs + ([track] if track is not None else []), prof, options, code)}\n")
         raise typer.Exit(code)
+
+
+def _single_json(a, legs, cycle, code, forgiven, workspace_fit, rendezvous, track) -> dict:
+    """The --json document of one move, round trip or belt cycle: the plan's, with the belt cycle, the cycle's
+    rounding cost [s] and the table written, where there are."""
+    doc = _plan_json(legs, cycle, code, forgiven, workspace_fit, rendezvous, track)
+    if a.belt_cycle is not None:
+        doc["belt_cycle"] = a.belt_cycle.as_dict()
+    if a.cycle_s is not None:
+        from .controller import cycle_cost
+
+        doc["cycle_rounding_cost_s"] = cycle_cost(legs, a.round_trip)
+    if getattr(a, "table_info", None) is not None:
+        doc["table"] = a.table_info
+    return doc
 
 
 def _single_task(a, prof, params: dict):
