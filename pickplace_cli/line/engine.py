@@ -64,6 +64,8 @@ class PartResult:
                 "t_placed_s": c.t_placed, "t_free_s": c.t_free, "target": c.target, "place_m": c.place_point.tolist(),
                 "waited_for_window": c.waited,
                 "pick_shape": list(pick.solved.move.basis.params), "place_shape": list(place.solved.move.basis.params),
+                "grip_angle_rad": pick.solved.move.theta_end, "place_angle_rad": place.solved.move.theta_end,
+                "turn_rad": place.solved.move.turn,
             })
         if self.declines:
             doc["declined"] = dict(self.declines)
@@ -162,7 +164,7 @@ class LineEngine:
         declines = {self.robots[i].name: why for i, why in left_out.items()}
         for i in ask:
             r = self.robots[i]
-            res = r.plan(d.along, d.across, d.t)
+            res = r.plan(d.along, d.across, d.t, angle=d.angle)
             if isinstance(res, Cycle):
                 r.commit(res)
                 self.runs[i].legs += res.legs

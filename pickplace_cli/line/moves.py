@@ -137,10 +137,18 @@ def conditions(start, v_from, end_a, end_b, v_to, height: float, eta: float, lam
 
 
 class Move:
-    """One move of a fixed shape: T → its path, the capacity rule's excess, exact peaks (module docstring)."""
+    """One move of a fixed shape: T → its path, the capacity rule's excess, exact peaks (module docstring).
 
-    def __init__(self, basis: ShapeBasis, start, v_from, end_a, end_b, v_to, height: float, eta: float) -> None:
+    ``theta`` [rad] is the tool's angle about the base z axis at the start (a rotary fourth axis; 0 otherwise) and
+    ``turn`` [rad] the turn it makes, as ``plan`` makes one (:func:`~pickplace_cli.paths.turn.turned`: the degree-9
+    law between lift-off and set-down). Neither depends on T, nor does the window of the turn: the path's height
+    (the z column of its conditions) is the same at every duration, so the law in τ is fixed per move."""
+
+    def __init__(self, basis: ShapeBasis, start, v_from, end_a, end_b, v_to, height: float, eta: float,
+                 theta: float = 0.0, turn: float = 0.0) -> None:
         self.basis = basis
+        self.theta, self.turn = float(theta), float(turn)
+        self._law = None
         self.start = np.asarray(start, float)
         self.v_from, self.v_to = np.asarray(v_from, float), np.asarray(v_to, float)
         self.end_a, self.end_b = np.asarray(end_a, float), np.asarray(end_b, float)
@@ -233,17 +241,69 @@ class Move:
         derivs = [m @ d for m in self.basis.left]
         return pieces_norm_peaks(self.basis.breaks, derivs, orders)  # type: ignore[return-value]
 
-    def task(self, T: float):
+    @property
+    def theta_end(self) -> float:
+        """The tool angle at the move's end [rad]."""
+        return self.theta + self.turn
+
+    def task(self, T: float, angles: bool | None = None):
+        """The move's Task at duration T (with the tool angles when it turns, or when ``angles``)."""
         from ..model.task import Task
 
-        return Task(self.start, self.end(T), self.height, self.eta, self.v_from, self.v_to)
+        if angles is None:
+            angles = self.turn != 0.0
+        th = (self.theta, self.theta_end) if angles else (None, None)
+        return Task(self.start, self.end(T), self.height, self.eta, self.v_from, self.v_to, *th)
 
-    def path(self, T: float):
+    def path(self, T: float, angle: bool = True):
         """The CartesianPath of the move planned for T, built by the method itself
-        (:func:`~pickplace_cli.paths.bspline_vel.plan_bspline_vel` with this shape)."""
+        (:func:`~pickplace_cli.paths.bspline_vel.plan_bspline_vel` with this shape), carrying the tool's turn as
+        ``plan`` attaches it (:func:`~pickplace_cli.paths.turn.turned`), or its constant angle (``angle``)."""
         from ..paths.bspline_vel import plan_bspline_vel
 
-        return plan_bspline_vel(self.task(T), T, params=list(self.basis.params))
+        path = plan_bspline_vel(self.task(T, angles=False), T, params=list(self.basis.params))
+        if not angle or (self.turn == 0.0 and self.theta == 0.0):
+            return path
+        if self.turn == 0.0:
+            from dataclasses import replace
+
+            from ..curves.rotation import RotationLaw
+
+            return replace(path, angle=RotationLaw(self.theta, 0.0))
+        from ..paths.turn import turned
+
+        return turned(path, self.task(T), "transfer")
+
+    def angle_orders(self, tau) -> np.ndarray:
+        """θ, θ′, θ″, θ‴ (4, N) of the tool angle at τ [rad/1^k] (the law of :meth:`path`, the same at every T)."""
+        tau = np.asarray(tau, float)
+        if self.turn == 0.0:
+            out = np.zeros((4, len(tau)))
+            out[0] = self.theta
+            return out
+        if self._law is None:
+            self._law = turn_law(self)
+        return self._law.all_orders(tau)
+
+
+_WINDOWS: dict = {}
+
+
+def turn_law(mv: "Move"):
+    """The angle law of a turning move: :func:`~pickplace_cli.paths.turn.turned`'s on the move's path, its window
+    memoised on what the path's height depends on (the shape, the end heights, the clearance and η)."""
+    from ..curves.rotation import RotationLaw
+
+    key = (mv.basis.params, float(mv.start[2]), float(mv.end_a[2]), float(mv.v_from[2]), float(mv.v_to[2]), mv.height,
+           mv.eta)
+    window = _WINDOWS.get(key)
+    if window is None:
+        law = mv.path(1.0).angle
+        window = (law.tau0, law.tau1)
+        if len(_WINDOWS) > 65536:
+            _WINDOWS.clear()
+        _WINDOWS[key] = window
+    return RotationLaw(mv.theta, mv.turn, *window)
 
 
 def first_feasible(excess: Callable[[np.ndarray], np.ndarray], a: float, b: float, rtol: float = RTOL,

@@ -37,6 +37,7 @@ import numpy as np
 from ..curves.peaks import parabolic_peak
 from ..model.errors import PickplaceError, TaskError, UnreachableError
 from .frames import Frame
+from .grids import UsePlan, _leg_of, track_basis
 from .moves import (HORIZON, Move, Shapes, Solved, T_MIN, exact_rule, first_feasible, search_auto, solve_auto,
                     solve_seconds, verify_auto)
 
@@ -49,8 +50,6 @@ GRID_SAFETY = 2e-4
 #: under the rule ``limits`` the capacity's durations stand when no joint or motor limit is used beyond this on the
 #: grid (its estimates are within 0.3 % of the exact peaks; a leg above SCREEN_MARGIN is still checked exactly)
 LIMITS_SCREEN = 0.95
-#: uniform samples of a tracking leg's grid (plus its Gauss–Legendre nodes)
-TRACK_UNIFORM = 9
 #: the quantities a duration changes (the fit rule's); positions, workcell and singularity do not
 TIMED = frozenset({"velocity", "acceleration", "jerk", "motor speed", "motor torque", "motor torque rate"})
 
@@ -63,6 +62,7 @@ class RobotState:
     position: np.ndarray
     velocity: np.ndarray
     t_free: float
+    angle: float = 0.0  #: the tool's angle about the base z axis [rad] (a rotary fourth axis; else 0)
 
     @property
     def moving(self) -> bool:
@@ -87,6 +87,20 @@ class Leg:
     use: np.ndarray | None = None
     end_torque: np.ndarray | None = None
     exact: bool = False
+    theta: float = 0.0  #: the tool angle [rad] of a track or release leg (held)
+
+    @property
+    def end_angle(self) -> float:
+        """The tool angle at the leg's end [rad]."""
+        return self.solved.move.theta_end if self.solved is not None else self.theta
+
+    def angle_orders(self, tau) -> np.ndarray:
+        """θ, θ′, θ″, θ‴ (4, N) of the tool angle over the leg at τ [rad/1^k]."""
+        if self.solved is not None:
+            return self.solved.move.angle_orders(tau)
+        out = np.zeros((4, len(tau)))
+        out[0] = self.theta
+        return out
 
     @property
     def t1(self) -> float:
@@ -182,29 +196,6 @@ class _StandIn:
         return None
 
 
-class TrackBasis:
-    """The grid of a tracking leg (constant velocity, τ ∈ [0, 1]): uniform samples and Gauss–Legendre nodes."""
-
-    def __init__(self) -> None:
-        from .moves import gauss_legendre
-
-        x, w = gauss_legendre()
-        nodes = 0.5 + 0.5 * x
-        self.tau = np.unique(np.concatenate([np.linspace(0.0, 1.0, TRACK_UNIFORM), nodes]))
-        self.gl_index = np.searchsorted(self.tau, nodes)
-        self.gl_weight = 0.5 * w
-
-
-_TRACK = None
-
-
-def track_basis() -> TrackBasis:
-    global _TRACK
-    if _TRACK is None:
-        _TRACK = TrackBasis()
-    return _TRACK
-
-
 class LineRobot:
     """A robot of the line (module docstring): set up from its :class:`~pickplace_cli.line.spec.RobotSpec`."""
 
@@ -242,6 +233,11 @@ class LineRobot:
                                for s in limit_specs(profile.rated)])  # the RMS is reported against the ratings
         self.has_drives = self.model.has_drives
         self.targets = _targets(spec.place, self.frame)
+        #: a robot that turns the tool (a rotary fourth axis); the base frame's angle in the line frame [rad]
+        self.rotary = bool(getattr(robot, "rotary", False))
+        self.phi = math.atan2(self.frame.d[1], self.frame.d[0])
+        self.place_angles = _place_angles(spec.place, len(self.targets))
+        self.turn_tolerance = float(spec.place.angle_tolerance)
         home = spec.home if spec.home is not None else None
         self.home = self.frame.to_robot(home) if home is not None else self.targets[0][0].copy()
         self.next_target = 0
@@ -276,7 +272,7 @@ class LineRobot:
         along_free = along + self.speed * (st.t_free - t_detect)
         if t_ready <= st.t_free and along_free >= self.window[0]:
             return None
-        moves = [Move(b, st.position, st.velocity, self.home, np.zeros(3), np.zeros(3), self.height, self.eta)
+        moves = [Move(b, st.position, st.velocity, self.home, np.zeros(3), np.zeros(3), self.height, self.eta, st.angle)
                  for b in self._shapes_for(st.position, st.velocity, self.home, np.zeros(3))]
         solved = self._solve(moves, T_MIN, HORIZON)
         if solved is None:
@@ -288,12 +284,43 @@ class LineRobot:
         return leg
 
     def commit_stop(self, leg: Leg) -> None:
-        self.state = RobotState(leg.end.copy(), np.zeros(3), leg.t1)
+        self.state = RobotState(leg.end.copy(), np.zeros(3), leg.t1, leg.end_angle)
 
-    def plan(self, along: float, across: float, t_detect: float, state: RobotState | None = None) -> Cycle | Decline:
-        """The cycle of a part detected at ``t_detect`` [s] at ``along``, ``across`` [m] from ``state`` (default the
-        robot's), or why it cannot take it (module docstring). Does not change the robot."""
+    def turns(self, angle: float | None, st: RobotState) -> tuple[float, float, float] | Decline:
+        """(tool angle at the start, turn of the pick, turn of the place) [rad, base frame] for a part lying at
+        ``angle`` [rad, line frame] (None: not known) placed at the next target's angle. The place needs the turn
+        wrap(place − part) (the shorter way round, |turn| ≤ π); the tool puts the part down at the place angle taken
+        within (−π, π] in the base frame, so it takes the part at that angle less the turn (the gripper takes it as
+        it lies) and turns to it on the way there: every tool angle stays within 2π of 0 rad, and the pick's turn
+        within π once the tool has placed a part. No turn without both angles; a Decline when the robot has no
+        rotary axis and the turn is larger than the place's ``angle_tolerance``."""
+        place = self.place_angles[self.next_target % len(self.targets)]
+        if angle is None or place is None:
+            return st.angle, 0.0, 0.0
+        from ..curves.rotation import resolve_turn
+
+        need = resolve_turn(angle, place) - angle
+        if not self.rotary:
+            if abs(need) <= self.turn_tolerance:
+                return st.angle, 0.0, 0.0
+            return Decline(f"robot {self.name}: the part lies at {angle:.4f} rad and the place wants {place:.4f} rad: "
+                           f"a turn of {need:.4f} rad (more than angle_tolerance = {self.turn_tolerance:g} rad) and "
+                           f"profile {self.profile.name} has no rotary fourth axis", 4)
+        put = resolve_turn(0.0, place + self.phi)
+        return st.angle, put - need - st.angle, need
+
+    def plan(self, along: float, across: float, t_detect: float, state: RobotState | None = None,
+             angle: float | None = None) -> Cycle | Decline:
+        """The cycle of a part detected at ``t_detect`` [s] at ``along``, ``across`` [m] lying at ``angle`` [rad,
+        line frame; None: not known] from ``state`` (default the robot's), or why it cannot take it (module
+        docstring). Does not change the robot."""
         st = self.state if state is None else state
+        turns = self.turns(angle, st)
+        if isinstance(turns, Decline):
+            return turns
+        th0, t_pick, t_place = turns
+        th_grip = th0 + t_pick
+        pturn = (th_grip, t_place)
         t_ready = t_detect + self.latency
         t_start = max(st.t_free, t_ready)
         along0 = along + self.speed * (t_start - t_detect)  # where the part is when the move starts
@@ -312,30 +339,31 @@ class LineRobot:
             # where it enters the window, when the rule's move there fits in the time left
             entry = self.part_at(self.window[0], across)
             t_entry = t_detect + (self.window[0] - along) / self.speed
-            wmoves = [Move(bs, st.position, st.velocity, entry, np.zeros(3), self.v_belt, self.height, self.eta)
-                      for bs in self._shapes_for(st.position, st.velocity, entry, self.v_belt)]
-            got = self._pick_and_place(wmoves, T_MIN, t_entry - t_start, target, v_out)
+            wmoves = [Move(bs, st.position, st.velocity, entry, np.zeros(3), self.v_belt, self.height, self.eta, th0,
+                           t_pick) for bs in self._shapes_for(st.position, st.velocity, entry, self.v_belt)]
+            got = self._pick_and_place(wmoves, T_MIN, t_entry - t_start, target, v_out, pturn)
             if isinstance(got, tuple) and t_entry - got[0].T >= t_start:
                 solved, t_start, waited = got, t_entry - got[0].T, True
         if solved is None:
             p0 = self.part_at(along0, across)
-            moves = [Move(bs, st.position, st.velocity, p0, self.v_belt, self.v_belt, self.height, self.eta)
+            moves = [Move(bs, st.position, st.velocity, p0, self.v_belt, self.v_belt, self.height, self.eta, th0, t_pick)
                      for bs in self._shapes_for(st.position, st.velocity, p0 + self.v_belt * self.last_T, self.v_belt)]
-            solved = self._pick_and_place(moves, a, b, target, v_out)
+            solved = self._pick_and_place(moves, a, b, target, v_out, pturn)
             if solved is None:
                 return Decline(_Reason(self, moves, a, b, along0, busy))
         if isinstance(solved, Decline):
             return solved
         pick, place = solved
         meet = pick.end
-        track = Leg("track", t_start + pick.T, self.dwell, point=meet, velocity=self.v_belt.copy())
+        track = Leg("track", t_start + pick.T, self.dwell, point=meet, velocity=self.v_belt.copy(), theta=th_grip)
         legs = [Leg("pick", t_start, pick.T, pick), track, Leg("place", track.t1, place.T, place)]
-        legs.append(Leg("release", legs[-1].t1, self.release, point=target.copy(), velocity=v_out.copy()))
+        legs.append(Leg("release", legs[-1].t1, self.release, point=target.copy(), velocity=v_out.copy(),
+                        theta=th_grip + t_place))
         bad = self._check(legs)
         if bad is not None:
             return bad
         end = legs[-1].end
-        state = RobotState(end.copy(), v_out.copy(), legs[-1].t1)
+        state = RobotState(end.copy(), v_out.copy(), legs[-1].t1, th_grip + t_place)
         meet_line = self.frame.to_line(meet)
         return Cycle(legs, t_start, t_start + pick.T, meet.copy(), meet_line, self.next_target % len(self.targets),
                      target.copy(), state, waited=waited)
@@ -359,39 +387,41 @@ class LineRobot:
             return [self.shapes.basis(_paper())]
         return self.shapes.candidates(task, T)
 
-    def _place_moves(self, leave, target, v_out) -> list[Move]:
-        return [Move(bs, leave, self.v_belt, target, np.zeros(3), v_out, self.height, self.eta)
+    def _place_moves(self, leave, target, v_out, turn=(0.0, 0.0)) -> list[Move]:
+        """The candidate place moves; ``turn``: (tool angle at the start, the turn) [rad]."""
+        return [Move(bs, leave, self.v_belt, target, np.zeros(3), v_out, self.height, self.eta, *turn)
                 for bs in self._shapes_for(leave, self.v_belt, target, v_out)]
 
-    def _pick_and_place(self, moves: list[Move], a: float, b: float, target, v_out):
+    def _pick_and_place(self, moves: list[Move], a: float, b: float, target, v_out, turn=(0.0, 0.0)):
         """(pick, place) Solved, None when the pick cannot meet the part in [a, b], or a Decline for the place.
         The capacity rule: both durations searched on the grid (raised by ``GRID_SAFETY``), then checked on their
         exact peaks in one batch; a move the exact check nudges is searched again from where it must start."""
         if self.optimal:
             from .optimal import pick_and_place
 
-            got = pick_and_place(self, moves[0], a, b, target, v_out)
+            got = pick_and_place(self, moves[0], a, b, target, v_out, turn)
             return Decline(got, 1) if isinstance(got, str) else got
         if self.rule == "limits":
             # the capacity's durations first (cheap): where every joint and motor limit holds there with room to
             # spare (LIMITS_SCREEN), they are the rule's answer (no shorter move holds the capacity, and these hold
             # the motors: the cycle's check then decides the legs as for any rule)
-            got = self._capacity_pick_and_place(moves, a, b, target, v_out)
+            got = self._capacity_pick_and_place(moves, a, b, target, v_out, turn)
             if not isinstance(got, tuple) or all(self._motors_clear(s) for s in got):
                 return got  # (None or a Decline: no move holds the capacity, so none holds every limit)
         if self.rule != "auto":
             pick = self._solve(moves, a, b)
             if pick is None:
                 return None
-            place = self._solve(self._place_moves(pick.end + self.v_belt * self.dwell, target, v_out), T_MIN, HORIZON)
+            place = self._solve(self._place_moves(pick.end + self.v_belt * self.dwell, target, v_out, turn), T_MIN,
+                                HORIZON)
             return (pick, place) if place is not None else self._no_place(pick.end + self.v_belt * self.dwell, target)
-        return self._capacity_pick_and_place(moves, a, b, target, v_out)
+        return self._capacity_pick_and_place(moves, a, b, target, v_out, turn)
 
     def _motors_clear(self, solved: Solved) -> bool:
         """Every timed joint and motor limit used at most ``LIMITS_SCREEN`` on the move's grid at its duration."""
         return bool(self._excess_fit(solved.move, np.array([solved.T]))[0] <= LIMITS_SCREEN - 1.0)
 
-    def _capacity_pick_and_place(self, moves: list[Move], a: float, b: float, target, v_out):
+    def _capacity_pick_and_place(self, moves: list[Move], a: float, b: float, target, v_out, turn=(0.0, 0.0)):
         """(pick, place) by the Cartesian capacity (the rule ``auto``), None, or a Decline for the place."""
         found = search_auto(moves, self.capacity, a, b, guess=self.last_T)
         if found is None:
@@ -399,7 +429,7 @@ class LineRobot:
         mv, T = found
         T = min(T * (1 + GRID_SAFETY), b) if T > a else T
         leave = mv.end(T) + self.v_belt * self.dwell
-        pmoves = self._place_moves(leave, target, v_out)
+        pmoves = self._place_moves(leave, target, v_out, turn)
         pfound = search_auto(pmoves, self.capacity, T_MIN, HORIZON, guess=self.last_place_T)
         if pfound is None:
             return self._no_place(leave, target)
@@ -411,7 +441,7 @@ class LineRobot:
         if pick is None:
             return None
         pick = pick[0]
-        place = self._solve(self._place_moves(pick.end + self.v_belt * self.dwell, target, v_out), T_MIN, HORIZON)
+        place = self._solve(self._place_moves(pick.end + self.v_belt * self.dwell, target, v_out, turn), T_MIN, HORIZON)
         return (pick, place) if place is not None else self._no_place(pick.end + self.v_belt * self.dwell, target)
 
     def _no_place(self, leave, target) -> Decline:
@@ -486,6 +516,8 @@ class LineRobot:
         G = len(tau)
         out = np.full(len(Ts), np.inf)
         motion = [np.concatenate([a + T * b for T in Ts]) for a, b in zip(mv.A, mv.B)]
+        if self.rotary:
+            motion.append(np.tile(mv.angle_orders(tau), len(Ts)))
         try:
             parts = self.model.parts(np.tile(tau, len(Ts)), motion=tuple(motion), singularity=False)
         except UnreachableError:
@@ -517,6 +549,8 @@ class LineRobot:
                 grids.append((tb.tau, [p, np.broadcast_to(d, p.shape).copy(), z, z], tb.gl_index, tb.gl_weight))
         tau = np.concatenate([g[0] for g in grids])
         motion = tuple(np.concatenate([g[1][k] for g in grids]) for k in range(4))
+        if self.rotary:  # the tool angle of every leg (its turn, or held)
+            motion += (np.concatenate([leg.angle_orders(g[0]) for g, leg in zip(grids, legs)], axis=1),)
         Ts = np.concatenate([np.full(len(g[0]), max(leg.duration, 1e-9)) for g, leg in zip(grids, legs)])
         try:
             parts = self.model.parts(tau, motion=motion)
@@ -558,7 +592,16 @@ class LineRobot:
         from ..planner import motion_model
 
         T = leg.duration
-        path = leg.solved.move.path(T) if leg.solved is not None else tracking_path(leg.point, leg.velocity, T)
+        if leg.solved is not None:
+            path = leg.solved.move.path(T)
+        else:
+            path = tracking_path(leg.point, leg.velocity, T)
+            if leg.theta != 0.0:
+                from dataclasses import replace
+
+                from ..curves.rotation import RotationLaw
+
+                path = replace(path, angle=RotationLaw(leg.theta, 0.0))
         try:
             rep = check_limits(motion_model(path, self.profile), T, dwell=0.0)
         except UnreachableError as exc:
@@ -595,6 +638,16 @@ def _xyz(p) -> str:
     return ",".join(f"{c:.4f}" for c in p)
 
 
+def _place_angles(place, n: int) -> list:
+    """The place angle of every target in turn [rad, line frame] (None: the part is placed as it lies)."""
+    a = place.angle
+    if a is None:
+        return [None] * n
+    if isinstance(a, (int, float)):
+        return [float(a)] * n
+    return [float(x) for x in a]
+
+
 def _targets(place, frame: Frame) -> list[tuple[np.ndarray, np.ndarray]]:
     """(point, arrival velocity) of every place target in turn [m, m/s, robot frame]."""
     if place.belt is not None:
@@ -607,57 +660,6 @@ def _targets(place, frame: Frame) -> list[tuple[np.ndarray, np.ndarray]]:
     else:
         pts = [np.asarray(p, float) for p in place.points]
     return [(frame.to_robot(p), np.zeros(3)) for p in pts]
-
-
-class UsePlan:
-    """How the columns' peaks (:meth:`~pickplace_cli.limits.motion.MotionModel.columns`) become the use of every limit
-    as the limit report gives it (``keys``: (joint, quantity) per row): peak/limit; the singularity measure
-    limit/minimum; a [min, max] range by the side nearer its bound, |x − mid| / half-range. Built once per robot."""
-
-    def __init__(self, meta: list) -> None:
-        self.meta = meta
-        keys, cols, limits, lower = [], [], [], []
-        ranges: dict = {}
-        for c, (joint, quantity, _unit, limit, _kind, sign) in enumerate(meta):
-            base, _, side = quantity.rpartition(" ")
-            if side in ("max", "min") and base.startswith(("position", "workcell")):
-                ranges.setdefault((joint, base), {})[side] = (c, float(limit))
-            else:
-                keys.append((joint, quantity))
-                cols.append(c)
-                limits.append(float(limit))
-                lower.append(sign < 0)
-        self.cols, self.limits, self.lower = np.array(cols, int), np.array(limits), np.array(lower, bool)
-        rmax, rmin, mid, half = [], [], [], []
-        for key, sides in ranges.items():
-            (cmax, hi), (cmin, lo) = sides["max"], sides["min"]
-            keys.append(key)
-            rmax.append(cmax)
-            rmin.append(cmin)
-            mid.append((lo + hi) / 2)
-            half.append((hi - lo) / 2)
-        self.rmax, self.rmin, self.mid, self.half = np.array(rmax, int), np.array(rmin, int), np.array(mid), np.array(half)
-        self.keys = keys
-
-    def __call__(self, peak: np.ndarray) -> np.ndarray:
-        """(L, C) column peaks (column sign convention) → (L, R) use per row."""
-        v = peak[:, self.cols]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            single = np.where(self.lower, np.where(-v > 0, self.limits / -v, np.inf), v / self.limits)
-        vmax, vmin = peak[:, self.rmax], -peak[:, self.rmin]
-        ranged = np.maximum((vmax - self.mid) / self.half, (self.mid - vmin) / self.half)
-        return np.concatenate([single, ranged], axis=1)
-
-
-def _leg_of(index, grids) -> int:
-    if index is None:
-        return 0
-    start = 0
-    for k, g in enumerate(grids):
-        start += len(g[0])
-        if index < start:
-            return k
-    return len(grids) - 1
 
 
 __all__ = ["LineRobot", "RobotState", "Leg", "Cycle", "Decline", "PickplaceError"]

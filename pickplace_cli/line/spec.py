@@ -12,6 +12,7 @@ Every position in the file is given as ``[along, across, height]`` in this frame
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Annotated, Any, Literal, Optional, Union
 
@@ -81,12 +82,28 @@ class Place(_Model):
                                         description="Place points [along, across, height] in m, used in turn")
     tray: Optional[Tray] = Field(default=None, description="A tray pattern of place points")
     belt: Optional[OutgoingBelt] = Field(default=None, description="An outgoing belt")
+    angle: Union[Num, list[Num], None] = Field(
+        default=None, description="The angle [rad] about the vertical (line frame, counter-clockwise from the belt's "
+        "direction seen from above) at which a part must lie once placed: one for every target, or one per target "
+        "in turn (a tray's slots row by row); default none: a part is placed as it lies")
+    angle_tolerance: Num = Field(default=0.0, ge=0, le=math.pi, description="How far [rad] a part's angle may lie "
+                                 "from the place angle and still be placed unturned by a robot without a rotary "
+                                 "fourth axis (0 … pi rad; default 0 rad)")
 
     @model_validator(mode="after")
     def _one(self) -> "Place":
         given = [k for k in ("points", "tray", "belt") if getattr(self, k) is not None]
         if len(given) != 1:
             raise ValueError(f"give exactly one of points, tray, belt (got {', '.join(given) or 'none'})")
+        if isinstance(self.angle, list):
+            n = (len(self.points) if self.points is not None else
+                 self.tray.rows * self.tray.columns if self.tray is not None else 1)
+            if len(self.angle) != n:
+                raise ValueError(f"angle has {len(self.angle)} values for {n} place target{'s' if n > 1 else ''}: "
+                                 "give one angle [rad] for all, or one per target")
+        for x in self.angle if isinstance(self.angle, list) else [self.angle] if self.angle is not None else []:
+            if abs(x) > 100.0:
+                raise ValueError(f"angle = {x:g} rad: must lie within ±100 rad (SI units: radians, not degrees)")
         return self
 
 
