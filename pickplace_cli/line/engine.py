@@ -167,6 +167,9 @@ class LineEngine:
             res = r.plan(d.along, d.across, d.t, angle=d.angle)
             if isinstance(res, Cycle):
                 r.commit(res)
+                for leg in res.legs:
+                    if leg.solved is not None:
+                        leg.solved.move.drop_caches()
                 self.runs[i].legs += res.legs
                 self.runs[i].picks += 1
                 self.sharing.picked(i)
@@ -189,6 +192,7 @@ class LineEngine:
         if isinstance(leg, Decline):
             raise TaskError(leg.reason)
         run.robot.commit_stop(leg)
+        leg.solved.move.drop_caches()
         run.legs.append(leg)
 
     def run(self, items: Iterable[Detection | BadRow]) -> Iterator[PartResult]:

@@ -241,6 +241,13 @@ class Move:
         derivs = [m @ d for m in self.basis.left]
         return pieces_norm_peaks(self.basis.breaks, derivs, orders)  # type: ignore[return-value]
 
+    def drop_caches(self) -> None:
+        """Forget the grid matrices and dot products (recomputed on use): a committed move keeps only what defines
+        it, so a long run holds a few kB a part."""
+        self._check = None
+        self._dot = {}
+        self._law = None
+
     @property
     def theta_end(self) -> float:
         """The tool angle at the move's end [rad]."""

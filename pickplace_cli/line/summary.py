@@ -92,6 +92,10 @@ class LineSummary:
     t_last_detection: float
     robots: list = field(default_factory=list)
     warnings: list = field(default_factory=list)
+    #: the miss rate's and picks/min's confidence intervals (:mod:`~pickplace_cli.line.confidence`)
+    intervals: Any = None
+    #: --until: {"precision", "reached", "max_s"} (None without it)
+    until: Any = None
 
     @property
     def span(self) -> float:
@@ -131,6 +135,8 @@ class LineSummary:
             "picks_per_minute": self.picks_per_minute, "feed_s": self.feed,
             "t_begin_s": self.t_begin if math.isfinite(self.t_begin) else None,
             "t_end_s": self.t_end if math.isfinite(self.t_end) else None, "span_s": self.span,
+            "intervals": None if self.intervals is None else self.intervals.as_dict(),
+            **({} if self.until is None else {"until": dict(self.until)}),
             "exit_code": self.exit_code(), "violations": self.violations(), "warnings": list(self.warnings),
             "robots": [r.as_dict() for r in self.robots],
         }
@@ -166,6 +172,9 @@ def summarise(engine) -> LineSummary:
     out = LineSummary(parts, picked, parts - picked, engine.bad_rows, t_begin, t_end, t_last,
                       warnings=list(engine.warnings))
     span = max(t_end - t_begin, 0.0)
+    from .confidence import summary_intervals
+
+    out.intervals = summary_intervals(out, engine.results)
     for run in engine.runs:
         r = run.robot
         integral, busy = sequence_integral(run.legs, r.home_torque, t_begin, t_end)
