@@ -489,6 +489,13 @@ def _sweep(line_file, detections, belt_speed, robots, strategy, seed, speeds, ro
                 write_sweep_plot(rows, fh, plot_kind, title=f"{base.name}: miss rate against belt speed")
         if ckpt is not None and ckpt.exists():
             os.unlink(ckpt)
+    if not quiet:
+        from ..line.sweep import seed_intervals
+
+        for kind, n, speed, miss, picks in seed_intervals(rows):
+            sys.stderr.write(f"{kind}, {n} robots, {speed:g} m/s: miss rate {100 * miss.estimate:.1f} ± "
+                             f"{100 * miss.half:.1f} %, picks/min {picks.estimate:.1f} ± {picks.half:.1f} (95 %, "
+                             f"{miss.method})\n")
     failed = [r for r in rows if r.get("error") and r.get("exit_code") != 4]
     for r in failed[:5]:
         sys.stderr.write(f"pickplace: case {r['strategy']}, {r['robots']} robots, {r['belt_speed']:g} m/s, seed "
