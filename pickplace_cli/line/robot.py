@@ -30,7 +30,6 @@ peaks, as the batch verdict engine measures); any other leg is checked by the pr
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
@@ -38,6 +37,7 @@ from ..curves.peaks import parabolic_peak
 from ..model.errors import PickplaceError, TaskError, UnreachableError
 from .frames import Frame
 from .grids import UsePlan, _leg_of, track_basis
+from .legs import Cycle, Decline, Leg, RobotState
 from .moves import (HORIZON, Move, Shapes, Solved, T_MIN, exact_rule, first_feasible, search_auto, solve_auto,
                     solve_seconds, verify_auto)
 
@@ -50,113 +50,10 @@ GRID_SAFETY = 2e-4
 #: under the rule ``limits`` the capacity's durations stand when no joint or motor limit is used beyond this on the
 #: grid (its estimates are within 0.3 % of the exact peaks; a leg above SCREEN_MARGIN is still checked exactly)
 LIMITS_SCREEN = 0.95
+#: rounds of a cycle delayed until its place move arrives after an exchange (the part moves on meanwhile)
+EXCHANGE_ROUNDS = 6
 #: the quantities a duration changes (the fit rule's); positions, workcell and singularity do not
 TIMED = frozenset({"velocity", "acceleration", "jerk", "motor speed", "motor torque", "motor torque rate"})
-
-
-@dataclass(frozen=True)
-class RobotState:
-    """Where the robot is from ``t_free`` [s] on: ``position`` [m, robot frame], ``velocity`` [m/s] (zero at
-    rest; an outgoing belt's after a place on it)."""
-
-    position: np.ndarray
-    velocity: np.ndarray
-    t_free: float
-    angle: float = 0.0  #: the tool's angle about the base z axis [rad] (a rotary fourth axis; else 0)
-
-    @property
-    def moving(self) -> bool:
-        return bool(np.any(self.velocity != 0.0))
-
-
-@dataclass
-class Leg:
-    """One segment of a robot's sequence: ``kind`` (pick, track, place, release, stop), its start ``t0`` [s, line
-    clock] and ``duration`` [s]; ``solved`` (the B-spline move; None for a track/release leg, which is
-    ``point`` + ``velocity``·t); the exact ∫ motor torque² dt per motor over the leg [N²·m²·s]; the use of every
-    limit (in the order of the robot's ``use_keys``: (joint, quantity)); the motor torque at its end [N·m];
-    ``exact``: checked by the exact limit check."""
-
-    kind: str
-    t0: float
-    duration: float
-    solved: Solved | None = None
-    point: np.ndarray | None = None
-    velocity: np.ndarray | None = None
-    integral: np.ndarray | None = None
-    use: np.ndarray | None = None
-    end_torque: np.ndarray | None = None
-    exact: bool = False
-    theta: float = 0.0  #: the tool angle [rad] of a track or release leg (held)
-
-    @property
-    def end_angle(self) -> float:
-        """The tool angle at the leg's end [rad]."""
-        return self.solved.move.theta_end if self.solved is not None else self.theta
-
-    def angle_orders(self, tau) -> np.ndarray:
-        """θ, θ′, θ″, θ‴ (4, N) of the tool angle over the leg at τ [rad/1^k]."""
-        if self.solved is not None:
-            return self.solved.move.angle_orders(tau)
-        out = np.zeros((4, len(tau)))
-        out[0] = self.theta
-        return out
-
-    @property
-    def t1(self) -> float:
-        return self.t0 + self.duration
-
-    @property
-    def end(self) -> np.ndarray:
-        if self.solved is not None:
-            return self.solved.end
-        return self.point + self.velocity * self.duration
-
-
-@dataclass
-class Cycle:
-    """A part taken: the legs (a stop first when the robot had to come to rest), the meeting (time, point in
-    the robot's frame and in the line's), the place target, and the robot's state after."""
-
-    legs: list
-    t_start: float
-    t_meet: float
-    meet_robot: np.ndarray
-    meet_line: np.ndarray
-    target: int
-    place_point: np.ndarray
-    state: RobotState
-    waited: bool = False
-
-    @property
-    def pick(self) -> Leg:
-        return next(leg for leg in self.legs if leg.kind == "pick")
-
-    @property
-    def t_placed(self) -> float:
-        return next(leg for leg in self.legs if leg.kind == "place").t1
-
-    @property
-    def t_free(self) -> float:
-        return self.state.t_free
-
-
-@dataclass(frozen=True)
-class Decline:
-    """Why a robot does not take a part: ``reason`` (one line; computed when first read) and the exit code it
-    would be (4: cannot meet it in the window or a point is out of reach; 3: a limit; 1: no plan)."""
-
-    why: object
-    code: int = 4
-
-    @property
-    def reason(self) -> str:
-        return self.why if isinstance(self.why, str) else str(self.why)
-
-    @property
-    def short(self) -> str:
-        """The reason without the costly details (for a part another robot took)."""
-        return self.why if isinstance(self.why, str) else self.why.short()
 
 
 class _Reason:
@@ -241,6 +138,12 @@ class LineRobot:
         home = spec.home if spec.home is not None else None
         self.home = self.frame.to_robot(home) if home is not None else self.targets[0][0].copy()
         self.next_target = 0
+        #: (places between two exchanges, seconds of an exchange), or None; until when it cannot place [s]; the
+        #: exchanges (start, end) [s]
+        ex = spec.place.exchange
+        self.exchange = None if ex is None else (int(ex.every or len(self.targets)), float(ex.time))
+        self.blocked_until = -math.inf
+        self.exchanges: list = []
         self.state = RobotState(self.home.copy(), np.zeros(3), -math.inf)
         self.last_T = 0.2
         self.last_place_T = 0.2
@@ -313,8 +216,33 @@ class LineRobot:
              angle: float | None = None) -> Cycle | Decline:
         """The cycle of a part detected at ``t_detect`` [s] at ``along``, ``across`` [m] lying at ``angle`` [rad,
         line frame; None: not known] from ``state`` (default the robot's), or why it cannot take it (module
-        docstring). Does not change the robot."""
+        docstring). Does not change the robot.
+
+        While its place is being exchanged (until ``blocked_until``) the robot cannot place: a cycle whose place
+        move would arrive before then starts later by the difference, again until it arrives at or after that
+        time (the part is then further along; a few rounds), or the part is declined saying so."""
         st = self.state if state is None else state
+        got = self._cycle(along, across, t_detect, st, angle)
+        late = st
+        for _ in range(EXCHANGE_ROUNDS):
+            if isinstance(got, Cycle) and got.t_placed >= self.blocked_until - 1e-9:
+                return got
+            if not isinstance(got, Cycle):
+                break
+            # later by the shortfall and a quarter more (the part has moved on: the pick is a little shorter)
+            late = RobotState(late.position, late.velocity,
+                              got.t_start + 1.25 * (self.blocked_until - got.t_placed) + 1e-6, late.angle)
+            got = self._cycle(along, across, t_detect, late, angle)
+        if late is st:
+            return got
+        why = got.reason if isinstance(got, Decline) else "its place move still arrives before then"
+        return Decline(f"robot {self.name}: its place is exchanged until t = {self.blocked_until:.4f} s, and a cycle "
+                       f"placing after that cannot: {why.removeprefix(f'robot {self.name}: ')}",
+                       got.code if isinstance(got, Decline) else 4)
+
+    def _cycle(self, along: float, across: float, t_detect: float, st: RobotState,
+              angle: float | None) -> Cycle | Decline:
+        """:meth:`plan` without the exchange's wait."""
         turns = self.turns(angle, st)
         if isinstance(turns, Decline):
             return turns
@@ -371,6 +299,9 @@ class LineRobot:
     def commit(self, cycle: Cycle) -> None:
         self.state = cycle.state
         self.next_target += 1
+        if self.exchange is not None and self.next_target % self.exchange[0] == 0:
+            self.blocked_until = cycle.t_free + self.exchange[1]  # a full tray: exchanged once the part is released
+            self.exchanges.append((cycle.t_free, self.blocked_until))
         self.last_T = cycle.pick.duration
         self.last_place_T = next(leg.duration for leg in cycle.legs if leg.kind == "place")
 

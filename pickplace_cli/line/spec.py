@@ -75,6 +75,16 @@ class OutgoingBelt(_Model):
     velocity: tuple[Num, Num] = Field(description="Outgoing belt velocity [along, across] in m/s (line frame)")
 
 
+class Exchange(_Model):
+    """A place that is exchanged (a full tray replaced, a tray indexed): every ``every`` places the robot cannot
+    place for ``time`` seconds."""
+
+    every: Optional[Int] = Field(default=None, ge=1, le=100000, description="Places between two exchanges "
+                                 "(default: the number of place targets, a full tray)")
+    time: Num = Field(gt=0, le=3600, description="Seconds from the release of the last part until the robot may "
+                                                 "place again (0 … 3600 s)")
+
+
 class Place(_Model):
     """Where a robot puts its parts: fixed ``points`` (used in turn), a ``tray`` pattern, or an outgoing ``belt``."""
 
@@ -89,12 +99,16 @@ class Place(_Model):
     angle_tolerance: Num = Field(default=0.0, ge=0, le=math.pi, description="How far [rad] a part's angle may lie "
                                  "from the place angle and still be placed unturned by a robot without a rotary "
                                  "fourth axis (0 … pi rad; default 0 rad)")
+    exchange: Optional[Exchange] = Field(default=None, description="The tray's exchange: every N places, T seconds "
+                                         "during which the robot cannot place (default: none)")
 
     @model_validator(mode="after")
     def _one(self) -> "Place":
         given = [k for k in ("points", "tray", "belt") if getattr(self, k) is not None]
         if len(given) != 1:
             raise ValueError(f"give exactly one of points, tray, belt (got {', '.join(given) or 'none'})")
+        if self.exchange is not None and self.belt is not None:
+            raise ValueError("exchange: an outgoing belt is not exchanged; give exchange with points or a tray")
         if isinstance(self.angle, list):
             n = (len(self.points) if self.points is not None else
                  self.tray.rows * self.tray.columns if self.tray is not None else 1)

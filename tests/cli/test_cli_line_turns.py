@@ -70,6 +70,13 @@ def test_turns_in_the_parts_csv_and_the_reason_of_a_robot_without_the_axis(line_
      "angle_tolerance = 4: Input should be less than or equal to 3.14159"),
     ("[[1.4, 0.35, 0.0]], angle: 0.5}", "[[1.4, 0.35, 0.0]], angle: 0.5, angle_tolerance: -0.1}",
      "angle_tolerance = -0.1: Input should be greater than or equal to 0"),
+    ("[[1.4, 0.35, 0.0]], angle: 0.5}", "[[1.4, 0.35, 0.0]], exchange: {time: 0}}",
+     "exchange.time = 0: Input should be greater than 0"),
+    ("[[1.4, 0.35, 0.0]], angle: 0.5}", "[[1.4, 0.35, 0.0]], exchange: {time: 2, every: 0}}",
+     "exchange.every = 0: Input should be greater than or equal to 1"),
+    ("[[1.4, 0.35, 0.0]], angle: 0.5}", "[[1.4, 0.35, 0.0]], exchange: {every: 3}}", "exchange.time: required field"),
+    ("points: [[1.4, 0.35, 0.0]], angle: 0.5}", "belt: {point: [1.4, 0.35, 0.0], velocity: [0.2, 0]}, "
+     "exchange: {time: 2}}", "exchange: an outgoing belt is not exchanged"),
 ])
 def test_bad_turn_fields_are_one_line(line_file, old, new, text):
     assert old in LINE

@@ -12,6 +12,8 @@ computations:
 * each robot's RMS motor torque over the run (the fourth axis' included) agrees within 0.5 % with the trapezoid
   integral of the motor torque written to the run's MCAP file at 1 kHz (the trapezoid's error at 1 kHz on moves
   of ~0.2 s is ~1e-5 relative; 0.5 % is the tolerance of the line's other RMS tests);
+* the tray is exchanged after every 4th place: the next place move arrives at least 1.5 s after the release of
+  the 4th part (1e-9 s), and the slots start again at the first;
 * under ``time: fit`` a turn lengthens the place move, and the move is at its fit: a limit is used between 98 %
   and 100 % (the planner's exact check at the line's duration).
 """
@@ -32,6 +34,7 @@ from pickplace_cli.model.profile import load_profile
 FOUR = load_profile("delta-4axis")
 THREE = load_profile("delta-su2018")
 SLOTS = [0.0, 0.5, -1.2, 3.0]  # rad, line frame: one per tray slot, row by row
+EXCHANGE = 1.5  # s: a full tray (4 places) is replaced in this time, during which d4 cannot place
 LINE = f"""\
 belt: {{speed: 0.3, width: 0.2, direction: +y}}
 robots:
@@ -39,7 +42,8 @@ robots:
     profile: delta-4axis
     base: [0.6, 0.0, 0.8]
     window: [0.4, 0.8]
-    place: {{tray: {{origin: [0.55, 0.35, 0.0], rows: 2, columns: 2, pitch: [0.05, 0.05]}}, angle: {SLOTS}}}
+    place: {{tray: {{origin: [0.55, 0.35, 0.0], rows: 2, columns: 2, pitch: [0.05, 0.05]}}, angle: {SLOTS},
+            exchange: {{time: {EXCHANGE}}}}}
   - name: d3
     profile: delta-su2018
     base: [1.4, 0.0, 0.8]
@@ -183,3 +187,20 @@ def test_a_turn_lengthens_the_move_at_fit_and_the_move_is_at_its_fit():
     worst = max((r for r in got.report.rows if r.quantity in TIMED), key=lambda r: r.utilisation)
     assert worst.joint == "q4"  # the turn binds
     assert abs(got.joint.q[-1, 3] - math.pi) < 1e-9
+
+
+def test_the_tray_is_exchanged_after_every_full_tray(run):
+    _, eng, _ = run
+    mine = sorted((res.cycle for res in eng.results if res.robot == "d4"), key=lambda c: c.t_start)
+    assert len(mine) >= 12
+    assert [c.target for c in mine] == [k % 4 for k in range(len(mine))]
+    waits = []
+    for k in range(4, len(mine), 4):
+        full = mine[k - 1].t_free  # the 4th part released: the tray is replaced from then on
+        assert mine[k].t_placed >= full + EXCHANGE - 1e-9
+        waits.append(mine[k].t_placed - full)
+    assert min(waits) < EXCHANGE + 0.5  # the next cycle is started so as to place soon after, not held back further
+    robot = eng.robots[0]
+    assert len(robot.exchanges) == len(mine) // 4
+    assert any("its place is exchanged until" in why for res in eng.results for why in res.declines.values()
+               if isinstance(why, str))
