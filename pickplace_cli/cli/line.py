@@ -282,7 +282,7 @@ def _single(line_file, detections, belt_speed, robots, strategy, seed, output, a
         summary.until = {"precision": until[0], "reached": reached, "max_s": until[1]}
         if not reached:
             sys.stderr.write(f"pickplace: warning: --until {until[0]:g}: the miss rate's interval is "
-                             f"± {100 * iv.half if iv else 100:.2f} % after {summary.feed:.6g} s of parts (--until-max "
+                             f"± {100 * iv.half if iv else 100:.2f} % after {summary.feed:.4g} s of parts (--until-max "
                              f"{until[1]:g} s): not as narrow as asked\n")
     _after(engine, summary, line, robots_csv, summary_file, plot, plot_kind if plot else None, mcap, rate, quiet)
     code = summary.exit_code()

@@ -54,6 +54,8 @@ LIMITS_SCREEN = 0.95
 EXCHANGE_ROUNDS = 6
 #: the quantities a duration changes (the fit rule's); positions, workcell and singularity do not
 TIMED = frozenset({"velocity", "acceleration", "jerk", "motor speed", "motor torque", "motor torque rate"})
+#: the power of 1/T each of them grows with at most (a torque's gravity part does not grow: less than 2)
+NUDGE_ORDER = {"velocity": 1, "motor speed": 1, "acceleration": 2, "motor torque": 2, "jerk": 3, "motor torque rate": 3}
 
 
 class _Reason:
@@ -430,13 +432,15 @@ class LineRobot:
                 rep = check_limits(motion_model(mv.path(T), self.profile), T, dwell=0.0)
             except (UnreachableError, TaskError):
                 return None
-            bad = [r.utilisation ** (1 / 3) for r in rep.violations if r.quantity in TIMED]
+            # each use scales with T as T^-k (speeds k = 1, accelerations and torques at most 2, jerks and torque
+            # rates at most 3): the step u^(1/k) is exact for a speed and never too long for the others
+            bad = [r.utilisation ** (1 / NUDGE_ORDER[r.quantity]) for r in rep.violations if r.quantity in TIMED]
             if capacity:  # the capacity on the exact peaks: T_auto(T)/T > 1 when it is exceeded
                 t_rule = exact_rule([(mv, T)], self.capacity)[1][0]
                 if t_rule > T:
                     bad.append(t_rule / T)
             if not bad:
-                return Solved(mv, T, mv.exact_peaks(T))
+                return Solved(mv, T, mv.exact_peaks(T), rep)
             T *= max(bad) * (1.0 + 1e-9)
         return None  # pragma: no cover - converges in one or two steps
 
@@ -519,22 +523,12 @@ class LineRobot:
     def _exact_check(self, leg: Leg) -> Decline | None:
         """The exact limit check of one leg on its real path (RMS aside); the leg's use from it."""
         from ..limits.check import check_limits
-        from ..pipelines.tracking import tracking_path
         from ..planner import motion_model
 
         T = leg.duration
-        if leg.solved is not None:
-            path = leg.solved.move.path(T)
-        else:
-            path = tracking_path(leg.point, leg.velocity, T)
-            if leg.theta != 0.0:
-                from dataclasses import replace
-
-                from ..curves.rotation import RotationLaw
-
-                path = replace(path, angle=RotationLaw(leg.theta, 0.0))
+        done = leg.solved.report if leg.solved is not None else None  # the duration search's own exact check
         try:
-            rep = check_limits(motion_model(path, self.profile), T, dwell=0.0)
+            rep = done if done is not None else check_limits(motion_model(_leg_path(leg), self.profile), T, dwell=0.0)
         except UnreachableError as exc:
             return Decline(f"robot {self.name}: the {leg.kind} move (t = {leg.t0:.4f} … {leg.t1:.4f} s) leaves the "
                            f"workspace: {exc}")
@@ -567,6 +561,23 @@ def _paper():
 
 def _xyz(p) -> str:
     return ",".join(f"{c:.4f}" for c in p)
+
+
+def _leg_path(leg: Leg):
+    """The CartesianPath of a leg (its move's, with the turn; a track or release leg's straight line, its angle
+    held)."""
+    if leg.solved is not None:
+        return leg.solved.move.path(leg.duration)
+    from ..pipelines.tracking import tracking_path
+
+    path = tracking_path(leg.point, leg.velocity, leg.duration)
+    if leg.theta == 0.0:
+        return path
+    from dataclasses import replace
+
+    from ..curves.rotation import RotationLaw
+
+    return replace(path, angle=RotationLaw(leg.theta, 0.0))
 
 
 def _place_angles(place, n: int) -> list:

@@ -204,3 +204,24 @@ def test_the_tray_is_exchanged_after_every_full_tray(run):
     assert len(robot.exchanges) == len(mine) // 4
     assert any("its place is exchanged until" in why for res in eng.results for why in res.declines.values()
                if isinstance(why, str))
+
+
+def test_the_turn_window_is_turneds():
+    """The window of a move's turn from its height's piece polynomials equals turned()'s (sampled, then bisected to
+    1e-12) within 1e-9 in τ on 40 random moves of two shapes (rest or belt velocity at the start, unequal heights)."""
+    from pickplace_cli.curves.vel_problem import PAPER_INITIAL
+    from pickplace_cli.line.moves import Move, Shapes, transfer_window
+    from pickplace_cli.paths.turn import turned
+
+    shapes = Shapes.shared()
+    rng = np.random.default_rng(11)
+    for i in range(40):
+        basis = shapes.basis(PAPER_INITIAL if i % 2 else [0.05, 0.2, 0.8, 0.95, 0.2, 0.5, 0.2])
+        start = np.array([*rng.uniform(-0.2, 0.2, 2), -0.79])
+        end = np.array([*rng.uniform(-0.3, 0.3, 2), -0.8 + rng.uniform(0.0, 0.05)])
+        v0 = np.array([0.0, rng.uniform(0.0, 1.0), 0.0]) if i % 3 else np.zeros(3)
+        mv = Move(basis, start, v0, end, np.zeros(3), np.zeros(3), 0.025, 0.5, 0.3, rng.uniform(-3.0, 3.0))
+        law = turned(mv.path(0.3, angle=False), mv.task(0.3), "transfer").angle
+        got = transfer_window(mv)
+        assert abs(got[0] - law.tau0) < 1e-9 and abs(got[1] - law.tau1) < 1e-9, (got, law.tau0, law.tau1)
+        assert mv.path(0.3).angle.tau0 == got[0]  # the leg's path carries that window
