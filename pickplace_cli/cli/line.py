@@ -298,11 +298,14 @@ def _single(line_file, detections, belt_speed, robots, strategy, seed, output, a
 
 #: with --until, the interval is first looked at after this many parts, then every ``UNTIL_STEP`` parts
 UNTIL_FIRST, UNTIL_STEP = 400, 50
+#: ... and it stops only once this many parts were missed (or Wilson's upper end is below the precision)
+UNTIL_MISSES = 20
 
 
 def _until_items(line, line_file, engine, precision: float, most: float):
     """The file's generator run for up to ``most`` s (at most MAX_PARTS parts), stopped as soon as the miss rate's
-    batch-means interval is at most ± ``precision`` (looked at every ``UNTIL_STEP`` parts from ``UNTIL_FIRST`` on)."""
+    batch-means interval is at most ± ``precision`` and ``UNTIL_MISSES`` parts were missed (or Wilson's interval
+    lies below ``precision``), looked at every ``UNTIL_STEP`` parts from ``UNTIL_FIRST`` on."""
     from ..line.confidence import result_arrays, run_intervals
     from ..line.parts import MAX_PARTS, generate
 
@@ -311,8 +314,12 @@ def _until_items(line, line_file, engine, precision: float, most: float):
     gen = gen.model_copy(update={"count": None, "duration": most})
     for k, d in enumerate(generate(gen, line.belt.width)):
         if k >= UNTIL_FIRST and k % UNTIL_STEP == 0:
-            iv = run_intervals(*result_arrays(engine.results), 0.0).miss
-            if iv is not None and iv.half <= precision:
+            t, missed = result_arrays(engine.results)
+            ivs = run_intervals(t, missed, 0.0)
+            # a handful of misses makes an unreliable interval: also UNTIL_MISSES misses, or a rate known to be
+            # below PRECISION outright (Wilson's upper end: a line that hardly misses)
+            if ivs.miss is not None and ivs.miss.half <= precision and (
+                    int(missed.sum()) >= UNTIL_MISSES or ivs.miss_wilson.high <= precision):
                 return
         yield d
 
