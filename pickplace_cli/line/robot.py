@@ -339,8 +339,23 @@ class LineRobot:
             # spare (LIMITS_SCREEN), they are the rule's answer (no shorter move holds the capacity, and these hold
             # the motors: the cycle's check then decides the legs as for any rule)
             got = self._capacity_pick_and_place(moves, a, b, target, v_out, turn)
-            if not isinstance(got, tuple) or all(self._motors_clear(s) for s in got):
+            if not isinstance(got, tuple):
                 return got  # (None or a Decline: no move holds the capacity, so none holds every limit)
+            pick, place = got
+            if self._motors_clear(pick):
+                if self._motors_clear(place):
+                    return got
+                # the pick stands; the place alone is searched on every limit, from its capacity duration up (the
+                # rule's duration is the longer of both: none shorter holds)
+                leave = pick.end + self.v_belt * self.dwell
+                place = self._solve_fit(self._place_moves(leave, target, v_out, turn), T_MIN, HORIZON, True, place.T)
+                return (pick, place) if place is not None else self._no_place(leave, target)
+            pick = self._solve_fit(moves, a, b, True, pick.T)
+            if pick is None:
+                return None
+            leave = pick.end + self.v_belt * self.dwell
+            place = self._solve(self._place_moves(leave, target, v_out, turn), T_MIN, HORIZON)
+            return (pick, place) if place is not None else self._no_place(leave, target)
         if self.rule != "auto":
             pick = self._solve(moves, a, b)
             if pick is None:
@@ -404,7 +419,8 @@ class LineRobot:
                 text += f"; the earliest meeting is {self.speed * (T - b) * 1e3:.0f} mm past that"
         return text
 
-    def _solve_fit(self, moves: list[Move], a: float, b: float, capacity: bool = False) -> Solved | None:
+    def _solve_fit(self, moves: list[Move], a: float, b: float, capacity: bool = False,
+                   guess: float | None = None) -> Solved | None:
         """The smallest T in [a, b] at which every timed limit holds on the grid, then the exact check at T and
         nudged up until it holds (as the rendezvous fit does). ``capacity``: the Cartesian capacity too (the rule
         limits: the longer of both, each checked exactly)."""
@@ -416,7 +432,7 @@ class LineRobot:
 
         best = None
         for mv in moves:
-            T = first_feasible(excess(mv), a, b, scan=8)
+            T = first_feasible(excess(mv), a, b, scan=8, guess=guess)
             if T is not None and (best is None or T < best[1]):
                 best = (mv, T)
         if best is None:
