@@ -40,6 +40,7 @@ class RobotSummary:
     rated: np.ndarray
     legs: int
     exact_legs: int
+    exchanges: int = 0
 
     @property
     def picks_per_minute(self) -> float:
@@ -71,7 +72,7 @@ class RobotSummary:
         return {
             "robot": self.name, "picks": self.picks, "picks_per_minute": self.picks_per_minute,
             "busy_s": self.busy, "idle_s": self.idle, "utilisation": self.utilisation, "span_s": self.span,
-            "legs": self.legs, "legs_checked_exactly": self.exact_legs,
+            "legs": self.legs, "legs_checked_exactly": self.exact_legs, "place_exchanges": self.exchanges,
             "rms_motor_torque_N_m": {j: float(r) for j, r in zip(self.joints, self.rms)},
             "rated_torque_N_m": {j: (float(x) if np.isfinite(x) else None) for j, x in zip(self.joints, self.rated)},
             "rms_use": {j: (float(u) if np.isfinite(u) else None) for j, u in zip(self.joints, self.rms_use)},
@@ -186,5 +187,5 @@ def summarise(engine) -> LineSummary:
                     for k, v in peak.items()}
         out.robots.append(RobotSummary(r.name, run.picks, busy, span, out.parts_per_minute, parts, peak, r.joint_names,
                                        rms, r.rated,
-                                       len(run.legs), sum(1 for leg in run.legs if leg.exact)))
+                                       len(run.legs), sum(1 for leg in run.legs if leg.exact), len(r.exchanges)))
     return out
