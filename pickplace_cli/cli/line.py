@@ -253,6 +253,9 @@ def _single(line_file, detections, belt_speed, robots, strategy, seed, output, a
     if source is None and line.parts.generate is None:
         raise TaskError(f"{line_file}: parts: give a detection file (parts.detections, or --detections FILE|-) or a "
                         "generator (parts.generate)")
+    if until[0] is not None and source is not None:
+        _usage(f"--until runs the line file's generator longer; {line_file}'s parts come from a detection file "
+               "(parts.detections): give parts.generate")
     streaming = output == "-"
     with contextlib.ExitStack() as stack:
         if source is not None:

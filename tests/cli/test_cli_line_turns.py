@@ -96,6 +96,15 @@ def test_bad_until_is_one_line(line_file, args, code, text):
     assert text in r.stderr
 
 
+def test_until_needs_a_generator(line_file, tmp_path):
+    (tmp_path / "det.csv").write_text("t[s],along[m],across[m]\n0,0,0\n0.5,0,0.01\n")
+    line_file.write_text(LINE.replace("  generate: {rate: 2.0, count: 30, seed: 1, angles: true}\n",
+                                      "  detections: det.csv\n"))
+    r = run("line", line_file, "-q", "-o", "/dev/null", "--until", "0.05")
+    assert r.exit_code == 2, r.stderr
+    assert "parts come from a detection file (parts.detections): give parts.generate" in r.stderr
+
+
 def test_until_runs_until_the_interval_is_that_narrow(line_file, tmp_path):
     """A tolerance of ± 5 points is reached well inside --until-max, and the summary's batch-means interval says so;
     a 20 s cap that cannot reach ± 0.1 % stops there with a warning (exit 0: the interval is a result)."""
