@@ -51,11 +51,11 @@ def line_cmd(
     until: Optional[float] = typer.Option(
         None, "--until", metavar="PRECISION", rich_help_panel="Batch and performance",
         help="Run the file's generator until the miss rate's 95 % interval (batch means) is at most ± PRECISION wide "
-             "(a share, e.g. 0.01 for ± 1 percentage point; 0.001 … 0.5), or until --until-max seconds of parts."),
+             "(a share, e.g. 0.01 for ± 1 percentage point; 0.001 … 0.5) and 20 parts were missed, or until "
+             "--until-max seconds of parts."),
     until_max: float = typer.Option(
         3600.0, "--until-max", metavar="SECONDS", rich_help_panel="Batch and performance",
-        help="With --until: the longest feed in s of simulated time (1 … 1e5 s; at most 100,000 parts) [default: "
-             "3600]."),
+        help="With --until: the longest feed in s of simulated time (1 … 1e5 s; at most 100,000 parts)."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No table or progress bar on stderr."),
     speeds: Optional[str] = typer.Option(
         None, "--speeds", help="Sweep: belt speeds in m/s, a list 0.2,0.5 or a range START:STOP:STEP."),
