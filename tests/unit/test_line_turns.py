@@ -14,6 +14,8 @@ computations:
   of ~0.2 s is ~1e-5 relative; 0.5 % is the tolerance of the line's other RMS tests);
 * the tray is exchanged after every 4th place: the next place move arrives at least 1.5 s after the release of
   the 4th part (1e-9 s), and the slots start again at the first;
+* a SCARA (J4 on link 2: tool angle q1 + q2 + q4) in the manual's mixed line puts its parts down at its points'
+  angles the same way (1e-9 rad);
 * under ``time: fit`` a turn lengthens the place move, and the move is at its fit: a limit is used between 98 %
   and 100 % (the planner's exact check at the line's duration).
 """
@@ -225,3 +227,43 @@ def test_the_turn_window_is_turneds():
         got = transfer_window(mv)
         assert abs(got[0] - law.tau0) < 1e-9 and abs(got[1] - law.tau1) < 1e-9, (got, law.tau0, law.tau1)
         assert mv.path(0.3).angle.tau0 == got[0]  # the leg's path carries that window
+
+
+def test_a_scara_turns_the_part_with_its_arm_counted():
+    """docs/line/mixed.yaml with parts at random angles and the SCARA's two place points at 0 and 1.5 rad: each of
+    its place moves, re-planned by the planner, ends with the tool angle q1 + q2 + q4 (the SCARA's J4 sits on link 2:
+    written out here from the profile's sign +1) at its point's angle + π/2 (mod 2π) within 1e-9 rad, and holds
+    every limit; the 4-axis Delta and the gantry beside it place as the parts lie (their places give no angle)."""
+    from pathlib import Path
+
+    from pickplace_cli.model.task import Task
+    from pickplace_cli.planner import PlanOptions, plan
+
+    text = Path(__file__).parents[2].joinpath("docs", "line", "mixed.yaml").read_text()
+    text = text.replace("    place: {points: [[0.3, 0.2, 0.0], [-0.3, 0.2, 0.0]]}",
+                        "    place: {points: [[0.3, 0.2, 0.0], [-0.3, 0.2, 0.0]], angle: [0.0, 1.5]}")
+    text = text.replace("detect_at: -0.6}", "detect_at: -0.6, angles: true}")
+    assert "angle: [0.0, 1.5]" in text and "angles: true" in text
+    line = parse_line(text, "mixed.yaml")
+    profiles = {r.name: load_profile(r.profile) for r in line.robots}
+    eng = LineEngine(line, profiles)
+    for d in generate(line.parts.generate, line.belt.width):
+        eng.offer(d)
+    scara = profiles["s1"]
+    mine = [res for res in eng.results if res.robot == "s1"]
+    assert len(mine) >= 5
+    for res in mine:
+        place = next(leg for leg in res.cycle.legs if leg.kind == "place")
+        mv = place.solved.move
+        task = Task(mv.start, mv.end(place.duration), scara.planning.height, scara.planning.eta, mv.v_from, mv.v_to,
+                    mv.theta, mv.theta + mv.turn)
+        got = plan(task, scara, PlanOptions(method="bspline-vel", method_params={"params": list(mv.basis.params)},
+                                            time=place.duration, fit=False, turn="as-given"))
+        q = got.joint.q[-1]
+        slot = [0.0, 1.5][res.cycle.target]
+        assert abs(_wrap(q[0] + q[1] + q[3] - (slot + math.pi / 2))) < 1e-9
+        assert abs(_wrap(mv.turn - (slot - res.detection.angle))) < 1e-9
+        bad = [r for r in got.report.violations if r.quantity != "rms motor torque"]
+        assert not bad, bad
+    others = [res for res in eng.results if res.robot in ("d4", "g1")]
+    assert others and all(res.cycle.pick.solved.move.turn == 0.0 for res in others)
