@@ -103,6 +103,7 @@ class Decline:
 
     why: object
     code: int = 4
+    place: bool = False  #: no place move to the target (a pocket on an outgoing belt: the next one may do)
 
     @property
     def reason(self) -> str:

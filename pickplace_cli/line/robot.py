@@ -136,6 +136,21 @@ class LineRobot:
         self.rotary = bool(getattr(robot, "rotary", False))
         self.phi = math.atan2(self.frame.d[1], self.frame.d[0])
         self.place_angles = _place_angles(spec.place, len(self.targets))
+        #: pockets on an outgoing belt (pitch [m], time pocket 0 passes the point [s], reach [m], speed [m/s]) or
+        #: None; the next pocket; the place's start time as a function of the pick's duration (set per cycle)
+        out = spec.place.belt
+        self.pockets = None
+        if out is not None and out.pitch is not None:
+            self.pockets = (float(out.pitch), float(out.first), float(out.reach if out.reach is not None else
+                            out.pitch / 2), math.hypot(*out.velocity))
+            if spec.shape == "optimal":
+                from ..model.errors import ProfileError
+
+                raise ProfileError(f"robot {spec.name}: shape: optimal does not place into pockets on an outgoing belt "
+                                   "(place.belt.pitch): use shape: table")
+        self.next_pocket = 0
+        self._pocket_skip = 0
+        self._leave_time = None
         self.turn_tolerance = float(spec.place.angle_tolerance)
         home = spec.home if spec.home is not None else None
         self.home = self.frame.to_robot(home) if home is not None else self.targets[0][0].copy()
@@ -225,6 +240,13 @@ class LineRobot:
         time (the part is then further along; a few rounds), or the part is declined saying so."""
         st = self.state if state is None else state
         got = self._cycle(along, across, t_detect, st, angle)
+        if self.pockets is not None:  # a pocket the place move cannot meet in time: the next one
+            for skip in (1, 2, 3):
+                if not (isinstance(got, Decline) and got.place):
+                    break
+                self._pocket_skip = skip
+                got = self._cycle(along, across, t_detect, st, angle)
+            self._pocket_skip = 0
         late = st
         for _ in range(EXCHANGE_ROUNDS):
             if isinstance(got, Cycle) and got.t_placed >= self.blocked_until - 1e-9:
@@ -271,6 +293,7 @@ class LineRobot:
             t_entry = t_detect + (self.window[0] - along) / self.speed
             wmoves = [Move(bs, st.position, st.velocity, entry, np.zeros(3), self.v_belt, self.height, self.eta, th0,
                            t_pick) for bs in self._shapes_for(st.position, st.velocity, entry, self.v_belt)]
+            self._leave_time = lambda T: t_entry + self.dwell  # noqa: E731 - the place starts after the tracking
             got = self._pick_and_place(wmoves, T_MIN, t_entry - t_start, target, v_out, pturn)
             if isinstance(got, tuple) and t_entry - got[0].T >= t_start:
                 solved, t_start, waited = got, t_entry - got[0].T, True
@@ -278,6 +301,7 @@ class LineRobot:
             p0 = self.part_at(along0, across)
             moves = [Move(bs, st.position, st.velocity, p0, self.v_belt, self.v_belt, self.height, self.eta, th0, t_pick)
                      for bs in self._shapes_for(st.position, st.velocity, p0 + self.v_belt * self.last_T, self.v_belt)]
+            self._leave_time = lambda T: t_start + T + self.dwell  # noqa: E731
             solved = self._pick_and_place(moves, a, b, target, v_out, pturn)
             if solved is None:
                 return Decline(_Reason(self, moves, a, b, along0, busy))
@@ -287,7 +311,7 @@ class LineRobot:
         meet = pick.end
         track = Leg("track", t_start + pick.T, self.dwell, point=meet, velocity=self.v_belt.copy(), theta=th_grip)
         legs = [Leg("pick", t_start, pick.T, pick), track, Leg("place", track.t1, place.T, place)]
-        legs.append(Leg("release", legs[-1].t1, self.release, point=target.copy(), velocity=v_out.copy(),
+        legs.append(Leg("release", legs[-1].t1, self.release, point=place.end.copy(), velocity=v_out.copy(),
                         theta=th_grip + t_place))
         bad = self._check(legs)
         if bad is not None:
@@ -295,12 +319,15 @@ class LineRobot:
         end = legs[-1].end
         state = RobotState(end.copy(), v_out.copy(), legs[-1].t1, th_grip + t_place)
         meet_line = self.frame.to_line(meet)
-        return Cycle(legs, t_start, t_start + pick.T, meet.copy(), meet_line, self.next_target % len(self.targets),
-                     target.copy(), state, waited=waited)
+        where = place.move.pocket if self.pockets is not None else self.next_target % len(self.targets)
+        return Cycle(legs, t_start, t_start + pick.T, meet.copy(), meet_line, where, place.end.copy(), state,
+                     waited=waited)
 
     def commit(self, cycle: Cycle) -> None:
         self.state = cycle.state
         self.next_target += 1
+        if self.pockets is not None:
+            self.next_pocket = cycle.target + 1
         if self.exchange is not None and self.next_target % self.exchange[0] == 0:
             self.blocked_until = cycle.t_free + self.exchange[1]  # a full tray: exchanged once the part is released
             self.exchanges.append((cycle.t_free, self.blocked_until))
@@ -320,10 +347,31 @@ class LineRobot:
             return [self.shapes.basis(_paper())]
         return self.shapes.candidates(task, T)
 
-    def _place_moves(self, leave, target, v_out, turn=(0.0, 0.0)) -> list[Move]:
-        """The candidate place moves; ``turn``: (tool angle at the start, the turn) [rad]."""
-        return [Move(bs, leave, self.v_belt, target, np.zeros(3), v_out, self.height, self.eta, *turn)
-                for bs in self._shapes_for(leave, self.v_belt, target, v_out)]
+    def _place_moves(self, leave, target, v_out, turn=(0.0, 0.0), T_pick: float = 0.0) -> list[Move]:
+        """The candidate place moves; ``turn``: (tool angle at the start, the turn) [rad]. Each carries ``span``, the
+        durations [s] it may take, and ``pocket``: a fixed target any (T_MIN … HORIZON, None); a pocket on an outgoing
+        belt (:meth:`pocket`) is met like a part, its end moving with the belt, within its reach."""
+        span, pocket, end_b = (T_MIN, HORIZON), None, np.zeros(3)
+        if self.pockets is not None:
+            pocket, target, span = self.pocket(self._leave_time(T_pick), v_out)
+            end_b = v_out
+        moves = [Move(bs, leave, self.v_belt, target, end_b, v_out, self.height, self.eta, *turn)
+                 for bs in self._shapes_for(leave, self.v_belt, target + end_b * self.last_place_T, v_out)]
+        for mv in moves:
+            mv.span, mv.pocket = span, pocket
+        return moves
+
+    def pocket(self, t_leave: float, v_out) -> tuple[int, np.ndarray, tuple[float, float]]:
+        """(k, where pocket k is at ``t_leave`` [m, robot frame], the place move's durations (a, b) [s] that meet it
+        within its reach): the first pocket from the next free one on that the move can still meet, judged by the
+        robot's last place duration (pocket k passes the point at first + k·pitch/speed)."""
+        pitch, first, reach, speed = self.pockets
+        point = self.targets[0][0]
+        soonest = t_leave + max(T_MIN, 0.9 * self.last_place_T) - reach / speed
+        k = max(self.next_pocket, math.ceil((soonest - first) * speed / pitch - 1e-9)) + self._pocket_skip
+        t_k = first + k * pitch / speed
+        span = (max(T_MIN, t_k - reach / speed - t_leave), t_k + reach / speed - t_leave)
+        return k, point + v_out * (t_leave - t_k), span
 
     def _pick_and_place(self, moves: list[Move], a: float, b: float, target, v_out, turn=(0.0, 0.0)):
         """(pick, place) Solved, None when the pick cannot meet the part in [a, b], or a Decline for the place.
@@ -348,20 +396,22 @@ class LineRobot:
                 # the pick stands; the place alone is searched on every limit, from its capacity duration up (the
                 # rule's duration is the longer of both: none shorter holds)
                 leave = pick.end + self.v_belt * self.dwell
-                place = self._solve_fit(self._place_moves(leave, target, v_out, turn), T_MIN, HORIZON, True, place.T)
+                pm = self._place_moves(leave, target, v_out, turn, pick.T)
+                place = self._solve_fit(pm, *pm[0].span, True, place.T)
                 return (pick, place) if place is not None else self._no_place(leave, target)
             pick = self._solve_fit(moves, a, b, True, pick.T)
             if pick is None:
                 return None
             leave = pick.end + self.v_belt * self.dwell
-            place = self._solve(self._place_moves(leave, target, v_out, turn), T_MIN, HORIZON)
+            pm = self._place_moves(leave, target, v_out, turn, pick.T)
+            place = self._solve(pm, *pm[0].span)
             return (pick, place) if place is not None else self._no_place(leave, target)
         if self.rule != "auto":
             pick = self._solve(moves, a, b)
             if pick is None:
                 return None
-            place = self._solve(self._place_moves(pick.end + self.v_belt * self.dwell, target, v_out, turn), T_MIN,
-                                HORIZON)
+            pm = self._place_moves(pick.end + self.v_belt * self.dwell, target, v_out, turn, pick.T)
+            place = self._solve(pm, *pm[0].span)
             return (pick, place) if place is not None else self._no_place(pick.end + self.v_belt * self.dwell, target)
         return self._capacity_pick_and_place(moves, a, b, target, v_out, turn)
 
@@ -377,24 +427,27 @@ class LineRobot:
         mv, T = found
         T = min(T * (1 + GRID_SAFETY), b) if T > a else T
         leave = mv.end(T) + self.v_belt * self.dwell
-        pmoves = self._place_moves(leave, target, v_out, turn)
-        pfound = search_auto(pmoves, self.capacity, T_MIN, HORIZON, guess=self.last_place_T)
+        pmoves = self._place_moves(leave, target, v_out, turn, T)
+        lo, hi = pmoves[0].span
+        pfound = search_auto(pmoves, self.capacity, lo, hi, guess=self.last_place_T)
         if pfound is None:
             return self._no_place(leave, target)
         pmv, pT = pfound
-        both = verify_auto([(mv, T, b), (pmv, pT * (1 + GRID_SAFETY), HORIZON)], self.capacity)
+        both = verify_auto([(mv, T, b), (pmv, min(pT * (1 + GRID_SAFETY), hi) if pT > lo else pT, hi)], self.capacity)
         if both is not None and both[0].T == T:
             return both[0], both[1]
         pick = verify_auto([(mv, T, b)], self.capacity)  # the pick moved (rare): the place starts elsewhere
         if pick is None:
             return None
         pick = pick[0]
-        place = self._solve(self._place_moves(pick.end + self.v_belt * self.dwell, target, v_out, turn), T_MIN, HORIZON)
+        pm = self._place_moves(pick.end + self.v_belt * self.dwell, target, v_out, turn, pick.T)
+        place = self._solve(pm, *pm[0].span)
         return (pick, place) if place is not None else self._no_place(pick.end + self.v_belt * self.dwell, target)
 
     def _no_place(self, leave, target) -> Decline:
         return Decline(f"robot {self.name}: no place move from {_xyz(leave)} m to {_xyz(target)} m within "
-                       f"{HORIZON:g} s by the rule {self.rule}", 1)
+                       f"{HORIZON:g} s by the rule {self.rule}" + (" (pockets: the next three tried too)" if self.pockets
+                                                                   else ""), 1, place=True)
 
     def _solve(self, moves: list[Move], a: float, b: float) -> Solved | None:
         if a > b:

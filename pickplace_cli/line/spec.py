@@ -73,6 +73,20 @@ class OutgoingBelt(_Model):
 
     point: Xyz = Field(description="Place point [along, across, height] in m (line frame)")
     velocity: tuple[Num, Num] = Field(description="Outgoing belt velocity [along, across] in m/s (line frame)")
+    pitch: Optional[Num] = Field(default=None, gt=0, le=10, description="Pockets (cartons, slots) every this many m "
+                                 "along the outgoing belt: each part goes into the next pocket the robot can meet, "
+                                 "met by a rendezvous (default none: put down at point, whatever passes there)")
+    first: Num = Field(default=0.0, description="With pitch: the time in s (line clock) at which pocket 0 passes point")
+    reach: Optional[Num] = Field(default=None, gt=0, le=10, description="With pitch: how far in m upstream or "
+                                 "downstream of point along the outgoing belt a pocket may be met (default pitch / 2)")
+
+    @model_validator(mode="after")
+    def _pockets(self) -> "OutgoingBelt":
+        if self.pitch is not None and math.hypot(*self.velocity) <= 0.0:
+            raise ValueError("pitch: pockets on a belt that stands still are fixed points: give place.points instead")
+        if self.pitch is None and (self.reach is not None or self.first != 0.0):
+            raise ValueError("first and reach are for pockets: give pitch too")
+        return self
 
 
 class Exchange(_Model):
