@@ -17,6 +17,11 @@ model evaluation per cycle, and the exact check of a leg near a limit), the reas
 The sweep: belt speed × strategy cases of ``--sweep-seconds`` simulated each, run by ``run_sweep`` on a pool of 1
 local process and on a pool of 2 (both fresh: each process imports and fills its shape memo, as in a real sweep);
 speed-up = wall(1) / wall(2). Results: ``bench/results/line.json``.
+
+Also (``--turns``, on by default): the same three robots as 4-axis Deltas (``delta-4axis``) with gripper times (close
+0.03 s, open 0.02 s) and parts at random angles, each turned to its tray's 0 rad, against the same line placing the
+parts as they lie (both sides in the same run, medians of ``--runs`` warm seeds); and a 10-minute run of the
+manual's line (``docs/line/deltas.yaml``, 3 robots, ``quota``): its CPU seconds.
 """
 
 from __future__ import annotations
@@ -52,8 +57,29 @@ def the_line(seconds: float, seed: int, robots: int = 3):
     return line, {r.name: load_profile(r.profile) for r in line.robots}
 
 
-def one_run(seconds: float, seed: int) -> dict:
-    line, profiles = the_line(seconds, seed)
+def turning_line(seconds: float, seed: int, turns: bool = True):
+    """The 3-robot line as 4-axis Deltas with gripper times, parts at random angles, turned to 0 rad (or not)."""
+    line, _ = the_line(seconds, seed)
+    robots = []
+    for r in line.robots:
+        place = r.place.model_copy(update={"angle": 0.0 if turns else None})
+        robots.append(r.model_copy(update={"profile": "delta-4axis", "place": place,
+                                           "gripper": r.gripper.model_copy(update={"close": 0.03, "open": 0.02})}))
+    gen = line.parts.generate.model_copy(update={"angles": True})
+    line = line.model_copy(update={"robots": robots, "parts": line.parts.model_copy(update={"generate": gen})})
+    return line, {r.name: load_profile(r.profile) for r in line.robots}
+
+
+def manual_line(seconds: float):
+    """The manual's worked example: docs/line/deltas.yaml, 3 robots, quota, seed 1, for ``seconds`` of parts."""
+    from pickplace_cli.line.spec import Quota
+
+    line, profiles = the_line(seconds, 1)
+    return line.model_copy(update={"strategy": Quota(kind="quota")}), profiles
+
+
+def one_run(seconds: float, seed: int, make=None) -> dict:
+    line, profiles = (make or the_line)(seconds, seed)
     parts = generate(line.parts.generate, line.belt.width)
     w0, c0 = time.perf_counter(), time.process_time()
     eng = LineEngine(line, profiles)
@@ -170,6 +196,7 @@ def main() -> None:
     ap.add_argument("--runs", type=int, default=3, help="warm runs (seeds 2, 3, …) after the cold one (seed 1)")
     ap.add_argument("--sweep-seconds", type=float, default=30.0)
     ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--no-turns", dest="turns", action="store_false", help="leave out the 4-axis turning runs")
     ap.add_argument("--output", default=str(ROOT / "bench" / "results" / "line.json"))
     args = ap.parse_args()
     if args.quick:
@@ -199,11 +226,26 @@ def main() -> None:
           f"({sw['cpu_s_1']:.2f} s CPU: {sw['cores_used_1']:.2f} cores), 2 local processes {sw['wall_s_2']:.2f} s wall "
           f"({sw['cpu_s_2']:.2f} s CPU: {sw['cores_used_2']:.2f} cores): speed-up {sw['speedup']:.2f}× (same rows: "
           f"{sw['same_rows']})", flush=True)
+    turns = {}
+    if args.turns:
+        for name, flag in (("turned", True), ("as they lie", False)):
+            one_run(args.seconds, 1, lambda t, s, f=flag: turning_line(t, s, f))  # cold: fills the memos
+            runs = [one_run(args.seconds, 2 + k, lambda t, s, f=flag: turning_line(t, s, f)) for k in range(args.runs)]
+            turns[name] = {"runs": runs, "median_ratio_cpu": statistics.median(w["ratio_cpu"] for w in runs),
+                           "median_ratio_wall": statistics.median(w["ratio_wall"] for w in runs),
+                           "median_ms_per_part_cpu": statistics.median(w["ms_per_part_cpu"] for w in runs)}
+            print(f"3 × delta-4axis, gripper times, parts {name}: median {turns[name]['median_ratio_cpu']:.1f}× real "
+                  f"time (CPU), {turns[name]['median_ratio_wall']:.1f}× (wall), "
+                  f"{turns[name]['median_ms_per_part_cpu']:.2f} ms CPU per part", flush=True)
+        ten = one_run(600.0, 1, lambda t, s: manual_line(t))
+        turns["manual_line_600s"] = ten
+        print(f"the manual's line (3 Deltas, quota) for 600 s of parts: {ten['parts']} parts, {ten['cpu_s']:.2f} s CPU "
+              f"({ten['ratio_cpu']:.1f}× real time), {ten['wall_s']:.2f} s wall", flush=True)
     yard_after = reference()
     print(f"yardstick after the runs: {yard_after:.3f} ms CPU", flush=True)
     doc = {"load_average": load, "cores": os.cpu_count(), "yardstick_ms": [yard, yard_after], "seconds": args.seconds,
            "cold": cold, "warm": warm,
-           "median": med, "breakdown": parts, "sweep": sw}
+           "median": med, "breakdown": parts, "sweep": sw, "turns": turns}
     Path(args.output).parent.mkdir(parents=True, exist_ok=True)
     Path(args.output).write_text(json.dumps(doc, indent=1) + "\n")
     print(f"written {args.output}")

@@ -48,6 +48,14 @@ def line_cmd(
                                                               "profile]"),
     max_miss_rate: Optional[float] = typer.Option(
         None, "--max-miss-rate", help="Exit 4 when the share of missed parts exceeds this (0 … 1)."),
+    until: Optional[float] = typer.Option(
+        None, "--until", metavar="PRECISION", rich_help_panel="Batch and performance",
+        help="Run the file's generator until the miss rate's 95 % interval (batch means) is at most ± PRECISION wide "
+             "(a share, e.g. 0.01 for ± 1 percentage point; 0.001 … 0.5) and 20 parts were missed, or until "
+             "--until-max seconds of parts."),
+    until_max: float = typer.Option(
+        3600.0, "--until-max", metavar="SECONDS", rich_help_panel="Batch and performance",
+        help="With --until: the longest feed in s of simulated time (1 … 1e5 s; at most 100,000 parts)."),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="No table or progress bar on stderr."),
     speeds: Optional[str] = typer.Option(
         None, "--speeds", help="Sweep: belt speeds in m/s, a list 0.2,0.5 or a range START:STOP:STEP."),
@@ -80,6 +88,13 @@ def line_cmd(
         raise TaskError(f"max-miss-rate = {max_miss_rate!r}: must be a share between 0 and 1")
     if rate is not None and not (rate > 0 and rate <= 1e5):
         raise TaskError(f"rate = {rate!r}: must be a sample rate in Hz, > 0 and at most 1e5")
+    if until is not None and not (1e-3 <= until <= 0.5):
+        raise TaskError(f"until = {until!r}: the half-width of the miss rate's interval is a share from 0.001 to 0.5 "
+                        "(0.01 = ± 1 percentage point)")
+    if not (1.0 <= until_max <= 1e5):
+        raise TaskError(f"until-max = {until_max!r} s: the longest run is from 1 to 1e5 s of simulated time")
+    if until is not None and (sweep or detections is not None):
+        _usage("--until runs the line file's generator longer; it is for a single run without --detections")
     if sweep:
         for name, given in (("--detections -", detections == "-"), ("--mcap", mcap), ("--robots-csv", robots_csv),
                             ("--summary", summary_file), ("--json", as_json)):
@@ -91,7 +106,7 @@ def line_cmd(
     if resume or scheduler or workers:
         _usage("--resume, --scheduler and --workers are for a sweep (--speeds, --robot-counts, --strategies, --seeds)")
     _single(line_file, detections, belt_speed, robots, strategy, seed, output, as_json, robots_csv, summary_file, plot,
-            mcap, rate, max_miss_rate, quiet)
+            mcap, rate, max_miss_rate, quiet, (until, until_max))
 
 
 # ------------------------------------------------------------------------------------------------ a single run
@@ -213,7 +228,7 @@ def _detection_lines(source: str):
 
 
 def _single(line_file, detections, belt_speed, robots, strategy, seed, output, as_json, robots_csv, summary_file,
-            plot, mcap, rate, max_miss_rate, quiet) -> None:
+            plot, mcap, rate, max_miss_rate, quiet, until=(None, 3600.0)) -> None:
     from ..export import atomic_output
     from ..line.engine import LineEngine
     from ..line.parts import generate, in_time_order, read_detections
@@ -238,11 +253,16 @@ def _single(line_file, detections, belt_speed, robots, strategy, seed, output, a
     if source is None and line.parts.generate is None:
         raise TaskError(f"{line_file}: parts: give a detection file (parts.detections, or --detections FILE|-) or a "
                         "generator (parts.generate)")
+    if until[0] is not None and source is not None:
+        _usage(f"--until runs the line file's generator longer; {line_file}'s parts come from a detection file "
+               "(parts.detections): give parts.generate")
     streaming = output == "-"
     with contextlib.ExitStack() as stack:
         if source is not None:
             lines = stack.enter_context(_detection_lines(source))
             items = read_detections(lines, "stdin" if source == "-" else source)
+        elif until[0] is not None:
+            items = _until_items(line, line_file, engine, *until)
         else:
             items = iter(generate(line.parts.generate, line.belt.width))
         out = stack.enter_context(atomic_output(output))
@@ -259,6 +279,14 @@ def _single(line_file, detections, belt_speed, robots, strategy, seed, output, a
         summary = engine.finish()
         if as_json:
             out.write(summary_json(summary, line.name, compact=True))
+    if until[0] is not None:
+        iv = summary.intervals.miss if summary.intervals is not None else None
+        reached = iv is not None and iv.half <= until[0]
+        summary.until = {"precision": until[0], "reached": reached, "max_s": until[1]}
+        if not reached:
+            sys.stderr.write(f"pickplace: warning: --until {until[0]:g}: the miss rate's interval is "
+                             f"± {100 * iv.half if iv else 100:.2f} % after {summary.feed:.4g} s of parts (--until-max "
+                             f"{until[1]:g} s): not as narrow as asked\n")
     _after(engine, summary, line, robots_csv, summary_file, plot, plot_kind if plot else None, mcap, rate, quiet)
     code = summary.exit_code()
     for v in summary.violations():
@@ -269,6 +297,34 @@ def _single(line_file, detections, belt_speed, robots, strategy, seed, output, a
         code = max(code, 4)
     if code:
         raise typer.Exit(code)
+
+
+#: with --until, the interval is first looked at after this many parts, then every ``UNTIL_STEP`` parts
+UNTIL_FIRST, UNTIL_STEP = 400, 50
+#: ... and it stops only once this many parts were missed (or Wilson's upper end is below the precision)
+UNTIL_MISSES = 20
+
+
+def _until_items(line, line_file, engine, precision: float, most: float):
+    """The file's generator run for up to ``most`` s (at most MAX_PARTS parts), stopped as soon as the miss rate's
+    batch-means interval is at most ± ``precision`` and ``UNTIL_MISSES`` parts were missed (or Wilson's interval
+    lies below ``precision``), looked at every ``UNTIL_STEP`` parts from ``UNTIL_FIRST`` on."""
+    from ..line.confidence import result_arrays, run_intervals
+    from ..line.parts import MAX_PARTS, generate
+
+    gen = line.parts.generate
+    most = min(float(most), 0.999 * MAX_PARTS / float(gen.rate))
+    gen = gen.model_copy(update={"count": None, "duration": most})
+    for k, d in enumerate(generate(gen, line.belt.width)):
+        if k >= UNTIL_FIRST and k % UNTIL_STEP == 0:
+            t, missed = result_arrays(engine.results)
+            ivs = run_intervals(t, missed, 0.0)
+            # a handful of misses makes an unreliable interval: also UNTIL_MISSES misses, or a rate known to be
+            # below PRECISION outright (Wilson's upper end: a line that hardly misses)
+            if ivs.miss is not None and ivs.miss.half <= precision and (
+                    int(missed.sum()) >= UNTIL_MISSES or ivs.miss_wilson.high <= precision):
+                return
+        yield d
 
 
 def _after(engine, summary, line, robots_csv, summary_file, plot, plot_kind, mcap, rate, quiet) -> None:
@@ -443,6 +499,13 @@ def _sweep(line_file, detections, belt_speed, robots, strategy, seed, speeds, ro
                 write_sweep_plot(rows, fh, plot_kind, title=f"{base.name}: miss rate against belt speed")
         if ckpt is not None and ckpt.exists():
             os.unlink(ckpt)
+    if not quiet:
+        from ..line.sweep import seed_intervals
+
+        for kind, n, speed, miss, picks in seed_intervals(rows):
+            sys.stderr.write(f"{kind}, {n} robots, {speed:g} m/s: miss rate {100 * miss.estimate:.1f} ± "
+                             f"{100 * miss.half:.1f} %, picks/min {picks.estimate:.1f} ± {picks.half:.1f} (95 %, "
+                             f"{miss.method})\n")
     failed = [r for r in rows if r.get("error") and r.get("exit_code") != 4]
     for r in failed[:5]:
         sys.stderr.write(f"pickplace: case {r['strategy']}, {r['robots']} robots, {r['belt_speed']:g} m/s, seed "

@@ -64,6 +64,8 @@ class PartResult:
                 "t_placed_s": c.t_placed, "t_free_s": c.t_free, "target": c.target, "place_m": c.place_point.tolist(),
                 "waited_for_window": c.waited,
                 "pick_shape": list(pick.solved.move.basis.params), "place_shape": list(place.solved.move.basis.params),
+                "grip_angle_rad": pick.solved.move.theta_end, "place_angle_rad": place.solved.move.theta_end,
+                "turn_rad": place.solved.move.turn,
             })
         if self.declines:
             doc["declined"] = dict(self.declines)
@@ -162,9 +164,12 @@ class LineEngine:
         declines = {self.robots[i].name: why for i, why in left_out.items()}
         for i in ask:
             r = self.robots[i]
-            res = r.plan(d.along, d.across, d.t)
+            res = r.plan(d.along, d.across, d.t, angle=d.angle)
             if isinstance(res, Cycle):
                 r.commit(res)
+                for leg in res.legs:
+                    if leg.solved is not None:
+                        leg.solved.move.drop_caches()
                 self.runs[i].legs += res.legs
                 self.runs[i].picks += 1
                 self.sharing.picked(i)
@@ -187,6 +192,7 @@ class LineEngine:
         if isinstance(leg, Decline):
             raise TaskError(leg.reason)
         run.robot.commit_stop(leg)
+        leg.solved.move.drop_caches()
         run.legs.append(leg)
 
     def run(self, items: Iterable[Detection | BadRow]) -> Iterator[PartResult]:

@@ -3,7 +3,7 @@
 
 * :func:`write_timeline` — a run: every part's way along the belt against time (detection to meeting, coloured
   by the robot that took it; a missed part in grey to the end of the line), the robots' windows, and below it
-  each robot's legs (pick, track, place, release, stop) on a time axis;
+  each robot's legs (pick, track, place, release, stop) on a time axis, and its place's exchanges (hatched);
 * :func:`write_sweep_plot` — a sweep: the miss rate against belt speed, one curve per strategy and robot count
   (the mean over the seeds, the band from the lowest to the highest).
 """
@@ -75,12 +75,17 @@ def write_timeline(engine, summary, stream: IO[bytes], fmt: str = "png", title: 
             bars = [(leg.t0, leg.duration) for leg in run.legs if leg.kind == kind]
             if bars:
                 gantt.broken_barh(bars, (k - 0.4, 0.8), facecolors=colour)
+        swaps = [(t0, t1 - t0) for t0, t1 in run.robot.exchanges]
+        if swaps:  # the place is exchanged: the robot cannot place meanwhile
+            gantt.broken_barh(swaps, (k - 0.4, 0.8), facecolors="none", edgecolors="0.4", hatch="///", lw=0.5)
     gantt.set_yticks(range(len(robots)), [r.name for r in robots])
     gantt.set_xlabel("t [s] (line clock)")
     from matplotlib.patches import Patch
 
     handles = [Patch(color=c, label=k) for k, c in LEG_COLOURS.items()]
-    gantt.legend(handles=handles, loc="upper right", fontsize=7, ncols=len(LEG_COLOURS))
+    if any(run.robot.exchanges for run in engine.runs):
+        handles.append(Patch(facecolor="none", edgecolor="0.4", hatch="///", label="exchange"))
+    gantt.legend(handles=handles, loc="upper right", fontsize=7, ncols=len(handles))
     _save(fig, stream, fmt)
 
 

@@ -137,10 +137,18 @@ def conditions(start, v_from, end_a, end_b, v_to, height: float, eta: float, lam
 
 
 class Move:
-    """One move of a fixed shape: T → its path, the capacity rule's excess, exact peaks (module docstring)."""
+    """One move of a fixed shape: T → its path, the capacity rule's excess, exact peaks (module docstring).
 
-    def __init__(self, basis: ShapeBasis, start, v_from, end_a, end_b, v_to, height: float, eta: float) -> None:
+    ``theta`` [rad] is the tool's angle about the base z axis at the start (a rotary fourth axis; 0 otherwise) and
+    ``turn`` [rad] the turn it makes, as ``plan`` makes one (:func:`~pickplace_cli.paths.turn.turned`: the degree-9
+    law between lift-off and set-down). Neither depends on T, nor does the window of the turn: the path's height
+    (the z column of its conditions) is the same at every duration, so the law in τ is fixed per move."""
+
+    def __init__(self, basis: ShapeBasis, start, v_from, end_a, end_b, v_to, height: float, eta: float,
+                 theta: float = 0.0, turn: float = 0.0) -> None:
         self.basis = basis
+        self.theta, self.turn = float(theta), float(turn)
+        self._law = None
         self.start = np.asarray(start, float)
         self.v_from, self.v_to = np.asarray(v_from, float), np.asarray(v_to, float)
         self.end_a, self.end_b = np.asarray(end_a, float), np.asarray(end_b, float)
@@ -233,17 +241,116 @@ class Move:
         derivs = [m @ d for m in self.basis.left]
         return pieces_norm_peaks(self.basis.breaks, derivs, orders)  # type: ignore[return-value]
 
-    def task(self, T: float):
+    def drop_caches(self) -> None:
+        """Forget the grid matrices and dot products (recomputed on use): a committed move keeps only what defines
+        it, so a long run holds a few kB a part."""
+        self._check = None
+        self._dot = {}
+        self._law = None
+
+    @property
+    def theta_end(self) -> float:
+        """The tool angle at the move's end [rad]."""
+        return self.theta + self.turn
+
+    def task(self, T: float, angles: bool | None = None):
+        """The move's Task at duration T (with the tool angles when it turns, or when ``angles``)."""
         from ..model.task import Task
 
-        return Task(self.start, self.end(T), self.height, self.eta, self.v_from, self.v_to)
+        if angles is None:
+            angles = self.turn != 0.0
+        th = (self.theta, self.theta_end) if angles else (None, None)
+        return Task(self.start, self.end(T), self.height, self.eta, self.v_from, self.v_to, *th)
 
-    def path(self, T: float):
+    def path(self, T: float, angle: bool = True):
         """The CartesianPath of the move planned for T, built by the method itself
-        (:func:`~pickplace_cli.paths.bspline_vel.plan_bspline_vel` with this shape)."""
+        (:func:`~pickplace_cli.paths.bspline_vel.plan_bspline_vel` with this shape), carrying the tool's turn as
+        ``plan`` attaches it (:func:`~pickplace_cli.paths.turn.turned`), or its constant angle (``angle``)."""
         from ..paths.bspline_vel import plan_bspline_vel
 
-        return plan_bspline_vel(self.task(T), T, params=list(self.basis.params))
+        path = plan_bspline_vel(self.task(T, angles=False), T, params=list(self.basis.params))
+        if not angle or (self.turn == 0.0 and self.theta == 0.0):
+            return path
+        from dataclasses import replace
+
+        from ..curves.rotation import RotationLaw, with_rotation
+
+        if self.turn == 0.0:
+            return replace(path, angle=RotationLaw(self.theta, 0.0))
+        # turned()'s law (paths/turn.py, as plan attaches it), its window memoised: the path's height is the same at
+        # every T, so the window found once on this move's shape and heights is this path's
+        law = self.law()
+        info = {"from_rad": self.theta, "to_rad": self.theta_end, "turn_rad": self.turn, "during": "transfer",
+                "window_tau": [law.tau0, law.tau1]}
+        path = with_rotation(path, self.theta, self.turn, (law.tau0, law.tau1))
+        return replace(path, parameters={**path.parameters, "turn": info})
+
+    def law(self):
+        """The angle law of a turning move (:func:`turn_law`, kept)."""
+        if self._law is None:
+            self._law = turn_law(self)
+        return self._law
+
+    def angle_orders(self, tau) -> np.ndarray:
+        """θ, θ′, θ″, θ‴ (4, N) of the tool angle at τ [rad/1^k] (the law of :meth:`path`, the same at every T)."""
+        tau = np.asarray(tau, float)
+        if self.turn == 0.0:
+            out = np.zeros((4, len(tau)))
+            out[0] = self.theta
+            return out
+        return self.law().all_orders(tau)
+
+
+_WINDOWS: dict = {}
+
+
+def turn_law(mv: "Move"):
+    """The angle law of a turning move: :func:`~pickplace_cli.paths.turn.turned`'s on the move's path, its window
+    memoised on what the path's height depends on (the shape, the end heights, the clearance and η)."""
+    from ..curves.rotation import RotationLaw
+
+    key = (mv.basis.params, float(mv.start[2]), float(mv.end_a[2]), float(mv.v_from[2]), float(mv.v_to[2]), mv.height,
+           mv.eta)
+    window = _WINDOWS.get(key)
+    if window is None:
+        window = transfer_window(mv)
+        if len(_WINDOWS) > 65536:
+            _WINDOWS.clear()
+        _WINDOWS[key] = window
+    return RotationLaw(mv.theta, mv.turn, *window)
+
+
+def transfer_window(mv: "Move") -> tuple[float, float]:
+    """(τa, τb) of :func:`~pickplace_cli.curves.rotation.transfer_window` for the move's path (what
+    :func:`~pickplace_cli.paths.turn.turned` uses: the first τ at which the tool has risen to the lift-off height,
+    the last at which it is still at the set-down height or above, those heights η of the rise to the apex), found
+    on the height's piece polynomials (each span a quintic: its real roots) instead of samples and bisection; (0, 1)
+    when the path does not rise through both. Tests: equal to turned()'s window within 1e-9."""
+    z_lift = mv.start[2] + mv.eta * (mv.da[5, 2] - mv.start[2])
+    z_set = mv.end_a[2] + mv.eta * (mv.da[5, 2] - mv.end_a[2])
+    breaks = mv.basis.breaks
+    z = mv.da[:, 2]
+    derivs = np.array([m @ z for m in mv.basis.left])  # (6, spans): d^r z/dτ^r at each span's left end
+
+    def crossings(level: float) -> list[float]:
+        out = []
+        for k in range(len(breaks) - 1):
+            c = [derivs[r, k] / math.factorial(r) for r in range(5, -1, -1)]
+            c[-1] -= level
+            h = breaks[k + 1] - breaks[k]
+            for root in np.roots(c):
+                if abs(root.imag) < 1e-9 and -1e-12 <= root.real <= h + 1e-12:
+                    out.append(float(breaks[k] + min(max(root.real, 0.0), h)))
+        return sorted(out)
+
+    up, down = crossings(z_lift), crossings(z_set)
+    if mv.start[2] >= z_lift:
+        up = [0.0] + up
+    if mv.end_a[2] >= z_set:
+        down = down + [1.0]
+    if not up or not down or not up[0] < down[-1]:
+        return 0.0, 1.0
+    return up[0], down[-1]
 
 
 def first_feasible(excess: Callable[[np.ndarray], np.ndarray], a: float, b: float, rtol: float = RTOL,
@@ -423,11 +530,13 @@ _GROUPS = ("h_over_b", "v0_along", "v0_across", "v1_along", "v1_across")
 @dataclass(frozen=True)
 class Solved:
     """A move with its duration: the Move (fixed shape), T [s], exact peaks (‖p′‖, ‖p″‖, ‖p‴‖ at T = 1 s; the
-    jerk's only when the capacity limits it, else NaN)."""
+    jerk's only when the capacity limits it, else NaN); ``report``: the exact limit check of the move at T when
+    the duration search ran it (the leg's check then uses it instead of running it again)."""
 
     move: Move
     T: float
     peaks: tuple[float, float, float]
+    report: object = None
 
     @property
     def end(self) -> np.ndarray:

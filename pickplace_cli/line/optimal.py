@@ -33,9 +33,9 @@ def profile_with_window(robot):
 
 
 def _solved(robot, mv: Move, params, T: float, path) -> Solved:
-    """The planned move as a leg's Move of that shape (the same spline)."""
+    """The planned move as a leg's Move of that shape (the same spline, the same turn)."""
     basis = robot.shapes.basis([float(params[n]) for n in _NAMES])
-    again = Move(basis, mv.start, mv.v_from, mv.end_a, mv.end_b, mv.v_to, mv.height, mv.eta)
+    again = Move(basis, mv.start, mv.v_from, mv.end_a, mv.end_b, mv.v_to, mv.height, mv.eta, mv.theta, mv.turn)
     return Solved(again, float(T), tuple(float(x) for x in path.peaks))
 
 
@@ -45,13 +45,15 @@ def _plan(robot, mv: Move, T_end):
 
     rule = robot.rule
     return plan(mv.task(T_end), robot.profile,
-                PlanOptions(method="bspline-vel", time=rule, fit=rule == "fit", rate=100.0))
+                PlanOptions(method="bspline-vel", time=rule, fit=rule == "fit", rate=100.0, turn="as-given"))
 
 
-def pick_and_place(robot, mv: Move, a: float, b: float, target, v_out):
+def pick_and_place(robot, mv: Move, a: float, b: float, target, v_out, turn=(0.0, 0.0)):
     """(pick, place) Solved, None when the pick cannot meet the part in [a, b], or the reason (text) the place move
     cannot be planned: ``mv`` describes the pick (a moving end: the rendezvous; a fixed end: the move to the
-    window's entry, which must take at most b)."""
+    window's entry, which must take at most b); ``turn``: the place move's (start angle, turn) [rad] (the planner
+    times it with the turn; the rendezvous of the pick is searched without its turn, which the leg's check then
+    holds to every limit)."""
     from ..pipelines.rendezvous import Part, find_rendezvous
 
     try:
@@ -72,7 +74,7 @@ def pick_and_place(robot, mv: Move, a: float, b: float, target, v_out):
     except PickplaceError:
         return None
     leave = pick.end + robot.v_belt * robot.dwell
-    pmv = Move(pick.move.basis, leave, robot.v_belt, target, np.zeros(3), v_out, robot.height, robot.eta)
+    pmv = Move(pick.move.basis, leave, robot.v_belt, target, np.zeros(3), v_out, robot.height, robot.eta, *turn)
     try:
         got = _plan(robot, pmv, 0.0)
     except PickplaceError as exc:

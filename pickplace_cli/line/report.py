@@ -14,7 +14,7 @@ from typing import IO, Any
 PART_COLUMNS = (
     "id", "row", "t_detect[s]", "along[m]", "across[m]", "angle[rad]", "picked", "robot", "t_start[s]", "t_meet[s]",
     "meet_along[m]", "meet_across[m]", "pick_duration[s]", "place_duration[s]", "t_placed[s]", "t_free[s]",
-    "target", "exit_code", "reason",
+    "target", "turn[rad]", "exit_code", "reason",
 )
 
 
@@ -52,7 +52,8 @@ class PartsCsv:
                  _num(d.get("across_m")), _num(d.get("angle_rad")), _num(bool(d["picked"])), _text(d.get("robot")),
                  _num(d.get("t_start_s")), _num(d.get("t_meet_s")), _num(d.get("meet_along_m")),
                  _num(d.get("meet_across_m")), _num(d.get("pick_duration_s")), _num(d.get("place_duration_s")),
-                 _num(d.get("t_placed_s")), _num(d.get("t_free_s")), _num(d.get("target")), str(d["exit_code"]),
+                 _num(d.get("t_placed_s")), _num(d.get("t_free_s")), _num(d.get("target")),
+                 _num(d.get("turn_rad")), str(d["exit_code"]),
                  _text(d.get("reason"))]
         self.stream.write(",".join(cells) + "\n")
 
@@ -103,6 +104,19 @@ def write_robots_csv(summary, stream: IO[str]) -> None:
         stream.write(",".join(cells) + "\n")
 
 
+def interval_text(iv) -> list[str]:
+    """The intervals as lines of text (none without them)."""
+    if iv is None:
+        return []
+    level = f"{100 * iv.miss_wilson.level:g} %"
+    wil = f"Wilson, were the parts missed independently: {100 * iv.miss_wilson.low:.1f} … {100 * iv.miss_wilson.high:.1f} %"
+    if iv.miss is None:
+        return [f"miss rate {100 * iv.miss_wilson.estimate:.1f} % ({level}: {wil}; too few parts for batch means)"]
+    return [f"miss rate {100 * iv.miss.estimate:.1f} ± {100 * iv.miss.half:.1f} % ({level}, batch means over "
+            f"{iv.batches} windows of {iv.window:.3g} s; {wil})",
+            f"picks/min {iv.picks_per_minute.estimate:.1f} ± {iv.picks_per_minute.half:.1f} ({level}, batch means)"]
+
+
 def print_table(summary, console=None) -> None:
     """The per-robot table and the line's totals, on stderr (rich)."""
     from rich.console import Console
@@ -128,3 +142,5 @@ def print_table(summary, console=None) -> None:
         t.add_row(r.name, str(r.picks), f"{r.picks_per_minute:.1f}", f"{100 * r.utilisation:.1f} %",
                   f"{r.idle:.2f}", peak, rms)
     console.print(t)
+    for text in interval_text(summary.intervals):
+        console.print(text, soft_wrap=True, markup=False)

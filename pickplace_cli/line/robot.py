@@ -30,13 +30,14 @@ peaks, as the batch verdict engine measures); any other leg is checked by the pr
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
 from ..curves.peaks import parabolic_peak
 from ..model.errors import PickplaceError, TaskError, UnreachableError
 from .frames import Frame
+from .grids import UsePlan, _leg_of, track_basis
+from .legs import Cycle, Decline, Leg, RobotState
 from .moves import (HORIZON, Move, Shapes, Solved, T_MIN, exact_rule, first_feasible, search_auto, solve_auto,
                     solve_seconds, verify_auto)
 
@@ -49,100 +50,12 @@ GRID_SAFETY = 2e-4
 #: under the rule ``limits`` the capacity's durations stand when no joint or motor limit is used beyond this on the
 #: grid (its estimates are within 0.3 % of the exact peaks; a leg above SCREEN_MARGIN is still checked exactly)
 LIMITS_SCREEN = 0.95
-#: uniform samples of a tracking leg's grid (plus its Gauss–Legendre nodes)
-TRACK_UNIFORM = 9
+#: rounds of a cycle delayed until its place move arrives after an exchange (the part moves on meanwhile)
+EXCHANGE_ROUNDS = 6
 #: the quantities a duration changes (the fit rule's); positions, workcell and singularity do not
 TIMED = frozenset({"velocity", "acceleration", "jerk", "motor speed", "motor torque", "motor torque rate"})
-
-
-@dataclass(frozen=True)
-class RobotState:
-    """Where the robot is from ``t_free`` [s] on: ``position`` [m, robot frame], ``velocity`` [m/s] (zero at
-    rest; an outgoing belt's after a place on it)."""
-
-    position: np.ndarray
-    velocity: np.ndarray
-    t_free: float
-
-    @property
-    def moving(self) -> bool:
-        return bool(np.any(self.velocity != 0.0))
-
-
-@dataclass
-class Leg:
-    """One segment of a robot's sequence: ``kind`` (pick, track, place, release, stop), its start ``t0`` [s, line
-    clock] and ``duration`` [s]; ``solved`` (the B-spline move; None for a track/release leg, which is
-    ``point`` + ``velocity``·t); the exact ∫ motor torque² dt per motor over the leg [N²·m²·s]; the use of every
-    limit (in the order of the robot's ``use_keys``: (joint, quantity)); the motor torque at its end [N·m];
-    ``exact``: checked by the exact limit check."""
-
-    kind: str
-    t0: float
-    duration: float
-    solved: Solved | None = None
-    point: np.ndarray | None = None
-    velocity: np.ndarray | None = None
-    integral: np.ndarray | None = None
-    use: np.ndarray | None = None
-    end_torque: np.ndarray | None = None
-    exact: bool = False
-
-    @property
-    def t1(self) -> float:
-        return self.t0 + self.duration
-
-    @property
-    def end(self) -> np.ndarray:
-        if self.solved is not None:
-            return self.solved.end
-        return self.point + self.velocity * self.duration
-
-
-@dataclass
-class Cycle:
-    """A part taken: the legs (a stop first when the robot had to come to rest), the meeting (time, point in
-    the robot's frame and in the line's), the place target, and the robot's state after."""
-
-    legs: list
-    t_start: float
-    t_meet: float
-    meet_robot: np.ndarray
-    meet_line: np.ndarray
-    target: int
-    place_point: np.ndarray
-    state: RobotState
-    waited: bool = False
-
-    @property
-    def pick(self) -> Leg:
-        return next(leg for leg in self.legs if leg.kind == "pick")
-
-    @property
-    def t_placed(self) -> float:
-        return next(leg for leg in self.legs if leg.kind == "place").t1
-
-    @property
-    def t_free(self) -> float:
-        return self.state.t_free
-
-
-@dataclass(frozen=True)
-class Decline:
-    """Why a robot does not take a part: ``reason`` (one line; computed when first read) and the exit code it
-    would be (4: cannot meet it in the window or a point is out of reach; 3: a limit; 1: no plan)."""
-
-    why: object
-    code: int = 4
-
-    @property
-    def reason(self) -> str:
-        return self.why if isinstance(self.why, str) else str(self.why)
-
-    @property
-    def short(self) -> str:
-        """The reason without the costly details (for a part another robot took)."""
-        return self.why if isinstance(self.why, str) else self.why.short()
+#: the power of 1/T each of them grows with at most (a torque's gravity part does not grow: less than 2)
+NUDGE_ORDER = {"velocity": 1, "motor speed": 1, "acceleration": 2, "motor torque": 2, "jerk": 3, "motor torque rate": 3}
 
 
 class _Reason:
@@ -182,29 +95,6 @@ class _StandIn:
         return None
 
 
-class TrackBasis:
-    """The grid of a tracking leg (constant velocity, τ ∈ [0, 1]): uniform samples and Gauss–Legendre nodes."""
-
-    def __init__(self) -> None:
-        from .moves import gauss_legendre
-
-        x, w = gauss_legendre()
-        nodes = 0.5 + 0.5 * x
-        self.tau = np.unique(np.concatenate([np.linspace(0.0, 1.0, TRACK_UNIFORM), nodes]))
-        self.gl_index = np.searchsorted(self.tau, nodes)
-        self.gl_weight = 0.5 * w
-
-
-_TRACK = None
-
-
-def track_basis() -> TrackBasis:
-    global _TRACK
-    if _TRACK is None:
-        _TRACK = TrackBasis()
-    return _TRACK
-
-
 class LineRobot:
     """A robot of the line (module docstring): set up from its :class:`~pickplace_cli.line.spec.RobotSpec`."""
 
@@ -242,9 +132,35 @@ class LineRobot:
                                for s in limit_specs(profile.rated)])  # the RMS is reported against the ratings
         self.has_drives = self.model.has_drives
         self.targets = _targets(spec.place, self.frame)
+        #: a robot that turns the tool (a rotary fourth axis); the base frame's angle in the line frame [rad]
+        self.rotary = bool(getattr(robot, "rotary", False))
+        self.phi = math.atan2(self.frame.d[1], self.frame.d[0])
+        self.place_angles = _place_angles(spec.place, len(self.targets))
+        #: pockets on an outgoing belt (pitch [m], time pocket 0 passes the point [s], reach [m], speed [m/s]) or
+        #: None; the next pocket; the place's start time as a function of the pick's duration (set per cycle)
+        out = spec.place.belt
+        self.pockets = None
+        if out is not None and out.pitch is not None:
+            self.pockets = (float(out.pitch), float(out.first), float(out.reach if out.reach is not None else
+                            out.pitch / 2), math.hypot(*out.velocity))
+            if spec.shape == "optimal":
+                from ..model.errors import ProfileError
+
+                raise ProfileError(f"robot {spec.name}: shape: optimal does not place into pockets on an outgoing belt "
+                                   "(place.belt.pitch): use shape: table")
+        self.next_pocket = 0
+        self._pocket_skip = 0
+        self._leave_time = None
+        self.turn_tolerance = float(spec.place.angle_tolerance)
         home = spec.home if spec.home is not None else None
         self.home = self.frame.to_robot(home) if home is not None else self.targets[0][0].copy()
         self.next_target = 0
+        #: (places between two exchanges, seconds of an exchange), or None; until when it cannot place [s]; the
+        #: exchanges (start, end) [s]
+        ex = spec.place.exchange
+        self.exchange = None if ex is None else (int(ex.every or len(self.targets)), float(ex.time))
+        self.blocked_until = -math.inf
+        self.exchanges: list = []
         self.state = RobotState(self.home.copy(), np.zeros(3), -math.inf)
         self.last_T = 0.2
         self.last_place_T = 0.2
@@ -276,7 +192,7 @@ class LineRobot:
         along_free = along + self.speed * (st.t_free - t_detect)
         if t_ready <= st.t_free and along_free >= self.window[0]:
             return None
-        moves = [Move(b, st.position, st.velocity, self.home, np.zeros(3), np.zeros(3), self.height, self.eta)
+        moves = [Move(b, st.position, st.velocity, self.home, np.zeros(3), np.zeros(3), self.height, self.eta, st.angle)
                  for b in self._shapes_for(st.position, st.velocity, self.home, np.zeros(3))]
         solved = self._solve(moves, T_MIN, HORIZON)
         if solved is None:
@@ -288,12 +204,75 @@ class LineRobot:
         return leg
 
     def commit_stop(self, leg: Leg) -> None:
-        self.state = RobotState(leg.end.copy(), np.zeros(3), leg.t1)
+        self.state = RobotState(leg.end.copy(), np.zeros(3), leg.t1, leg.end_angle)
 
-    def plan(self, along: float, across: float, t_detect: float, state: RobotState | None = None) -> Cycle | Decline:
-        """The cycle of a part detected at ``t_detect`` [s] at ``along``, ``across`` [m] from ``state`` (default the
-        robot's), or why it cannot take it (module docstring). Does not change the robot."""
+    def turns(self, angle: float | None, st: RobotState) -> tuple[float, float, float] | Decline:
+        """(tool angle at the start, turn of the pick, turn of the place) [rad, base frame] for a part lying at
+        ``angle`` [rad, line frame] (None: not known) placed at the next target's angle. The place needs the turn
+        wrap(place − part) (the shorter way round, |turn| ≤ π); the tool puts the part down at the place angle taken
+        within (−π, π] in the base frame, so it takes the part at that angle less the turn (the gripper takes it as
+        it lies) and turns to it on the way there: every tool angle stays within 2π of 0 rad, and the pick's turn
+        within π once the tool has placed a part. No turn without both angles; a Decline when the robot has no
+        rotary axis and the turn is larger than the place's ``angle_tolerance``."""
+        place = self.place_angles[self.next_target % len(self.targets)]
+        if angle is None or place is None:
+            return st.angle, 0.0, 0.0
+        from ..curves.rotation import resolve_turn
+
+        need = resolve_turn(angle, place) - angle
+        if not self.rotary:
+            if abs(need) <= self.turn_tolerance:
+                return st.angle, 0.0, 0.0
+            return Decline(f"robot {self.name}: the part lies at {angle:.4f} rad and the place wants {place:.4f} rad: "
+                           f"a turn of {need:.4f} rad (more than angle_tolerance = {self.turn_tolerance:g} rad) and "
+                           f"profile {self.profile.name} has no rotary fourth axis", 4)
+        put = resolve_turn(0.0, place + self.phi)
+        return st.angle, put - need - st.angle, need
+
+    def plan(self, along: float, across: float, t_detect: float, state: RobotState | None = None,
+             angle: float | None = None) -> Cycle | Decline:
+        """The cycle of a part detected at ``t_detect`` [s] at ``along``, ``across`` [m] lying at ``angle`` [rad,
+        line frame; None: not known] from ``state`` (default the robot's), or why it cannot take it (module
+        docstring). Does not change the robot.
+
+        While its place is being exchanged (until ``blocked_until``) the robot cannot place: a cycle whose place
+        move would arrive before then starts later by the difference, again until it arrives at or after that
+        time (the part is then further along; a few rounds), or the part is declined saying so."""
         st = self.state if state is None else state
+        got = self._cycle(along, across, t_detect, st, angle)
+        if self.pockets is not None:  # a pocket the place move cannot meet in time: the next one
+            for skip in (1, 2, 3):
+                if not (isinstance(got, Decline) and got.place):
+                    break
+                self._pocket_skip = skip
+                got = self._cycle(along, across, t_detect, st, angle)
+            self._pocket_skip = 0
+        late = st
+        for _ in range(EXCHANGE_ROUNDS):
+            if isinstance(got, Cycle) and got.t_placed >= self.blocked_until - 1e-9:
+                return got
+            if not isinstance(got, Cycle):
+                break
+            # later by the shortfall and a quarter more (the part has moved on: the pick is a little shorter)
+            late = RobotState(late.position, late.velocity,
+                              got.t_start + 1.25 * (self.blocked_until - got.t_placed) + 1e-6, late.angle)
+            got = self._cycle(along, across, t_detect, late, angle)
+        if late is st:
+            return got
+        why = got.reason if isinstance(got, Decline) else "its place move still arrives before then"
+        return Decline(f"robot {self.name}: its place is exchanged until t = {self.blocked_until:.4f} s, and a cycle "
+                       f"placing after that cannot: {why.removeprefix(f'robot {self.name}: ')}",
+                       got.code if isinstance(got, Decline) else 4)
+
+    def _cycle(self, along: float, across: float, t_detect: float, st: RobotState,
+              angle: float | None) -> Cycle | Decline:
+        """:meth:`plan` without the exchange's wait."""
+        turns = self.turns(angle, st)
+        if isinstance(turns, Decline):
+            return turns
+        th0, t_pick, t_place = turns
+        th_grip = th0 + t_pick
+        pturn = (th_grip, t_place)
         t_ready = t_detect + self.latency
         t_start = max(st.t_free, t_ready)
         along0 = along + self.speed * (t_start - t_detect)  # where the part is when the move starts
@@ -312,37 +291,46 @@ class LineRobot:
             # where it enters the window, when the rule's move there fits in the time left
             entry = self.part_at(self.window[0], across)
             t_entry = t_detect + (self.window[0] - along) / self.speed
-            wmoves = [Move(bs, st.position, st.velocity, entry, np.zeros(3), self.v_belt, self.height, self.eta)
-                      for bs in self._shapes_for(st.position, st.velocity, entry, self.v_belt)]
-            got = self._pick_and_place(wmoves, T_MIN, t_entry - t_start, target, v_out)
+            wmoves = [Move(bs, st.position, st.velocity, entry, np.zeros(3), self.v_belt, self.height, self.eta, th0,
+                           t_pick) for bs in self._shapes_for(st.position, st.velocity, entry, self.v_belt)]
+            self._leave_time = lambda T: t_entry + self.dwell  # noqa: E731 - the place starts after the tracking
+            got = self._pick_and_place(wmoves, T_MIN, t_entry - t_start, target, v_out, pturn)
             if isinstance(got, tuple) and t_entry - got[0].T >= t_start:
                 solved, t_start, waited = got, t_entry - got[0].T, True
         if solved is None:
             p0 = self.part_at(along0, across)
-            moves = [Move(bs, st.position, st.velocity, p0, self.v_belt, self.v_belt, self.height, self.eta)
+            moves = [Move(bs, st.position, st.velocity, p0, self.v_belt, self.v_belt, self.height, self.eta, th0, t_pick)
                      for bs in self._shapes_for(st.position, st.velocity, p0 + self.v_belt * self.last_T, self.v_belt)]
-            solved = self._pick_and_place(moves, a, b, target, v_out)
+            self._leave_time = lambda T: t_start + T + self.dwell  # noqa: E731
+            solved = self._pick_and_place(moves, a, b, target, v_out, pturn)
             if solved is None:
                 return Decline(_Reason(self, moves, a, b, along0, busy))
         if isinstance(solved, Decline):
             return solved
         pick, place = solved
         meet = pick.end
-        track = Leg("track", t_start + pick.T, self.dwell, point=meet, velocity=self.v_belt.copy())
+        track = Leg("track", t_start + pick.T, self.dwell, point=meet, velocity=self.v_belt.copy(), theta=th_grip)
         legs = [Leg("pick", t_start, pick.T, pick), track, Leg("place", track.t1, place.T, place)]
-        legs.append(Leg("release", legs[-1].t1, self.release, point=target.copy(), velocity=v_out.copy()))
+        legs.append(Leg("release", legs[-1].t1, self.release, point=place.end.copy(), velocity=v_out.copy(),
+                        theta=th_grip + t_place))
         bad = self._check(legs)
         if bad is not None:
             return bad
         end = legs[-1].end
-        state = RobotState(end.copy(), v_out.copy(), legs[-1].t1)
+        state = RobotState(end.copy(), v_out.copy(), legs[-1].t1, th_grip + t_place)
         meet_line = self.frame.to_line(meet)
-        return Cycle(legs, t_start, t_start + pick.T, meet.copy(), meet_line, self.next_target % len(self.targets),
-                     target.copy(), state, waited=waited)
+        where = place.move.pocket if self.pockets is not None else self.next_target % len(self.targets)
+        return Cycle(legs, t_start, t_start + pick.T, meet.copy(), meet_line, where, place.end.copy(), state,
+                     waited=waited)
 
     def commit(self, cycle: Cycle) -> None:
         self.state = cycle.state
         self.next_target += 1
+        if self.pockets is not None:
+            self.next_pocket = cycle.target + 1
+        if self.exchange is not None and self.next_target % self.exchange[0] == 0:
+            self.blocked_until = cycle.t_free + self.exchange[1]  # a full tray: exchanged once the part is released
+            self.exchanges.append((cycle.t_free, self.blocked_until))
         self.last_T = cycle.pick.duration
         self.last_place_T = next(leg.duration for leg in cycle.legs if leg.kind == "place")
 
@@ -359,39 +347,79 @@ class LineRobot:
             return [self.shapes.basis(_paper())]
         return self.shapes.candidates(task, T)
 
-    def _place_moves(self, leave, target, v_out) -> list[Move]:
-        return [Move(bs, leave, self.v_belt, target, np.zeros(3), v_out, self.height, self.eta)
-                for bs in self._shapes_for(leave, self.v_belt, target, v_out)]
+    def _place_moves(self, leave, target, v_out, turn=(0.0, 0.0), T_pick: float = 0.0) -> list[Move]:
+        """The candidate place moves; ``turn``: (tool angle at the start, the turn) [rad]. Each carries ``span``, the
+        durations [s] it may take, and ``pocket``: a fixed target any (T_MIN … HORIZON, None); a pocket on an outgoing
+        belt (:meth:`pocket`) is met like a part, its end moving with the belt, within its reach."""
+        span, pocket, end_b = (T_MIN, HORIZON), None, np.zeros(3)
+        if self.pockets is not None:
+            pocket, target, span = self.pocket(self._leave_time(T_pick), v_out)
+            end_b = v_out
+        moves = [Move(bs, leave, self.v_belt, target, end_b, v_out, self.height, self.eta, *turn)
+                 for bs in self._shapes_for(leave, self.v_belt, target + end_b * self.last_place_T, v_out)]
+        for mv in moves:
+            mv.span, mv.pocket = span, pocket
+        return moves
 
-    def _pick_and_place(self, moves: list[Move], a: float, b: float, target, v_out):
+    def pocket(self, t_leave: float, v_out) -> tuple[int, np.ndarray, tuple[float, float]]:
+        """(k, where pocket k is at ``t_leave`` [m, robot frame], the place move's durations (a, b) [s] that meet it
+        within its reach): the first pocket from the next free one on that the move can still meet, judged by the
+        robot's last place duration (pocket k passes the point at first + k·pitch/speed)."""
+        pitch, first, reach, speed = self.pockets
+        point = self.targets[0][0]
+        soonest = t_leave + max(T_MIN, 0.9 * self.last_place_T) - reach / speed
+        k = max(self.next_pocket, math.ceil((soonest - first) * speed / pitch - 1e-9)) + self._pocket_skip
+        t_k = first + k * pitch / speed
+        span = (max(T_MIN, t_k - reach / speed - t_leave), t_k + reach / speed - t_leave)
+        return k, point + v_out * (t_leave - t_k), span
+
+    def _pick_and_place(self, moves: list[Move], a: float, b: float, target, v_out, turn=(0.0, 0.0)):
         """(pick, place) Solved, None when the pick cannot meet the part in [a, b], or a Decline for the place.
         The capacity rule: both durations searched on the grid (raised by ``GRID_SAFETY``), then checked on their
         exact peaks in one batch; a move the exact check nudges is searched again from where it must start."""
         if self.optimal:
             from .optimal import pick_and_place
 
-            got = pick_and_place(self, moves[0], a, b, target, v_out)
+            got = pick_and_place(self, moves[0], a, b, target, v_out, turn)
             return Decline(got, 1) if isinstance(got, str) else got
         if self.rule == "limits":
             # the capacity's durations first (cheap): where every joint and motor limit holds there with room to
             # spare (LIMITS_SCREEN), they are the rule's answer (no shorter move holds the capacity, and these hold
             # the motors: the cycle's check then decides the legs as for any rule)
-            got = self._capacity_pick_and_place(moves, a, b, target, v_out)
-            if not isinstance(got, tuple) or all(self._motors_clear(s) for s in got):
+            got = self._capacity_pick_and_place(moves, a, b, target, v_out, turn)
+            if not isinstance(got, tuple):
                 return got  # (None or a Decline: no move holds the capacity, so none holds every limit)
+            pick, place = got
+            if self._motors_clear(pick):
+                if self._motors_clear(place):
+                    return got
+                # the pick stands; the place alone is searched on every limit, from its capacity duration up (the
+                # rule's duration is the longer of both: none shorter holds)
+                leave = pick.end + self.v_belt * self.dwell
+                pm = self._place_moves(leave, target, v_out, turn, pick.T)
+                place = self._solve_fit(pm, *pm[0].span, True, place.T)
+                return (pick, place) if place is not None else self._no_place(leave, target)
+            pick = self._solve_fit(moves, a, b, True, pick.T)
+            if pick is None:
+                return None
+            leave = pick.end + self.v_belt * self.dwell
+            pm = self._place_moves(leave, target, v_out, turn, pick.T)
+            place = self._solve(pm, *pm[0].span)
+            return (pick, place) if place is not None else self._no_place(leave, target)
         if self.rule != "auto":
             pick = self._solve(moves, a, b)
             if pick is None:
                 return None
-            place = self._solve(self._place_moves(pick.end + self.v_belt * self.dwell, target, v_out), T_MIN, HORIZON)
+            pm = self._place_moves(pick.end + self.v_belt * self.dwell, target, v_out, turn, pick.T)
+            place = self._solve(pm, *pm[0].span)
             return (pick, place) if place is not None else self._no_place(pick.end + self.v_belt * self.dwell, target)
-        return self._capacity_pick_and_place(moves, a, b, target, v_out)
+        return self._capacity_pick_and_place(moves, a, b, target, v_out, turn)
 
     def _motors_clear(self, solved: Solved) -> bool:
         """Every timed joint and motor limit used at most ``LIMITS_SCREEN`` on the move's grid at its duration."""
         return bool(self._excess_fit(solved.move, np.array([solved.T]))[0] <= LIMITS_SCREEN - 1.0)
 
-    def _capacity_pick_and_place(self, moves: list[Move], a: float, b: float, target, v_out):
+    def _capacity_pick_and_place(self, moves: list[Move], a: float, b: float, target, v_out, turn=(0.0, 0.0)):
         """(pick, place) by the Cartesian capacity (the rule ``auto``), None, or a Decline for the place."""
         found = search_auto(moves, self.capacity, a, b, guess=self.last_T)
         if found is None:
@@ -399,24 +427,27 @@ class LineRobot:
         mv, T = found
         T = min(T * (1 + GRID_SAFETY), b) if T > a else T
         leave = mv.end(T) + self.v_belt * self.dwell
-        pmoves = self._place_moves(leave, target, v_out)
-        pfound = search_auto(pmoves, self.capacity, T_MIN, HORIZON, guess=self.last_place_T)
+        pmoves = self._place_moves(leave, target, v_out, turn, T)
+        lo, hi = pmoves[0].span
+        pfound = search_auto(pmoves, self.capacity, lo, hi, guess=self.last_place_T)
         if pfound is None:
             return self._no_place(leave, target)
         pmv, pT = pfound
-        both = verify_auto([(mv, T, b), (pmv, pT * (1 + GRID_SAFETY), HORIZON)], self.capacity)
+        both = verify_auto([(mv, T, b), (pmv, min(pT * (1 + GRID_SAFETY), hi) if pT > lo else pT, hi)], self.capacity)
         if both is not None and both[0].T == T:
             return both[0], both[1]
         pick = verify_auto([(mv, T, b)], self.capacity)  # the pick moved (rare): the place starts elsewhere
         if pick is None:
             return None
         pick = pick[0]
-        place = self._solve(self._place_moves(pick.end + self.v_belt * self.dwell, target, v_out), T_MIN, HORIZON)
+        pm = self._place_moves(pick.end + self.v_belt * self.dwell, target, v_out, turn, pick.T)
+        place = self._solve(pm, *pm[0].span)
         return (pick, place) if place is not None else self._no_place(pick.end + self.v_belt * self.dwell, target)
 
     def _no_place(self, leave, target) -> Decline:
         return Decline(f"robot {self.name}: no place move from {_xyz(leave)} m to {_xyz(target)} m within "
-                       f"{HORIZON:g} s by the rule {self.rule}", 1)
+                       f"{HORIZON:g} s by the rule {self.rule}" + (" (pockets: the next three tried too)" if self.pockets
+                                                                   else ""), 1, place=True)
 
     def _solve(self, moves: list[Move], a: float, b: float) -> Solved | None:
         if a > b:
@@ -441,7 +472,8 @@ class LineRobot:
                 text += f"; the earliest meeting is {self.speed * (T - b) * 1e3:.0f} mm past that"
         return text
 
-    def _solve_fit(self, moves: list[Move], a: float, b: float, capacity: bool = False) -> Solved | None:
+    def _solve_fit(self, moves: list[Move], a: float, b: float, capacity: bool = False,
+                   guess: float | None = None) -> Solved | None:
         """The smallest T in [a, b] at which every timed limit holds on the grid, then the exact check at T and
         nudged up until it holds (as the rendezvous fit does). ``capacity``: the Cartesian capacity too (the rule
         limits: the longer of both, each checked exactly)."""
@@ -453,7 +485,7 @@ class LineRobot:
 
         best = None
         for mv in moves:
-            T = first_feasible(excess(mv), a, b, scan=8)
+            T = first_feasible(excess(mv), a, b, scan=8, guess=guess)
             if T is not None and (best is None or T < best[1]):
                 best = (mv, T)
         if best is None:
@@ -469,13 +501,15 @@ class LineRobot:
                 rep = check_limits(motion_model(mv.path(T), self.profile), T, dwell=0.0)
             except (UnreachableError, TaskError):
                 return None
-            bad = [r.utilisation ** (1 / 3) for r in rep.violations if r.quantity in TIMED]
+            # each use scales with T as T^-k (speeds k = 1, accelerations and torques at most 2, jerks and torque
+            # rates at most 3): the step u^(1/k) is exact for a speed and never too long for the others
+            bad = [r.utilisation ** (1 / NUDGE_ORDER[r.quantity]) for r in rep.violations if r.quantity in TIMED]
             if capacity:  # the capacity on the exact peaks: T_auto(T)/T > 1 when it is exceeded
                 t_rule = exact_rule([(mv, T)], self.capacity)[1][0]
                 if t_rule > T:
                     bad.append(t_rule / T)
             if not bad:
-                return Solved(mv, T, mv.exact_peaks(T))
+                return Solved(mv, T, mv.exact_peaks(T), rep)
             T *= max(bad) * (1.0 + 1e-9)
         return None  # pragma: no cover - converges in one or two steps
 
@@ -486,6 +520,8 @@ class LineRobot:
         G = len(tau)
         out = np.full(len(Ts), np.inf)
         motion = [np.concatenate([a + T * b for T in Ts]) for a, b in zip(mv.A, mv.B)]
+        if self.rotary:
+            motion.append(np.tile(mv.angle_orders(tau), len(Ts)))
         try:
             parts = self.model.parts(np.tile(tau, len(Ts)), motion=tuple(motion), singularity=False)
         except UnreachableError:
@@ -517,6 +553,8 @@ class LineRobot:
                 grids.append((tb.tau, [p, np.broadcast_to(d, p.shape).copy(), z, z], tb.gl_index, tb.gl_weight))
         tau = np.concatenate([g[0] for g in grids])
         motion = tuple(np.concatenate([g[1][k] for g in grids]) for k in range(4))
+        if self.rotary:  # the tool angle of every leg (its turn, or held)
+            motion += (np.concatenate([leg.angle_orders(g[0]) for g, leg in zip(grids, legs)], axis=1),)
         Ts = np.concatenate([np.full(len(g[0]), max(leg.duration, 1e-9)) for g, leg in zip(grids, legs)])
         try:
             parts = self.model.parts(tau, motion=motion)
@@ -554,13 +592,12 @@ class LineRobot:
     def _exact_check(self, leg: Leg) -> Decline | None:
         """The exact limit check of one leg on its real path (RMS aside); the leg's use from it."""
         from ..limits.check import check_limits
-        from ..pipelines.tracking import tracking_path
         from ..planner import motion_model
 
         T = leg.duration
-        path = leg.solved.move.path(T) if leg.solved is not None else tracking_path(leg.point, leg.velocity, T)
+        done = leg.solved.report if leg.solved is not None else None  # the duration search's own exact check
         try:
-            rep = check_limits(motion_model(path, self.profile), T, dwell=0.0)
+            rep = done if done is not None else check_limits(motion_model(_leg_path(leg), self.profile), T, dwell=0.0)
         except UnreachableError as exc:
             return Decline(f"robot {self.name}: the {leg.kind} move (t = {leg.t0:.4f} … {leg.t1:.4f} s) leaves the "
                            f"workspace: {exc}")
@@ -595,6 +632,33 @@ def _xyz(p) -> str:
     return ",".join(f"{c:.4f}" for c in p)
 
 
+def _leg_path(leg: Leg):
+    """The CartesianPath of a leg (its move's, with the turn; a track or release leg's straight line, its angle
+    held)."""
+    if leg.solved is not None:
+        return leg.solved.move.path(leg.duration)
+    from ..pipelines.tracking import tracking_path
+
+    path = tracking_path(leg.point, leg.velocity, leg.duration)
+    if leg.theta == 0.0:
+        return path
+    from dataclasses import replace
+
+    from ..curves.rotation import RotationLaw
+
+    return replace(path, angle=RotationLaw(leg.theta, 0.0))
+
+
+def _place_angles(place, n: int) -> list:
+    """The place angle of every target in turn [rad, line frame] (None: the part is placed as it lies)."""
+    a = place.angle
+    if a is None:
+        return [None] * n
+    if isinstance(a, (int, float)):
+        return [float(a)] * n
+    return [float(x) for x in a]
+
+
 def _targets(place, frame: Frame) -> list[tuple[np.ndarray, np.ndarray]]:
     """(point, arrival velocity) of every place target in turn [m, m/s, robot frame]."""
     if place.belt is not None:
@@ -607,57 +671,6 @@ def _targets(place, frame: Frame) -> list[tuple[np.ndarray, np.ndarray]]:
     else:
         pts = [np.asarray(p, float) for p in place.points]
     return [(frame.to_robot(p), np.zeros(3)) for p in pts]
-
-
-class UsePlan:
-    """How the columns' peaks (:meth:`~pickplace_cli.limits.motion.MotionModel.columns`) become the use of every limit
-    as the limit report gives it (``keys``: (joint, quantity) per row): peak/limit; the singularity measure
-    limit/minimum; a [min, max] range by the side nearer its bound, |x − mid| / half-range. Built once per robot."""
-
-    def __init__(self, meta: list) -> None:
-        self.meta = meta
-        keys, cols, limits, lower = [], [], [], []
-        ranges: dict = {}
-        for c, (joint, quantity, _unit, limit, _kind, sign) in enumerate(meta):
-            base, _, side = quantity.rpartition(" ")
-            if side in ("max", "min") and base.startswith(("position", "workcell")):
-                ranges.setdefault((joint, base), {})[side] = (c, float(limit))
-            else:
-                keys.append((joint, quantity))
-                cols.append(c)
-                limits.append(float(limit))
-                lower.append(sign < 0)
-        self.cols, self.limits, self.lower = np.array(cols, int), np.array(limits), np.array(lower, bool)
-        rmax, rmin, mid, half = [], [], [], []
-        for key, sides in ranges.items():
-            (cmax, hi), (cmin, lo) = sides["max"], sides["min"]
-            keys.append(key)
-            rmax.append(cmax)
-            rmin.append(cmin)
-            mid.append((lo + hi) / 2)
-            half.append((hi - lo) / 2)
-        self.rmax, self.rmin, self.mid, self.half = np.array(rmax, int), np.array(rmin, int), np.array(mid), np.array(half)
-        self.keys = keys
-
-    def __call__(self, peak: np.ndarray) -> np.ndarray:
-        """(L, C) column peaks (column sign convention) → (L, R) use per row."""
-        v = peak[:, self.cols]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            single = np.where(self.lower, np.where(-v > 0, self.limits / -v, np.inf), v / self.limits)
-        vmax, vmin = peak[:, self.rmax], -peak[:, self.rmin]
-        ranged = np.maximum((vmax - self.mid) / self.half, (self.mid - vmin) / self.half)
-        return np.concatenate([single, ranged], axis=1)
-
-
-def _leg_of(index, grids) -> int:
-    if index is None:
-        return 0
-    start = 0
-    for k, g in enumerate(grids):
-        start += len(g[0])
-        if index < start:
-            return k
-    return len(grids) - 1
 
 
 __all__ = ["LineRobot", "RobotState", "Leg", "Cycle", "Decline", "PickplaceError"]

@@ -12,6 +12,7 @@ Every position in the file is given as ``[along, across, height]`` in this frame
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Annotated, Any, Literal, Optional, Union
 
@@ -72,6 +73,30 @@ class OutgoingBelt(_Model):
 
     point: Xyz = Field(description="Place point [along, across, height] in m (line frame)")
     velocity: tuple[Num, Num] = Field(description="Outgoing belt velocity [along, across] in m/s (line frame)")
+    pitch: Optional[Num] = Field(default=None, gt=0, le=10, description="Pockets (cartons, slots) every this many m "
+                                 "along the outgoing belt: each part goes into the next pocket the robot can meet, "
+                                 "met by a rendezvous (default none: put down at point, whatever passes there)")
+    first: Num = Field(default=0.0, description="With pitch: the time in s (line clock) at which pocket 0 passes point")
+    reach: Optional[Num] = Field(default=None, gt=0, le=10, description="With pitch: how far in m upstream or "
+                                 "downstream of point along the outgoing belt a pocket may be met (default pitch / 2)")
+
+    @model_validator(mode="after")
+    def _pockets(self) -> "OutgoingBelt":
+        if self.pitch is not None and math.hypot(*self.velocity) <= 0.0:
+            raise ValueError("pitch: pockets on a belt that stands still are fixed points: give place.points instead")
+        if self.pitch is None and (self.reach is not None or self.first != 0.0):
+            raise ValueError("first and reach are for pockets: give pitch too")
+        return self
+
+
+class Exchange(_Model):
+    """A place that is exchanged (a full tray replaced, a tray indexed): every ``every`` places the robot cannot
+    place for ``time`` seconds."""
+
+    every: Optional[Int] = Field(default=None, ge=1, le=100000, description="Places between two exchanges "
+                                 "(default: the number of place targets, a full tray)")
+    time: Num = Field(gt=0, le=3600, description="Seconds from the release of the last part until the robot may "
+                                                 "place again (0 … 3600 s)")
 
 
 class Place(_Model):
@@ -81,12 +106,32 @@ class Place(_Model):
                                         description="Place points [along, across, height] in m, used in turn")
     tray: Optional[Tray] = Field(default=None, description="A tray pattern of place points")
     belt: Optional[OutgoingBelt] = Field(default=None, description="An outgoing belt")
+    angle: Union[Num, list[Num], None] = Field(
+        default=None, description="The angle [rad] about the vertical (line frame, counter-clockwise from the belt's "
+        "direction seen from above) at which a part must lie once placed: one for every target, or one per target "
+        "in turn (a tray's slots row by row); default none: a part is placed as it lies")
+    angle_tolerance: Num = Field(default=0.0, ge=0, le=math.pi, description="How far [rad] a part's angle may lie "
+                                 "from the place angle and still be placed unturned by a robot without a rotary "
+                                 "fourth axis (0 … pi rad; default 0 rad)")
+    exchange: Optional[Exchange] = Field(default=None, description="The tray's exchange: every N places, T seconds "
+                                         "during which the robot cannot place (default: none)")
 
     @model_validator(mode="after")
     def _one(self) -> "Place":
         given = [k for k in ("points", "tray", "belt") if getattr(self, k) is not None]
         if len(given) != 1:
             raise ValueError(f"give exactly one of points, tray, belt (got {', '.join(given) or 'none'})")
+        if self.exchange is not None and self.belt is not None:
+            raise ValueError("exchange: an outgoing belt is not exchanged; give exchange with points or a tray")
+        if isinstance(self.angle, list):
+            n = (len(self.points) if self.points is not None else
+                 self.tray.rows * self.tray.columns if self.tray is not None else 1)
+            if len(self.angle) != n:
+                raise ValueError(f"angle has {len(self.angle)} values for {n} place target{'s' if n > 1 else ''}: "
+                                 "give one angle [rad] for all, or one per target")
+        for x in self.angle if isinstance(self.angle, list) else [self.angle] if self.angle is not None else []:
+            if abs(x) > 100.0:
+                raise ValueError(f"angle = {x:g} rad: must lie within ±100 rad (SI units: radians, not degrees)")
         return self
 
 

@@ -40,6 +40,7 @@ class RobotSummary:
     rated: np.ndarray
     legs: int
     exact_legs: int
+    exchanges: int = 0
 
     @property
     def picks_per_minute(self) -> float:
@@ -71,7 +72,7 @@ class RobotSummary:
         return {
             "robot": self.name, "picks": self.picks, "picks_per_minute": self.picks_per_minute,
             "busy_s": self.busy, "idle_s": self.idle, "utilisation": self.utilisation, "span_s": self.span,
-            "legs": self.legs, "legs_checked_exactly": self.exact_legs,
+            "legs": self.legs, "legs_checked_exactly": self.exact_legs, "place_exchanges": self.exchanges,
             "rms_motor_torque_N_m": {j: float(r) for j, r in zip(self.joints, self.rms)},
             "rated_torque_N_m": {j: (float(x) if np.isfinite(x) else None) for j, x in zip(self.joints, self.rated)},
             "rms_use": {j: (float(u) if np.isfinite(u) else None) for j, u in zip(self.joints, self.rms_use)},
@@ -92,6 +93,10 @@ class LineSummary:
     t_last_detection: float
     robots: list = field(default_factory=list)
     warnings: list = field(default_factory=list)
+    #: the miss rate's and picks/min's confidence intervals (:mod:`~pickplace_cli.line.confidence`)
+    intervals: Any = None
+    #: --until: {"precision", "reached", "max_s"} (None without it)
+    until: Any = None
 
     @property
     def span(self) -> float:
@@ -131,6 +136,8 @@ class LineSummary:
             "picks_per_minute": self.picks_per_minute, "feed_s": self.feed,
             "t_begin_s": self.t_begin if math.isfinite(self.t_begin) else None,
             "t_end_s": self.t_end if math.isfinite(self.t_end) else None, "span_s": self.span,
+            "intervals": None if self.intervals is None else self.intervals.as_dict(),
+            **({} if self.until is None else {"until": dict(self.until)}),
             "exit_code": self.exit_code(), "violations": self.violations(), "warnings": list(self.warnings),
             "robots": [r.as_dict() for r in self.robots],
         }
@@ -166,6 +173,9 @@ def summarise(engine) -> LineSummary:
     out = LineSummary(parts, picked, parts - picked, engine.bad_rows, t_begin, t_end, t_last,
                       warnings=list(engine.warnings))
     span = max(t_end - t_begin, 0.0)
+    from .confidence import summary_intervals
+
+    out.intervals = summary_intervals(out, engine.results)
     for run in engine.runs:
         r = run.robot
         integral, busy = sequence_integral(run.legs, r.home_torque, t_begin, t_end)
@@ -177,5 +187,5 @@ def summarise(engine) -> LineSummary:
                     for k, v in peak.items()}
         out.robots.append(RobotSummary(r.name, run.picks, busy, span, out.parts_per_minute, parts, peak, r.joint_names,
                                        rms, r.rated,
-                                       len(run.legs), sum(1 for leg in run.legs if leg.exact)))
+                                       len(run.legs), sum(1 for leg in run.legs if leg.exact), len(r.exchanges)))
     return out

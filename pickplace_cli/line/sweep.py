@@ -26,7 +26,7 @@ from ..model.errors import PickplaceError, TaskError
 
 SWEEP_COLUMNS = ("strategy", "robots", "belt_speed[m/s]", "seed", "parts", "picked", "missed", "miss_rate[-]",
                  "picks_per_minute[1/min]", "utilisation_min[-]", "utilisation_mean[-]", "utilisation_max[-]",
-                 "rms_use_max[-]", "exit_code", "error")
+                 "rms_use_max[-]", "miss_rate_half[-]", "picks_per_minute_half[1/min]", "exit_code", "error")
 
 
 @dataclass(frozen=True)
@@ -116,6 +116,9 @@ def run_case(args: tuple) -> dict:
                picks_per_minute=s.picks_per_minute, utilisation=[r.utilisation for r in s.robots],
                rms_use_max=max(rms) if rms else math.nan, exit_code=s.exit_code(), error=None,
                simulated_s=s.span)
+    iv = s.intervals
+    if iv is not None and iv.miss is not None:  # the case's 95 % intervals by batch means (half-widths)
+        row.update(miss_rate_half=iv.miss.half, picks_per_minute_half=iv.picks_per_minute.half)
     row["seconds"] = time.perf_counter() - t0  # wall and CPU time of the case (the checkpoint keeps them; the table
     row["cpu_seconds"] = time.process_time() - c0  # does not: the same sweep gives the same bytes)
     return row
@@ -227,5 +230,24 @@ def write_sweep_csv(rows: list[dict], stream) -> None:
                  str(r.get("parts", 0)), str(r.get("picked", 0)), str(r.get("missed", 0)), _num(r.get("miss_rate")),
                  _num(r.get("picks_per_minute")), _num(min(util) if util else None),
                  _num(sum(util) / len(util) if util else None), _num(max(util) if util else None),
-                 _num(r.get("rms_use_max")), str(r.get("exit_code", 0)), _text(r.get("error"))]
+                 _num(r.get("rms_use_max")), _num(r.get("miss_rate_half")), _num(r.get("picks_per_minute_half")),
+                 str(r.get("exit_code", 0)), _text(r.get("error"))]
         stream.write(",".join(cells) + "\n")
+
+
+def seed_intervals(rows: list[dict]) -> list[tuple[str, int, float, "object", "object"]]:
+    """Per strategy, robot count and belt speed run with two seeds or more: (strategy, robots, speed, the miss
+    rate's and picks/min's intervals across the seeds: :func:`~pickplace_cli.line.confidence.across_seeds`)."""
+    from .confidence import across_seeds
+
+    groups: dict = {}
+    for r in rows:
+        if r.get("error") and r.get("exit_code") != 4:
+            continue
+        groups.setdefault((r["strategy"], r["robots"], r["belt_speed"]), []).append(r)
+    out = []
+    for (kind, n, v), group in groups.items():
+        miss = across_seeds([g.get("miss_rate") for g in group])
+        if miss is not None:
+            out.append((kind, n, v, miss, across_seeds([g.get("picks_per_minute") for g in group])))
+    return out

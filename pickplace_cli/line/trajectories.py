@@ -76,12 +76,16 @@ def robot_samples(run, t: np.ndarray) -> RobotSamples:
         T = leg.duration
         tau = np.clip((t[i0:i1] - leg.t0) / T, 0.0, 1.0)
         if leg.solved is not None:
-            motion = tuple(leg.solved.move.path(T).all_orders(tau))
+            path = leg.solved.move.path(T)
+            motion = tuple(path.all_orders(tau))
+            angle = path.angle_orders(tau)
+            if angle is not None:  # the tool's angle law, as the path carries it
+                motion += (angle,)
         else:
             d = leg.velocity * T
             p = leg.point + np.multiply.outer(tau, d)
             z = np.zeros_like(p)
-            motion = (p, np.broadcast_to(d, p.shape).copy(), z, z)
+            motion = (p, np.broadcast_to(d, p.shape).copy(), z, z, leg.angle_orders(tau))
         parts = model.parts(tau, derivatives=False, motion=motion, singularity=False)
         q[i0:i1], qd[i0:i1] = parts.q, parts.qd1 / T
         tq[i0:i1] = parts.A / T**2 + parts.G
@@ -94,7 +98,7 @@ def robot_samples(run, t: np.ndarray) -> RobotSamples:
     hold = _hold_state(r, r.home)
     ends = {}
     for leg in legs:
-        ends[leg.t1] = _hold_state(r, leg.end)
+        ends[leg.t1] = _hold_state(r, leg.end, leg.end_angle)
     k_leg = 0
     for i in np.flatnonzero(~filled):
         while k_leg < len(legs) and legs[k_leg].t1 <= t[i] + 1e-12:
@@ -107,10 +111,13 @@ def robot_samples(run, t: np.ndarray) -> RobotSamples:
                         tool, list(r.joint_names), list(model.robot.joint_units))
 
 
-def _hold_state(r, point) -> tuple:
-    """(q, joint torque, motor torque, tool in the line frame) of the robot at rest at ``point``."""
+def _hold_state(r, point, angle: float = 0.0) -> tuple:
+    """(q, joint torque, motor torque, tool in the line frame) of the robot at rest at ``point`` with the tool at
+    ``angle`` [rad]."""
     z = np.zeros((1, 3))
-    parts = r.model.parts(np.zeros(1), derivatives=False, motion=(np.asarray(point, float)[None], z, z, z),
+    theta = np.zeros((4, 1))
+    theta[0, 0] = angle
+    parts = r.model.parts(np.zeros(1), derivatives=False, motion=(np.asarray(point, float)[None], z, z, z, theta),
                           singularity=False)
     mt = parts.Gm[0] if r.model.has_drives else np.full(len(r.joint_names), np.nan)
     return parts.q[0], parts.G[0], mt, r.frame.to_line(point)
