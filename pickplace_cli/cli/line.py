@@ -10,7 +10,8 @@ from typing import Optional
 
 import typer
 
-from .app import _handle_errors, _usage, app, note_exit
+from ..model.text import quoted
+from .app import Panel, _handle_errors, _usage, app, note_exit
 
 
 @app.command("line")
@@ -20,55 +21,55 @@ def line_cmd(
     detections: Optional[str] = typer.Option(
         None, "--detections", "-d", metavar="FILE|-",
         help="Detections CSV (t[s], along[m], across[m], optional angle[rad], id) instead of the file's parts; '-' = "
-             "standard input, each detection answered as it is read."),
-    belt_speed: Optional[float] = typer.Option(None, "--belt-speed", help="Belt speed in m/s instead of the file's."),
-    robots: Optional[int] = typer.Option(None, "--robots", help="Use only the first N robots of the file."),
+             "standard input, each detection answered as it is read.", rich_help_panel=Panel.MOVE),
+    belt_speed: Optional[float] = typer.Option(None, "--belt-speed", help="Belt speed in m/s instead of the file's.", rich_help_panel=Panel.BELT),
+    robots: Optional[int] = typer.Option(None, "--robots", help="Use only the first N robots of the file.", rich_help_panel=Panel.MOVE),
     strategy: Optional[str] = typer.Option(
         None, "--strategy", help="Strategy instead of the file's: upstream_first, quota, bands or skip (its defaults "
-                                 "unless the file's is of that kind)."),
-    seed: Optional[int] = typer.Option(None, "--seed", help="Seed of the file's part generator."),
+                                 "unless the file's is of that kind).", rich_help_panel=Panel.METHOD),
+    seed: Optional[int] = typer.Option(None, "--seed", help="Seed of the file's part generator.", rich_help_panel=Panel.MOVE),
     output: str = typer.Option(
         "-", "--output", "-o",
         help="Per-part results: CSV (units in the header), or JSON lines with --json; '-' = stdout, row by row as the "
-             "parts are answered. A file is written atomically at the end. In a sweep: the sweep's CSV."),
+             "parts are answered. A file is written atomically at the end. In a sweep: the sweep's CSV.", rich_help_panel=Panel.OUTPUT),
     as_json: bool = typer.Option(False, "--json", help="Per-part results as JSON lines (robot, meeting, plan, or why "
-                                                       "missed), then one line with the run's summary."),
+                                                       "missed), then one line with the run's summary.", rich_help_panel=Panel.OUTPUT),
     robots_csv: Optional[str] = typer.Option(None, "--robots-csv", metavar="FILE",
-                                             help="Per-robot results CSV (picks/min, utilisation, idle, RMS, peak use)."),
+                                             help="Per-robot results CSV (picks/min, utilisation, idle, RMS, peak use).", rich_help_panel=Panel.OUTPUT),
     summary_file: Optional[str] = typer.Option(None, "--summary", metavar="FILE",
-                                               help="The run's summary (line and robots) as JSON."),
+                                               help="The run's summary (line and robots) as JSON.", rich_help_panel=Panel.OUTPUT),
     plot: Optional[str] = typer.Option(
         None, "--plot", metavar="FILE.png|svg",
         help="Figure: the parts along the belt against time and the robots' legs (a sweep: miss rate against belt "
-             "speed). Needs pickplace-cli[plot]."),
+             "speed). Needs pickplace-cli[plot].", rich_help_panel=Panel.STUDY),
     mcap: Optional[str] = typer.Option(None, "--mcap", metavar="FILE.mcap",
                                        help="Every robot's joint trajectory over the run (ROS 2 MCAP, topics "
-                                            "/ROBOT/joint_states, /ROBOT/motor_states, /ROBOT/tool_pose)."),
+                                            "/ROBOT/joint_states, /ROBOT/motor_states, /ROBOT/tool_pose).", rich_help_panel=Panel.OUTPUT),
     rate: Optional[float] = typer.Option(None, "--rate", help="Sample rate of --mcap in Hz. [default: the first robot's "
-                                                              "profile]"),
+                                                              "profile]", rich_help_panel=Panel.OUTPUT),
     max_miss_rate: Optional[float] = typer.Option(
-        None, "--max-miss-rate", help="Exit 4 when the share of missed parts exceeds this (0 … 1)."),
+        None, "--max-miss-rate", help="Exit 4 when the share of missed parts exceeds this (0 … 1).", rich_help_panel=Panel.LIMITS),
     until: Optional[float] = typer.Option(
-        None, "--until", metavar="PRECISION", rich_help_panel="Batch and performance",
+        None, "--until", metavar="PRECISION", rich_help_panel=Panel.BATCH,
         help="Run the file's generator until the miss rate's 95 % interval (batch means) is at most ± PRECISION wide "
              "(a share, e.g. 0.01 for ± 1 percentage point; 0.001 … 0.5) and 20 parts were missed, or until "
              "--until-max seconds of parts."),
     until_max: float = typer.Option(
-        3600.0, "--until-max", metavar="SECONDS", rich_help_panel="Batch and performance",
+        3600.0, "--until-max", metavar="SECONDS", rich_help_panel=Panel.BATCH,
         help="With --until: the longest feed in s of simulated time (1 … 1e5 s; at most 100,000 parts)."),
-    quiet: bool = typer.Option(False, "--quiet", "-q", help="No table or progress bar on stderr."),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="No table or progress bar on stderr.", rich_help_panel=Panel.OUTPUT),
     speeds: Optional[str] = typer.Option(
-        None, "--speeds", help="Sweep: belt speeds in m/s, a list 0.2,0.5 or a range START:STOP:STEP."),
+        None, "--speeds", help="Sweep: belt speeds in m/s, a list 0.2,0.5 or a range START:STOP:STEP.", rich_help_panel=Panel.STUDY),
     robot_counts: Optional[str] = typer.Option(None, "--robot-counts", help="Sweep: robot counts, e.g. 3,4 (the first "
-                                                                            "N robots of the file)."),
+                                                                            "N robots of the file).", rich_help_panel=Panel.STUDY),
     strategies: Optional[str] = typer.Option(None, "--strategies", help="Sweep: strategies, e.g. upstream_first,quota "
-                                                                        "or all."),
-    seeds: Optional[str] = typer.Option(None, "--seeds", help="Sweep: generator seeds, e.g. 1,2,3 or 1:10."),
+                                                                        "or all.", rich_help_panel=Panel.STUDY),
+    seeds: Optional[str] = typer.Option(None, "--seeds", help="Sweep: generator seeds, e.g. 1,2,3 or 1:10.", rich_help_panel=Panel.STUDY),
     workers: int = typer.Option(0, "--workers", "-j", help="Sweep: local worker processes (0 = all cores; 1 = in this "
-                                                          "process)."),
+                                                          "process).", rich_help_panel=Panel.BATCH),
     scheduler: Optional[str] = typer.Option(None, "--scheduler", metavar="tcp://HOST:PORT",
-                                            help="Sweep: run the cases on this Dask scheduler (pickplace-cli[dask])."),
-    resume: bool = typer.Option(False, "--resume", help="Sweep: continue from OUTPUT.partial.jsonl (needs -o FILE)."),
+                                            help="Sweep: run the cases on this Dask scheduler (pickplace-cli[dask]).", rich_help_panel=Panel.BATCH),
+    resume: bool = typer.Option(False, "--resume", help="Sweep: continue from OUTPUT.partial.jsonl (needs -o FILE).", rich_help_panel=Panel.BATCH),
 ) -> None:
     """Run a line of robots along one belt: each part is offered to the robots in the strategy's order and taken
     by the first that can meet it in its window (a real plan: rendezvous, tracking, place, every limit checked);
@@ -83,7 +84,7 @@ def line_cmd(
 
     sweep = any(x is not None for x in (speeds, robot_counts, strategies, seeds))
     if seed is not None and not 0 <= seed <= MAX_SEED:
-        raise TaskError(f"seed = {_short(str(seed))}: a seed is a whole number from 0 to 2^64 − 1")
+        raise TaskError(f"seed = {quoted(str(seed))}: a seed is a whole number from 0 to 2^64 − 1")
     if max_miss_rate is not None and not (0.0 <= max_miss_rate <= 1.0):
         raise TaskError(f"max-miss-rate = {max_miss_rate!r}: must be a share between 0 and 1")
     if rate is not None and not (rate > 0 and rate <= 1e5):
@@ -360,27 +361,6 @@ def _after(engine, summary, line, robots_csv, summary_file, plot, plot_kind, mca
 # ------------------------------------------------------------------------------------------------------ sweeps
 
 
-def _cap_workers(workers: int) -> int:
-    """``-j N`` capped at the cores this process may use (more processes only share them), with a one-line note;
-    0 stays 0 (all cores)."""
-    import os
-
-    try:
-        cores = len(os.sched_getaffinity(0))
-    except (AttributeError, OSError):
-        cores = os.cpu_count() or 1
-    if workers > cores:
-        sys.stderr.write(f"pickplace: note: -j {workers}: {cores} core{'s' if cores > 1 else ''} available; running "
-                         f"{cores} worker process{'es' if cores > 1 else ''}\n")
-        return cores
-    return workers
-
-
-def _short(text: str, most: int = 60) -> str:
-    """``text`` quoted, cut to ``most`` characters (a value pasted by mistake stays one short line)."""
-    return repr(text) if len(text) <= most else repr(text[:most]) + f" … ({len(text)} characters)"
-
-
 def _numbers(name: str, text: str, integer: bool = False) -> list:
     """A list ``a,b,c`` or a range ``start:stop:step`` (stop included when on the grid); whole numbers exactly when
     ``integer``."""
@@ -404,7 +384,7 @@ def _numbers(name: str, text: str, integer: bool = False) -> list:
                 raise ValueError
             n = int(math.floor((parts[1] - parts[0]) / parts[2] + 1e-9)) + 1
             if n > 10000:
-                raise TaskError(f"{name} = {_short(text)}: {n} values; at most 10000")
+                raise TaskError(f"{name} = {quoted(text)}: {n} values; at most 10000")
             values = [parts[0] + k * parts[2] if integer and all(isinstance(p, int) for p in parts)
                       else round(parts[0] + k * parts[2], 12) for k in range(n)]
         else:
@@ -412,10 +392,10 @@ def _numbers(name: str, text: str, integer: bool = False) -> list:
         if not values or not all(math.isfinite(v) for v in values):
             raise ValueError
     except (ValueError, OverflowError):
-        raise TaskError(f"{name} = {_short(text)}: give numbers separated by commas, or START:STOP:STEP") from None
+        raise TaskError(f"{name} = {quoted(text)}: give numbers separated by commas, or START:STOP:STEP") from None
     if integer:
         if not all(v == int(v) for v in values):
-            raise TaskError(f"{name} = {_short(text)}: give whole numbers")
+            raise TaskError(f"{name} = {quoted(text)}: give whole numbers")
         values = [int(v) for v in values]
     return list(dict.fromkeys(values))
 
@@ -433,7 +413,7 @@ def _sweep(line_file, detections, belt_speed, robots, strategy, seed, speeds, ro
     base = load_line(line_file)
     v = _numbers("speeds", speeds) if speeds else [belt_speed if belt_speed is not None else base.belt.speed]
     if not all(MIN_BELT_SPEED <= x <= MAX_BELT_SPEED for x in v):
-        raise TaskError(f"speeds = {_short(speeds or '')}: every belt speed must be at least {MIN_BELT_SPEED:g} and at "
+        raise TaskError(f"speeds = {quoted(speeds or '')}: every belt speed must be at least {MIN_BELT_SPEED:g} and at "
                         f"most {MAX_BELT_SPEED:g} m/s")
     n = _numbers("robot-counts", robot_counts, True) if robot_counts else [robots or len(base.robots)]
     if not all(1 <= x <= len(base.robots) for x in n):
@@ -442,7 +422,7 @@ def _sweep(line_file, detections, belt_speed, robots, strategy, seed, speeds, ro
     k = _strategy_names(strategies) if strategies else [strategy or base.strategy.kind]
     s = _numbers("seeds", seeds, True) if seeds else [seed]
     if seeds and any(not 0 <= x <= MAX_SEED for x in s):
-        raise TaskError(f"seeds = {_short(seeds)}: seeds are whole numbers from 0 to 2^64 − 1")
+        raise TaskError(f"seeds = {quoted(seeds)}: seeds are whole numbers from 0 to 2^64 − 1")
     if workers < 0:
         raise TaskError(f"workers = {workers}: must be 0 (all cores) or a positive number")
     if resume and output == "-":
@@ -471,7 +451,9 @@ def _sweep(line_file, detections, belt_speed, robots, strategy, seed, speeds, ro
     ckpt = checkpoint_path(output) if output != "-" else None
     tag = digest(base, axes)
     if not scheduler:
-        workers = _cap_workers(workers)
+        from .guards import cap_workers
+
+        workers = cap_workers(workers)
     from ..lookup.checkpoint import checkpoint_lock
 
     with checkpoint_lock(ckpt, "line sweep"), contextlib.ExitStack() as stack:  # one sweep owns the checkpoint

@@ -32,7 +32,7 @@ def _commands():
 
 COMMANDS = _commands()
 #: commands whose options are given their panels where they are defined by another change (the line command)
-PENDING = {"line"}
+PENDING: set = set()
 
 
 def test_the_app_has_its_commands():
