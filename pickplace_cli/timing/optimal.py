@@ -290,6 +290,10 @@ def _problem(model, tau: np.ndarray, knots: np.ndarray, t_fit: float, dwell: flo
     n_lin = len(rows["lin_g"])
     n_rows = n_lin + len(rows["quad_g"])
     rated = [(i, s.drive.rated_torque) for i, s in enumerate(model.specs) if s.drive and s.drive.rated_torque]
+    ri = [i for i, _ in rated]
+    A_r, m_r, G_r = pr.Am[:, ri], m[:, ri], pr.Gm[:, ri]
+    hold_r = dwell * (pr.Gm[0, ri] ** 2 + pr.Gm[-1, ri] ** 2)
+    r2_r = np.array([r for _, r in rated], float) ** 2
 
     def state(x):
         return B0s @ x, B1s @ x, B2s @ x
@@ -301,21 +305,19 @@ def _problem(model, tau: np.ndarray, knots: np.ndarray, t_fit: float, dwell: flo
     def rms_rows(b, b1):
         """RMS over the duty cycle, one row per rated joint: (2∫τ²/√b dτ + dwell·(G0² + G1²)) / (2T + 2·dwell)
         ≤ rated²: (values, Jacobian)."""
+        if not rated:
+            return np.zeros(0), np.zeros((0, B0.shape[1]))
         ib = b**-0.5
         Tn = w @ ib
         dT = (w * -0.5 * ib**3) @ B0s
-        vals, jacs = [], []
-        for i, r in rated:
-            tq = pr.Am[:, i] * b + m[:, i] / 2 * b1 + pr.Gm[:, i]
-            I = w @ (tq**2 * ib)
-            dI = (w * (2 * tq * ib * pr.Am[:, i] - 0.5 * tq**2 * ib**3)) @ B0s + (w * tq * ib * m[:, i]) @ B1s
-            hold = dwell * (pr.Gm[0, i] ** 2 + pr.Gm[-1, i] ** 2)
-            den = 2 * Tn + 2 * dwell
-            ms = (2 * I + hold) / den
-            dms = (2 * dI * den - (2 * I + hold) * 2 * dT) / den**2
-            vals.append(1.0 - ms / r**2)
-            jacs.append(-dms / r**2)
-        return np.array(vals), np.array(jacs).reshape(len(vals), B0.shape[1])  # (0, n) with no rated joint
+        tq = A_r * b[:, None] + m_r / 2 * b1[:, None] + G_r  # (N, k): every rated joint at once
+        wt = (w * ib)[:, None] * tq
+        I = np.einsum("nk,nk->k", wt, tq)
+        dI = (2 * wt * A_r - 0.5 * (w * ib**3)[:, None] * tq**2).T @ B0s + (wt * m_r).T @ B1s
+        den = 2 * Tn + 2 * dwell
+        ms = (2 * I + hold_r) / den
+        dms = (2 * dI * den - (2 * I + hold_r)[:, None] * 2 * dT) / den**2
+        return 1.0 - ms / r2_r, -dms / r2_r[:, None]
 
     def subset(keep=None):
         """x ↦ (values ≥ 0 when feasible, Jacobian) of the grid rows ``keep`` (all: None) and the RMS rows."""
