@@ -1,0 +1,139 @@
+"""An independent reference for ``--time optimal``: the same minimum-time problem written as a direct
+transcription on a dense grid and solved by IPOPT (CasADi), from several starts.
+
+The law b(τ) = τ̇² is a C² piecewise cubic with a knot at every node of a uniform grid of ``n`` intervals:
+the variables are b, b′, b″ at every node and the constant b‴ of every interval, chained exactly
+(b_{k+1} = b_k + h·b′_k + h²/2·b″_k + h³/6·b‴_k, …). With ``n`` a multiple of 17 this space holds every law
+of the plan's 20 uniform knots (and is far richer). Every limit of the plan's problem is a constraint at
+``SUB`` points of every interval (b, b′, b″ there from the interval's cubic) and the last node, written here from the motion model's terms at T = 1 s (``MotionModel.parts``) — not from the plan's row
+code:
+
+    joint velocity  b·q′² ≤ v²                 motor speed   b·(N q′)² ≤ ω²
+    joint accel.    |q″b + q′b′/2| ≤ a          motor torque  |A_m b + m b′/2 + G_m| ≤ τ_max
+    joint jerk      b·(q‴b + 3/2 q″b′ + q′b″/2)² ≤ j²
+    torque rate     b·(A_m′b + (A_m + m′/2)b′ + m b″/2 + G_m′)² ≤ τ̇²
+    RMS             (2∫τ²/√b dτ + dwell·(G_0² + G_1²)) / (2T + 2·dwell) ≤ rated²
+
+(m: the motor torque of accelerating along p′ from rest, m′ its τ-derivative by central differences.) The
+duration T = ∫dτ/√b and the RMS integral are Simpson's rule on the nodes (``n`` even).
+b is held to the plan's range [1e-2, 1e2] × the uniform law's 1/T_fit² (the plan bounds its coefficients so;
+values in that range are a superset).
+
+The constraints hold at the nodes only, so the reference may sit slightly *below* the true optimum of its
+class (by its discretisation error, which a finer ``n`` shrinks); a plan's law is exact-checked continuously.
+IPOPT is a local solver: :func:`reference_duration` solves from the uniform law, from the plan's own law when
+given, and from the uniform law at a few faster scales, and keeps the shortest feasible answer.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: the law's range relative to the uniform law (the plan's coefficient bounds)
+B_RANGE = (1e-2, 1e2)
+#: points per interval at which every limit is held (the law may bend between its nodes)
+SUB = 4
+
+
+def model_terms(model, tau: np.ndarray) -> dict:
+    """The motion model's terms at ``tau`` (T = 1 s): the joints' q′, q″, q‴, the motor torque's inertial part
+    A_m, gravity part G_m and their τ-derivatives, and m, m′ (the torque of p′ at rest, m′ by differences)."""
+    path = model.path
+    pr = model.parts(tau)
+
+    def inertia(t):
+        p, p1 = path.all_orders(t)[:2]
+        z = np.zeros_like(p)
+        motion = (p, z, p1, z)
+        angle = path.angle_orders(t)
+        if angle is not None:
+            motion += (np.stack([angle[0], np.zeros(len(t)), angle[1], np.zeros(len(t))]),)
+        return model.parts(t, derivatives=False, motion=motion, singularity=False).Am
+
+    h = 1e-5
+    lo, hi = np.clip(tau - h, 0, 1), np.clip(tau + h, 0, 1)
+    return {"q1": pr.qd1, "q2": pr.qdd1, "q3": pr.qddd1, "A": pr.Am, "G": pr.Gm, "dA": pr.dAm, "dG": pr.dGm,
+            "m": inertia(tau), "dm": (inertia(hi) - inertia(lo)) / (hi - lo)[:, None]}
+
+
+def _solve(model, dwell: float, t_fit: float, n: int, start_b: np.ndarray) -> tuple[float, np.ndarray] | None:
+    import casadi as ca
+
+    tau = np.linspace(0.0, 1.0, n + 1)
+    h = 1.0 / n
+    theta = np.arange(SUB) / SUB  # the limits' points: SUB per interval, and the last node
+    pts = np.concatenate([(tau[:-1, None] + h * theta[None, :]).T.ravel(), [1.0]])
+    c = model_terms(model, pts)
+    s = 1.0 / t_fit**2  # the variables are b relative to the uniform law (x = b·T_fit²)
+    opti = ca.Opti()
+    x, d, e = opti.variable(n + 1), opti.variable(n + 1), opti.variable(n + 1)  # b, b′, b″ (relative)
+    j = opti.variable(n)  # b‴ per interval
+    opti.subject_to(x[1:] == x[:-1] + h * d[:-1] + h**2 / 2 * e[:-1] + h**3 / 6 * j)
+    opti.subject_to(d[1:] == d[:-1] + h * e[:-1] + h**2 / 2 * j)
+    opti.subject_to(e[1:] == e[:-1] + h * j)
+    opti.subject_to(opti.bounded(B_RANGE[0], x, B_RANGE[1]))
+    sub = [(x[:-1] + th * h * d[:-1] + (th * h) ** 2 / 2 * e[:-1] + (th * h) ** 3 / 6 * j,
+            d[:-1] + th * h * e[:-1] + (th * h) ** 2 / 2 * j, e[:-1] + th * h * j) for th in theta]
+    b, b1, b2 = (s * ca.vertcat(*[v[k] for v in sub], end) for k, end in enumerate((x[-1], d[-1], e[-1])))
+    opti.subject_to(b >= B_RANGE[0] * s)  # between the nodes too (the nodes' own bounds are the variables')
+    node = np.concatenate([np.arange(n), [n * SUB]])  # the nodes among the points (θ = 0 first)
+    inv = (s * x) ** -0.5
+    simpson = np.ones(n + 1)  # composite Simpson weights on the nodes (n even)
+    simpson[1:-1:2], simpson[2:-1:2] = 4.0, 2.0
+    simpson *= h / 3
+    T = ca.dot(simpson, inv)
+    for i, spec in enumerate(model.specs):
+        lim, drv = spec.limits, spec.drive
+        q1, q2, q3 = c["q1"][:, i], c["q2"][:, i], c["q3"][:, i]
+        if lim.velocity is not None:
+            opti.subject_to(b * q1**2 <= lim.velocity**2)
+        if lim.acceleration is not None:
+            opti.subject_to(opti.bounded(-lim.acceleration, q2 * b + q1 / 2 * b1, lim.acceleration))
+        if lim.jerk is not None:
+            opti.subject_to(b * (q3 * b + 1.5 * q2 * b1 + q1 / 2 * b2) ** 2 <= lim.jerk**2)
+        if drv is None:
+            continue
+        A, G, m = c["A"][:, i], c["G"][:, i], c["m"][:, i]
+        torque = A * b + m / 2 * b1 + G
+        if drv.max_speed is not None:
+            opti.subject_to(b * (drv.gear_ratio * q1) ** 2 <= drv.max_speed**2)
+        if drv.peak_torque is not None:
+            opti.subject_to(opti.bounded(-drv.peak_torque, torque, drv.peak_torque))
+        if drv.torque_rate is not None:
+            rate = c["dA"][:, i] * b + (A + c["dm"][:, i] / 2) * b1 + m / 2 * b2 + c["dG"][:, i]
+            opti.subject_to(b * rate**2 <= drv.torque_rate**2)
+        if drv.rated_torque:
+            hold = dwell * (G[0] ** 2 + G[-1] ** 2)
+            tn = A[node] * s * x + m[node] / 2 * s * d + G[node]  # the torque at the nodes
+            integral = ca.dot(simpson, tn**2 * inv)
+            opti.subject_to(2 * integral + hold <= drv.rated_torque**2 * (2 * T + 2 * dwell))
+    opti.minimize(T / t_fit)
+    xs = np.clip(np.asarray(start_b, float) * t_fit**2, *B_RANGE)
+    opti.set_initial(x, xs)
+    grad = np.gradient(xs, tau)
+    opti.set_initial(d, grad)
+    opti.set_initial(e, np.gradient(grad, tau))
+    opti.solver("ipopt", {"print_time": False, "detect_simple_bounds": True}, {"print_level": 0, "max_iter": 3000, "tol": 1e-10,
+                                                 "constr_viol_tol": 1e-9, "sb": "yes"})
+    try:
+        sol = opti.solve()
+    except RuntimeError:
+        return None
+    bv, dv = (s * np.asarray(sol.value(v)).ravel() for v in (x, d))
+    return float(sol.value(T)), bv, dv
+
+
+def reference_duration(model, dwell: float, t_fit: float, n: int = 408, law=None,
+                       scales: tuple = (1.0, 1.1, 1.25)) -> float:
+    """The shortest duration [s] IPOPT finds from each start (the uniform law at T_fit/scale for each of
+    ``scales``, and ``law`` — a callable b(τ) such as the plan's — when given); inf when none converges."""
+    tau = np.linspace(0.0, 1.0, n + 1)
+    starts = [np.full(n + 1, scale**2 / t_fit**2) for scale in scales]
+    if law is not None:
+        starts.append(np.asarray(law(tau), float))
+    best = np.inf
+    for b0 in starts:
+        got = _solve(model, dwell, t_fit, n, b0)
+        if got is not None:
+            best = min(best, got[0])
+    return best
