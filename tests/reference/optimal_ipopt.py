@@ -33,6 +33,8 @@ import numpy as np
 B_RANGE = (1e-2, 1e2)
 #: points per interval at which every limit is held (the law may bend between its nodes)
 SUB = 4
+#: the law's intervals
+N = 160
 
 
 def model_terms(model, tau: np.ndarray) -> dict:
@@ -56,13 +58,19 @@ def model_terms(model, tau: np.ndarray) -> dict:
             "m": inertia(tau), "dm": (inertia(hi) - inertia(lo)) / (hi - lo)[:, None]}
 
 
-def _solve(model, dwell: float, t_fit: float, n: int, start_b: np.ndarray) -> tuple[float, np.ndarray] | None:
+def nodes(n: int) -> np.ndarray:
+    """The law's n + 1 nodes: cosine-spaced (the law varies fastest near the path's ends, where p′ → 0)."""
+    return 0.5 * (1.0 - np.cos(np.pi * np.arange(n + 1) / n))
+
+
+def _solve(model, dwell: float, t_fit: float, n: int, start_b: np.ndarray):
+    """IPOPT from ``start_b`` (b at :func:`nodes`) → (T [s], b, b′ at the nodes) or None when it fails."""
     import casadi as ca
 
-    tau = np.linspace(0.0, 1.0, n + 1)
-    h = 1.0 / n
-    theta = np.arange(SUB) / SUB  # the limits' points: SUB per interval, and the last node
-    pts = np.concatenate([(tau[:-1, None] + h * theta[None, :]).T.ravel(), [1.0]])
+    tau = nodes(n)
+    h = np.diff(tau)
+    theta = np.arange(SUB) / SUB  # the limits' points: SUB per interval (θ-major) and the last node
+    pts = np.concatenate([(tau[None, :-1] + theta[:, None] * h[None, :]).ravel(), [1.0]])
     c = model_terms(model, pts)
     s = 1.0 / t_fit**2  # the variables are b relative to the uniform law (x = b·T_fit²)
     opti = ca.Opti()
@@ -71,50 +79,63 @@ def _solve(model, dwell: float, t_fit: float, n: int, start_b: np.ndarray) -> tu
     opti.subject_to(x[1:] == x[:-1] + h * d[:-1] + h**2 / 2 * e[:-1] + h**3 / 6 * j)
     opti.subject_to(d[1:] == d[:-1] + h * e[:-1] + h**2 / 2 * j)
     opti.subject_to(e[1:] == e[:-1] + h * j)
+    xs, ds, es = [x[:-1]], [d[:-1]], [e[:-1]]
+    for th in theta[1:]:  # b inside the intervals: variables (bounded like the nodes), tied to the cubic
+        y = opti.variable(n)
+        g = th * h
+        opti.subject_to(y == x[:-1] + g * d[:-1] + g**2 / 2 * e[:-1] + g**3 / 6 * j)
+        opti.subject_to(opti.bounded(B_RANGE[0], y, B_RANGE[1]))
+        xs.append(y)
+        ds.append(d[:-1] + g * e[:-1] + g**2 / 2 * j)
+        es.append(e[:-1] + g * j)
     opti.subject_to(opti.bounded(B_RANGE[0], x, B_RANGE[1]))
-    sub = [(x[:-1] + th * h * d[:-1] + (th * h) ** 2 / 2 * e[:-1] + (th * h) ** 3 / 6 * j,
-            d[:-1] + th * h * e[:-1] + (th * h) ** 2 / 2 * j, e[:-1] + th * h * j) for th in theta]
-    b, b1, b2 = (s * ca.vertcat(*[v[k] for v in sub], end) for k, end in enumerate((x[-1], d[-1], e[-1])))
-    opti.subject_to(b >= B_RANGE[0] * s)  # between the nodes too (the nodes' own bounds are the variables')
-    node = np.concatenate([np.arange(n), [n * SUB]])  # the nodes among the points (θ = 0 first)
-    inv = (s * x) ** -0.5
-    simpson = np.ones(n + 1)  # composite Simpson weights on the nodes (n even)
-    simpson[1:-1:2], simpson[2:-1:2] = 4.0, 2.0
-    simpson *= h / 3
-    T = ca.dot(simpson, inv)
+    b, b1, b2 = (s * ca.vertcat(*parts, end[-1]) for parts, end in ((xs, x), (ds, d), (es, e)))
+    # Simpson on every interval: its two nodes and its midpoint (θ = 1/2, a point of the limits)
+    mid = SUB // 2
+    wq = np.zeros(len(pts))
+    wq[:n] += h / 6
+    wq[n * mid: n * (mid + 1)] += 4 * h / 6
+    wq[1:n] += h[:-1] / 6
+    wq[-1] += h[-1] / 6
+    inv = b ** -0.5
+    T = ca.dot(wq, inv)
+    def hold(constraint):  # a row that does not depend on the law (a joint the path does not move) is left out
+        if not ca.MX(constraint).is_constant():
+            opti.subject_to(constraint)
+
     for i, spec in enumerate(model.specs):
         lim, drv = spec.limits, spec.drive
         q1, q2, q3 = c["q1"][:, i], c["q2"][:, i], c["q3"][:, i]
         if lim.velocity is not None:
-            opti.subject_to(b * q1**2 <= lim.velocity**2)
+            hold(b * q1**2 <= lim.velocity**2)
         if lim.acceleration is not None:
-            opti.subject_to(opti.bounded(-lim.acceleration, q2 * b + q1 / 2 * b1, lim.acceleration))
+            hold(opti.bounded(-lim.acceleration, q2 * b + q1 / 2 * b1, lim.acceleration))
         if lim.jerk is not None:
-            opti.subject_to(b * (q3 * b + 1.5 * q2 * b1 + q1 / 2 * b2) ** 2 <= lim.jerk**2)
+            hold(b * (q3 * b + 1.5 * q2 * b1 + q1 / 2 * b2) ** 2 <= lim.jerk**2)
         if drv is None:
             continue
         A, G, m = c["A"][:, i], c["G"][:, i], c["m"][:, i]
         torque = A * b + m / 2 * b1 + G
         if drv.max_speed is not None:
-            opti.subject_to(b * (drv.gear_ratio * q1) ** 2 <= drv.max_speed**2)
+            hold(b * (drv.gear_ratio * q1) ** 2 <= drv.max_speed**2)
         if drv.peak_torque is not None:
-            opti.subject_to(opti.bounded(-drv.peak_torque, torque, drv.peak_torque))
+            hold(opti.bounded(-drv.peak_torque, torque, drv.peak_torque))
         if drv.torque_rate is not None:
             rate = c["dA"][:, i] * b + (A + c["dm"][:, i] / 2) * b1 + m / 2 * b2 + c["dG"][:, i]
-            opti.subject_to(b * rate**2 <= drv.torque_rate**2)
+            hold(b * rate**2 <= drv.torque_rate**2)
         if drv.rated_torque:
-            hold = dwell * (G[0] ** 2 + G[-1] ** 2)
-            tn = A[node] * s * x + m[node] / 2 * s * d + G[node]  # the torque at the nodes
-            integral = ca.dot(simpson, tn**2 * inv)
-            opti.subject_to(2 * integral + hold <= drv.rated_torque**2 * (2 * T + 2 * dwell))
+            holding = dwell * (G[0] ** 2 + G[-1] ** 2)
+            integral = ca.dot(wq, torque**2 * inv)
+            hold(2 * integral + holding <= drv.rated_torque**2 * (2 * T + 2 * dwell))
     opti.minimize(T / t_fit)
-    xs = np.clip(np.asarray(start_b, float) * t_fit**2, *B_RANGE)
-    opti.set_initial(x, xs)
-    grad = np.gradient(xs, tau)
-    opti.set_initial(d, grad)
-    opti.set_initial(e, np.gradient(grad, tau))
-    opti.solver("ipopt", {"print_time": False, "detect_simple_bounds": True}, {"print_level": 0, "max_iter": 3000, "tol": 1e-10,
-                                                 "constr_viol_tol": 1e-9, "sb": "yes"})
+    x0 = np.clip(np.asarray(start_b, float) * t_fit**2, *B_RANGE)
+    d0 = np.gradient(x0, tau)
+    e0 = np.gradient(d0, tau)
+    opti.set_initial(x, x0)
+    opti.set_initial(d, d0)
+    opti.set_initial(e, e0)
+    opti.solver("ipopt", {"print_time": False, "detect_simple_bounds": True},
+                {"print_level": 0, "max_iter": 3000, "tol": 1e-10, "constr_viol_tol": 1e-9, "sb": "yes"})
     try:
         sol = opti.solve()
     except RuntimeError:
@@ -123,11 +144,19 @@ def _solve(model, dwell: float, t_fit: float, n: int, start_b: np.ndarray) -> tu
     return float(sol.value(T)), bv, dv
 
 
-def reference_duration(model, dwell: float, t_fit: float, n: int = 408, law=None,
+def reference_law(tau: np.ndarray, b: np.ndarray, b1: np.ndarray):
+    """The reference's law as a scipy BSpline: the C² cubic through b with end slopes b′ (the transcription's own
+    piecewise cubic, knots at the nodes), for :func:`~pickplace_cli.timing.optimal.compose`."""
+    from scipy.interpolate import make_interp_spline
+
+    return make_interp_spline(tau, b, k=3, bc_type=([(1, b1[0])], [(1, b1[-1])]))
+
+
+def reference_duration(model, dwell: float, t_fit: float, n: int = N, law=None,
                        scales: tuple = (1.0, 1.1, 1.25)) -> float:
     """The shortest duration [s] IPOPT finds from each start (the uniform law at T_fit/scale for each of
     ``scales``, and ``law`` — a callable b(τ) such as the plan's — when given); inf when none converges."""
-    tau = np.linspace(0.0, 1.0, n + 1)
+    tau = nodes(n)
     starts = [np.full(n + 1, scale**2 / t_fit**2) for scale in scales]
     if law is not None:
         starts.append(np.asarray(law(tau), float))
