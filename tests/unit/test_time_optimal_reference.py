@@ -59,3 +59,27 @@ def test_adept_optimal_law_holds_the_exact_check(adept):
     assert opt.report.ok
     assert check_limits(model, T, dwell=prof.planning.dwell).ok
     assert not check_limits(model, 0.98 * T, dwell=prof.planning.dwell).ok
+
+
+def test_grid_data_taken_by_index_equals_a_fresh_evaluation(adept):
+    """The law's rows are built from the model evaluated once on a union of grids (``_GridData``) and taken by
+    index; a grid with points not yet held is evaluated and merged. Both equal the model evaluated on that grid
+    alone (``model.parts`` and the reference's own inertia terms), to rounding."""
+    import numpy as np
+
+    from pickplace_cli.timing.optimal import _GridData
+    from tests.reference.optimal_ipopt import model_terms
+
+    prof, fit, _, _ = adept
+    model = motion_model(fit.cartesian.path, prof)
+    data = _GridData(model, np.linspace(0.0, 1.0, 201))
+    held = set(data.tau.tolist())
+    for tau in (np.linspace(0.0, 1.0, 51), np.unique(np.r_[np.linspace(0.0, 1.0, 21), 0.123456, 0.987654])):
+        got = data.take(tau)
+        ref = model_terms(model, tau)
+        for mine, theirs in (("qd1", "q1"), ("qdd1", "q2"), ("qddd1", "q3"), ("Am", "A"), ("Gm", "G"),
+                             ("dAm", "dA"), ("dGm", "dG"), ("m", "m"), ("dm", "dm")):
+            np.testing.assert_allclose(getattr(got, mine), ref[theirs], rtol=1e-12, atol=1e-12 * np.abs(ref[theirs]).max())
+        held |= set(tau.tolist())
+        assert len(data.tau) == len(held)  # the new points merged (once), the rest taken
+    assert 0.123456 in held and np.all(np.diff(data.tau) > 0)
