@@ -2,14 +2,16 @@
 duration against an independent reference solve (IPOPT on a dense direct transcription,
 ``tests/reference/optimal_ipopt.py``).
 
-    python bench/bench_optimal_online.py --moves 30            # the users' spec: 30 random moves per profile
+    python bench/bench_optimal_online.py --moves 30            # the users' spec: 30 random moves per profile (hours:
+                                                               # ~40 s of IPOPT per move on a loaded machine)
     python bench/bench_optimal_online.py --moves 5 --no-shape  # a quicker look
 
 For each profile (delta-su2018, delta-4axis, scara-600, gantry with the drives of
 ``tests/property/test_limit_truth.py``; the default method, bspline) and for the Adept cycle: the cold
 in-process time of ``plan`` with the default duration and with ``time="optimal"`` (each a fresh call on the
 same move, one after the other; CPU time by ``time.process_time`` with BLAS held to one thread, and wall time),
-``--optimize shape --time optimal`` (unless ``--no-shape``), and the reference duration T_ref. Printed per move:
+``--optimize shape --time optimal`` (unless ``--no-shape``), and the reference duration T_ref (IPOPT from the uniform
+law and from the plan's own law, the shorter kept). Printed per move:
 T_opt/T_ref − 1 (the gap: the plan's exact-checked duration above the reference's point-wise optimum; the
 reference holds its limits at 4 points per interval of 160 cosine-spaced intervals only, so it can sit a little
 below the true optimum of smooth laws: a small positive gap is its discretisation error, a larger one the
@@ -72,7 +74,7 @@ def one(name: str, prof, task: Task, shape: bool) -> dict | None:
         from pickplace_cli.timing.optimal import optimal_law
 
         law = optimal_law(model, prof.planning.dwell, fit.duration.seconds).law
-    t_ref = reference_duration(model, prof.planning.dwell, fit.duration.seconds, law=law)
+    t_ref = reference_duration(model, prof.planning.dwell, fit.duration.seconds, law=law, scales=(1.0,))
     row.update(t_fit=fit.duration.seconds, t_ref=t_ref, gap=opt.duration.seconds / t_ref - 1.0)
     return row
 
