@@ -13,7 +13,7 @@ same move, one after the other; CPU time by ``time.process_time`` with BLAS held
 ``--optimize shape --time optimal`` (unless ``--no-shape``), and the reference duration T_ref (IPOPT from the uniform
 law and from the plan's own law, the shorter kept). Printed per move:
 T_opt/T_ref − 1 (the gap: the plan's exact-checked duration above the reference's point-wise optimum; the
-reference holds its limits at 4 points per interval of 160 cosine-spaced intervals only, so it can sit a little
+reference holds its limits at 4 points per interval of 160 cosine-spaced intervals and the path's knots only, so it can sit a little
 below the true optimum of smooth laws: a small positive gap is its discretisation error, a larger one the
 plan's own). Medians per profile and the worst gap. Results go to ``bench/results/optimal_online.json``.
 Needs ``casadi`` (the ``bench`` extra).
