@@ -19,11 +19,12 @@ duration T = ∫dτ/√b and the RMS integral are Simpson's rule on every interv
 b is held to the plan's range [1e-2, 1e2] × the uniform law's 1/T_fit² (the plan bounds its coefficients so;
 values in that range are a superset).
 
-The constraints hold at the nodes only, so the reference may sit slightly *below* the true optimum of its
+The constraints hold at those points only, so the reference may sit slightly *below* the true optimum of its
 class (by its discretisation error, which a finer ``n`` shrinks); a plan's law is exact-checked continuously.
 IPOPT is a local solver: :func:`reference_duration` solves from the uniform law (at a few faster scales too) and
-from the plan's own law when given, and keeps the shortest answer. Without the path's knots among the nodes the
-reference came out 0.3 % *above* the plan on a SCARA move (its law could not bend where the plan's does).
+from the plan's own law when given, on two node sets (with and without the path's knots), and keeps the shortest
+answer: without the knots it came out 0.3 % *above* the plan on a SCARA move (its law could not bend where the
+plan's does), with them 2–3.5 % above on two Delta moves.
 """
 
 from __future__ import annotations
@@ -73,12 +74,12 @@ def nodes(n: int, path=None) -> np.ndarray:
     return np.unique(np.concatenate([t[keep], knots]))
 
 
-def _solve(model, dwell: float, t_fit: float, n: int, start_b):
+def _solve(model, dwell: float, t_fit: float, n: int, start_b, knots: bool = True):
     """IPOPT from ``start_b`` (b at :func:`nodes`, or a callable b(τ) with a ``derivative`` method, whose b′, b″, b‴
     then start the other variables) → (T [s], b, b′ at the nodes) or None when it fails."""
     import casadi as ca
 
-    tau = nodes(n, model.path)
+    tau = nodes(n, model.path if knots else None)
     n = len(tau) - 1
     h = np.diff(tau)
     theta = np.arange(SUB) / SUB  # the limits' points: SUB per interval (θ-major) and the last node
@@ -169,16 +170,19 @@ def reference_law(tau: np.ndarray, b: np.ndarray, b1: np.ndarray):
 
 
 def reference_duration(model, dwell: float, t_fit: float, n: int = N, law=None,
-                       scales: tuple = (1.0, 1.1, 1.25)) -> float:
+                       scales: tuple = (1.0, 1.1, 1.25), knots: tuple = (True, False)) -> float:
     """The shortest duration [s] IPOPT finds from each start (the uniform law at T_fit/scale for each of
-    ``scales``, and ``law`` — a callable b(τ) such as the plan's — when given); inf when none converges."""
-    tau = nodes(n, model.path)
-    starts = [np.full(len(tau), scale**2 / t_fit**2) for scale in scales]
-    if law is not None:
-        starts.append(law if hasattr(law, "derivative") else np.asarray(law(tau), float))
+    ``scales``, and ``law`` — a callable b(τ) such as the plan's — when given) on each node set of ``knots``
+    (with and without the path's knots among the nodes: each alone came out above the other by 0.3–4 % on some
+    moves, a local optimum of IPOPT's); inf when none converges."""
     best = np.inf
-    for b0 in starts:
-        got = _solve(model, dwell, t_fit, n, b0)
-        if got is not None:
-            best = min(best, got[0])
+    for with_knots in knots:
+        tau = nodes(n, model.path if with_knots else None)
+        starts = [np.full(len(tau), scale**2 / t_fit**2) for scale in scales]
+        if law is not None:
+            starts.append(law if hasattr(law, "derivative") else np.asarray(law(tau), float))
+        for b0 in starts:
+            got = _solve(model, dwell, t_fit, n, b0, with_knots)
+            if got is not None:
+                best = min(best, got[0])
     return best
