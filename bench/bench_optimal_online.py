@@ -2,7 +2,7 @@
 duration against an independent reference solve (IPOPT on a dense direct transcription,
 ``tests/reference/optimal_ipopt.py``).
 
-    python bench/bench_optimal_online.py --moves 30            # the users' spec: 30 random moves per profile (hours:
+    python bench/bench_optimal_online.py --moves 30            # the users' spec: 30 random moves per profile (over an hour:
                                                                # ~40 s of IPOPT per move on a loaded machine)
     python bench/bench_optimal_online.py --moves 5 --no-shape  # a quicker look
 

@@ -4,9 +4,9 @@ transcription on a dense grid and solved by IPOPT (CasADi), from several starts.
 The law b(τ) = τ̇² is a C² piecewise cubic with a knot at every node (:func:`nodes`: cosine-spaced, denser at
 the path's ends where the law varies fastest, and the path's own knots, where the limits' coefficients change
 slope or step): the variables are b, b′, b″ at every node and the constant b‴ of every interval, chained
-exactly (b_{k+1} = b_k + h·b′_k + h²/2·b″_k + h³/6·b‴_k, …). Every limit of the plan's problem is a constraint at
-``SUB`` points of every interval (b, b′, b″ there from the interval's cubic) and the last node, written here from the motion model's terms at T = 1 s (``MotionModel.parts``) — not from the plan's row
-code:
+exactly (b_{k+1} = b_k + h·b′_k + h²/2·b″_k + h³/6·b‴_k, …). Every limit of the plan's problem is a
+constraint at ``SUB`` points of every interval (b, b′, b″ there from the interval's cubic) and the last node,
+written here from the motion model's terms at T = 1 s (``MotionModel.parts``) — not from the plan's row code:
 
     joint velocity  b·q′² ≤ v²                 motor speed   b·(N q′)² ≤ ω²
     joint accel.    |q″b + q′b′/2| ≤ a          motor torque  |A_m b + m b′/2 + G_m| ≤ τ_max
