@@ -136,8 +136,55 @@ class _Problem:
     ``subset(keep)`` → a function x ↦ (values ≥ 0 when feasible, Jacobian) of the grid rows ``keep`` and the RMS
     rows, ``values(x)`` → every row's value; ``n_rows`` grid rows (the RMS rows follow them)."""
 
-    def __init__(self, model, tau: np.ndarray, knots: np.ndarray, t_fit: float, dwell: float, capacity) -> None:
-        self.__dict__.update(_problem(model, tau, knots, t_fit, dwell, capacity))
+    def __init__(self, model, tau: np.ndarray, knots: np.ndarray, t_fit: float, dwell: float, capacity,
+                 data: "_GridData | None" = None) -> None:
+        self.__dict__.update(_problem(model, tau, knots, t_fit, dwell, capacity, data))
+
+
+class _GridData:
+    """The model's terms of the law's rows (:func:`_problem`) evaluated once on a union of τ grids and taken by
+    index for each grid of one :func:`optimal_law` call (the coarse, fine, check and refined grids share most of
+    their points, and each model evaluation has a fixed cost: one evaluation instead of one per grid). A τ not
+    yet held is evaluated and merged in. Every term is computed point by point, so a grid's rows are those of
+    its own evaluation."""
+
+    FIELDS = ("qd1", "qdd1", "qddd1", "Am", "Gm", "dAm", "dGm", "p1", "p2", "p3", "m", "dm")
+
+    def __init__(self, model, tau: np.ndarray) -> None:
+        self.model = model
+        self.tau = np.zeros(0)
+        self.arrays: dict = {}
+        self._add(np.unique(np.asarray(tau, float)))
+
+    def _add(self, tau: np.ndarray) -> None:
+        model, path = self.model, self.model.path
+        pr = model.parts(tau)
+        p, p1, p2, p3 = path.all_orders(tau)
+        m = _inertia_along(model, tau, p, p1)
+        h = 1e-5
+        lo, hi = np.clip(tau - h, 0.0, 1.0), np.clip(tau + h, 0.0, 1.0)
+        plo, phi = path.all_orders(lo), path.all_orders(hi)
+        dm = (_inertia_along(model, hi, phi[0], phi[1]) - _inertia_along(model, lo, plo[0], plo[1])) / (hi - lo)[:, None]
+        new = {"qd1": pr.qd1, "qdd1": pr.qdd1, "qddd1": pr.qddd1, "Am": pr.Am, "Gm": pr.Gm, "dAm": pr.dAm,
+               "dGm": pr.dGm, "p1": p1, "p2": p2, "p3": p3, "m": m, "dm": dm}
+        if not len(self.tau):
+            self.tau, self.arrays = tau, new
+            return
+        allt = np.concatenate([self.tau, tau])
+        order = np.argsort(allt, kind="stable")
+        self.tau = allt[order]
+        self.arrays = {k: np.concatenate([self.arrays[k], new[k]])[order] for k in self.FIELDS}
+
+    def take(self, tau: np.ndarray):
+        """The terms at ``tau`` (sorted, unique), as a namespace of arrays."""
+        from types import SimpleNamespace
+
+        i = np.clip(np.searchsorted(self.tau, tau), 0, max(len(self.tau) - 1, 0))
+        miss = self.tau[i] != tau if len(self.tau) else np.ones(len(tau), bool)
+        if miss.any():
+            self._add(np.unique(tau[miss]))
+            i = np.searchsorted(self.tau, tau)
+        return SimpleNamespace(**{k: v[i] for k, v in self.arrays.items()})
 
 
 def _limit_rows(model, pr, m: np.ndarray, dm: np.ndarray, tool: tuple, capacity) -> tuple[list, list]:
@@ -226,15 +273,10 @@ def _rows(rows: dict, b: np.ndarray, b1: np.ndarray, b2: np.ndarray, jac: bool =
     return vals, a0, a1, a2
 
 
-def _problem(model, tau: np.ndarray, knots: np.ndarray, t_fit: float, dwell: float, capacity) -> dict:
-    path = model.path
-    pr = model.parts(tau)
-    p, p1, p2, p3 = path.all_orders(tau)
-    m = _inertia_along(model, tau, p, p1)
-    h = 1e-5
-    lo, hi = np.clip(tau - h, 0.0, 1.0), np.clip(tau + h, 0.0, 1.0)
-    plo, phi = path.all_orders(lo), path.all_orders(hi)
-    dm = (_inertia_along(model, hi, phi[0], phi[1]) - _inertia_along(model, lo, plo[0], plo[1])) / (hi - lo)[:, None]
+def _problem(model, tau: np.ndarray, knots: np.ndarray, t_fit: float, dwell: float, capacity,
+             data: _GridData | None = None) -> dict:
+    pr = (data or _GridData(model, tau)).take(tau)
+    p1, p2, p3, m, dm = pr.p1, pr.p2, pr.p3, pr.m, pr.dm
 
     B0, B1, B2 = _basis(knots, tau)
     w = np.zeros(len(tau))  # trapezoid weights on the grid
@@ -248,6 +290,10 @@ def _problem(model, tau: np.ndarray, knots: np.ndarray, t_fit: float, dwell: flo
     n_lin = len(rows["lin_g"])
     n_rows = n_lin + len(rows["quad_g"])
     rated = [(i, s.drive.rated_torque) for i, s in enumerate(model.specs) if s.drive and s.drive.rated_torque]
+    ri = [i for i, _ in rated]
+    A_r, m_r, G_r = pr.Am[:, ri], m[:, ri], pr.Gm[:, ri]
+    hold_r = dwell * (pr.Gm[0, ri] ** 2 + pr.Gm[-1, ri] ** 2)
+    r2_r = np.array([r for _, r in rated], float) ** 2
 
     def state(x):
         return B0s @ x, B1s @ x, B2s @ x
@@ -259,21 +305,19 @@ def _problem(model, tau: np.ndarray, knots: np.ndarray, t_fit: float, dwell: flo
     def rms_rows(b, b1):
         """RMS over the duty cycle, one row per rated joint: (2∫τ²/√b dτ + dwell·(G0² + G1²)) / (2T + 2·dwell)
         ≤ rated²: (values, Jacobian)."""
+        if not rated:
+            return np.zeros(0), np.zeros((0, B0.shape[1]))
         ib = b**-0.5
         Tn = w @ ib
         dT = (w * -0.5 * ib**3) @ B0s
-        vals, jacs = [], []
-        for i, r in rated:
-            tq = pr.Am[:, i] * b + m[:, i] / 2 * b1 + pr.Gm[:, i]
-            I = w @ (tq**2 * ib)
-            dI = (w * (2 * tq * ib * pr.Am[:, i] - 0.5 * tq**2 * ib**3)) @ B0s + (w * tq * ib * m[:, i]) @ B1s
-            hold = dwell * (pr.Gm[0, i] ** 2 + pr.Gm[-1, i] ** 2)
-            den = 2 * Tn + 2 * dwell
-            ms = (2 * I + hold) / den
-            dms = (2 * dI * den - (2 * I + hold) * 2 * dT) / den**2
-            vals.append(1.0 - ms / r**2)
-            jacs.append(-dms / r**2)
-        return np.array(vals), np.array(jacs).reshape(len(vals), B0.shape[1])  # (0, n) with no rated joint
+        tq = A_r * b[:, None] + m_r / 2 * b1[:, None] + G_r  # (N, k): every rated joint at once
+        wt = (w * ib)[:, None] * tq
+        I = np.einsum("nk,nk->k", wt, tq)
+        dI = (2 * wt * A_r - 0.5 * (w * ib**3)[:, None] * tq**2).T @ B0s + (wt * m_r).T @ B1s
+        den = 2 * Tn + 2 * dwell
+        ms = (2 * I + hold_r) / den
+        dms = (2 * dI * den - (2 * I + hold_r)[:, None] * 2 * dT) / den**2
+        return 1.0 - ms / r2_r, -dms / r2_r[:, None]
 
     def subset(keep=None):
         """x ↦ (values ≥ 0 when feasible, Jacobian) of the grid rows ``keep`` (all: None) and the RMS rows."""
@@ -369,7 +413,9 @@ def optimal_law(model, dwell: float, t_fit: float, coefficients: int | None = No
     ``LAW_COEFFICIENTS``) uniform knots solved from ``start`` or the uniform law (the benchmarks' independent
     solves)."""
     if start is None and not direct and (coefficients is None or coefficients > LAW_COEFFICIENTS):
-        first = _solve_law(model, dwell, t_fit, LAW_COEFFICIENTS, _knots(LAW_COEFFICIENTS), capacity, None)
+        data = _GridData(model, _shared_grid(model.path, coefficients or LAW_REFINED))
+        first = _solve_law(model, dwell, t_fit, LAW_COEFFICIENTS, _knots(LAW_COEFFICIENTS), capacity, None,
+                           data=data)
         n = coefficients or LAW_REFINED
         if coefficients is None and not first.t_estimate < LAW_REFINE_BELOW * t_fit:
             return first
@@ -378,7 +424,7 @@ def optimal_law(model, dwell: float, t_fit: float, coefficients: int | None = No
         for weight in LAW_REFINE_PLACEMENTS:  # each knot placement from the first law; the shortest is kept
             knots = _refined_knots(first.law, model.path, n, weight)
             x = np.clip(np.linalg.lstsq(_basis(knots, s)[0], first.law(s) * t_fit**2, rcond=None)[0], *LAW_BOUNDS)
-            law = _solve_law(model, dwell, t_fit, n, knots, capacity, x, coarse=False)
+            law = _solve_law(model, dwell, t_fit, n, knots, capacity, x, coarse=False, data=data)
             nit += law.iterations
             tried.append(f"{law.t_estimate:.5g} s")
             if fine is None or law.t_estimate < fine.t_estimate:
@@ -394,16 +440,17 @@ def optimal_law(model, dwell: float, t_fit: float, coefficients: int | None = No
 
 
 def _solve_law(model, dwell: float, t_fit: float, coefficients: int, knots: np.ndarray, capacity,
-               start: np.ndarray | None, coarse: bool = True) -> LawResult:
+               start: np.ndarray | None, coarse: bool = True, data: _GridData | None = None) -> LawResult:
     """One solve of the law on ``knots`` (:func:`optimal_law`): the coarse phase (unless not ``coarse``: a warm
     start from a solved law needs none), the fine phase and its check rounds."""
     path = model.path
+    data = data or _GridData(model, _shared_grid(path, coefficients))
     x0 = np.ones(coefficients)
     x = x0 if start is None else np.clip(np.asarray(start, float), *LAW_BOUNDS)
     nit = 0
     if LAW_COARSE_GRID and coarse:
         coarse_pr = _Problem(model, _law_grid(path, LAW_COARSE_GRID, spans=False, clustered=True), knots, t_fit,
-                             dwell, capacity)
+                             dwell, capacity, data)
         # the rows above LAW_COARSE_ACTIVE of their limit at the start (a quarter of them on the Adept cycle:
         # SLSQP's cost per iteration grows with the rows); a row the solution breaks joins and the solve goes on
         keep = coarse_pr.values(x)[: coarse_pr.n_rows] < 1.0 - LAW_COARSE_ACTIVE
@@ -413,7 +460,7 @@ def _solve_law(model, dwell: float, t_fit: float, coefficients: int, knots: np.n
     # the optimiser's grid: at least 4 points per knot interval (an 80-coefficient law on the 161 points that
     # suit 40 coefficients came out longer than the 20-coefficient law on the Adept cycle)
     points = max(LAW_GRID, 4 * (coefficients - 3) + 1)
-    x, n2, message, rounds, fine = _check_rounds(model, knots, t_fit, dwell, capacity, x, points)
+    x, n2, message, rounds, fine = _check_rounds(model, knots, t_fit, dwell, capacity, x, points, data)
     nit += n2
     # a law that breaks its own grid constraints (the solver stopped somewhere infeasible) is not used
     worst = float(fine.values(x).min()) if np.all(np.isfinite(x)) else -np.inf
@@ -424,6 +471,14 @@ def _solve_law(model, dwell: float, t_fit: float, coefficients: int, knots: np.n
     scale = 1.0 / t_fit**2
     b = _law_spline(knots, scale * x)
     return LawResult(compose(path, b), float(fine.objective(x)[0]), nit, message, b)
+
+
+def _shared_grid(path, coefficients: int) -> np.ndarray:
+    """The union of the grids one solve of ``coefficients`` coefficients starts with (coarse, fine, check): the
+    τ of its :class:`_GridData`."""
+    return np.concatenate([_law_grid(path, LAW_COARSE_GRID, spans=False, clustered=True),
+                           _law_grid(path, max(LAW_GRID, 4 * (coefficients - 3) + 1)),
+                           _law_grid(path, LAW_GRID), _law_grid(path, LAW_CHECK_GRID)])
 
 
 def _refined_knots(law, path, coefficients: int, weight: float = 1.0) -> np.ndarray:
@@ -452,13 +507,14 @@ def _knots(coefficients: int) -> np.ndarray:
     return np.concatenate([[0.0] * 3, np.linspace(0.0, 1.0, coefficients - 2), [1.0] * 3])
 
 
-def _check_rounds(model, knots, t_fit: float, dwell: float, capacity, x: np.ndarray, points: int = 0):
+def _check_rounds(model, knots, t_fit: float, dwell: float, capacity, x: np.ndarray, points: int = 0,
+                  data: _GridData | None = None):
     """The fine phase from ``x`` and its check rounds: between the grid's points the law may still break a limit
     (a peak the grid straddles); the rows of a denser grid (``LAW_CHECK_GRID``) find where, those τ join the grid
     and the solve continues from its answer (``LAW_CHECK_ROUNDS`` at most). Returns (x, iterations, message,
     rounds, the last fine problem)."""
     path = model.path
-    check = _Problem(model, _law_grid(path, LAW_CHECK_GRID), knots, t_fit, dwell, capacity)
+    check = _Problem(model, _law_grid(path, LAW_CHECK_GRID), knots, t_fit, dwell, capacity, data)
     # the check grid's local peaks of every row above LAW_ACTIVE at x join the grid from the start (the fine
     # solve then rarely needs a check round: each round is a cold SLSQP restart)
     v = check.values(x)[: check.n_rows].reshape(-1, len(check.tau))
@@ -467,7 +523,7 @@ def _check_rounds(model, knots, t_fit: float, dwell: float, capacity, x: np.ndar
     at = np.flatnonzero(peak.any(axis=0)) + 1
     near = (at[:, None] + np.arange(-LAW_PEAK_SPREAD, LAW_PEAK_SPREAD + 1)).ravel()
     grid = np.union1d(_law_grid(path, points), check.tau[np.clip(near, 0, len(check.tau) - 1)])
-    fine = _Problem(model, grid, knots, t_fit, dwell, capacity)
+    fine = _Problem(model, grid, knots, t_fit, dwell, capacity, data)
     keep = fine.values(x)[: fine.n_rows] < 1.0 - LAW_ACTIVE
     x, nit, message, rounds = _solve(fine, x, keep, t_fit)
     for _ in range(LAW_CHECK_ROUNDS):
@@ -476,7 +532,7 @@ def _check_rounds(model, knots, t_fit: float, dwell: float, capacity, x: np.ndar
         if not bad.size:
             break
         grid = np.union1d(grid, bad)
-        fine = _Problem(model, grid, knots, t_fit, dwell, capacity)
+        fine = _Problem(model, grid, knots, t_fit, dwell, capacity, data)
         keep = fine.values(x)[: fine.n_rows] < 1.0 - LAW_ACTIVE
         x, n3, message, r3 = _solve(fine, x, keep, t_fit)
         nit, rounds = nit + n3, rounds + r3
