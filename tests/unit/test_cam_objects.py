@@ -292,3 +292,44 @@ def test_cli_cam_object_mirrors_the_library():
     from pickplace_cli.export.cam_objects import CamVendor
 
     assert [c.value for c in CamObject] == ["none"] + [v.value for v in CamVendor]
+
+
+def test_belt_cycle_cams_with_the_belt_as_master_rebuild_the_cycle_feed(tmp_path):
+    """The whole belt cycle (--to-belt --round-trip on a 1 ms cycle) as CODESYS XYVA cams with the belt as master: each
+    joint's cam, rebuilt here as a 5th-order polynomial per segment from its points' slave position, dY/dX and d²Y/dX²
+    (solved independently of the exporter), at the belt travel of every cycle's sample (belt speed · (t + latency),
+    from the time column of the same plan's --columns plc feed), is within --tolerance (1e-6 rad, in counts: k·1e-6)
+    of the feed's counts (+1e-9 rad: the feed's counts are written to 5 decimals)."""
+    belt = ("-p", "delta-4axis", "--from", "-0.15,0,-0.8,0", "--to", "0.15,-0.2,-0.8,1.2", "--to-belt", "0,0.5,0",
+            "--latency", "0.05", "--round-trip", "--cycle", "0.001", "-q")
+    st, feed = tmp_path / "cams.st", tmp_path / "feed.csv"
+    run = CliRunner()
+    res = run.invoke(app, ["plan", *belt, "-f", "cam-st", "--cam-object", "codesys", "--cam-master", "belt",
+                           "-o", str(st)], catch_exceptions=False)
+    assert res.exit_code == 0, res.stderr
+    res = run.invoke(app, ["plan", *belt, "--columns", "plc", "-o", str(feed)], catch_exceptions=False)
+    assert res.exit_code == 0, res.stderr
+    text = st.read_text()
+    const = {n: np.array([float(v) for v in re.sub(r"\(\*.*?\*\)", "", body, flags=re.S).split(",")])
+             for n, body in re.findall(r"^    (\w+) : ARRAY\[[^\]]*\] OF LREAL := \[(.*?)\];", text, re.M | re.S)}
+    x = const["fMaster"]
+    assert np.all(np.diff(x) > 0)  # the belt only moves forward: a strictly increasing master [m]
+    head = feed.read_text().splitlines()[0].split(",")
+    data = np.loadtxt(feed, delimiter=",", skiprows=1)
+    t = data[:, head.index("t[s]")]
+    at = 0.5 * (t + 0.05)  # the belt's travel since the part's detection [m]
+    assert x[0] == pytest.approx(at[0], abs=1e-12) and x[-1] == pytest.approx(at[-1], abs=1e-12)
+    seg = np.clip(np.searchsorted(x, at, side="right") - 1, 0, len(x) - 2)
+    for j in ("A1", "A2", "A3", "A4"):
+        y, v, a = const[f"{j}_y"], const[f"{j}_v"], const[f"{j}_a"]
+        rebuilt = np.empty_like(at)
+        for s in np.unique(seg):
+            h = x[s + 1] - x[s]
+            c = piece_poly([(0.0, 0, y[s]), (h, 0, y[s + 1]), (0.0, 1, v[s]), (h, 1, v[s + 1]), (0.0, 2, a[s]),
+                            (h, 2, a[s + 1])])
+            u = at[seg == s] - x[s]
+            rebuilt[seg == s] = np.polyval(c[::-1], u)
+        gear = 25.0 if j != "A4" else 10.0  # delta-4axis: arms 25, the rotary axis 10 motor rad per joint rad
+        k = gear * 1048576 / (2 * math.pi)  # 2^20 counts per motor revolution [counts/rad]
+        err = np.abs(rebuilt - data[:, head.index(f"{j}[counts]")]).max() / k
+        assert err <= 1e-6 + 1e-9, (j, err)
