@@ -6,11 +6,9 @@ import csv
 import json
 
 import pytest
-from typer.testing import CliRunner
 
-from pickplace_cli.cli import app
+from .test_cli_line import _one_line, run
 
-runner = CliRunner()
 LINE = """\
 belt: {speed: 0.3, width: 0.2, direction: +y}
 robots:
@@ -29,22 +27,11 @@ parts:
 """
 
 
-def run(*args, input=None):
-    return runner.invoke(app, [str(a) for a in args], input=input, catch_exceptions=False)
-
-
 @pytest.fixture
 def line_file(tmp_path):
     p = tmp_path / "line.yaml"
     p.write_text(LINE)
     return p
-
-
-def _one_line(r, code: int, text: str) -> str:
-    assert r.exit_code == code, (r.exit_code, r.stderr)
-    err = [x for x in r.stderr.splitlines() if x.startswith("pickplace: error:")]
-    assert len(err) == 1 and text in err[0], r.stderr
-    return err[0]
 
 
 def test_turns_in_the_parts_csv_and_the_reason_of_a_robot_without_the_axis(line_file, tmp_path):
