@@ -222,6 +222,7 @@ def refine_max(
     iterations: int = 26,
     segments: np.ndarray | None = None,
     budget: int = REFINE_BUDGET,
+    within: np.ndarray | float | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Refine the maxima of each column of ``fun`` beyond the samples ``x`` (N,).
 
@@ -238,6 +239,14 @@ def refine_max(
     than the sampled maximum. ``segments`` (N,): a label per sample of the piece it lies on
     (:func:`pickplace_cli.limits.grid.segment_ids`); a bracket never reaches into a neighbour of another
     label, so a search never straddles a jump of ``fun``.
+
+    ``within`` (a number or (n_cols,)): instead of the ``max_candidates`` highest, *every* local maximum of the
+    samples whose sampled value is at least the column's largest sample minus ``within`` is refined (a peak
+    that rises more than ``within`` above its neighbouring samples is one the grid does not resolve: the grid
+    must be chosen so that none does). Taking the highest samples only is not safe: a time-optimal law rides its
+    limit, so a column has dozens of local maxima within 1e-3 of each other, and a narrow peak sampled on its
+    flanks can rank below eight of them while its top is the column's maximum (100.005 % of a torque-rate
+    limit reported as 99.9 %).
     """
     x = np.asarray(x, dtype=float)
     if y is None:
@@ -259,16 +268,20 @@ def refine_max(
     right = np.vstack([y[1:], np.full((1, ncol), -np.inf)])
     is_peak = (y >= left) & (y >= right)
     lo_list, hi_list, col_list = [], [], []
+    floor = None if within is None else best - np.broadcast_to(np.asarray(within, float), best.shape)
     for c in range(ncol):
         idx = np.flatnonzero(is_peak[:, c])
-        idx = idx[np.argsort(y[idx, c])[::-1][:max_candidates]]
+        if floor is None:
+            idx = idx[np.argsort(y[idx, c])[::-1][:max_candidates]]
+        else:
+            idx = idx[y[idx, c] >= floor[c]]
         lo, hi = np.maximum(idx - 1, 0), np.minimum(idx + 1, n - 1)
         if segments is not None:
             lo = np.where(segments[lo] == segments[idx], lo, idx)
             hi = np.where(segments[hi] == segments[idx], hi, idx)
         lo_list.append(x[lo])
         hi_list.append(x[hi])
-        col_list.append(np.full(idx.size, c))
+        col_list.append(np.full(lo.size, c))
     a = np.concatenate(lo_list)
     b = np.concatenate(hi_list)
     cols = np.concatenate(col_list)

@@ -153,7 +153,7 @@ def check_limits(
                 return model.columns(pr, T)[1][:, near]
 
             # the exact value replaces the estimate; it is never below the sampled maximum
-            exact, exact_at = refine_max(fun, x, data[:, near], segments=seg)
+            exact, exact_at = refine_max(fun, x, data[:, near], segments=seg, within=plan.band[near])
             peak[near] = exact
             at[near] = exact_at
         values = (plan.signs * peak).tolist()
