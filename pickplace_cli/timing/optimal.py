@@ -32,6 +32,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..model.threads import single_blas_thread
+from .compose import compose
 
 #: cubic B-spline coefficients of b(τ) of the first solve (uniform knots in τ)
 LAW_COEFFICIENTS = 20
@@ -75,8 +76,6 @@ LAW_CHECK_GRID = 1001
 LAW_CHECK_ROUNDS = 2
 LAW_CHECK_TOL = 1e-5
 LAW_PEAK_SPREAD = 2
-#: points of the table that inverts t(τ) for the composed path
-LAW_TABLE = 4001
 
 
 @dataclass(frozen=True)
@@ -543,62 +542,3 @@ def _law_spline(knots: np.ndarray, coef: np.ndarray):
     from scipy.interpolate import BSpline
 
     return BSpline(knots, coef, 3, extrapolate=False)
-
-
-def compose(path, b) -> object:
-    """The path traversed with dτ/dt = √b(τ) (``b``: a scipy BSpline in τ), as a CartesianPath in u = t/T
-    (its derivatives are those at T = 1 s; ``T`` of the law itself is ∫dτ/√b)."""
-    from scipy.interpolate import CubicHermiteSpline
-
-    from ..model.trajectory import CartesianPath
-
-    b1, b2 = b.derivative(1), b.derivative(2)
-    # t(τ) = ∫ dτ/√b: 4-point Gauss on every interval of a fine table (b is a cubic spline: ~1e-13)
-    tab = np.unique(np.concatenate([np.linspace(0.0, 1.0, LAW_TABLE), np.asarray(path.breakpoints, float),
-                                    b.t[3:-3]]))
-    tab = tab[np.concatenate([[True], np.diff(tab) > 1e-12])]  # round-off twins would make t(τ) stand still
-    xg, wg = np.polynomial.legendre.leggauss(4)
-    lo, hi = tab[:-1], tab[1:]
-    nodes = (lo[:, None] + (hi - lo)[:, None] * (xg + 1) / 2)
-    seg = ((b(nodes) ** -0.5) * wg).sum(axis=1) * (hi - lo) / 2
-    t_tab = np.concatenate([[0.0], np.cumsum(seg)])
-    T = float(t_tab[-1])
-    u_tab = t_tab / T
-    speed = T * np.sqrt(b(tab))  # dτ/du
-    inv = CubicHermiteSpline(u_tab, tab, speed)  # τ(u)
-    fwd = CubicHermiteSpline(tab, u_tab, 1.0 / speed)  # u(τ)
-
-    def chain(u: np.ndarray):
-        u = np.clip(np.asarray(u, float), 0.0, 1.0)
-        tau = np.clip(inv(u), 0.0, 1.0)
-        bb = b(tau)
-        return tau, T * np.sqrt(bb), T**2 * b1(tau) / 2, T**3 * np.sqrt(bb) * b2(tau) / 2
-
-    def orders(u: np.ndarray):
-        tau, s1, s2, s3 = chain(u)
-        p, d1, d2, d3 = path.all_orders(tau)
-        return [p, d1 * s1[:, None], d2 * (s1**2)[:, None] + d1 * s2[:, None],
-                d3 * (s1**3)[:, None] + 3 * d2 * (s1 * s2)[:, None] + d1 * s3[:, None]]
-
-    def evaluate(u: np.ndarray, order: int) -> np.ndarray:
-        return orders(u)[order]
-
-    dense = np.linspace(0.0, 1.0, 4001)
-    # the path's knots and the law's (where b‴ steps, so the torque rate has a kink: the check's grid and its
-    # Gauss-Kronrod spans then see it, and the fit's first check passes instead of nudging by 2e-5)
-    bp = np.unique(np.clip(fwd(np.concatenate([np.asarray(path.breakpoints, float), b.t[3:-3]])), 0.0, 1.0))
-    jumps = fwd(path.jump_points) if len(path.jump_points) else np.zeros(0)
-    from ..curves.peaks import true_peaks
-
-    shell = CartesianPath(evaluate, path.method, {}, (0.0, 0.0, 0.0), np.unique(np.concatenate([[0.0, 1.0], bp])),
-                          jumps=tuple(jumps.tolist()), evaluate_all=orders)
-    peaks = true_peaks(shell, np.unique(np.concatenate([dense, shell.breakpoints])))
-    params = dict(path.parameters)
-    params.update(time_law="optimal", law_coefficients=len(b.c))
-    angle = None
-    if path.angle is not None:  # the tool's turn runs on the same time law
-        from ..curves.rotation import ComposedRotation
-
-        angle = ComposedRotation(path.angle, chain)
-    return CartesianPath(evaluate, path.method, params, tuple(float(x) for x in peaks), shell.breakpoints,
-                         max_order=path.max_order, jumps=shell.jumps, evaluate_all=orders, angle=angle)
