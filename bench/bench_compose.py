@@ -4,10 +4,12 @@ before and after, in the same run.
     python bench/bench_compose.py                 # the Adept cycle + 12 random moves of delta-su2018 (~1 min)
     python bench/bench_compose.py --moves 30 --repeat 30
 
-The laws are solved once (``optimal_law`` of ``plan --time optimal``'s first law); then, per law and for the best
-of ``--repeat`` interleaved rounds' medians: ``compose`` as it was (a 4001-point cubic-Hermite table of τ(u) and
-the Cartesian peaks on a 4001-point grid, kept below as ``compose_before``) and as it is, and the exact judge (the
-fit with the plan's final check: ``fit_duration`` with ``_FinalCheck``) of each composed path. Printed: wall and CPU
+The laws are solved once (``optimal_law`` of ``plan --time optimal``'s first law); then, per law, medians of
+``--repeat`` interleaved rounds: ``compose`` as it was (a 4001-point cubic-Hermite table of τ(u) and the Cartesian
+peaks on a 4001-point grid, kept below as ``compose_before``) and as it is, and the exact judge of each composed
+path (the fit as ``plan --time optimal`` runs it: the screen on the fit grid, the precise solve and the plan's
+final check, ``_FinalCheck``). Both judges run the current limit check: "judge before/after" differ only by the
+composed path they judge (for the limit check before and after, run this script on an older checkout). Printed: wall and CPU
 medians [ms] (BLAS held to one thread; on a shared machine the figures carry its load), the two fitted
 durations' relative difference, the largest difference of the composed positions [m] and of the Cartesian peaks
 (relative), and the verdicts.
@@ -118,14 +120,15 @@ def laws(moves: int, seed: int) -> list[tuple[str, object, object]]:
             law = O.optimal_law(model, prof.planning.dwell, t_fit, coefficients=O.LAW_COEFFICIENTS)
         except PickplaceError:
             continue
-        out.append((name, path, law.law))
+        out.append((name, path, law.law, law.t_estimate))
     return out
 
 
-def judge(prof, path):
-    """The exact judge of a composed path: the fit with the plan's final check → (T [s], report)."""
+def judge(prof, path, t_law):
+    """The exact judge of a composed path as ``plan --time optimal`` runs it: the fit (screen on the fit grid,
+    precise solve, the check) from the law's own duration with the plan's final check → (T [s], report)."""
     check = _FinalCheck(prof.planning.rate, prof.planning.dwell)
-    T, _ = fit_duration(motion_model(path, prof), prof.planning.dwell, start=0.1, margin=3e-5, check=check)
+    T, _ = fit_duration(motion_model(path, prof), prof.planning.dwell, start=t_law, margin=3e-5, check=check)
     return T, check.last[3]
 
 
@@ -147,19 +150,19 @@ def main() -> None:
     prof = load_profile("delta-su2018")
     rows = []
     u = np.linspace(0.0, 1.0, 10001)
-    for name, path, b in laws(args.moves, args.seed):
+    for name, path, b, t_law in laws(args.moves, args.seed):
         times = {k: [] for k in ("compose_before", "compose", "judge_before", "judge")}
         cpu = {k: [] for k in times}
         for _ in range(args.repeat):  # interleaved: both sides see the same load
-            for key, fn in (("before", compose_before), ("", compose)):
+            for key, fn, jd in (("before", compose_before, judge), ("", compose, judge)):
                 c, w, p = timed(fn, path, b)
                 times["compose" + ("_" + key if key else "")].append(w)
                 cpu["compose" + ("_" + key if key else "")].append(p)
-                (T, rep), w, p = timed(judge, prof, c)
+                (T, rep), w, p = timed(jd, prof, c, t_law)
                 times["judge" + ("_" + key if key else "")].append(w)
                 cpu["judge" + ("_" + key if key else "")].append(p)
         old, new = compose_before(path, b), compose(path, b)
-        (t_old, r_old), (t_new, r_new) = judge(prof, old), judge(prof, new)
+        (t_old, r_old), (t_new, r_new) = judge(prof, old, t_law), judge(prof, new, t_law)
         dp = float(np.abs(old(u, 0) - new(u, 0)).max())
         dpk = float(np.max(np.abs(np.subtract(old.peaks, new.peaks)) / np.abs(old.peaks)))
         med = {k: 1e3 * statistics.median(v) for k, v in times.items()}

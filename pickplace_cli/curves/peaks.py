@@ -223,6 +223,7 @@ def refine_max(
     segments: np.ndarray | None = None,
     budget: int = REFINE_BUDGET,
     within: np.ndarray | float | None = None,
+    rtol: float | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Refine the maxima of each column of ``fun`` beyond the samples ``x`` (N,).
 
@@ -247,6 +248,13 @@ def refine_max(
     limit, so a column has dozens of local maxima within 1e-3 of each other, and a narrow peak sampled on its
     flanks can rank below eight of them while its top is the column's maximum (100.005 % of a torque-rate
     limit reported as 99.9 %).
+
+    ``rtol``: a bracket stops early once its best point leads both its neighbours by at most ``rtol`` of its
+    value. Where the function is concave across the final bracket (any smooth maximum once the bracket is small;
+    a concave corner, such as the torque rate's kink at a law's knot) its maximum there lies at most that lead
+    above the best point (the chord slopes of a concave function bound its slopes beyond them), so the peak
+    returned is then within ``rtol`` (relative) below the true one; the ``iterations`` bound still caps the
+    rounds.
     """
     x = np.asarray(x, dtype=float)
     if y is None:
@@ -290,15 +298,21 @@ def refine_max(
     target = ((np.sqrt(5.0) - 1.0) / 2.0) ** iterations  # golden-section's bracket after ``iterations`` steps
     rounds = max(1, math.ceil(math.log(target) / math.log(2.0 / (p + 1))))
     frac = np.linspace(0.0, 1.0, p + 2)
-    rows = np.arange(k_count)
-    fm = xm = None
+    fm, xm = np.full(k_count, -np.inf), np.zeros(k_count)
+    live = np.arange(k_count)  # the brackets still searched
     for _ in range(rounds):
-        s = a[:, None] + (b - a)[:, None] * frac  # (K, p + 2), both ends included
-        vals = f(s.ravel()).reshape(k_count, p + 2, -1)[rows, :, cols]  # (K, p + 2): each bracket's column
+        rows = np.arange(live.size)
+        s = a[live, None] + (b[live] - a[live])[:, None] * frac  # (K, p + 2), both ends included
+        vals = f(s.ravel()).reshape(live.size, p + 2, -1)[rows, :, cols[live]]  # (K, p + 2): each bracket's column
         k = np.argmax(vals, axis=1)
-        fm, xm = vals[rows, k], s[rows, k]
-        a = s[rows, np.maximum(k - 1, 0)]
-        b = s[rows, np.minimum(k + 1, p + 1)]
+        lo, hi = np.maximum(k - 1, 0), np.minimum(k + 1, p + 1)
+        fm[live], xm[live] = vals[rows, k], s[rows, k]
+        a[live], b[live] = s[rows, lo], s[rows, hi]
+        if rtol is not None:  # converged: the best point's lead over both neighbours within rtol of its value
+            gap = np.maximum(fm[live] - vals[rows, lo], fm[live] - vals[rows, hi])
+            live = live[~(gap <= rtol * np.abs(fm[live]))]
+            if not live.size:
+                break
     for c in range(ncol):
         sel = cols == c
         if np.any(sel):
