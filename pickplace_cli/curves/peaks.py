@@ -213,6 +213,39 @@ def _bernstein(n: int, _cache: dict = {}) -> np.ndarray:  # noqa: B006 - deliber
     return _cache[n]
 
 
+def _search(f, a: np.ndarray, b: np.ndarray, cols: np.ndarray, ncol: int, budget: int, target: float,
+            rtol: float) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`refine_max`'s bracketing grid search with ``rtol`` → (best value, its x) per bracket [a, b] of column
+    ``cols``. Each round spreads ``budget`` points over the brackets still searched (8 … 64 inside each: fewer
+    brackets, finer rounds) and keeps the two intervals beside each best point. A bracket stops when its best
+    point leads both neighbours by at most ``rtol`` of its value, when it is ``target`` of its first width, or when
+    it cannot hold its column's maximum: where the function is concave across the bracket its maximum lies at most
+    that lead above the best point, so a bracket whose best value plus twice its lead is below a value already
+    reached in its column is dropped."""
+    k_count = a.size
+    a, b = a.copy(), b.copy()
+    width = (b - a) * target
+    fm, xm = np.full(k_count, -np.inf), a.copy()
+    live = np.arange(k_count)
+    while live.size:
+        p = int(min(64, max(8, budget // live.size)))
+        frac = np.linspace(0.0, 1.0, p + 2)
+        rows = np.arange(live.size)
+        s = a[live, None] + (b[live] - a[live])[:, None] * frac  # (K, p + 2), both ends included
+        vals = f(s.ravel()).reshape(live.size, p + 2, -1)[rows, :, cols[live]]
+        k = np.argmax(vals, axis=1)
+        lo, hi = np.maximum(k - 1, 0), np.minimum(k + 1, p + 1)
+        fm[live], xm[live] = vals[rows, k], s[rows, k]
+        a[live], b[live] = s[rows, lo], s[rows, hi]
+        gap = np.maximum(fm[live] - vals[rows, lo], fm[live] - vals[rows, hi])
+        top = np.full(ncol, -np.inf)
+        np.maximum.at(top, cols, fm)
+        done = (gap <= rtol * np.abs(fm[live])) | (b[live] - a[live] <= width[live])
+        done |= fm[live] + 2.0 * gap < top[cols[live]]
+        live = live[~done]
+    return fm, xm
+
+
 def refine_max(
     fun: Callable[[np.ndarray], np.ndarray],
     x: np.ndarray,
@@ -254,7 +287,8 @@ def refine_max(
     a concave corner, such as the torque rate's kink at a law's knot) its maximum there lies at most that lead
     above the best point (the chord slopes of a concave function bound its slopes beyond them), so the peak
     returned is then within ``rtol`` (relative) below the true one; the ``iterations`` bound still caps the
-    rounds.
+    rounds. Brackets that cannot hold their column's maximum are dropped on the way and the points of each call
+    spread over the rest (:func:`_search`).
     """
     x = np.asarray(x, dtype=float)
     if y is None:
@@ -294,25 +328,21 @@ def refine_max(
     b = np.concatenate(hi_list)
     cols = np.concatenate(col_list)
     k_count = a.size
-    p = int(min(64, max(8, budget // max(k_count, 1))))  # interior points per bracket and call
     target = ((np.sqrt(5.0) - 1.0) / 2.0) ** iterations  # golden-section's bracket after ``iterations`` steps
-    rounds = max(1, math.ceil(math.log(target) / math.log(2.0 / (p + 1))))
-    frac = np.linspace(0.0, 1.0, p + 2)
-    fm, xm = np.full(k_count, -np.inf), np.zeros(k_count)
-    live = np.arange(k_count)  # the brackets still searched
-    for _ in range(rounds):
-        rows = np.arange(live.size)
-        s = a[live, None] + (b[live] - a[live])[:, None] * frac  # (K, p + 2), both ends included
-        vals = f(s.ravel()).reshape(live.size, p + 2, -1)[rows, :, cols[live]]  # (K, p + 2): each bracket's column
-        k = np.argmax(vals, axis=1)
-        lo, hi = np.maximum(k - 1, 0), np.minimum(k + 1, p + 1)
-        fm[live], xm[live] = vals[rows, k], s[rows, k]
-        a[live], b[live] = s[rows, lo], s[rows, hi]
-        if rtol is not None:  # converged: the best point's lead over both neighbours within rtol of its value
-            gap = np.maximum(fm[live] - vals[rows, lo], fm[live] - vals[rows, hi])
-            live = live[~(gap <= rtol * np.abs(fm[live]))]
-            if not live.size:
-                break
+    if rtol is not None:
+        fm, xm = _search(f, a, b, cols, ncol, budget, target, rtol)
+    else:
+        p = int(min(64, max(8, budget // max(k_count, 1))))  # interior points per bracket and call
+        rounds = max(1, math.ceil(math.log(target) / math.log(2.0 / (p + 1))))
+        frac = np.linspace(0.0, 1.0, p + 2)
+        rows = np.arange(k_count)
+        for _ in range(rounds):
+            s = a[:, None] + (b - a)[:, None] * frac  # (K, p + 2), both ends included
+            vals = f(s.ravel()).reshape(k_count, p + 2, -1)[rows, :, cols]  # (K, p + 2): each bracket's column
+            k = np.argmax(vals, axis=1)
+            fm, xm = vals[rows, k], s[rows, k]
+            a = s[rows, np.maximum(k - 1, 0)]
+            b = s[rows, np.minimum(k + 1, p + 1)]
     for c in range(ncol):
         sel = cols == c
         if np.any(sel):

@@ -193,8 +193,21 @@ def screened_fit(model, parts, dwell: float = 0.0, seg=None, refine: bool = Fals
 
 
 def rms_threshold(model, parts, dwell: float = 0.0) -> float:
-    """The largest RMS threshold of :func:`fit_thresholds` [s] (0 without a rated torque): exact, sample-free."""
-    return max((t for n, t in fit_thresholds(model, parts, dwell) if n.endswith("rms motor torque")), default=0.0)
+    """The largest RMS threshold of :func:`fit_thresholds` [s] (0 without a rated torque): exact, sample-free (the
+    RMS rows of its table alone: the model's integrals, memoised, and the quartics; ``parts`` may hold the first
+    round of the integrals' nodes). Raises NoFeasibleDuration as fit_thresholds does for an RMS row."""
+    rated, has = _rated(model)
+    if not has:
+        return 0.0
+    integral, ends = (np.asarray(x, float) for x in model.rms_integrals(parts))
+    hold = ends[0] ** 2 + ends[1] ** 2
+    ts = rms_thresholds(integral[0, has], integral[1, has], integral[2, has], hold[has], dwell,
+                        np.array([rated[i] for i in has]))
+    for i, t in zip(has, ts):
+        if not np.isfinite(t):
+            raise NoFeasibleDuration(f"time = fit: no duration satisfies {model.robot.joint_names[i]} rms motor torque "
+                                     f"(the holding torque alone exceeds the rated {rated[i]:g} N·m)")
+    return float(ts.max())
 
 
 #: the screened fit is searched up to this duration [s] (longer: no duration holds the limits)
