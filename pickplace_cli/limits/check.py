@@ -152,15 +152,16 @@ def check_limits(
         seg = segment_ids(x, interior_jumps(model.path.breakpoints, model.path.jumps))
         imax = np.argmax(data, axis=0)
         peak, at = parabolic_peak(x, data, seg=seg, i=imax)
+        limits = plan.limits  # in column sign convention
+        close = (np.abs(peak - limits) <= plan.band) | (peak > limits)  # refined exactly below: no zoom needed
         # the duration-dependent peaks the grid does not resolve (a sharp one), zoomed in on the model
-        zoom = plan.zoom[_unresolved(x, data[:, plan.zoom], imax[plan.zoom], at[plan.zoom], seg)]
+        zoom = plan.zoom[_unresolved(x, data[:, plan.zoom], imax[plan.zoom], at[plan.zoom], seg) & ~close[plan.zoom]]
         if zoom.size:
             sub = plan.zoom_sub[np.searchsorted(plan.zoom, zoom)]
             peak[zoom], at[zoom] = _zoom_peak(model, T, x, data, seg, parts.dAm is not None, zoom, sub)
-        limits = plan.limits  # in column sign convention
         # refine exactly every peak near its limit or apparently beyond it (a violation is always confirmed
         # on the model itself, never taken from an interpolated estimate)
-        near = np.flatnonzero((np.abs(peak - limits) <= plan.band) | (peak > limits))
+        near = np.flatnonzero(close | (np.abs(peak - limits) <= plan.band) | (peak > limits))
         if near.size:
 
             def fun(s: np.ndarray) -> np.ndarray:
