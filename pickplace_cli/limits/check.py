@@ -12,7 +12,8 @@ does not depend on sampling:
   with ``within``), not only the highest few: a time-optimal law rides its limit, with dozens of local maxima
   within 1e-3 of each other, and a peak sampled on its flanks can rank low while it is the column's maximum;
 * each search stops when its best point leads both neighbours by at most ``EXACT_RTOL`` of its value: the peak
-  reported is the model's own value there, at most that far below the true maximum.
+  reported is the model's own value there, at most that far below the true maximum of a concave peak (a corner
+  between two samples stops at the search's bracket limit first, ~1e-8; the path's knots and jumps are samples).
 
 The precondition is the grid's: no local maximum of a limited quantity rises more than ``EXACT_BAND`` of its
 limit above the grid samples beside it (measured on every shipped profile's default and time-optimal plans:
