@@ -16,8 +16,8 @@ needs a table, built with error control:
   integrating t from the piece's start to the interpolated τ).
 
 The composed path's normalised Cartesian peaks (v̂, â, ĵ) are found on the continuous motion: sampled on its
-knots, the Gauss–Kronrod nodes of its spans and a uniform grid, every local maximum of the samples near the top
-refined (:func:`~pickplace_cli.curves.peaks.refine_max` with ``within``).
+knots and a uniform grid, every local maximum of the samples near the top refined
+(:func:`~pickplace_cli.curves.peaks.refine_max` with ``within`` and ``rtol``).
 """
 
 from __future__ import annotations
@@ -32,10 +32,12 @@ INVERSE_TOL = 1e-11
 TABLE_START = 2
 #: rounds of bisection at most (each halves the pieces that fail; 2⁻²⁰ of a knot interval: never reached)
 TABLE_ROUNDS = 20
-#: uniform points of u ∈ [0, 1] on which the composed path's Cartesian peaks are sampled (plus its knots and the
-#: Gauss-Kronrod nodes of every span); each local maximum within ``PEAK_WITHIN`` of the top is then refined
+#: uniform points of u ∈ [0, 1] on which the composed path's Cartesian peaks are sampled (plus its knots and both
+#: sides of every jump); each local maximum within ``PEAK_WITHIN`` of the top is then refined
 PEAK_GRID = 257
 PEAK_WITHIN = 0.05
+#: … until each is known to this fraction of its value (:func:`~pickplace_cli.curves.peaks.refine_max`'s ``rtol``)
+PEAK_RTOL = 1e-10
 
 _XG, _WG = np.polynomial.legendre.leggauss(8)
 
@@ -195,12 +197,15 @@ def compose(path, b) -> object:
 
 def composed_peaks(path) -> tuple[float, float, float]:
     """max ‖d^k p/du^k‖, k = 1, 2, 3, of a composed path (m/1^k, T = 1): sampled on ``PEAK_GRID`` uniform points,
-    its breakpoints, both sides of every jump and the Gauss–Kronrod nodes of its spans; every local maximum of the
-    samples within ``PEAK_WITHIN`` of its column's top refined on the path (never across a jump)."""
+    its breakpoints (the law's and the path's knots: where the jerk has a kink) and both sides of every jump; every
+    local maximum of the samples within ``PEAK_WITHIN`` of its column's top refined on the path (never across a
+    jump) to ``PEAK_RTOL``."""
     from ..curves.peaks import refine_max
-    from ..limits.grid import _extra_points, interior_jumps, segment_ids
+    from ..limits.grid import interior_jumps, jump_sides, segment_ids
 
-    grid = _extra_points(path.breakpoints, path.jumps, PEAK_GRID)
+    grid = np.unique(np.concatenate([np.linspace(0.0, 1.0, PEAK_GRID), np.asarray(path.breakpoints, float),
+                                     jump_sides(path.breakpoints, path.jumps)]))
+    grid = grid[np.concatenate([[True], np.diff(grid) > 1e-12])]
     seg = segment_ids(grid, interior_jumps(path.breakpoints, path.jumps))
 
     def norms(t: np.ndarray) -> np.ndarray:
@@ -208,5 +213,5 @@ def composed_peaks(path) -> tuple[float, float, float]:
         return np.column_stack([np.sqrt(np.einsum("ij,ij->i", o[k], o[k])) for k in (1, 2, 3)])
 
     y = norms(grid)
-    peak, _ = refine_max(norms, grid, y, segments=seg, within=PEAK_WITHIN * y.max(axis=0))
+    peak, _ = refine_max(norms, grid, y, segments=seg, within=PEAK_WITHIN * y.max(axis=0), rtol=PEAK_RTOL)
     return float(peak[0]), float(peak[1]), float(peak[2])

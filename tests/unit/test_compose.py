@@ -59,7 +59,7 @@ def test_composed_motion_is_the_independent_composition(seed):
 def test_composed_peaks_are_the_dense_peaks():
     # the composed path's v̂, â, ĵ against its own motion on 200,001 points and its breakpoints: the composition is
     # checked above, so this checks the peak search (a dense miss is ≤ ~(5e-6/width)², 1e-7 relative allowed; the
-    # peaks found can only be above the dense maxima, never more than that)
+    # peaks found are the path's own values, known to 1e-10 of the true maxima: below the dense ones by no more)
     path = plan_path(ADEPT, "bspline")
     from pickplace_cli.model.profile import load_profile
     from pickplace_cli.planner import motion_model
@@ -74,4 +74,4 @@ def test_composed_peaks_are_the_dense_peaks():
         o = got.all_orders(u)
         dense = [np.linalg.norm(o[k], axis=1).max() for k in (1, 2, 3)]
         for k in range(3):
-            assert dense[k] * (1 - 1e-12) <= got.peaks[k] <= dense[k] * (1 + 1e-7)
+            assert dense[k] * (1 - 1e-10) <= got.peaks[k] <= dense[k] * (1 + 1e-7)
