@@ -3,6 +3,7 @@ before and after, in the same run.
 
     python bench/bench_compose.py                 # the Adept cycle + 12 random moves of delta-su2018 (~1 min)
     python bench/bench_compose.py --moves 30 --repeat 30
+    python bench/bench_compose.py -o bench/results/compose.txt     # appends what it prints
 
 The laws are solved once (``optimal_law`` of ``plan --time optimal``'s first law); then, per law, medians of
 ``--repeat`` interleaved rounds: ``compose`` as it was (a 4001-point cubic-Hermite table of τ(u) and the Cartesian
@@ -146,7 +147,16 @@ def main() -> None:
     ap.add_argument("--moves", type=int, default=12)
     ap.add_argument("--repeat", type=int, default=15)
     ap.add_argument("--seed", type=int, default=7)
+    ap.add_argument("-o", "--out", default=None, help="also append the lines printed to this text file")
     args = ap.parse_args()
+    lines: list[str] = []
+
+    def say(text: str) -> None:
+        print(text, flush=True)
+        lines.append(text)
+
+    say(f"# python bench/bench_compose.py --moves {args.moves} --repeat {args.repeat} --seed {args.seed} "
+        f"(load average {os.getloadavg()[0]:.2f}, {os.cpu_count()} cores)")
     from threadpoolctl import threadpool_limits
 
     threadpool_limits(1)
@@ -171,13 +181,16 @@ def main() -> None:
         med = {k: 1e3 * statistics.median(v) for k, v in times.items()}
         mc = {k: 1e3 * statistics.median(v) for k, v in cpu.items()}
         rows.append((med, mc))
-        print(f"{name:10s} compose {med['compose_before']:6.2f} → {med['compose']:5.2f} ms (CPU {mc['compose_before']:.2f} → "
+        say(f"{name:10s} compose {med['compose_before']:6.2f} → {med['compose']:5.2f} ms (CPU {mc['compose_before']:.2f} → "
               f"{mc['compose']:.2f})  judge {med['judge_before']:6.2f} → {med['judge']:5.2f} ms (CPU {mc['judge_before']:.2f} → "
               f"{mc['judge']:.2f})  T {t_new:.6f} s (ΔT/T {t_new / t_old - 1:+.1e})  |Δp| {dp:.1e} m  Δpeaks {dpk:.1e}  "
-              f"ok {r_old.ok}/{r_new.ok}", flush=True)
+              f"ok {r_old.ok}/{r_new.ok}")
     for k in ("compose_before", "compose", "judge_before", "judge"):
-        print(f"median over moves: {k:15s} {statistics.median(r[0][k] for r in rows):6.2f} ms wall, "
-              f"{statistics.median(r[1][k] for r in rows):6.2f} ms CPU")
+        say(f"median over moves: {k:15s} {statistics.median(r[0][k] for r in rows):6.2f} ms wall, "
+            f"{statistics.median(r[1][k] for r in rows):6.2f} ms CPU")
+    if args.out:
+        with open(args.out, "a", encoding="utf-8") as fh:
+            fh.write("\n".join(lines) + "\n")
 
 
 if __name__ == "__main__":
