@@ -367,7 +367,7 @@ def _dense_grid(path) -> np.ndarray:
 def true_peaks(path, grid: np.ndarray | None = None, samples: dict[int, np.ndarray] | None = None) -> tuple[float, float, float]:
     """max ‖d^k p/dτ^k‖ for k = 1, 2, 3 over τ ∈ [0, 1] (m/1^k, T = 1), measured on the path: dense
     samples (plus every breakpoint and τ ± 1e-11 on both sides, so a one-sided limit at a jump is seen),
-    each local maximum refined by golden-section search (:func:`pickplace_cli.curves.peaks.refine_max`)."""
+    every local maximum within 5 % of the top refined (:func:`pickplace_cli.curves.peaks.refine_max`)."""
     if grid is None:
         grid = _dense_grid(path)
 
@@ -375,6 +375,7 @@ def true_peaks(path, grid: np.ndarray | None = None, samples: dict[int, np.ndarr
         o = path.all_orders(t)  # one pass for the three orders (a composed path evaluates its law once)
         return np.column_stack([np.linalg.norm(o[k], axis=1) for k in (1, 2, 3)])
 
-    y = None if samples is None else np.column_stack([np.linalg.norm(samples[k], axis=1) for k in (1, 2, 3)])
-    peak, _ = refine_max(norms, grid, y)
+    y = norms(grid) if samples is None else np.column_stack([np.linalg.norm(samples[k], axis=1) for k in (1, 2, 3)])
+    # every local maximum within 5 % of each norm's top is refined (not only the eight highest samples')
+    peak, _ = refine_max(norms, grid, y, within=0.05 * np.max(y, axis=0))
     return float(peak[0]), float(peak[1]), float(peak[2])

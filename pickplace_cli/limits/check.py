@@ -27,7 +27,7 @@ import numpy as np
 from ..curves.peaks import parabolic_peak
 from ..model.errors import UnreachableError
 from .grid import interior_jumps, segment_ids
-from .motion import MotionModel, Parts
+from .motion import EXACT_BAND, MotionModel, Parts
 from .report import LimitReport, LimitRow
 
 
@@ -237,7 +237,8 @@ def capacity_rows(path, T: float, capacity, not_held: str = "", grid: np.ndarray
 
         x = np.unique(np.clip(np.asarray(grid, float), 0.0, 1.0))
         seg = segment_ids(x, interior_jumps(path.breakpoints, path.jumps))
-        peak, where = refine_max(norms, x, segments=seg)
+        y = norms(x)  # every local maximum within the exact band of each norm's top is refined, as for the joints
+        peak, where = refine_max(norms, x, y, segments=seg, within=EXACT_BAND * y.max(axis=0), rtol=EXACT_RTOL)
         v, a, j = (float(p) for p in peak)
         at = tuple(float(w) * T for w in where)
     rows = [("speed", "m/s", v / T, capacity.velocity, at[0]),
