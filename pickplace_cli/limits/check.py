@@ -164,10 +164,15 @@ def check_limits(
         # on the model itself, never taken from an interpolated estimate)
         near = np.flatnonzero(close | (np.abs(peak - limits) <= plan.band) | (peak > limits))
         if near.size:
+            # only timed limits near: the model without its singularity measure, their columns there (a call is
+            # ~30 % cheaper on a few points)
+            timed = bool(np.isin(near, plan.zoom).all())
+            cols = plan.zoom_sub[np.searchsorted(plan.zoom, near)] if timed else near
+            sing = parts.singularity is not None and not timed  # (the columns of ``parts`` otherwise)
 
             def fun(s: np.ndarray) -> np.ndarray:
-                pr = model.parts(np.clip(s, 0.0, 1.0), derivatives=True)
-                return model.columns(pr, T)[1][:, near]
+                pr = model.parts(np.clip(s, 0.0, 1.0), derivatives=parts.dAm is not None, singularity=sing)
+                return model.columns(pr, T)[1][:, cols]
 
             # the exact value replaces the estimate; it is never below the sampled maximum
             exact, exact_at = refine_max(fun, x, data[:, near], segments=seg, within=plan.band[near], rtol=EXACT_RTOL)
