@@ -287,8 +287,9 @@ def refine_max(
     a concave corner, such as the torque rate's kink at a law's knot) its maximum there lies at most that lead
     above the best point (the chord slopes of a concave function bound its slopes beyond them), so the peak
     returned is then within ``rtol`` (relative) below the true one; the ``iterations`` bound still caps the
-    rounds (it stops a corner between samples first, whose value error is linear in the bracket: ~1e-8 there). Brackets that cannot hold their column's maximum are dropped on the way and the points of each call
-    spread over the rest (:func:`_search`).
+    rounds (it stops a corner between samples first, whose value error is linear in the bracket: ~1e-8 there).
+    Brackets that cannot hold their column's maximum are dropped on the way and the points of each call spread
+    over the rest (:func:`_search`).
     """
     x = np.asarray(x, dtype=float)
     if y is None:
