@@ -246,6 +246,27 @@ def _search(f, a: np.ndarray, b: np.ndarray, cols: np.ndarray, ncol: int, budget
     return fm, xm
 
 
+def _vertex_reach(x: np.ndarray, y: np.ndarray, segments: np.ndarray | None) -> np.ndarray:
+    """(N, n_cols): each sample's value, or the vertex of the parabola through it and its two neighbours where that
+    opens downward and rises above it (three samples of one segment): how high a local maximum of the samples is
+    estimated to reach, for :func:`refine_max`'s ``within``."""
+    out = y.copy()
+    if len(x) < 3:
+        return out
+    x0, x1, x2 = x[:-2, None], x[1:-1, None], x[2:, None]
+    y0, y1, y2 = y[:-2], y[1:-1], y[2:]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        d1, d2 = (y1 - y0) / (x1 - x0), (y2 - y1) / (x2 - x1)
+        curv = (d2 - d1) / (x2 - x0)
+        slope = d1 + curv * (x1 - x0)
+        top = np.where(curv < 0, y1 - slope**2 / (4 * np.where(curv < 0, curv, -1.0)), y1)
+    if segments is not None:
+        one = (segments[:-2] == segments[1:-1]) & (segments[1:-1] == segments[2:])
+        top = np.where(one[:, None], top, y1)
+    out[1:-1] = np.maximum(y1, np.nan_to_num(top, nan=-np.inf))
+    return out
+
+
 def refine_max(
     fun: Callable[[np.ndarray], np.ndarray],
     x: np.ndarray,
@@ -275,9 +296,9 @@ def refine_max(
     label, so a search never straddles a jump of ``fun``.
 
     ``within`` (a number or (n_cols,)): instead of the ``max_candidates`` highest, *every* local maximum of the
-    samples whose sampled value is at least the column's largest sample minus ``within`` is refined (a peak
-    that rises more than ``within`` above its neighbouring samples is one the grid does not resolve: the grid
-    must be chosen so that none does). Taking the highest samples only is not safe: a time-optimal law rides its
+    samples whose sampled value, or the vertex of the parabola through it and its neighbours, is at least the
+    column's largest sample minus ``within`` is refined (a peak that rises more than ``within`` above that is one
+    the grid does not resolve: the grid must be chosen so that none does). Taking the highest samples only is not safe: a time-optimal law rides its
     limit, so a column has dozens of local maxima within 1e-3 of each other, and a narrow peak sampled on its
     flanks can rank below eight of them while its top is the column's maximum (100.005 % of a torque-rate
     limit reported as 99.9 %).
@@ -312,12 +333,13 @@ def refine_max(
     is_peak = (y >= left) & (y >= right)
     lo_list, hi_list, col_list = [], [], []
     floor = None if within is None else best - np.broadcast_to(np.asarray(within, float), best.shape)
+    reach = None if floor is None else _vertex_reach(x, y, segments)
     for c in range(ncol):
         idx = np.flatnonzero(is_peak[:, c])
         if floor is None:
             idx = idx[np.argsort(y[idx, c])[::-1][:max_candidates]]
         else:
-            idx = idx[y[idx, c] >= floor[c]]
+            idx = idx[reach[idx, c] >= floor[c]]
         lo, hi = np.maximum(idx - 1, 0), np.minimum(idx + 1, n - 1)
         if segments is not None:
             lo = np.where(segments[lo] == segments[idx], lo, idx)

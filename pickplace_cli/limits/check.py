@@ -7,8 +7,9 @@ sampled, then refined at the top sample by the vertex of the parabola through it
 peak comes within ``EXACT_BAND`` of its limit is refined exactly on the model itself, so the verdict near a limit
 does not depend on sampling:
 
-* every local maximum of its samples within ``EXACT_BAND`` of the limit below the column's largest sample is
-  bracketed by its neighbours (never across a jump) and searched (:func:`~pickplace_cli.curves.peaks.refine_max`
+* every local maximum of its samples that reaches (by its sample, or by the vertex of the parabola through it and
+  its neighbours) within ``EXACT_BAND`` of the limit below the column's largest sample is bracketed by its
+  neighbours (never across a jump) and searched (:func:`~pickplace_cli.curves.peaks.refine_max`
   with ``within``), not only the highest few: a time-optimal law rides its limit, with dozens of local maxima
   within 1e-3 of each other, and a peak sampled on its flanks can rank low while it is the column's maximum;
 * each search stops when its best point leads both neighbours by at most ``EXACT_RTOL`` of its value: the peak
@@ -16,7 +17,7 @@ does not depend on sampling:
   between two samples stops at the search's bracket limit first, ~1e-8; the path's knots and jumps are samples).
 
 The precondition is the grid's: no local maximum of a limited quantity rises more than ``EXACT_BAND`` of its
-limit above the grid samples beside it (measured on every shipped profile's default and time-optimal plans:
+limit above that estimate (measured on every shipped profile's default and time-optimal plans:
 under 1 %, tests/unit/test_check_peaks.py).
 """
 

@@ -160,3 +160,26 @@ def test_the_report_is_the_dense_truth_and_the_grid_resolves_every_peak(name):
                 if abs(truth - limit) > 1e-6 * limit:
                     assert row.ok == (truth <= limit), (pl.duration.mode, joint, quantity)
     assert maxima >= 8 and near >= 2  # the moves do ride their limits (time-optimal: several rows at once)
+
+
+def test_a_peak_sampled_below_the_band_but_whose_parabola_reaches_it_is_refined():
+    # a narrower peak (σ = 2.2 grid steps) centred between two samples: its samples read 92.4 % of the limit,
+    # below the band's floor (99.9 % − 5 %), while it reaches 100.02 %; the parabola through each of them and its
+    # neighbours peaks at 98.7 %, inside the band: it is refined and found (the samples alone would not select it:
+    # fails when the selection reads the samples only)
+    global SIGMA
+    saved = SIGMA
+    try:
+        SIGMA = 2.2 * H
+        model, orders = _case()
+        tau = np.linspace(0.0, 1.0, 251)
+        sampled = np.abs(orders(tau)[2][:, 0])
+        near = np.abs(tau - (0.9 + H / 2)) < H
+        assert sampled[near].max() < 0.949 * LIMIT  # the samples beside the peak are below the floor
+        truth = np.abs(orders(np.linspace(0.85, 0.95, 200_001))[2][:, 0]).max()
+        assert truth > LIMIT
+        row = next(r for r in check_limits(model, 1.0, parts=model.parts(tau)).rows
+                   if r.joint == "q1" and r.quantity == "acceleration")
+        assert not row.ok and row.peak == pytest.approx(truth, rel=1e-7)
+    finally:
+        SIGMA = saved
