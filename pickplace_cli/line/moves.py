@@ -331,19 +331,23 @@ def transfer_window(mv: "Move") -> tuple[float, float]:
     breaks = mv.basis.breaks
     z = mv.da[:, 2]
     derivs = np.array([m @ z for m in mv.basis.left])  # (6, spans): d^r z/dτ^r at each span's left end
+    spans = len(breaks) - 1
+    coef = np.empty((2, spans, 6))  # per level and span: the quintic z − level, highest power first (as np.roots)
+    coef[:] = (derivs[::-1] / _FACTORIALS[::-1, None]).T
+    coef[0, :, -1] -= z_lift
+    coef[1, :, -1] -= z_set
+    roots = _quintic_roots(coef.reshape(-1, 6)).reshape(2, spans, -1)
 
-    def crossings(level: float) -> list[float]:
+    def crossings(level: int) -> list[float]:
         out = []
-        for k in range(len(breaks) - 1):
-            c = [derivs[r, k] / math.factorial(r) for r in range(5, -1, -1)]
-            c[-1] -= level
+        for k in range(spans):
             h = breaks[k + 1] - breaks[k]
-            for root in np.roots(c):
+            for root in roots[level, k]:
                 if abs(root.imag) < 1e-9 and -1e-12 <= root.real <= h + 1e-12:
                     out.append(float(breaks[k] + min(max(root.real, 0.0), h)))
         return sorted(out)
 
-    up, down = crossings(z_lift), crossings(z_set)
+    up, down = crossings(0), crossings(1)
     if mv.start[2] >= z_lift:
         up = [0.0] + up
     if mv.end_a[2] >= z_set:
@@ -351,6 +355,28 @@ def transfer_window(mv: "Move") -> tuple[float, float]:
     if not up or not down or not up[0] < down[-1]:
         return 0.0, 1.0
     return up[0], down[-1]
+
+
+_FACTORIALS = np.array([math.factorial(r) for r in range(6)], float)
+
+
+def _quintic_roots(coef: np.ndarray) -> np.ndarray:
+    """The roots of every quintic of ``coef`` (n, 6) (highest power first), (n, 5) complex, NaN where fewer: the
+    eigenvalues of their companion matrices in one batched call, as :func:`numpy.roots` forms them (a quintic whose
+    highest or lowest coefficient is 0 goes to numpy.roots itself, which drops those)."""
+    n = len(coef)
+    out = np.full((n, 5), np.nan, complex)
+    full = (coef[:, 0] != 0.0) & (coef[:, -1] != 0.0)
+    if full.any():
+        c = coef[full]
+        companion = np.zeros((len(c), 5, 5))
+        companion[:, 1:, :-1] = np.eye(4)
+        companion[:, 0, :] = -c[:, 1:] / c[:, :1]
+        out[full] = np.linalg.eigvals(companion)
+    for i in np.flatnonzero(~full):
+        r = np.roots(coef[i])
+        out[i, :len(r)] = r
+    return out
 
 
 def first_feasible(excess: Callable[[np.ndarray], np.ndarray], a: float, b: float, rtol: float = RTOL,

@@ -38,24 +38,16 @@ from ..model.errors import PickplaceError, TaskError, UnreachableError
 from .frames import Frame
 from .grids import UsePlan, _leg_of, track_basis
 from .legs import Cycle, Decline, Leg, RobotState
-from .moves import (HORIZON, Move, Shapes, Solved, T_MIN, exact_rule, first_feasible, search_auto, solve_auto,
+from .limit_search import LIMITS_SCREEN, NUDGE_ORDER, SCREEN_MARGIN, TIMED, LimitSearch  # noqa: F401 - (re-exported)
+from .moves import (HORIZON, Move, Shapes, Solved, T_MIN, first_feasible, search_auto, solve_auto,
                     solve_seconds, verify_auto)
 
-#: a leg is decided by the screening when every estimated limit use is at most this
-SCREEN_MARGIN = 0.9
 #: the capacity rule's durations found on the grid are raised by this fraction before their exact check (the
 #: refined grid peaks are within 1.3e-4 of the exact ones on a 3-robot line's moves, median 1e-5), so the exact
 #: check rarely has to nudge one (which would move the meeting point and so the place move's start)
 GRID_SAFETY = 2e-4
-#: under the rule ``limits`` the capacity's durations stand when no joint or motor limit is used beyond this on the
-#: grid (its estimates are within 0.3 % of the exact peaks; a leg above SCREEN_MARGIN is still checked exactly)
-LIMITS_SCREEN = 0.95
 #: rounds of a cycle delayed until its place move arrives after an exchange (the part moves on meanwhile)
 EXCHANGE_ROUNDS = 6
-#: the quantities a duration changes (the fit rule's); positions, workcell and singularity do not
-TIMED = frozenset({"velocity", "acceleration", "jerk", "motor speed", "motor torque", "motor torque rate"})
-#: the power of 1/T each of them grows with at most (a torque's gravity part does not grow: less than 2)
-NUDGE_ORDER = {"velocity": 1, "motor speed": 1, "acceleration": 2, "motor torque": 2, "jerk": 3, "motor torque rate": 3}
 
 
 class _Reason:
@@ -95,7 +87,7 @@ class _StandIn:
         return None
 
 
-class LineRobot:
+class LineRobot(LimitSearch):
     """A robot of the line (module docstring): set up from its :class:`~pickplace_cli.line.spec.RobotSpec`."""
 
     def __init__(self, spec, line, profile, shapes: Shapes, latency: float, grip: float) -> None:
@@ -155,6 +147,8 @@ class LineRobot:
         home = spec.home if spec.home is not None else None
         self.home = self.frame.to_robot(home) if home is not None else self.targets[0][0].copy()
         self.next_target = 0
+        #: the rotary fourth axis in closed form where it is decoupled from the arm (a Delta's; else None)
+        self.axis = _decoupled_axis(self.model, self.home) if self.rotary else None
         #: (places between two exchanges, seconds of an exchange), or None; until when it cannot place [s]; the
         #: exchanges (start, end) [s]
         ex = spec.place.exchange
@@ -165,6 +159,7 @@ class LineRobot:
         self.last_T = 0.2
         self.last_place_T = 0.2
         self._plan = None
+        self._last_uses = None
         self.use_keys: list = []
         self.home_torque = self._holding(self.home)
 
@@ -402,9 +397,9 @@ class LineRobot:
             pick = self._solve_fit(moves, a, b, True, pick.T)
             if pick is None:
                 return None
-            leave = pick.end + self.v_belt * self.dwell
-            pm = self._place_moves(leave, target, v_out, turn, pick.T)
-            place = self._solve(pm, *pm[0].span)
+            leave = pick.end + self.v_belt * self.dwell  # (the place then starts elsewhere: searched from the
+            pm = self._place_moves(leave, target, v_out, turn, pick.T)  # capacity's place duration up)
+            place = self._solve_fit(pm, *pm[0].span, True, place.T)
             return (pick, place) if place is not None else self._no_place(leave, target)
         if self.rule != "auto":
             pick = self._solve(moves, a, b)
@@ -414,10 +409,6 @@ class LineRobot:
             place = self._solve(pm, *pm[0].span)
             return (pick, place) if place is not None else self._no_place(pick.end + self.v_belt * self.dwell, target)
         return self._capacity_pick_and_place(moves, a, b, target, v_out, turn)
-
-    def _motors_clear(self, solved: Solved) -> bool:
-        """Every timed joint and motor limit used at most ``LIMITS_SCREEN`` on the move's grid at its duration."""
-        return bool(self._excess_fit(solved.move, np.array([solved.T]))[0] <= LIMITS_SCREEN - 1.0)
 
     def _capacity_pick_and_place(self, moves: list[Move], a: float, b: float, target, v_out, turn=(0.0, 0.0)):
         """(pick, place) by the Cartesian capacity (the rule ``auto``), None, or a Decline for the place."""
@@ -472,71 +463,6 @@ class LineRobot:
                 text += f"; the earliest meeting is {self.speed * (T - b) * 1e3:.0f} mm past that"
         return text
 
-    def _solve_fit(self, moves: list[Move], a: float, b: float, capacity: bool = False,
-                   guess: float | None = None) -> Solved | None:
-        """The smallest T in [a, b] at which every timed limit holds on the grid, then the exact check at T and
-        nudged up until it holds (as the rendezvous fit does). ``capacity``: the Cartesian capacity too (the rule
-        limits: the longer of both, each checked exactly)."""
-        def excess(mv):
-            if not capacity:
-                return lambda Ts: self._excess_fit(mv, Ts)
-            auto = mv.excess_auto(self.capacity)
-            return lambda Ts: np.maximum(self._excess_fit(mv, Ts), auto(Ts))
-
-        best = None
-        for mv in moves:
-            T = first_feasible(excess(mv), a, b, scan=8, guess=guess)
-            if T is not None and (best is None or T < best[1]):
-                best = (mv, T)
-        if best is None:
-            return None
-        mv, T = best
-        from ..limits.check import check_limits
-        from ..planner import motion_model
-
-        for _ in range(20):
-            if T > b * (1 + 1e-12):
-                return None
-            try:
-                rep = check_limits(motion_model(mv.path(T), self.profile), T, dwell=0.0)
-            except (UnreachableError, TaskError):
-                return None
-            # each use scales with T as T^-k (speeds k = 1, accelerations and torques at most 2, jerks and torque
-            # rates at most 3): the step u^(1/k) is exact for a speed and never too long for the others
-            bad = [r.utilisation ** (1 / NUDGE_ORDER[r.quantity]) for r in rep.violations if r.quantity in TIMED]
-            if capacity:  # the capacity on the exact peaks: T_auto(T)/T > 1 when it is exceeded
-                t_rule = exact_rule([(mv, T)], self.capacity)[1][0]
-                if t_rule > T:
-                    bad.append(t_rule / T)
-            if not bad:
-                return Solved(mv, T, mv.exact_peaks(T), rep)
-            T *= max(bad) * (1.0 + 1e-9)
-        return None  # pragma: no cover - converges in one or two steps
-
-    def _excess_fit(self, mv: Move, Ts: np.ndarray) -> np.ndarray:
-        """max over the timed limits of use − 1 on the grid for each trial T (inf where a sample is out of reach)."""
-        Ts = np.asarray(Ts, float)
-        tau = mv.basis.tau
-        G = len(tau)
-        out = np.full(len(Ts), np.inf)
-        motion = [np.concatenate([a + T * b for T in Ts]) for a, b in zip(mv.A, mv.B)]
-        if self.rotary:
-            motion.append(np.tile(mv.angle_orders(tau), len(Ts)))
-        try:
-            parts = self.model.parts(np.tile(tau, len(Ts)), motion=tuple(motion), singularity=False)
-        except UnreachableError:
-            if len(Ts) == 1:
-                return out
-            return np.concatenate([self._excess_fit(mv, np.array([T])) for T in Ts])
-        meta, data = self.model.columns(parts, np.repeat(Ts, G))
-        cols = [c for c, m in enumerate(meta) if m[1] in TIMED]
-        limits = np.array([meta[c][3] for c in cols])
-        if not cols:  # no timed limit (a gantry without drives' ratings): none binds
-            return np.full(len(Ts), -1.0)
-        peaks = parabolic_peak(np.tile(tau, len(Ts)), data[:, cols], np.arange(0, len(Ts) * G + 1, G))[0]
-        return np.max(peaks / limits, axis=1) - 1.0
-
-    # ---------------------------------------------------------------------------------------- the check
     def _check(self, legs: list[Leg]) -> Decline | None:
         """Check every leg (module docstring); fills each leg's integral, use and end torque. A Decline naming the
         leg and the limit (or the point out of reach) when one fails."""
@@ -574,14 +500,28 @@ class LineRobot:
             torque = am / T**2 + gm
             leg.integral = T * (gl_w[:, None] * torque[gl_i] ** 2).sum(axis=0)
             leg.end_torque = torque[-1].copy()
+        axis = self._axis_rows(meta, peaks, legs)
         uses = plan(peaks)
         for leg, use in zip(legs, uses):
             leg.use = use
-            if use.max(initial=0.0) > SCREEN_MARGIN:
+            if axis is None and use.max(initial=0.0) > SCREEN_MARGIN or axis is not None and (
+                    use[~axis].max(initial=0.0) > SCREEN_MARGIN or use[axis].max(initial=0.0) > 1.0):
                 bad = self._exact_check(leg)
                 if bad is not None:
                     return bad
         return None
+
+    def _axis_rows(self, meta, peaks: np.ndarray, legs: list[Leg]) -> np.ndarray | None:
+        """A decoupled fourth axis' columns of ``peaks`` (legs × columns) set to their exact values (closed form), and
+        which rows of the use are the axis' (None without such an axis)."""
+        if self.axis is None:
+            return None
+        idx = self.axis.plan(meta)[0]
+        for k, leg in enumerate(legs):
+            mv = leg.solved.move if leg.solved is not None else None
+            ends = (mv.theta, mv.theta_end) if mv is not None else (leg.theta, leg.theta)
+            peaks[k, idx] = self.axis.values(meta, mv, ends, max(leg.duration, 1e-9))[0]
+        return np.array([key[0] == self.axis.joint for key in self.use_keys], bool)
 
     def _use_plan(self, meta) -> "UsePlan":
         if self._plan is None or self._plan.meta != meta:  # the same columns every time (a new list each call)
@@ -620,6 +560,17 @@ class LineRobot:
 
 
 # ------------------------------------------------------------------------------------------------ helpers
+
+
+def _decoupled_axis(model, point):
+    """:class:`~pickplace_cli.line.rotary_axis.DecoupledAxis` of the model, None when coupled (or ``point`` is out
+    of reach)."""
+    from .rotary_axis import DecoupledAxis
+
+    try:
+        return DecoupledAxis.of(model, point)
+    except UnreachableError:
+        return None
 
 
 def _paper():
