@@ -58,7 +58,12 @@ class LimitSearch:
         best = None
         for mv in moves:
             lo = max(a, self.axis.shortest(mv)) if self.axis is not None else a  # below it the fourth axis breaks one
-            T = first_feasible(excess(mv), lo, b, scan=8, guess=None if guess is None else max(guess, lo))
+            g = None if guess is None else max(guess, lo)
+            if capacity:  # the capacity's own first T (cheap: no model); where the motors hold there, it is the answer,
+                lo = g = first_feasible(mv.excess_auto(self.capacity), lo, b, scan=8, guess=g)  # else from there up
+                if lo is None:
+                    continue
+            T = first_feasible(excess(mv), lo, b, scan=8, guess=g)
             if T is not None and (best is None or T < best[1]):
                 best = (mv, T)
         if best is None:

@@ -148,7 +148,7 @@ class Move:
                  theta: float = 0.0, turn: float = 0.0) -> None:
         self.basis = basis
         self.theta, self.turn = float(theta), float(turn)
-        self._law = None
+        self._law = self._turn_peaks = None
         self.start = np.asarray(start, float)
         self.v_from, self.v_to = np.asarray(v_from, float), np.asarray(v_to, float)
         self.end_a, self.end_b = np.asarray(end_a, float), np.asarray(end_b, float)
@@ -290,6 +290,13 @@ class Move:
         if self._law is None:
             self._law = turn_law(self)
         return self._law
+
+    def turn_peaks(self) -> tuple[float, float, float]:
+        """Exact max |θ′|, |θ″|, |θ‴| over τ of the tool angle's law [rad/1^k] (:attr:`RotationLaw.peaks`; 0 without a
+        turn), kept with the move (three numbers: through :meth:`drop_caches` too)."""
+        if self._turn_peaks is None:
+            self._turn_peaks = self.law().peaks if self.turn != 0.0 else (0.0, 0.0, 0.0)
+        return self._turn_peaks
 
     def angle_orders(self, tau) -> np.ndarray:
         """θ, θ′, θ″, θ‴ (4, N) of the tool angle at τ [rad/1^k] (the law of :meth:`path`, the same at every T)."""

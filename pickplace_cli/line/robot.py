@@ -159,7 +159,7 @@ class LineRobot(LimitSearch):
         self.last_T = 0.2
         self.last_place_T = 0.2
         self._plan = None
-        self._last_uses = None
+        self._last_uses = self._kept = self._timed = None
         self.use_keys: list = []
         self.home_torque = self._holding(self.home)
 
@@ -303,11 +303,8 @@ class LineRobot(LimitSearch):
         if isinstance(solved, Decline):
             return solved
         pick, place = solved
-        meet = pick.end
-        track = Leg("track", t_start + pick.T, self.dwell, point=meet, velocity=self.v_belt.copy(), theta=th_grip)
-        legs = [Leg("pick", t_start, pick.T, pick), track, Leg("place", track.t1, place.T, place)]
-        legs.append(Leg("release", legs[-1].t1, self.release, point=place.end.copy(), velocity=v_out.copy(),
-                        theta=th_grip + t_place))
+        legs = self._legs(t_start, pick, place, pturn, v_out)
+        meet = legs[1].point
         bad = self._check(legs)
         if bad is not None:
             return bad
@@ -317,6 +314,15 @@ class LineRobot(LimitSearch):
         where = place.move.pocket if self.pockets is not None else self.next_target % len(self.targets)
         return Cycle(legs, t_start, t_start + pick.T, meet.copy(), meet_line, where, place.end.copy(), state,
                      waited=waited)
+
+    def _legs(self, t_start: float, pick: Solved, place: Solved, turn: tuple[float, float], v_out) -> list[Leg]:
+        """The legs of a cycle from ``t_start`` [s]: pick, track (the grip, at the tool angle ``turn[0]``), place (the
+        turn ``turn[1]``) and release."""
+        track = Leg("track", t_start + pick.T, self.dwell, point=pick.end, velocity=self.v_belt.copy(), theta=turn[0])
+        legs = [Leg("pick", t_start, pick.T, pick), track, Leg("place", track.t1, place.T, place)]
+        legs.append(Leg("release", legs[-1].t1, self.release, point=place.end.copy(), velocity=np.array(v_out, float),
+                        theta=turn[0] + turn[1]))
+        return legs
 
     def commit(self, cycle: Cycle) -> None:
         self.state = cycle.state
@@ -385,8 +391,9 @@ class LineRobot(LimitSearch):
             if not isinstance(got, tuple):
                 return got  # (None or a Decline: no move holds the capacity, so none holds every limit)
             pick, place = got
-            if self._motors_clear(pick):
-                if self._motors_clear(place):
+            clear = self._motors_clear_both(pick, place, turn, v_out)
+            if clear[0]:
+                if clear[1]:
                     return got
                 # the pick stands; the place alone is searched on every limit, from its capacity duration up (the
                 # rule's duration is the longer of both: none shorter holds)
@@ -466,6 +473,47 @@ class LineRobot(LimitSearch):
     def _check(self, legs: list[Leg]) -> Decline | None:
         """Check every leg (module docstring); fills each leg's integral, use and end torque. A Decline naming the
         leg and the limit (or the point out of reach) when one fails."""
+        got = self._evaluate(legs)
+        if isinstance(got, Decline):
+            return got
+        meta, peaks, sums = got
+        plan = self._use_plan(meta)
+        for leg, (integral, end) in zip(legs, sums):
+            leg.integral, leg.end_torque = integral, end
+        axis = None if self.axis is None else np.array([k[0] == self.axis.joint for k in self.use_keys], bool)
+        uses = plan(peaks)
+        for leg, use in zip(legs, uses):
+            leg.use = use
+            if axis is None and use.max(initial=0.0) > SCREEN_MARGIN or axis is not None and (
+                    use[~axis].max(initial=0.0) > SCREEN_MARGIN or use[axis].max(initial=0.0) > 1.0):
+                bad = self._exact_check(leg)
+                if bad is not None:
+                    return bad
+        return None
+
+    def _motors_clear_both(self, pick: Solved, place: Solved, turn, v_out) -> tuple[bool, bool]:
+        """:meth:`_motors_clear` of the pick and of the place, from one evaluation of the model on the cycle's legs,
+        kept for the cycle's check (:meth:`_evaluate`) when it asks for the same legs."""
+        legs = self._legs(0.0, pick, place, turn, v_out)
+        got = self._evaluate(legs)
+        if isinstance(got, Decline):  # a point out of reach: each move on its own (that leg's search then says)
+            return self._motors_clear(pick), self._motors_clear(place)
+        self._kept = (legs, got)
+        meta, peaks, _ = got
+        if self._timed is None or self._timed[0] != meta:
+            cols = [c for c, m in enumerate(meta) if m[1] in TIMED]
+            self._timed = (meta, cols, np.array([meta[c][3] for c in cols]))
+        _, cols, limits = self._timed
+        use = np.max(peaks[[0, 2]][:, cols] / limits, axis=1, initial=0.0)
+        return bool(use[0] <= LIMITS_SCREEN), bool(use[1] <= LIMITS_SCREEN)
+
+    def _evaluate(self, legs: list[Leg]):
+        """The robot model once on every leg's grid: (meta, column peaks (legs × columns; a decoupled fourth axis'
+        exact), [(∫ torque² dt [N²·m²·s], end torque [N·m])] per leg), or a Decline naming the leg out of reach. The
+        evaluation kept by :meth:`_motors_clear_both` serves when its legs are these (the same moves and durations)."""
+        kept, self._kept = self._kept, None
+        if kept is not None and _same_legs(kept[0], legs):
+            return kept[1]
         grids = []
         for leg in legs:
             if leg.solved is not None:
@@ -489,39 +537,23 @@ class LineRobot(LimitSearch):
             return Decline(f"robot {self.name}: the {legs[k].kind} move (t = {legs[k].t0:.4f} … {legs[k].t1:.4f} s) "
                            f"leaves the workspace: {exc}")
         meta, data = self.model.columns(parts, Ts)
-        plan = self._use_plan(meta)
         start = 0
         peaks = parabolic_peak(tau, data, np.concatenate([[0], np.cumsum([len(g[0]) for g in grids])]))[0]
+        sums = []
         for leg, (gtau, _, gl_i, gl_w) in zip(legs, grids):
             sl = slice(start, start + len(gtau))
             start += len(gtau)
             T = max(leg.duration, 1e-9)
             am, gm = (parts.Am[sl], parts.Gm[sl]) if self.has_drives else (parts.A[sl], parts.G[sl])
             torque = am / T**2 + gm
-            leg.integral = T * (gl_w[:, None] * torque[gl_i] ** 2).sum(axis=0)
-            leg.end_torque = torque[-1].copy()
-        axis = self._axis_rows(meta, peaks, legs)
-        uses = plan(peaks)
-        for leg, use in zip(legs, uses):
-            leg.use = use
-            if axis is None and use.max(initial=0.0) > SCREEN_MARGIN or axis is not None and (
-                    use[~axis].max(initial=0.0) > SCREEN_MARGIN or use[axis].max(initial=0.0) > 1.0):
-                bad = self._exact_check(leg)
-                if bad is not None:
-                    return bad
-        return None
-
-    def _axis_rows(self, meta, peaks: np.ndarray, legs: list[Leg]) -> np.ndarray | None:
-        """A decoupled fourth axis' columns of ``peaks`` (legs × columns) set to their exact values (closed form), and
-        which rows of the use are the axis' (None without such an axis)."""
-        if self.axis is None:
-            return None
-        idx = self.axis.plan(meta)[0]
-        for k, leg in enumerate(legs):
-            mv = leg.solved.move if leg.solved is not None else None
-            ends = (mv.theta, mv.theta_end) if mv is not None else (leg.theta, leg.theta)
-            peaks[k, idx] = self.axis.values(meta, mv, ends, max(leg.duration, 1e-9))[0]
-        return np.array([key[0] == self.axis.joint for key in self.use_keys], bool)
+            sums.append((T * (gl_w[:, None] * torque[gl_i] ** 2).sum(axis=0), torque[-1].copy()))
+        if self.axis is not None:  # the decoupled fourth axis' columns: their exact values (closed form)
+            idx = self.axis.plan(meta)[0]
+            for k, leg in enumerate(legs):
+                mv = leg.solved.move if leg.solved is not None else None
+                ends = (mv.theta, mv.theta_end) if mv is not None else (leg.theta, leg.theta)
+                peaks[k, idx] = self.axis.values(meta, mv, ends, max(leg.duration, 1e-9))[0]
+        return meta, peaks, sums
 
     def _use_plan(self, meta) -> "UsePlan":
         if self._plan is None or self._plan.meta != meta:  # the same columns every time (a new list each call)
@@ -560,6 +592,14 @@ class LineRobot(LimitSearch):
 
 
 # ------------------------------------------------------------------------------------------------ helpers
+
+
+def _same_legs(a: list[Leg], b: list[Leg]) -> bool:
+    """The same legs but for their start times: kinds, durations, the same moves, track/release lines and angles."""
+    return len(a) == len(b) and all(
+        x.kind == y.kind and x.duration == y.duration and x.solved is y.solved and x.theta == y.theta
+        and (x.solved is not None or np.array_equal(x.point, y.point) and np.array_equal(x.velocity, y.velocity))
+        for x, y in zip(a, b))
 
 
 def _decoupled_axis(model, point):

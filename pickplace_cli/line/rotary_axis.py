@@ -93,9 +93,7 @@ class DecoupledAxis:
     @staticmethod
     def law_peaks(move) -> tuple[float, float, float]:
         """Exact max |θ′|, |θ″|, |θ‴| over the move's τ [rad/1^k] (0 without a turn)."""
-        if move is None or move.turn == 0.0:
-            return 0.0, 0.0, 0.0
-        return move.law().peaks
+        return (0.0, 0.0, 0.0) if move is None else move.turn_peaks()
 
     def values(self, meta, move, theta: tuple[float, float], T) -> np.ndarray:
         """The axis' columns (column sign convention, as :meth:`MotionModel.columns` holds them) at the peaks of a leg
