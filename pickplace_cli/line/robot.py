@@ -527,7 +527,8 @@ class LineRobot(LimitSearch):
                 grids.append((tb.tau, [p, np.broadcast_to(d, p.shape).copy(), z, z], tb.gl_index, tb.gl_weight))
         tau = np.concatenate([g[0] for g in grids])
         motion = tuple(np.concatenate([g[1][k] for g in grids]) for k in range(4))
-        if self.rotary:  # the tool angle of every leg (its turn, or held)
+        if self.rotary and self.axis is None:  # the tool angle of every leg (its turn, or held); a decoupled axis
+            # is left out (θ ≡ 0 there: no column, no torque of it) and added in closed form below
             motion += (np.concatenate([leg.angle_orders(g[0]) for g, leg in zip(grids, legs)], axis=1),)
         Ts = np.concatenate([np.full(len(g[0]), max(leg.duration, 1e-9)) for g, leg in zip(grids, legs)])
         try:
@@ -546,13 +547,13 @@ class LineRobot(LimitSearch):
             T = max(leg.duration, 1e-9)
             am, gm = (parts.Am[sl], parts.Gm[sl]) if self.has_drives else (parts.A[sl], parts.G[sl])
             torque = am / T**2 + gm
-            sums.append((T * (gl_w[:, None] * torque[gl_i] ** 2).sum(axis=0), torque[-1].copy()))
-        if self.axis is not None:  # the decoupled fourth axis' columns: their exact values (closed form)
-            idx = self.axis.plan(meta)[0]
-            for k, leg in enumerate(legs):
-                mv = leg.solved.move if leg.solved is not None else None
+            at_nodes = torque[gl_i]
+            mv = leg.solved.move if leg.solved is not None else None
+            if self.axis is not None:  # the decoupled axis: its torque (θ″ alone: 0 at a leg's end) and columns exact
+                at_nodes[:, -1] += self.axis.torque(mv, gtau[gl_i], T)
                 ends = (mv.theta, mv.theta_end) if mv is not None else (leg.theta, leg.theta)
-                peaks[k, idx] = self.axis.values(meta, mv, ends, max(leg.duration, 1e-9))[0]
+                peaks[len(sums), self.axis.plan(meta)[0]] = self.axis.values(meta, mv, ends, T)[0]
+            sums.append((T * (gl_w[:, None] * at_nodes ** 2).sum(axis=0), torque[-1].copy()))
         return meta, peaks, sums
 
     def _use_plan(self, meta) -> "UsePlan":

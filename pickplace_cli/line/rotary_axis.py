@@ -64,6 +64,11 @@ class DecoupledAxis:
         parts = self.model.parts(np.zeros(4), derivatives=rates, motion=(np.repeat(point[None], 4, 0), z, z, z, angle),
                                  singularity=False)
         meta, data = self.model.columns(parts, 1.0)
+        # the axis' own torque (motor's, or the joint's without drives) per unit θ″, signed: θ″ alone, no gravity
+        torque = (parts.Am if self.model.has_drives else parts.A)[:, -1]
+        if np.any(np.delete(torque, 2) != 0.0) or np.any(parts.Gm[:, -1] != 0.0) or np.any(parts.G[:, -1] != 0.0):
+            return None
+        self.torque_coef = float(torque[2])
         out = {}
         for c, m in enumerate(meta):
             if m[0] != self.joint:
@@ -105,6 +110,13 @@ class DecoupledAxis:
         timed = coef * P / Ts[:, None] ** orders
         ends = np.maximum(coef * theta[0], coef * theta[1])  # the range (order 0): q4 = σθ is monotone in τ
         return np.where(orders == 0, ends, timed)
+
+    def torque(self, move, tau: np.ndarray, T: float) -> np.ndarray:
+        """The axis' torque [N·m] (its motor's; its joint's without drives) at τ (N,) of the move at the duration T [s]:
+        the model's own coefficient times θ″(τ)/T² (0 without a turn)."""
+        if move is None or move.turn == 0.0:
+            return np.zeros(len(tau))
+        return self.torque_coef * move.law()(tau, 2) / T**2
 
     def _needs(self, move) -> list[tuple[int, float]]:
         """(order k, c_k·P_k/limit) of every timed limit of the axis for the move's turn."""
