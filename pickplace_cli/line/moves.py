@@ -438,27 +438,36 @@ def _bracket_up(excess, a: float, b: float, guess: float):
 
 
 def _refine(excess, lo: float, hi: float, elo: float, ehi: float, rtol: float) -> float:
-    """Regula falsi (Illinois) on a bracket [lo, hi] with e(lo) > 0 ≥ e(hi): the feasible end within ``rtol``."""
+    """Regula falsi (Illinois) on a bracket [lo, hi] with e(lo) > 0 ≥ e(hi): the feasible end within ``rtol``. The
+    first step is the fixed-point step T·(1 + e) from the feasible end (exact for a rule T_rule/T − 1 whose T_rule does
+    not change with T); when a step lands feasible again, the next is the secant through the last two feasible points
+    (the bracket's other end, often far — the guess's bracket starts at a — says little about the root there)."""
     side = 0
+    wlo, whi = elo, ehi  # the Illinois weights: the true values, halved at an end that stays
+    back = None  # the feasible point before hi
     for _ in range(60):
         if hi - lo <= rtol * hi or -ehi <= ETOL:
             break
-        if side == 0:  # first step: the fixed-point step T·(1 + e) from the feasible end (exact for a rule
-            x = hi * (1.0 + ehi)  # T_rule/T − 1 whose T_rule does not change with T)
+        if side == 0:
+            x = hi * (1.0 + ehi)
+        elif side == -1 and back is not None and back[1] < ehi:
+            x = hi - ehi * (hi - back[0]) / (ehi - back[1])
         else:
-            x = hi - ehi * (hi - lo) / (ehi - elo) if math.isfinite(elo) and elo > 0 else 0.5 * (lo + hi)
+            x = hi - whi * (hi - lo) / (whi - wlo) if math.isfinite(wlo) and wlo > 0 else 0.5 * (lo + hi)
         if not lo < x < hi:
             x = 0.5 * (lo + hi)
         ex = float(excess(np.array([x]))[0])
         if ex <= 0:
-            hi, ehi = x, ex
+            back = (hi, ehi)
+            hi, ehi, whi = x, ex, ex
             if side == -1:
-                elo *= 0.5  # Illinois: the stale end's value halved, so the bracket shrinks from both sides
+                wlo *= 0.5
             side = -1
         else:
             lo, elo = x, ex if math.isfinite(ex) else math.inf
+            wlo = elo
             if side == 1:
-                ehi *= 0.5
+                whi *= 0.5
             side = 1
     return hi
 
