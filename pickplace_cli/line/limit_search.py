@@ -75,13 +75,13 @@ class LimitSearch:
         for _ in range(20):
             if T > b * (1 + 1e-12):
                 return None
-            bad = []
+            bad, peaks = [], None
             if capacity:  # the capacity on the exact peaks: T_auto(T)/T > 1 when it is exceeded
-                t_rule = exact_rule([(mv, T)], self.capacity)[1][0]
+                (peaks,), (t_rule,) = exact_rule([(mv, T)], self.capacity)
                 if t_rule > T:
                     bad.append(t_rule / T)
             if not bad and self._screened(mv, T):  # (the binding limit is exact: the capacity or the fourth axis)
-                return Solved(mv, T, mv.exact_peaks(T))
+                return Solved(mv, T, peaks if peaks is not None else mv.exact_peaks(T))
             try:
                 rep = check_limits(motion_model(mv.path(T), self.profile), T, dwell=0.0)
             except (UnreachableError, TaskError):

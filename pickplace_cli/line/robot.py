@@ -24,7 +24,11 @@ of the robot's whole sequence (:mod:`~pickplace_cli.line.engine`). The check eva
 all legs of the cycle on each leg's grid (:class:`~pickplace_cli.line.moves.ShapeBasis`); a leg whose estimated
 use of every limit is at most ``SCREEN_MARGIN`` is decided by that (the estimates are within 0.3 % of the exact
 peaks, as the batch verdict engine measures); any other leg is checked by the project's exact limit check
-(:func:`~pickplace_cli.limits.check.check_limits`) on its real path.
+(:func:`~pickplace_cli.limits.check.check_limits`) on its real path. A rotary fourth axis decoupled from the arm
+(a Delta's: :mod:`~pickplace_cli.line.rotary_axis`) is left out of the model's evaluation and its limits' uses are
+exact in closed form: they decide the axis (at most 1), the grid's estimates the rest. Under the rule ``limits`` the
+same evaluation screens the capacity's durations against the motors (``LIMITS_SCREEN``) and is kept for the check of
+the cycle's legs, so an accepted cycle costs one model evaluation.
 """
 
 from __future__ import annotations

@@ -15,9 +15,10 @@ moves built on it, against independent computations:
   ``--time auto`` on the capacity): the line's duration is never below the longer of both by more than 1e-6 relative
   (the planner's fit stops within ~1e-7 of its root) and above it by at most 3e-4 (the capacity's grid durations are
   raised by GRID_SAFETY = 2e-4 before their exact check); where q4 binds, within 1e-6 of the fit;
+* one order of the angle law alone equals that row of all four bit for bit;
 * a 3-robot line of 4-axis Deltas turning every part (the benchmark's turned line, 20 s): every pick and place move
   it accepts holds every limit (RMS aside: a property of the sequence) under ``check_limits`` on its real path, and
-  every place move's duration lies in the bracket above against the single ``plan`` path.
+  its first 12 place moves' durations lie in the bracket above against the single ``plan`` path.
 """
 
 from __future__ import annotations
@@ -194,3 +195,15 @@ def test_every_move_of_a_turned_line_holds_every_limit_and_places_are_timed_as_p
                 _bracket(T, auto, fit)
                 places += 1
     assert moves >= 100 and places == 12 and bound >= 5, (moves, places, bound)
+
+
+def test_one_order_of_a_rotation_law_is_that_row_of_all_orders_bitwise():
+    """``RotationLaw(tau, k)`` computes the k-th order alone (the line's torque of the axis needs θ″ only): the same
+    numbers, bit for bit, as row k of ``all_orders`` (the same operations), inside, outside and at the window's ends."""
+    from pickplace_cli.curves.rotation import RotationLaw
+
+    law = RotationLaw(0.3, -2.7, 0.18, 0.83)
+    tau = np.concatenate([np.linspace(0.0, 1.0, 257), [0.18, 0.83]])
+    rows = law.all_orders(tau)
+    for k in range(4):
+        assert np.array_equal(law(tau, k), rows[k])
