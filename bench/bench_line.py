@@ -20,8 +20,10 @@ speed-up = wall(1) / wall(2). Results: ``bench/results/line.json``.
 
 Also (``--turns``, on by default): the same three robots as 4-axis Deltas (``delta-4axis``) with gripper times (close
 0.03 s, open 0.02 s) and parts at random angles, each turned to its tray's 0 rad, against the same line placing the
-parts as they lie (both sides in the same run, medians of ``--runs`` warm seeds); and a 10-minute run of the
-manual's line (``docs/line/deltas.yaml``, 3 robots, ``quota``): its CPU seconds.
+parts as they lie (both sides in the same run, medians of ``--runs`` warm seeds), where the time of the turned line
+goes (as above; ``searches on every limit``: the moves whose motors do not clear the capacity's durations, searched
+on every limit with their exact checks); and a 10-minute run of the manual's line (``docs/line/deltas.yaml``, 3
+robots, ``quota``): its CPU seconds.
 """
 
 from __future__ import annotations
