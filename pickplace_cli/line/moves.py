@@ -231,6 +231,17 @@ class Move:
                 t_rule = np.maximum(t_rule, np.cbrt(pk[:, 2] / jmax))
             return t_rule / Ts - 1.0
 
+        def floor(T: float) -> float:
+            """A lower bound of e(T) from the grid's samples alone (a refined peak is never below the largest sample):
+            a few vector operations, to tell a duration the rule cannot hold at without the search's evaluation."""
+            aa, ab, bb = self._dots(0)
+            pk = np.sqrt(np.maximum(np.max(aa + T * (ab + T * bb), axis=0), 0.0)).tolist()
+            t_rule = max(pk[0] / vmax, math.sqrt(pk[1] / amax))
+            if jmax:
+                t_rule = max(t_rule, (pk[2] / jmax) ** (1.0 / 3.0))
+            return t_rule / T - 1.0
+
+        e.floor = floor  # type: ignore[attr-defined]
         return e
 
     def exact_peaks(self, T: float, orders=(1, 2, 3)) -> tuple[float, ...]:
@@ -414,15 +425,19 @@ def first_feasible(excess: Callable[[np.ndarray], np.ndarray], a: float, b: floa
 
 
 def _bracket_up(excess, a: float, b: float, guess: float):
-    """a (feasible at a), None (nothing feasible up to b), or (lo, hi, e(lo), e(hi)) with e(lo) > 0 ≥ e(hi)."""
+    """a (feasible at a), None (nothing feasible up to b), or (lo, hi, e(lo), e(hi)) with e(lo) > 0 ≥ e(hi) (e(a):
+    a lower bound when ``excess.floor`` shows a infeasible)."""
     def one(T: float) -> float:
         v = float(np.asarray(excess(np.array([T])), float)[0])
         return v if v == v else math.inf
 
-    ea = one(a)
-    if ea <= 0:
-        return float(a)
-    lo, elo = a, ea
+    floor = getattr(excess, "floor", None)  # a lower bound of the excess, when it has one (cheaper than it)
+    ea = floor(a) if floor is not None else 0.0
+    if not ea > 0:  # (no bound, or it does not show a infeasible: the excess itself)
+        ea = one(a)
+        if ea <= 0:
+            return float(a)
+    lo, elo = a, ea  # (elo a bound only: the refinement's first step and its secants do not use it)
     T = min(max(guess, a), b)
     while True:
         if T <= lo:
