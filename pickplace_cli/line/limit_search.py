@@ -75,12 +75,13 @@ class LimitSearch:
         for _ in range(20):
             if T > b * (1 + 1e-12):
                 return None
-            bad, peaks = [], None
-            if capacity:  # the capacity on the exact peaks: T_auto(T)/T > 1 when it is exceeded
-                (peaks,), (t_rule,) = exact_rule([(mv, T)], self.capacity)
+            peaks = None
+            if capacity:  # the capacity on the exact peaks: T_auto(T)/T > 1 when it is exceeded: nudged first (the
+                (peaks,), (t_rule,) = exact_rule([(mv, T)], self.capacity)  # limits are then checked where it holds)
                 if t_rule > T:
-                    bad.append(t_rule / T)
-            if not bad and self._screened(mv, T):  # (the binding limit is exact: the capacity or the fourth axis)
+                    T *= t_rule / T * (1.0 + 1e-9)
+                    continue
+            if self._screened(mv, T):  # (the binding limit is exact: the capacity or the fourth axis)
                 return Solved(mv, T, peaks if peaks is not None else mv.exact_peaks(T))
             try:
                 rep = check_limits(motion_model(mv.path(T), self.profile), T, dwell=0.0)
@@ -88,7 +89,7 @@ class LimitSearch:
                 return None
             # each use scales with T as T^-k (speeds k = 1, accelerations and torques at most 2, jerks and torque
             # rates at most 3): the step u^(1/k) is exact for a speed and never too long for the others
-            bad += [r.utilisation ** (1 / NUDGE_ORDER[r.quantity]) for r in rep.violations if r.quantity in TIMED]
+            bad = [r.utilisation ** (1 / NUDGE_ORDER[r.quantity]) for r in rep.violations if r.quantity in TIMED]
             if not bad:
                 return Solved(mv, T, mv.exact_peaks(T), rep)
             T *= max(bad) * (1.0 + 1e-9)
