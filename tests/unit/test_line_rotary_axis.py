@@ -15,7 +15,8 @@ moves built on it, against independent computations:
   ``--time auto`` on the capacity): the line's duration is never below the longer of both by more than 1e-6 relative
   (the planner's fit stops within ~1e-7 of its root) and above it by at most 3e-4 (the capacity's grid durations are
   raised by GRID_SAFETY = 2e-4 before their exact check); where q4 binds, within 1e-6 of the fit;
-* one order of the angle law alone equals that row of all four bit for bit;
+* one order of the angle law alone equals that row of all four bit for bit; the turn window's batched quintic roots
+  equal numpy.roots' bit for bit;
 * a 3-robot line of 4-axis Deltas turning every part (the benchmark's turned line, 20 s): each cycle's check (the
   evaluation kept from the motors' screen, the axis' torque in closed form) equals the model evaluated afresh with the
   tool angle's law (integrals 1e-12; uses 1e-12, the axis' 0.3 %: the grid's estimate); every pick and place move
@@ -244,3 +245,19 @@ def test_one_order_of_a_rotation_law_is_that_row_of_all_orders_bitwise():
     rows = law.all_orders(tau)
     for k in range(4):
         assert np.array_equal(law(tau, k), rows[k])
+
+
+def test_the_batched_quintic_roots_are_numpys():
+    """The transfer window's roots, all spans and both heights in one batched eigenvalue call, against
+    :func:`numpy.roots` one polynomial at a time (the same companion matrices): equal bit for bit on 200 random
+    quintics, those with a zero highest or lowest coefficient (numpy.roots drops them) included."""
+    from pickplace_cli.line.moves import _quintic_roots
+
+    rng = np.random.default_rng(2)
+    coef = rng.normal(size=(200, 6))
+    coef[::7, 0] = 0.0
+    coef[3::11, -1] = 0.0
+    got = _quintic_roots(coef)
+    for c, row in zip(coef, got):
+        want = np.roots(c)
+        assert np.array_equal(row[: len(want)], want) and np.all(np.isnan(row[len(want):]))
