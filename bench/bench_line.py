@@ -20,8 +20,10 @@ speed-up = wall(1) / wall(2). Results: ``bench/results/line.json``.
 
 Also (``--turns``, on by default): the same three robots as 4-axis Deltas (``delta-4axis``) with gripper times (close
 0.03 s, open 0.02 s) and parts at random angles, each turned to its tray's 0 rad, against the same line placing the
-parts as they lie (both sides in the same run, medians of ``--runs`` warm seeds); and a 10-minute run of the
-manual's line (``docs/line/deltas.yaml``, 3 robots, ``quota``): its CPU seconds.
+parts as they lie (both sides in the same run, medians of ``--runs`` warm seeds), where the time of the turned line
+goes (as above; ``searches on every limit``: the moves whose motors do not clear the capacity's durations, searched
+on every limit with their exact checks); and a 10-minute run of the manual's line (``docs/line/deltas.yaml``, 3
+robots, ``quota``): its CPU seconds.
 """
 
 from __future__ import annotations
@@ -121,15 +123,28 @@ class Timers:
         setattr(owner, name, wrapped)
 
 
-def breakdown(seconds: float, seed: int) -> dict:
+def breakdown(seconds: float, seed: int, make=None) -> dict:
     timers = Timers()
+    saved = [(owner, name, getattr(owner, name)) for owner, name in (
+        (M.Shapes, "candidates"), (R, "search_auto"), (R, "verify_auto"), (R.LineRobot, "_check"),
+        (R.LineRobot, "_motors_clear_both"), (R.LineRobot, "_solve_fit"), (R.LineRobot, "_missed_reason"),
+        (R.LineRobot, "plan"))]
     timers.wrap(M.Shapes, "candidates", "shape look-ups")
     timers.wrap(R, "search_auto", "duration searches (grid)")
     timers.wrap(R, "verify_auto", "exact peak checks")
     timers.wrap(R.LineRobot, "_check", "limit checks")
+    timers.wrap(R.LineRobot, "_motors_clear_both", "limit checks")  # the cycle's one model evaluation, kept for _check
+    timers.wrap(R.LineRobot, "_solve_fit", "searches on every limit (+ their exact checks)")
     timers.wrap(R.LineRobot, "_missed_reason", "reasons of misses")
     timers.wrap(R.LineRobot, "plan", "other (cycle assembly)")
-    line, profiles = the_line(seconds, seed)
+    try:
+        return _breakdown(timers, *(make or the_line)(seconds, seed))
+    finally:
+        for owner, name, fn in saved:
+            setattr(owner, name, fn)
+
+
+def _breakdown(timers: Timers, line, profiles) -> dict:
     parts = generate(line.parts.generate, line.belt.width)
     eng = LineEngine(line, profiles)
     w0 = time.perf_counter()
@@ -144,6 +159,13 @@ def breakdown(seconds: float, seed: int) -> dict:
         "ms_per_part": 1e3 * (wall - sum(timers.total.values())) / s.parts,
         "share": (wall - sum(timers.total.values())) / wall, "calls": s.parts}
     return {"parts": s.parts, "picked": s.picked, "cycles_planned": plans, "wall_s": wall, "stages": rows}
+
+
+def show_breakdown(title: str, parts: dict) -> None:
+    print(f"{title}where the time goes (seed 2, {parts['parts']} parts, {parts['cycles_planned']} cycles planned, "
+          f"{parts['wall_s']:.2f} s wall with the timers):")
+    for k, v in parts["stages"].items():
+        print(f"  {k:48s} {v['ms_per_part']:6.3f} ms/part  {100 * v['share']:5.1f} %  ({v['calls']} calls)", flush=True)
 
 
 def reference(n: int = 50) -> float:
@@ -217,10 +239,7 @@ def main() -> None:
     print(f"median of the warm runs: {med['ratio_wall']:.1f}× real time (wall), {med['ratio_cpu']:.1f}× (CPU), "
           f"{med['ms_per_part_cpu']:.2f} ms CPU per part; target ≥ 50×", flush=True)
     parts = breakdown(args.seconds, 2)
-    print(f"where the time goes (seed 2, {parts['parts']} parts, {parts['cycles_planned']} cycles planned, "
-          f"{parts['wall_s']:.2f} s wall with the timers):")
-    for k, v in parts["stages"].items():
-        print(f"  {k:48s} {v['ms_per_part']:6.3f} ms/part  {100 * v['share']:5.1f} %  ({v['calls']} calls)")
+    show_breakdown("", parts)
     sw = sweep(args.sweep_seconds, [0.3, 0.5, 0.7, 0.9], ["upstream_first", "quota"])
     print(f"sweep: {sw['cases']} cases of {sw['simulated_s_each']:g} s: 1 worker {sw['wall_s_1']:.2f} s wall "
           f"({sw['cpu_s_1']:.2f} s CPU: {sw['cores_used_1']:.2f} cores), 2 local processes {sw['wall_s_2']:.2f} s wall "
@@ -237,6 +256,8 @@ def main() -> None:
             print(f"3 × delta-4axis, gripper times, parts {name}: median {turns[name]['median_ratio_cpu']:.1f}× real "
                   f"time (CPU), {turns[name]['median_ratio_wall']:.1f}× (wall), "
                   f"{turns[name]['median_ms_per_part_cpu']:.2f} ms CPU per part", flush=True)
+        turns["breakdown_turned"] = breakdown(args.seconds, 2, lambda t, s: turning_line(t, s, True))
+        show_breakdown("the turned line: ", turns["breakdown_turned"])
         ten = one_run(600.0, 1, lambda t, s: manual_line(t))
         turns["manual_line_600s"] = ten
         print(f"the manual's line (3 Deltas, quota) for 600 s of parts: {ten['parts']} parts, {ten['cpu_s']:.2f} s CPU "

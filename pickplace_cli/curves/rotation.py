@@ -122,19 +122,23 @@ class RotationLaw:
 
     def all_orders(self, tau: np.ndarray) -> np.ndarray:
         tau = np.atleast_1d(np.asarray(tau, float))
+        out = np.empty((4, len(tau)))
+        for k in range(4):
+            out[k] = self._order(tau, k)
+        return out
+
+    def _order(self, tau: np.ndarray, k: int) -> np.ndarray:
         w = self.tau1 - self.tau0
         x = np.clip((tau - self.tau0) / w, 0.0, 1.0)
+        if k == 0:
+            return self.start + self.turn * step(x)
         inside = (tau > self.tau0) & (tau < self.tau1)
-        out = np.empty((4, len(tau)))
-        out[0] = self.start + self.turn * step(x)
-        for k in (1, 2, 3):
-            out[k] = np.where(inside, self.turn * step(x, k) / w**k, 0.0)
-        return out
+        return np.where(inside, self.turn * step(x, k) / w**k, 0.0)
 
     def __call__(self, tau: np.ndarray, order: int = 0) -> np.ndarray:
         if not 0 <= order <= 3:
             raise ValueError(f"order must be in 0..3, got {order}")
-        return self.all_orders(tau)[order]
+        return self._order(np.atleast_1d(np.asarray(tau, float)), order)
 
     @property
     def peaks(self) -> tuple[float, float, float]:

@@ -148,7 +148,7 @@ class Move:
                  theta: float = 0.0, turn: float = 0.0) -> None:
         self.basis = basis
         self.theta, self.turn = float(theta), float(turn)
-        self._law = None
+        self._law = self._turn_peaks = None
         self.start = np.asarray(start, float)
         self.v_from, self.v_to = np.asarray(v_from, float), np.asarray(v_to, float)
         self.end_a, self.end_b = np.asarray(end_a, float), np.asarray(end_b, float)
@@ -231,6 +231,17 @@ class Move:
                 t_rule = np.maximum(t_rule, np.cbrt(pk[:, 2] / jmax))
             return t_rule / Ts - 1.0
 
+        def floor(T: float) -> float:
+            """A lower bound of e(T) from the grid's samples alone (a refined peak is never below the largest sample):
+            a few vector operations, to tell a duration the rule cannot hold at without the search's evaluation."""
+            aa, ab, bb = self._dots(0)
+            pk = np.sqrt(np.maximum(np.max(aa + T * (ab + T * bb), axis=0), 0.0)).tolist()
+            t_rule = max(pk[0] / vmax, math.sqrt(pk[1] / amax))
+            if jmax:
+                t_rule = max(t_rule, (pk[2] / jmax) ** (1.0 / 3.0))
+            return t_rule / T - 1.0
+
+        e.floor = floor  # type: ignore[attr-defined]
         return e
 
     def exact_peaks(self, T: float, orders=(1, 2, 3)) -> tuple[float, ...]:
@@ -291,6 +302,13 @@ class Move:
             self._law = turn_law(self)
         return self._law
 
+    def turn_peaks(self) -> tuple[float, float, float]:
+        """Exact max |θ′|, |θ″|, |θ‴| over τ of the tool angle's law [rad/1^k] (:attr:`RotationLaw.peaks`; 0 without a
+        turn), kept with the move (three numbers: through :meth:`drop_caches` too)."""
+        if self._turn_peaks is None:
+            self._turn_peaks = self.law().peaks if self.turn != 0.0 else (0.0, 0.0, 0.0)
+        return self._turn_peaks
+
     def angle_orders(self, tau) -> np.ndarray:
         """θ, θ′, θ″, θ‴ (4, N) of the tool angle at τ [rad/1^k] (the law of :meth:`path`, the same at every T)."""
         tau = np.asarray(tau, float)
@@ -331,19 +349,23 @@ def transfer_window(mv: "Move") -> tuple[float, float]:
     breaks = mv.basis.breaks
     z = mv.da[:, 2]
     derivs = np.array([m @ z for m in mv.basis.left])  # (6, spans): d^r z/dτ^r at each span's left end
+    spans = len(breaks) - 1
+    coef = np.empty((2, spans, 6))  # per level and span: the quintic z − level, highest power first (as np.roots)
+    coef[:] = (derivs[::-1] / _FACTORIALS[::-1, None]).T
+    coef[0, :, -1] -= z_lift
+    coef[1, :, -1] -= z_set
+    roots = _quintic_roots(coef.reshape(-1, 6)).reshape(2, spans, -1)
 
-    def crossings(level: float) -> list[float]:
+    def crossings(level: int) -> list[float]:
         out = []
-        for k in range(len(breaks) - 1):
-            c = [derivs[r, k] / math.factorial(r) for r in range(5, -1, -1)]
-            c[-1] -= level
+        for k in range(spans):
             h = breaks[k + 1] - breaks[k]
-            for root in np.roots(c):
+            for root in roots[level, k]:
                 if abs(root.imag) < 1e-9 and -1e-12 <= root.real <= h + 1e-12:
                     out.append(float(breaks[k] + min(max(root.real, 0.0), h)))
         return sorted(out)
 
-    up, down = crossings(z_lift), crossings(z_set)
+    up, down = crossings(0), crossings(1)
     if mv.start[2] >= z_lift:
         up = [0.0] + up
     if mv.end_a[2] >= z_set:
@@ -351,6 +373,28 @@ def transfer_window(mv: "Move") -> tuple[float, float]:
     if not up or not down or not up[0] < down[-1]:
         return 0.0, 1.0
     return up[0], down[-1]
+
+
+_FACTORIALS = np.array([math.factorial(r) for r in range(6)], float)
+
+
+def _quintic_roots(coef: np.ndarray) -> np.ndarray:
+    """The roots of every quintic of ``coef`` (n, 6) (highest power first), (n, 5) complex, NaN where fewer: the
+    eigenvalues of their companion matrices in one batched call, as :func:`numpy.roots` forms them (a quintic whose
+    highest or lowest coefficient is 0 goes to numpy.roots itself, which drops those)."""
+    n = len(coef)
+    out = np.full((n, 5), np.nan, complex)
+    full = (coef[:, 0] != 0.0) & (coef[:, -1] != 0.0)
+    if full.any():
+        c = coef[full]
+        companion = np.zeros((len(c), 5, 5))
+        companion[:, 1:, :-1] = np.eye(4)
+        companion[:, 0, :] = -c[:, 1:] / c[:, :1]
+        out[full] = np.linalg.eigvals(companion)
+    for i in np.flatnonzero(~full):
+        r = np.roots(coef[i])
+        out[i, :len(r)] = r
+    return out
 
 
 def first_feasible(excess: Callable[[np.ndarray], np.ndarray], a: float, b: float, rtol: float = RTOL,
@@ -381,15 +425,19 @@ def first_feasible(excess: Callable[[np.ndarray], np.ndarray], a: float, b: floa
 
 
 def _bracket_up(excess, a: float, b: float, guess: float):
-    """a (feasible at a), None (nothing feasible up to b), or (lo, hi, e(lo), e(hi)) with e(lo) > 0 ≥ e(hi)."""
+    """a (feasible at a), None (nothing feasible up to b), or (lo, hi, e(lo), e(hi)) with e(lo) > 0 ≥ e(hi) (e(a):
+    a lower bound when ``excess.floor`` shows a infeasible)."""
     def one(T: float) -> float:
         v = float(np.asarray(excess(np.array([T])), float)[0])
         return v if v == v else math.inf
 
-    ea = one(a)
-    if ea <= 0:
-        return float(a)
-    lo, elo = a, ea
+    floor = getattr(excess, "floor", None)  # a lower bound of the excess, when it has one (cheaper than it)
+    ea = floor(a) if floor is not None else 0.0
+    if not ea > 0:  # (no bound, or it does not show a infeasible: the excess itself)
+        ea = one(a)
+        if ea <= 0:
+            return float(a)
+    lo, elo = a, ea  # (elo a bound only: the refinement's first step and its secants do not use it)
     T = min(max(guess, a), b)
     while True:
         if T <= lo:
@@ -405,27 +453,36 @@ def _bracket_up(excess, a: float, b: float, guess: float):
 
 
 def _refine(excess, lo: float, hi: float, elo: float, ehi: float, rtol: float) -> float:
-    """Regula falsi (Illinois) on a bracket [lo, hi] with e(lo) > 0 ≥ e(hi): the feasible end within ``rtol``."""
+    """Regula falsi (Illinois) on a bracket [lo, hi] with e(lo) > 0 ≥ e(hi): the feasible end within ``rtol``. The
+    first step is the fixed-point step T·(1 + e) from the feasible end (exact for a rule T_rule/T − 1 whose T_rule does
+    not change with T); when a step lands feasible again, the next is the secant through the last two feasible points
+    (the bracket's other end, often far — the guess's bracket starts at a — says little about the root there)."""
     side = 0
+    wlo, whi = elo, ehi  # the Illinois weights: the true values, halved at an end that stays
+    back = None  # the feasible point before hi
     for _ in range(60):
         if hi - lo <= rtol * hi or -ehi <= ETOL:
             break
-        if side == 0:  # first step: the fixed-point step T·(1 + e) from the feasible end (exact for a rule
-            x = hi * (1.0 + ehi)  # T_rule/T − 1 whose T_rule does not change with T)
+        if side == 0:
+            x = hi * (1.0 + ehi)
+        elif side == -1 and back is not None and back[1] < ehi:
+            x = hi - ehi * (hi - back[0]) / (ehi - back[1])
         else:
-            x = hi - ehi * (hi - lo) / (ehi - elo) if math.isfinite(elo) and elo > 0 else 0.5 * (lo + hi)
+            x = hi - whi * (hi - lo) / (whi - wlo) if math.isfinite(wlo) and wlo > 0 else 0.5 * (lo + hi)
         if not lo < x < hi:
             x = 0.5 * (lo + hi)
         ex = float(excess(np.array([x]))[0])
         if ex <= 0:
-            hi, ehi = x, ex
+            back = (hi, ehi)
+            hi, ehi, whi = x, ex, ex
             if side == -1:
-                elo *= 0.5  # Illinois: the stale end's value halved, so the bracket shrinks from both sides
+                wlo *= 0.5
             side = -1
         else:
             lo, elo = x, ex if math.isfinite(ex) else math.inf
+            wlo = elo
             if side == 1:
-                ehi *= 0.5
+                whi *= 0.5
             side = 1
     return hi
 

@@ -24,7 +24,11 @@ of the robot's whole sequence (:mod:`~pickplace_cli.line.engine`). The check eva
 all legs of the cycle on each leg's grid (:class:`~pickplace_cli.line.moves.ShapeBasis`); a leg whose estimated
 use of every limit is at most ``SCREEN_MARGIN`` is decided by that (the estimates are within 0.3 % of the exact
 peaks, as the batch verdict engine measures); any other leg is checked by the project's exact limit check
-(:func:`~pickplace_cli.limits.check.check_limits`) on its real path.
+(:func:`~pickplace_cli.limits.check.check_limits`) on its real path. A rotary fourth axis decoupled from the arm
+(a Delta's: :mod:`~pickplace_cli.line.rotary_axis`) is left out of the model's evaluation and its limits' uses are
+exact in closed form: they decide the axis (at most 1), the grid's estimates the rest. Under the rule ``limits`` the
+same evaluation screens the capacity's durations against the motors (``LIMITS_SCREEN``) and is kept for the check of
+the cycle's legs, so an accepted cycle costs one model evaluation.
 """
 
 from __future__ import annotations
@@ -38,24 +42,16 @@ from ..model.errors import PickplaceError, TaskError, UnreachableError
 from .frames import Frame
 from .grids import UsePlan, _leg_of, track_basis
 from .legs import Cycle, Decline, Leg, RobotState
-from .moves import (HORIZON, Move, Shapes, Solved, T_MIN, exact_rule, first_feasible, search_auto, solve_auto,
+from .limit_search import LIMITS_SCREEN, NUDGE_ORDER, SCREEN_MARGIN, TIMED, LimitSearch  # noqa: F401 - (re-exported)
+from .moves import (HORIZON, Move, Shapes, Solved, T_MIN, first_feasible, search_auto, solve_auto,
                     solve_seconds, verify_auto)
 
-#: a leg is decided by the screening when every estimated limit use is at most this
-SCREEN_MARGIN = 0.9
 #: the capacity rule's durations found on the grid are raised by this fraction before their exact check (the
 #: refined grid peaks are within 1.3e-4 of the exact ones on a 3-robot line's moves, median 1e-5), so the exact
 #: check rarely has to nudge one (which would move the meeting point and so the place move's start)
 GRID_SAFETY = 2e-4
-#: under the rule ``limits`` the capacity's durations stand when no joint or motor limit is used beyond this on the
-#: grid (its estimates are within 0.3 % of the exact peaks; a leg above SCREEN_MARGIN is still checked exactly)
-LIMITS_SCREEN = 0.95
 #: rounds of a cycle delayed until its place move arrives after an exchange (the part moves on meanwhile)
 EXCHANGE_ROUNDS = 6
-#: the quantities a duration changes (the fit rule's); positions, workcell and singularity do not
-TIMED = frozenset({"velocity", "acceleration", "jerk", "motor speed", "motor torque", "motor torque rate"})
-#: the power of 1/T each of them grows with at most (a torque's gravity part does not grow: less than 2)
-NUDGE_ORDER = {"velocity": 1, "motor speed": 1, "acceleration": 2, "motor torque": 2, "jerk": 3, "motor torque rate": 3}
 
 
 class _Reason:
@@ -95,7 +91,7 @@ class _StandIn:
         return None
 
 
-class LineRobot:
+class LineRobot(LimitSearch):
     """A robot of the line (module docstring): set up from its :class:`~pickplace_cli.line.spec.RobotSpec`."""
 
     def __init__(self, spec, line, profile, shapes: Shapes, latency: float, grip: float) -> None:
@@ -155,6 +151,8 @@ class LineRobot:
         home = spec.home if spec.home is not None else None
         self.home = self.frame.to_robot(home) if home is not None else self.targets[0][0].copy()
         self.next_target = 0
+        #: the rotary fourth axis in closed form where it is decoupled from the arm (a Delta's; else None)
+        self.axis = _decoupled_axis(self.model, self.home) if self.rotary else None
         #: (places between two exchanges, seconds of an exchange), or None; until when it cannot place [s]; the
         #: exchanges (start, end) [s]
         ex = spec.place.exchange
@@ -165,6 +163,7 @@ class LineRobot:
         self.last_T = 0.2
         self.last_place_T = 0.2
         self._plan = None
+        self._last_uses = self._kept = self._timed = None
         self.use_keys: list = []
         self.home_torque = self._holding(self.home)
 
@@ -308,11 +307,8 @@ class LineRobot:
         if isinstance(solved, Decline):
             return solved
         pick, place = solved
-        meet = pick.end
-        track = Leg("track", t_start + pick.T, self.dwell, point=meet, velocity=self.v_belt.copy(), theta=th_grip)
-        legs = [Leg("pick", t_start, pick.T, pick), track, Leg("place", track.t1, place.T, place)]
-        legs.append(Leg("release", legs[-1].t1, self.release, point=place.end.copy(), velocity=v_out.copy(),
-                        theta=th_grip + t_place))
+        legs = self._legs(t_start, pick, place, pturn, v_out)
+        meet = legs[1].point
         bad = self._check(legs)
         if bad is not None:
             return bad
@@ -322,6 +318,15 @@ class LineRobot:
         where = place.move.pocket if self.pockets is not None else self.next_target % len(self.targets)
         return Cycle(legs, t_start, t_start + pick.T, meet.copy(), meet_line, where, place.end.copy(), state,
                      waited=waited)
+
+    def _legs(self, t_start: float, pick: Solved, place: Solved, turn: tuple[float, float], v_out) -> list[Leg]:
+        """The legs of a cycle from ``t_start`` [s]: pick, track (the grip, at the tool angle ``turn[0]``), place (the
+        turn ``turn[1]``) and release."""
+        track = Leg("track", t_start + pick.T, self.dwell, point=pick.end, velocity=self.v_belt.copy(), theta=turn[0])
+        legs = [Leg("pick", t_start, pick.T, pick), track, Leg("place", track.t1, place.T, place)]
+        legs.append(Leg("release", legs[-1].t1, self.release, point=place.end.copy(), velocity=np.array(v_out, float),
+                        theta=turn[0] + turn[1]))
+        return legs
 
     def commit(self, cycle: Cycle) -> None:
         self.state = cycle.state
@@ -390,8 +395,9 @@ class LineRobot:
             if not isinstance(got, tuple):
                 return got  # (None or a Decline: no move holds the capacity, so none holds every limit)
             pick, place = got
-            if self._motors_clear(pick):
-                if self._motors_clear(place):
+            clear = self._motors_clear_both(pick, place, turn, v_out)
+            if clear[0]:
+                if clear[1]:
                     return got
                 # the pick stands; the place alone is searched on every limit, from its capacity duration up (the
                 # rule's duration is the longer of both: none shorter holds)
@@ -402,9 +408,9 @@ class LineRobot:
             pick = self._solve_fit(moves, a, b, True, pick.T)
             if pick is None:
                 return None
-            leave = pick.end + self.v_belt * self.dwell
-            pm = self._place_moves(leave, target, v_out, turn, pick.T)
-            place = self._solve(pm, *pm[0].span)
+            leave = pick.end + self.v_belt * self.dwell  # (the place then starts elsewhere: searched from the
+            pm = self._place_moves(leave, target, v_out, turn, pick.T)  # capacity's place duration up)
+            place = self._solve_fit(pm, *pm[0].span, True, place.T)
             return (pick, place) if place is not None else self._no_place(leave, target)
         if self.rule != "auto":
             pick = self._solve(moves, a, b)
@@ -414,10 +420,6 @@ class LineRobot:
             place = self._solve(pm, *pm[0].span)
             return (pick, place) if place is not None else self._no_place(pick.end + self.v_belt * self.dwell, target)
         return self._capacity_pick_and_place(moves, a, b, target, v_out, turn)
-
-    def _motors_clear(self, solved: Solved) -> bool:
-        """Every timed joint and motor limit used at most ``LIMITS_SCREEN`` on the move's grid at its duration."""
-        return bool(self._excess_fit(solved.move, np.array([solved.T]))[0] <= LIMITS_SCREEN - 1.0)
 
     def _capacity_pick_and_place(self, moves: list[Move], a: float, b: float, target, v_out, turn=(0.0, 0.0)):
         """(pick, place) by the Cartesian capacity (the rule ``auto``), None, or a Decline for the place."""
@@ -472,74 +474,50 @@ class LineRobot:
                 text += f"; the earliest meeting is {self.speed * (T - b) * 1e3:.0f} mm past that"
         return text
 
-    def _solve_fit(self, moves: list[Move], a: float, b: float, capacity: bool = False,
-                   guess: float | None = None) -> Solved | None:
-        """The smallest T in [a, b] at which every timed limit holds on the grid, then the exact check at T and
-        nudged up until it holds (as the rendezvous fit does). ``capacity``: the Cartesian capacity too (the rule
-        limits: the longer of both, each checked exactly)."""
-        def excess(mv):
-            if not capacity:
-                return lambda Ts: self._excess_fit(mv, Ts)
-            auto = mv.excess_auto(self.capacity)
-            return lambda Ts: np.maximum(self._excess_fit(mv, Ts), auto(Ts))
-
-        best = None
-        for mv in moves:
-            T = first_feasible(excess(mv), a, b, scan=8, guess=guess)
-            if T is not None and (best is None or T < best[1]):
-                best = (mv, T)
-        if best is None:
-            return None
-        mv, T = best
-        from ..limits.check import check_limits
-        from ..planner import motion_model
-
-        for _ in range(20):
-            if T > b * (1 + 1e-12):
-                return None
-            try:
-                rep = check_limits(motion_model(mv.path(T), self.profile), T, dwell=0.0)
-            except (UnreachableError, TaskError):
-                return None
-            # each use scales with T as T^-k (speeds k = 1, accelerations and torques at most 2, jerks and torque
-            # rates at most 3): the step u^(1/k) is exact for a speed and never too long for the others
-            bad = [r.utilisation ** (1 / NUDGE_ORDER[r.quantity]) for r in rep.violations if r.quantity in TIMED]
-            if capacity:  # the capacity on the exact peaks: T_auto(T)/T > 1 when it is exceeded
-                t_rule = exact_rule([(mv, T)], self.capacity)[1][0]
-                if t_rule > T:
-                    bad.append(t_rule / T)
-            if not bad:
-                return Solved(mv, T, mv.exact_peaks(T), rep)
-            T *= max(bad) * (1.0 + 1e-9)
-        return None  # pragma: no cover - converges in one or two steps
-
-    def _excess_fit(self, mv: Move, Ts: np.ndarray) -> np.ndarray:
-        """max over the timed limits of use − 1 on the grid for each trial T (inf where a sample is out of reach)."""
-        Ts = np.asarray(Ts, float)
-        tau = mv.basis.tau
-        G = len(tau)
-        out = np.full(len(Ts), np.inf)
-        motion = [np.concatenate([a + T * b for T in Ts]) for a, b in zip(mv.A, mv.B)]
-        if self.rotary:
-            motion.append(np.tile(mv.angle_orders(tau), len(Ts)))
-        try:
-            parts = self.model.parts(np.tile(tau, len(Ts)), motion=tuple(motion), singularity=False)
-        except UnreachableError:
-            if len(Ts) == 1:
-                return out
-            return np.concatenate([self._excess_fit(mv, np.array([T])) for T in Ts])
-        meta, data = self.model.columns(parts, np.repeat(Ts, G))
-        cols = [c for c, m in enumerate(meta) if m[1] in TIMED]
-        limits = np.array([meta[c][3] for c in cols])
-        if not cols:  # no timed limit (a gantry without drives' ratings): none binds
-            return np.full(len(Ts), -1.0)
-        peaks = parabolic_peak(np.tile(tau, len(Ts)), data[:, cols], np.arange(0, len(Ts) * G + 1, G))[0]
-        return np.max(peaks / limits, axis=1) - 1.0
-
-    # ---------------------------------------------------------------------------------------- the check
     def _check(self, legs: list[Leg]) -> Decline | None:
         """Check every leg (module docstring); fills each leg's integral, use and end torque. A Decline naming the
         leg and the limit (or the point out of reach) when one fails."""
+        got = self._evaluate(legs)
+        if isinstance(got, Decline):
+            return got
+        meta, peaks, sums = got
+        plan = self._use_plan(meta)
+        for leg, (integral, end) in zip(legs, sums):
+            leg.integral, leg.end_torque = integral, end
+        axis = None if self.axis is None else np.array([k[0] == self.axis.joint for k in self.use_keys], bool)
+        uses = plan(peaks)
+        for leg, use in zip(legs, uses):
+            leg.use = use
+            if axis is None and use.max(initial=0.0) > SCREEN_MARGIN or axis is not None and (
+                    use[~axis].max(initial=0.0) > SCREEN_MARGIN or use[axis].max(initial=0.0) > 1.0):
+                bad = self._exact_check(leg)
+                if bad is not None:
+                    return bad
+        return None
+
+    def _motors_clear_both(self, pick: Solved, place: Solved, turn, v_out) -> tuple[bool, bool]:
+        """:meth:`_motors_clear` of the pick and of the place, from one evaluation of the model on the cycle's legs,
+        kept for the cycle's check (:meth:`_evaluate`) when it asks for the same legs."""
+        legs = self._legs(0.0, pick, place, turn, v_out)
+        got = self._evaluate(legs)
+        if isinstance(got, Decline):  # a point out of reach: each move on its own (that leg's search then says)
+            return self._motors_clear(pick), self._motors_clear(place)
+        self._kept = (legs, got)
+        meta, peaks, _ = got
+        if self._timed is None or self._timed[0] != meta:
+            cols = [c for c, m in enumerate(meta) if m[1] in TIMED]
+            self._timed = (meta, cols, np.array([meta[c][3] for c in cols]))
+        _, cols, limits = self._timed
+        use = np.max(peaks[[0, 2]][:, cols] / limits, axis=1, initial=0.0)
+        return bool(use[0] <= LIMITS_SCREEN), bool(use[1] <= LIMITS_SCREEN)
+
+    def _evaluate(self, legs: list[Leg]):
+        """The robot model once on every leg's grid: (meta, column peaks (legs × columns; a decoupled fourth axis'
+        exact), [(∫ torque² dt [N²·m²·s], end torque [N·m])] per leg), or a Decline naming the leg out of reach. The
+        evaluation kept by :meth:`_motors_clear_both` serves when its legs are these (the same moves and durations)."""
+        kept, self._kept = self._kept, None
+        if kept is not None and _same_legs(kept[0], legs):
+            return kept[1]
         grids = []
         for leg in legs:
             if leg.solved is not None:
@@ -553,7 +531,8 @@ class LineRobot:
                 grids.append((tb.tau, [p, np.broadcast_to(d, p.shape).copy(), z, z], tb.gl_index, tb.gl_weight))
         tau = np.concatenate([g[0] for g in grids])
         motion = tuple(np.concatenate([g[1][k] for g in grids]) for k in range(4))
-        if self.rotary:  # the tool angle of every leg (its turn, or held)
+        if self.rotary and self.axis is None:  # the tool angle of every leg (its turn, or held); a decoupled axis
+            # is left out (θ ≡ 0 there: no column, no torque of it) and added in closed form below
             motion += (np.concatenate([leg.angle_orders(g[0]) for g, leg in zip(grids, legs)], axis=1),)
         Ts = np.concatenate([np.full(len(g[0]), max(leg.duration, 1e-9)) for g, leg in zip(grids, legs)])
         try:
@@ -563,25 +542,23 @@ class LineRobot:
             return Decline(f"robot {self.name}: the {legs[k].kind} move (t = {legs[k].t0:.4f} … {legs[k].t1:.4f} s) "
                            f"leaves the workspace: {exc}")
         meta, data = self.model.columns(parts, Ts)
-        plan = self._use_plan(meta)
         start = 0
         peaks = parabolic_peak(tau, data, np.concatenate([[0], np.cumsum([len(g[0]) for g in grids])]))[0]
+        sums = []
         for leg, (gtau, _, gl_i, gl_w) in zip(legs, grids):
             sl = slice(start, start + len(gtau))
             start += len(gtau)
             T = max(leg.duration, 1e-9)
             am, gm = (parts.Am[sl], parts.Gm[sl]) if self.has_drives else (parts.A[sl], parts.G[sl])
             torque = am / T**2 + gm
-            leg.integral = T * (gl_w[:, None] * torque[gl_i] ** 2).sum(axis=0)
-            leg.end_torque = torque[-1].copy()
-        uses = plan(peaks)
-        for leg, use in zip(legs, uses):
-            leg.use = use
-            if use.max(initial=0.0) > SCREEN_MARGIN:
-                bad = self._exact_check(leg)
-                if bad is not None:
-                    return bad
-        return None
+            at_nodes = torque[gl_i]
+            mv = leg.solved.move if leg.solved is not None else None
+            if self.axis is not None:  # the decoupled axis: its torque (θ″ alone: 0 at a leg's end) and columns exact
+                at_nodes[:, -1] += self.axis.torque(mv, gtau[gl_i], T)
+                ends = (mv.theta, mv.theta_end) if mv is not None else (leg.theta, leg.theta)
+                peaks[len(sums), self.axis.plan(meta)[0]] = self.axis.values(meta, mv, ends, T)[0]
+            sums.append((T * (gl_w[:, None] * at_nodes ** 2).sum(axis=0), torque[-1].copy()))
+        return meta, peaks, sums
 
     def _use_plan(self, meta) -> "UsePlan":
         if self._plan is None or self._plan.meta != meta:  # the same columns every time (a new list each call)
@@ -620,6 +597,25 @@ class LineRobot:
 
 
 # ------------------------------------------------------------------------------------------------ helpers
+
+
+def _same_legs(a: list[Leg], b: list[Leg]) -> bool:
+    """The same legs but for their start times: kinds, durations, the same moves, track/release lines and angles."""
+    return len(a) == len(b) and all(
+        x.kind == y.kind and x.duration == y.duration and x.solved is y.solved and x.theta == y.theta
+        and (x.solved is not None or np.array_equal(x.point, y.point) and np.array_equal(x.velocity, y.velocity))
+        for x, y in zip(a, b))
+
+
+def _decoupled_axis(model, point):
+    """:class:`~pickplace_cli.line.rotary_axis.DecoupledAxis` of the model, None when coupled (or ``point`` is out
+    of reach)."""
+    from .rotary_axis import DecoupledAxis
+
+    try:
+        return DecoupledAxis.of(model, point)
+    except UnreachableError:
+        return None
 
 
 def _paper():
