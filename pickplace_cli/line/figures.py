@@ -75,7 +75,7 @@ def write_timeline(engine, summary, stream: IO[bytes], fmt: str = "png", title: 
             bars = [(leg.t0, leg.duration) for leg in run.legs if leg.kind == kind]
             if bars:
                 gantt.broken_barh(bars, (k - 0.4, 0.8), facecolors=colour)
-        swaps = [(t0, t1 - t0) for t0, t1 in run.robot.exchanges]
+        swaps = [(t0, t1 - t0) for t0, t1 in run.exchanges]
         if swaps:  # the place is exchanged: the robot cannot place meanwhile
             gantt.broken_barh(swaps, (k - 0.4, 0.8), facecolors="none", edgecolors="0.4", hatch="///", lw=0.5)
     gantt.set_yticks(range(len(robots)), [r.name for r in robots])
@@ -83,7 +83,7 @@ def write_timeline(engine, summary, stream: IO[bytes], fmt: str = "png", title: 
     from matplotlib.patches import Patch
 
     handles = [Patch(color=c, label=k) for k, c in LEG_COLOURS.items()]
-    if any(run.robot.exchanges for run in engine.runs):
+    if any(run.exchanges for run in engine.runs):
         handles.append(Patch(facecolor="none", edgecolor="0.4", hatch="///", label="exchange"))
     gantt.legend(handles=handles, loc="upper right", fontsize=7, ncols=len(handles))
     _save(fig, stream, fmt)

@@ -38,13 +38,18 @@ def _text(s) -> str:
 
 
 class PartsCsv:
-    """The per-part CSV: :meth:`header` once, then :meth:`row` per answered part."""
+    """The per-part CSV: :meth:`header` once, then :meth:`row` per answered part. ``typed`` (a line with part types):
+    a ``type`` column after ``angle[rad]``."""
 
-    def __init__(self, stream: IO[str]) -> None:
+    def __init__(self, stream: IO[str], typed: bool = False) -> None:
         self.stream = stream
+        self.typed = typed
 
     def header(self) -> None:
-        self.stream.write(",".join(PART_COLUMNS) + "\n")
+        cols = list(PART_COLUMNS)
+        if self.typed:
+            cols.insert(cols.index("angle[rad]") + 1, "type")
+        self.stream.write(",".join(cols) + "\n")
 
     def row(self, res) -> None:
         d = res.as_dict()
@@ -55,6 +60,8 @@ class PartsCsv:
                  _num(d.get("t_placed_s")), _num(d.get("t_free_s")), _num(d.get("target")),
                  _num(d.get("turn_rad")), str(d["exit_code"]),
                  _text(d.get("reason"))]
+        if self.typed:
+            cells.insert(PART_COLUMNS.index("angle[rad]") + 1, _text(d.get("type")))
         self.stream.write(",".join(cells) + "\n")
 
 
@@ -117,6 +124,13 @@ def interval_text(iv) -> list[str]:
             f"picks/min {iv.picks_per_minute.estimate:.1f} ± {iv.picks_per_minute.half:.1f} ({level}, batch means)"]
 
 
+def type_text(ts) -> list[str]:
+    """A part type's figures as lines of text: its counts, then its intervals (as :func:`interval_text`)."""
+    head = (f"type {ts.name}: {ts.parts} parts, {ts.picked} picked, {ts.missed} missed ({100 * ts.miss_rate:.1f} %): "
+            f"{ts.picks_per_minute:.1f} picks/min")
+    return [head] + ["  " + x for x in interval_text(ts.intervals)]
+
+
 def print_table(summary, console=None) -> None:
     """The per-robot table and the line's totals, on stderr (rich)."""
     from rich.console import Console
@@ -142,5 +156,5 @@ def print_table(summary, console=None) -> None:
         t.add_row(r.name, str(r.picks), f"{r.picks_per_minute:.1f}", f"{100 * r.utilisation:.1f} %",
                   f"{r.idle:.2f}", peak, rms)
     console.print(t)
-    for text in interval_text(summary.intervals):
+    for text in interval_text(summary.intervals) + [x for ts in summary.types or [] for x in type_text(ts)]:
         console.print(text, soft_wrap=True, markup=False)
