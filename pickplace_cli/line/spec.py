@@ -367,7 +367,7 @@ def check_types(line: Line, source: str = "line") -> None:
                                "_ or - (at most 40)")
     total = math.fsum(t.share for t in types.values())
     if abs(total - 1.0) > SHARE_TOLERANCE:
-        raise ProfileError(f"{source}: parts.types: the shares {', '.join(f'{k} {t.share:g}' for k, t in types.items())} "
+        raise ProfileError(f"{source}: parts.types: the shares {', '.join(f'{k} {t.share:.12g}' for k, t in types.items())} "
                            f"add up to {total:.12g}: they must add up to 1 (within {SHARE_TOLERANCE:g})")
     for r in line.robots:
         for name in r.places or {}:
