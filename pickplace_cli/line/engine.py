@@ -89,6 +89,8 @@ class RobotRun:
     legs: list = field(default_factory=list)
     picks: int = 0
     places: dict = field(default_factory=dict)
+    #: picks per part type (a line with types)
+    type_picks: dict = field(default_factory=dict)
 
     @property
     def instances(self) -> list:
@@ -233,6 +235,8 @@ class LineEngine:
                         leg.solved.move.drop_caches()
                 self.runs[i].legs += res.legs
                 self.runs[i].picks += 1
+                if d.type is not None:
+                    self.runs[i].type_picks[d.type] = self.runs[i].type_picks.get(d.type, 0) + 1
                 self.sharing.picked(i)
                 declines = {k: v if isinstance(v, str) else v.short for k, v in declines.items()}
                 out = PartResult(d, r.name, res, row=d.row, declines=declines)

@@ -41,6 +41,8 @@ class RobotSummary:
     legs: int
     exact_legs: int
     exchanges: int = 0
+    #: picks per part type (None: a line without types)
+    type_picks: Any = None
 
     @property
     def picks_per_minute(self) -> float:
@@ -77,6 +79,7 @@ class RobotSummary:
             "rated_torque_N_m": {j: (float(x) if np.isfinite(x) else None) for j, x in zip(self.joints, self.rated)},
             "rms_use": {j: (float(u) if np.isfinite(u) else None) for j, u in zip(self.joints, self.rms_use)},
             "peak_use": {f"{j} {q}": float(u) for (j, q), u in sorted(self.peak_use.items())},
+            **({} if self.type_picks is None else {"picks_by_type": dict(self.type_picks)}),
         }
 
 
@@ -237,5 +240,6 @@ def summarise(engine) -> LineSummary:
                     for k, v in peak.items()}
         out.robots.append(RobotSummary(r.name, run.picks, busy, span, out.parts_per_minute, parts, peak, r.joint_names,
                                        rms, r.rated,
-                                       len(run.legs), sum(1 for leg in run.legs if leg.exact), len(run.exchanges)))
+                                       len(run.legs), sum(1 for leg in run.legs if leg.exact), len(run.exchanges),
+                                       None if engine.types is None else {k: run.type_picks.get(k, 0) for k in engine.types}))
     return out

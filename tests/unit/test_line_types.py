@@ -102,6 +102,11 @@ def test_per_type_counts_add_up_to_the_totals(two):
     for t in s.types:
         mine = [r for r in eng.results if r.detection.type == t.name]
         assert t.parts == len(mine) and t.picked == sum(r.picked for r in mine)
+    for rs, run in zip(s.robots, eng.runs):  # each robot's picks by type: its own count of the results
+        assert rs.type_picks == {k: sum(r.robot == rs.name and r.detection.type == k for r in eng.results)
+                                 for k in ("A", "B")}
+        assert sum(rs.type_picks.values()) == rs.picks
+    assert s.robots[0].as_dict()["picks_by_type"] == {"A": s.robots[0].picks, "B": 0}
     doc = s.as_dict()["types"]
     assert doc["A"]["parts"] + doc["B"]["parts"] == 120 and doc["A"]["share"] == 0.6
 
