@@ -124,3 +124,17 @@ def test_a_type_no_robot_takes_is_a_warning_and_its_parts_are_missed(typed):
     assert b and not any(d["picked"] for d in b)
     assert all(d["reason"] == "missed: r1: takes no parts of type B (no place for them); r2: takes no parts of type B "
                "(no place for them)" for d in b)
+
+
+def test_a_sweep_and_until_give_the_generated_parts_their_types(typed, tmp_path):
+    """The sweep's cases and --until's longer run draw the types too: parts of type B are picked (by r2 only)."""
+    out = tmp_path / "sweep.csv"
+    r = run("line", typed, "--seeds", "1,2", "-j", "1", "-q", "-o", out)
+    assert r.exit_code == 0, r.stderr
+    rows = list(csv.DictReader(out.open()))
+    assert len(rows) == 2 and all(int(x["picked"]) > 0 for x in rows)
+    summ = tmp_path / "s.json"
+    r = run("line", typed, "--until", "0.5", "--until-max", "5", "-q", "-o", tmp_path / "p.csv", "--summary", summ)
+    assert r.exit_code == 0, r.stderr
+    doc = json.loads(summ.read_text())
+    assert doc["types"]["B"]["picked"] > 0 and doc["robots"][0]["picks_by_type"]["B"] == 0

@@ -231,3 +231,12 @@ def test_one_declared_type_takes_the_same_parts_as_no_types():
         s = eng.finish()
         assert (s.types is None) is (text is untyped)
     assert out[0] == out[1]
+
+
+def test_shares_within_1e9_of_one_are_accepted_and_beyond_refused():
+    from pickplace_cli.model.errors import ProfileError
+
+    ok = TWO.replace("B: {share: 0.4}", "B: {share: 0.4000000005}")  # 5e-10 off
+    assert parse_line(ok, "l.yaml").parts.types["B"].share == 0.4000000005
+    with pytest.raises(ProfileError, match=r"add up to 1.000000002: they must add up to 1 \(within 1e-09\)"):
+        parse_line(TWO.replace("B: {share: 0.4}", "B: {share: 0.400000002}"), "l.yaml")
