@@ -222,7 +222,8 @@ class Parts(_Model):
     """Where the parts come from and how they are seen."""
 
     detections: Optional[str] = Field(default=None, description="A detection CSV (t[s], along[m], across[m], "
-                                                                "optional angle[rad], id); relative to the line file")
+                                                                "optional angle[rad], id; type with parts.types); "
+                                                                "relative to the line file")
     generate: Optional[Generator] = Field(default=None, description="A seeded generator instead of a file")
     height: Num = Field(default=0.0, ge=0, le=1, description="Grip point above the belt surface in m")
     latency: Num = Field(default=0.0, ge=0, le=10, description="Seconds from a detection until a robot may start "
