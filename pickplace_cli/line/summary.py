@@ -234,7 +234,9 @@ def summarise(engine) -> LineSummary:
         integral, busy = sequence_integral(run.legs, r.home_torque, t_begin, t_end)
         rms = np.sqrt(integral / span) if span > 0 else np.zeros_like(integral)
         uses = [leg.use for leg in run.legs if leg.use is not None and len(leg.use)]
-        peak = dict(zip(r.use_keys, np.max(uses, axis=0).tolist())) if uses else {}
+        # the limits' keys of whichever of the robot's places checked a leg (one profile: the same columns in all)
+        keys = next((x.use_keys for x in getattr(run, "instances", [r]) if x.use_keys), r.use_keys)
+        peak = dict(zip(keys, np.max(uses, axis=0).tolist())) if uses else {}
         if r.limit_use != 1.0:  # planned against use × rating: the use of the ratings themselves
             peak = {k: (v * r.limit_use if not k[1].startswith(("position", "workcell", "singularity")) else v)
                     for k, v in peak.items()}

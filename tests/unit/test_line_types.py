@@ -173,6 +173,20 @@ def test_hand_traced_small_scenario():
     assert [(t.name, t.parts, t.picked) for t in s.types] == [("A", 4, 4), ("B", 1, 1)]
 
 
+def test_a_robot_whose_first_place_never_took_a_part_reports_its_limits():
+    """w takes only B parts here (its A place never plans a leg): its peak use of every limit comes from its B
+    cycles all the same (one profile: the same limits), none missing. B's place is a fixed point here, so no stop
+    leg (planned by the robot's first place) checks a leg either."""
+    eng = _engine(TWO.replace("B: {belt: {point: [1.4, -0.35, 0.0], velocity: [0.2, 0.0]}}",
+                              "B: {points: [[1.4, -0.35, 0.0]]}"))
+    for k, t in enumerate((0.0, 3.0, 6.0)):
+        assert eng.offer(Detection(str(k), t, 0.0, 0.0, None, k + 1, "B")).robot == "w"
+    s = eng.finish()
+    w = s.robots[1]
+    assert eng.runs[1].robot.use_keys == []  # its first place (A) never checked a leg
+    assert w.picks == 3 and len(w.peak_use) == len(eng.runs[1].instances[1].use_keys) > 0
+
+
 # ----------------------------------------------------------------------------------------- the intervals
 
 
