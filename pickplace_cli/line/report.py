@@ -90,7 +90,8 @@ def summary_json(summary, line_name: str, compact: bool = False) -> str:
 
 def write_robots_csv(summary, stream: IO[str]) -> None:
     """One row per robot: picks, picks/min, busy, idle, utilisation, per motor RMS over the run, rated and use,
-    and the peak use of every limit (columns: the union over the robots)."""
+    and the peak use of every limit (columns: the union over the robots); on a line with part types its picks of each
+    type (``picks_TYPE``)."""
     joints = []
     for r in summary.robots:
         joints += [j for j in r.joints if j not in joints]
@@ -99,6 +100,8 @@ def write_robots_csv(summary, stream: IO[str]) -> None:
     for j in joints:
         head += [f"rms_{j}[N*m]", f"rated_{j}[N*m]", f"rms_use_{j}[-]"]
     head += [f"peak_use_{j}_{q.replace(' ', '_')}[-]" for j, q in keys]
+    types = [t.name for t in summary.types] if summary.types else []
+    head += [f"picks_{t}" for t in types]  # a line with part types: each robot's picks of each type
     stream.write(",".join(head) + "\n")
     for r in summary.robots:
         cells = [_text(r.name), str(r.picks), _num(r.picks_per_minute), _num(r.busy), _num(r.idle), _num(r.utilisation)]
@@ -108,6 +111,7 @@ def write_robots_csv(summary, stream: IO[str]) -> None:
             x, lim = rms.get(j), rated.get(j)
             cells += [_num(x), _num(lim), _num(x / lim if x is not None and lim is not None and lim > 0 else None)]
         cells += [_num(r.peak_use.get(k)) for k in keys]
+        cells += [str((r.type_picks or {}).get(t, 0)) for t in types]
         stream.write(",".join(cells) + "\n")
 
 

@@ -42,8 +42,11 @@ def typed(tmp_path):
 
 def test_the_type_is_in_every_output(typed, tmp_path):
     out, summ = tmp_path / "parts.csv", tmp_path / "s.json"
-    r = run("line", typed, "-o", out, "--summary", summ)
+    r = run("line", typed, "-o", out, "--summary", summ, "--robots-csv", tmp_path / "robots.csv")
     assert r.exit_code == 0, r.stderr
+    rob = list(csv.DictReader((tmp_path / "robots.csv").open()))
+    assert rob[0]["picks_B"] == "0" and int(rob[0]["picks_A"]) == int(rob[0]["picks"])
+    assert int(rob[1]["picks_A"]) + int(rob[1]["picks_B"]) == int(rob[1]["picks"])
     rows = list(csv.DictReader(out.open()))
     assert list(rows[0])[6] == "type" and {x["type"] for x in rows} == {"A", "B"}
     assert all(x["robot"] == "r2" for x in rows if x["type"] == "B" and x["picked"] == "1")
