@@ -141,3 +141,23 @@ def test_a_sweep_and_until_give_the_generated_parts_their_types(typed, tmp_path)
     assert r.exit_code == 0, r.stderr
     doc = json.loads(summ.read_text())
     assert doc["types"]["B"]["picked"] > 0 and doc["robots"][0]["picks_by_type"]["B"] == 0
+
+
+def test_the_figure_of_a_typed_line(typed, tmp_path, monkeypatch):
+    """--plot on a line with types: a PNG, and its figure (caught as it is saved) has a legend entry per type whose
+    marker count is that type's picks."""
+    pytest.importorskip("matplotlib")
+    from matplotlib.figure import Figure
+
+    seen = []
+    save = Figure.savefig
+    monkeypatch.setattr(Figure, "savefig", lambda self, *a, **k: (seen.append(self), save(self, *a, **k))[1])
+    png = tmp_path / "line.png"
+    r = run("line", typed, "-q", "-o", tmp_path / "p.csv", "--plot", png)
+    assert r.exit_code == 0, r.stderr
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    ax = seen[0].axes[0]
+    assert [t.get_text() for t in ax.get_legend().get_texts()] == ["type A", "type B"]
+    rows = list(csv.DictReader((tmp_path / "p.csv").open()))
+    counts = {c.get_label(): len(c.get_offsets()) for c in ax.collections if c.get_label().startswith("type")}
+    assert counts == {f"type {k}": sum(x["type"] == k and x["picked"] == "1" for x in rows) for k in "AB"}
