@@ -254,3 +254,19 @@ def test_shares_within_1e9_of_one_are_accepted_and_beyond_refused():
     assert parse_line(ok, "l.yaml").parts.types["B"].share == 0.4000000005
     with pytest.raises(ProfileError, match=r"add up to 1.000000002: they must add up to 1 \(within 1e-09\)"):
         parse_line(TWO.replace("B: {share: 0.4}", "B: {share: 0.400000002}"), "l.yaml")
+
+
+def test_detections_read_their_type():
+    from pickplace_cli.line.parts import BadRow, read_detections
+    from pickplace_cli.model.errors import TaskError
+
+    rows = list(read_detections(["id,type,t[s],along[m],across[m]\n", "p1,B,0.5,0,0\n", "p2,,0.6,0,0\n",
+                                 "p3,b,0.7,0,0\n"], "d.csv", ["A", "B"]))
+    assert rows[0] == Detection("p1", 0.5, 0.0, 0.0, None, 1, "B")
+    assert isinstance(rows[1], BadRow) and rows[1].error == ("row 2 (d.csv:3): type = '': not a part type of the "
+                                                             "line file (parts.types: A, B)")
+    assert isinstance(rows[2], BadRow) and "type = 'b'" in rows[2].error  # names are case-sensitive
+    with pytest.raises(TaskError, match="missing column 'type'"):
+        list(read_detections(["t,along,across\n", "0,0,0\n"], "d.csv", ["A"]))
+    with pytest.raises(TaskError, match="column 'type': the line file declares no part types"):
+        list(read_detections(["t,along,across,type\n", "0,0,0,A\n"], "d.csv"))
