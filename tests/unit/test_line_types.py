@@ -270,3 +270,26 @@ def test_detections_read_their_type():
         list(read_detections(["t,along,across\n", "0,0,0\n"], "d.csv", ["A"]))
     with pytest.raises(TaskError, match="column 'type': the line file declares no part types"):
         list(read_detections(["t,along,across,type\n", "0,0,0,A\n"], "d.csv"))
+
+
+@pytest.mark.parametrize("spec, takes, want_ask, want_out", [
+    # upstream_first: every robot, less those without a place for the type
+    ({"kind": "upstream_first"}, {1, 2}, [1, 2], {0}),
+    # skip (skip = 2): part 1 is robot 0's; it takes no B: with pass_on the robots downstream of it are asked
+    ({"kind": "skip", "skip": 2}, {1, 2}, [1, 2], {0}),
+    # ... without pass_on the part is robot 0's alone: nobody is asked
+    ({"kind": "skip", "skip": 2, "pass_on": False}, {1, 2}, [], {0, 1, 2}),
+    # quota: robot 2 is at its share (set below), robot 0 takes no B: robot 1 alone
+    ({"kind": "quota"}, {1, 2}, [1], {0, 2}),
+])
+def test_strategies_leave_out_the_robots_without_the_type(spec, takes, want_ask, want_out):
+    from pickplace_cli.line.spec import Quota, Skip, UpstreamFirst
+    from pickplace_cli.line.strategies import Sharing
+
+    kind = {"upstream_first": UpstreamFirst, "skip": Skip, "quota": Quota}[spec["kind"]]
+    s = Sharing(kind(**spec), 3, [(-0.15, -0.05), (-0.05, 0.05), (0.05, 0.15)])
+    if spec["kind"] == "quota":
+        s.picks = [0, 0, 1]  # n = 1: robot 2's share 1/3 · 1 is reached
+    ask, out = s.order(0.0, 1, takes, "B")
+    assert ask == want_ask and set(out) == want_out
+    assert out[0] == "takes no parts of type B (no place for them)"
