@@ -20,8 +20,8 @@ def line_cmd(
     line_file: str = typer.Argument(..., metavar="LINE.yaml", help="The line file: belt, robots, parts, strategy (YAML)."),
     detections: Optional[str] = typer.Option(
         None, "--detections", "-d", metavar="FILE|-",
-        help="Detections CSV (t[s], along[m], across[m], optional angle[rad], id) instead of the file's parts; '-' = "
-             "standard input, each detection answered as it is read.", rich_help_panel=Panel.MOVE),
+        help="Detections CSV (t[s], along[m], across[m], optional angle[rad], id; type on a line with part types) "
+             "instead of the file's parts; '-' = standard input, each detection answered as it is read.", rich_help_panel=Panel.MOVE),
     belt_speed: Optional[float] = typer.Option(None, "--belt-speed", help="Belt speed in m/s instead of the file's.", rich_help_panel=Panel.BELT),
     robots: Optional[int] = typer.Option(None, "--robots", help="Use only the first N robots of the file.", rich_help_panel=Panel.MOVE),
     strategy: Optional[str] = typer.Option(
@@ -259,15 +259,16 @@ def _single(line_file, detections, belt_speed, robots, strategy, seed, output, a
                "(parts.detections): give parts.generate")
     streaming = output == "-"
     with contextlib.ExitStack() as stack:
+        types = line.parts.types
         if source is not None:
             lines = stack.enter_context(_detection_lines(source))
-            items = read_detections(lines, "stdin" if source == "-" else source)
+            items = read_detections(lines, "stdin" if source == "-" else source, None if types is None else list(types))
         elif until[0] is not None:
             items = _until_items(line, line_file, engine, *until)
         else:
-            items = iter(generate(line.parts.generate, line.belt.width))
+            items = iter(generate(line.parts.generate, line.belt.width, types))
         out = stack.enter_context(atomic_output(output))
-        writer = PartsCsv(out)
+        writer = PartsCsv(out, typed=types is not None)
         if not as_json:
             writer.header()
         for res in engine.run(in_time_order(items, line.parts.reorder)):
@@ -316,7 +317,7 @@ def _until_items(line, line_file, engine, precision: float, most: float):
     gen = line.parts.generate
     most = min(float(most), 0.999 * MAX_PARTS / float(gen.rate))
     gen = gen.model_copy(update={"count": None, "duration": most})
-    for k, d in enumerate(generate(gen, line.belt.width)):
+    for k, d in enumerate(generate(gen, line.belt.width, line.parts.types)):
         if k >= UNTIL_FIRST and k % UNTIL_STEP == 0:
             t, missed = result_arrays(engine.results)
             ivs = run_intervals(t, missed, 0.0)
@@ -440,7 +441,7 @@ def _sweep(line_file, detections, belt_speed, robots, strategy, seed, speeds, ro
         resolve_relative(base.parts.detections, line_file) if base.parts.detections else None)
     if src is not None:
         with _detection_lines(src) as lines:
-            dets = list(read_detections(lines, src))
+            dets = list(read_detections(lines, src, None if base.parts.types is None else list(base.parts.types)))
         bad = next((d for d in dets if isinstance(d, BadRow)), None)
         if bad is not None:
             raise TaskError(bad.error)

@@ -17,6 +17,9 @@ sd/√B. Both intervals are estimate ± t_{(1+level)/2, B−1}·SE (Student's t 
 parts are missed independently; on a busy line it is too narrow (tests: a two-state Markov chain of misses with
 correlation 0.55 covers its true rate 95 % of the time by batch means, far less by Wilson).
 
+**Per part type** (a line with several types): each type's miss rate and picks/min by the same two methods over
+that type's parts alone (its own windows over its own first to last detection).
+
 **Across seeds** (:func:`across_seeds`): k runs' miss rates (or any per-run figure) → mean ± t_{(1+level)/2, k−1}·sd/√k,
 each seed's run being independent.
 """
@@ -145,6 +148,11 @@ def result_arrays(results) -> tuple[np.ndarray, np.ndarray]:
     """(detection times [s], missed?) of a run's per-part results (bad rows left out)."""
     rows = [(r.detection.t, not r.picked) for r in results if r.detection is not None]
     return np.array([x[0] for x in rows], float), np.array([x[1] for x in rows], bool)
+
+
+def type_arrays(results, kind: str) -> tuple[np.ndarray, np.ndarray]:
+    """(detection times [s], missed?) of the parts of type ``kind`` (:func:`result_arrays` of that type's parts)."""
+    return result_arrays([r for r in results if r.detection is not None and r.detection.type == kind])
 
 
 def summary_intervals(summary, results, level: float = LEVEL) -> RunIntervals:

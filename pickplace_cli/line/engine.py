@@ -13,6 +13,12 @@ the robot's actual sequence — its moves, dwells and the time it waits at rest 
 each leg's integral exact (Gauss–Legendre on every knot span of the leg: :mod:`~pickplace_cli.line.moves`), over
 the run's span [t_begin, t_end] = [first detection, the later of the last detection and the end of the last
 leg of any robot]; not the single-move duty cycle with its retrace assumption.
+
+**Part types.** On a line with several part types (``parts.types``) a robot takes the types it has a place for
+(:func:`~pickplace_cli.line.spec.robot_places`). A robot with a place per type is one
+:class:`~pickplace_cli.line.robot.LineRobot` per place — each with that place's targets, tray counter, pockets and
+exchanges — sharing one state: after every leg the robot's position, velocity, tool angle and free time are the same
+in all of them (:meth:`RobotRun.sync`), so the robot moves as one, and a tray's exchange blocks only its own type.
 """
 
 from __future__ import annotations
@@ -27,7 +33,7 @@ from ..model.errors import PickplaceError, TaskError, UnreachableError
 from .parts import BadRow, Detection
 from .reach import check_reach
 from .robot import Cycle, Decline, Leg, LineRobot, RobotState
-from .spec import Line, robot_bands, upstream_order
+from .spec import Line, robot_bands, robot_places, type_names, untaken_types, upstream_order
 from .summary import LineSummary, summarise
 
 
@@ -53,6 +59,8 @@ class PartResult:
                                "exit_code": self.code, "robot": self.robot, "reason": self.reason}
         if d is not None:
             doc.update({"t_detect_s": d.t, "along_m": d.along, "across_m": d.across, "angle_rad": d.angle})
+            if d.type is not None:
+                doc["type"] = d.type
         c = self.cycle
         if c is not None:
             pick = c.pick
@@ -74,11 +82,35 @@ class PartResult:
 
 @dataclass
 class RobotRun:
-    """What one robot did over a run: its legs (in time order) and picks."""
+    """What one robot did over a run: its legs (in time order) and picks. ``places``: part type → the
+    :class:`LineRobot` with that type's place (``{None: robot}`` on a line without types); ``robot`` is the first."""
 
     robot: LineRobot
     legs: list = field(default_factory=list)
     picks: int = 0
+    places: dict = field(default_factory=dict)
+    #: picks per part type (a line with types)
+    type_picks: dict = field(default_factory=dict)
+
+    @property
+    def instances(self) -> list:
+        """The robot's distinct places' LineRobots (the first is ``robot``)."""
+        out = [self.robot]
+        for r in self.places.values():
+            if all(r is not x for x in out):
+                out.append(r)
+        return out
+
+    @property
+    def exchanges(self) -> list:
+        """Every exchange of the robot's places: (start, end) [s], in time order."""
+        return sorted(x for r in self.instances for x in r.exchanges)
+
+    def sync(self, src: LineRobot) -> None:
+        """Every place's LineRobot takes ``src``'s state (the robot is one: where it is, how it moves, when free)."""
+        for r in self.instances:
+            if r is not src:
+                r.state, r.last_T, r.last_place_T = src.state, src.last_T, src.last_place_T
 
 
 class LineEngine:
@@ -97,28 +129,50 @@ class LineEngine:
         order = upstream_order(line)
         bands = robot_bands(line)
         shapes = Shapes.shared()
+        self.types = type_names(line)
         self.robots: list[LineRobot] = []
+        self.runs: list[RobotRun] = []
         own_bands = []
         for i in order:
             spec = line.robots[i]
-            r = LineRobot(spec, line, profiles[spec.name], shapes, line.parts.latency, line.parts.height)
-            self.robots.append(r)
+            run = self._robot(spec, line, profiles[spec.name], shapes)
+            self.robots.append(run.robot)
+            self.runs.append(run)
             own_bands.append(bands[i])
         strategy = line.strategy
         half = line.belt.width / 2
-        for r, band in zip(self.robots, own_bands):
+        for run, band in zip(self.runs, own_bands):
             lo, hi = band if strategy.kind == "bands" else (-half, half)
             tol = getattr(strategy, "overlap", 0.0) if strategy.kind == "bands" else 0.0
-            check_reach(r, (max(lo - tol, -half), min(hi + tol, half)))
+            for r in run.instances:
+                check_reach(r, (max(lo - tol, -half), min(hi + tol, half)))
         self.sharing = Sharing(strategy, len(self.robots), own_bands)
-        self.runs = [RobotRun(r) for r in self.robots]
         self.n = 0
         self.t_begin = math.inf
         self.t_last = -math.inf
         self.results: list[PartResult] = []
         self.bad_rows = 0
-        self.warnings: list[str] = []
+        self.warnings: list[str] = [f"parts.types.{t}: no robot has a place for type {t}: every part of it is "
+                                    "missed" for t in untaken_types(line)]
         self.finished = None
+
+    @staticmethod
+    def _robot(spec, line: Line, profile, shapes) -> RobotRun:
+        """The robot's run: one LineRobot per distinct place (module docstring), all at the first one's home."""
+        made: dict = {}
+        places = {}
+        first = None
+        for kind, place in robot_places(spec, type_names(line)).items():
+            if id(place) not in made:
+                sub = spec if place is spec.place else spec.model_copy(update={"place": place, "places": None})
+                r = LineRobot(sub, line, profile, shapes, line.parts.latency, line.parts.height)
+                if first is None:
+                    first = r
+                else:  # one robot: one home, one state
+                    r.home, r.home_torque, r.state = first.home.copy(), first.home_torque, first.state
+                made[id(place)] = r
+            places[kind] = made[id(place)]
+        return RobotRun(first, places=places)
 
     # ---------------------------------------------------------------------------------------------- setup
     def check_speed(self) -> None:
@@ -154,24 +208,35 @@ class LineEngine:
             self.results.append(res)
             return res
         d = item
+        if (self.types is None) != (d.type is None) or (d.type is not None and d.type not in self.types):
+            self.bad_rows += 1
+            why = ("the line declares no part types (parts.types)" if self.types is None else
+                   f"not a part type of the line ({', '.join(self.types)})")
+            res = PartResult(None, reason=f"row {d.row} (part {d.id}): type = {d.type!r}: {why}", code=1, row=d.row)
+            self.results.append(res)
+            return res
         self.n += 1
         self.t_begin = min(self.t_begin, d.t)
         self.t_last = max(self.t_last, d.t)
         t_ready = d.t + self.line.parts.latency
         for run in self.runs:
             self._stop_if_due(run, t_ready, d.along, d.t)
-        ask, left_out = self.sharing.order(d.across, self.n)
+        takes = None if self.types is None else {i for i, run in enumerate(self.runs) if d.type in run.places}
+        ask, left_out = self.sharing.order(d.across, self.n, takes, d.type)
         declines = {self.robots[i].name: why for i, why in left_out.items()}
         for i in ask:
-            r = self.robots[i]
+            r = self.runs[i].places[d.type]
             res = r.plan(d.along, d.across, d.t, angle=d.angle)
             if isinstance(res, Cycle):
                 r.commit(res)
+                self.runs[i].sync(r)
                 for leg in res.legs:
                     if leg.solved is not None:
                         leg.solved.move.drop_caches()
                 self.runs[i].legs += res.legs
                 self.runs[i].picks += 1
+                if d.type is not None:
+                    self.runs[i].type_picks[d.type] = self.runs[i].type_picks.get(d.type, 0) + 1
                 self.sharing.picked(i)
                 declines = {k: v if isinstance(v, str) else v.short for k, v in declines.items()}
                 out = PartResult(d, r.name, res, row=d.row, declines=declines)
@@ -192,6 +257,7 @@ class LineEngine:
         if isinstance(leg, Decline):
             raise TaskError(leg.reason)
         run.robot.commit_stop(leg)
+        run.sync(run.robot)
         leg.solved.move.drop_caches()
         run.legs.append(leg)
 

@@ -31,6 +31,10 @@ def _save(fig, stream: IO[bytes], fmt: str) -> None:
         fig.savefig(stream, format=fmt, metadata=metadata, dpi=110)
 
 
+#: the meeting points' markers, one per part type in the file's order (the first: a line without types)
+TYPE_MARKERS = ("o", "s", "^", "D", "v", "P", "X", "*")
+
+
 def write_timeline(engine, summary, stream: IO[bytes], fmt: str = "png", title: str | None = None) -> None:
     """The run's figure (module docstring) to the binary ``stream``."""
     require_matplotlib()
@@ -59,10 +63,18 @@ def write_timeline(engine, summary, stream: IO[bytes], fmt: str = "png", title: 
     for k, r in enumerate(robots):
         ax.axhspan(r.window[0], r.window[1], color=colours[k], alpha=0.12, lw=0)
         ax.text(summary.t_begin, (r.window[0] + r.window[1]) / 2, f" {r.name}", va="center", fontsize=8, color=colours[k])
-    picked = [(res.cycle.t_meet, float(res.cycle.meet_line[0]), colours[by_name[res.robot]])
-              for res in engine.results if res.cycle is not None]
-    if picked:
-        ax.scatter([p[0] for p in picked], [p[1] for p in picked], c=[p[2] for p in picked], s=6, zorder=3)
+    types = getattr(engine, "types", None)
+    for k, kind in enumerate(types or [None]):  # the meetings; on a line with part types one marker per type
+        picked = [(res.cycle.t_meet, float(res.cycle.meet_line[0]), colours[by_name[res.robot]])
+                  for res in engine.results if res.cycle is not None and (kind is None or res.detection.type == kind)]
+        if picked:
+            ax.scatter([p[0] for p in picked], [p[1] for p in picked], c=[p[2] for p in picked], s=6 if kind is None
+                       else 10, zorder=3, marker=TYPE_MARKERS[k % len(TYPE_MARKERS)],
+                       **({} if kind is None else {"label": f"type {kind}"}))
+    if types:  # the markers in the legend in grey: the colours are the robots'
+        legend = ax.legend(loc="upper left", fontsize=8, markerscale=1.5)
+        for handle in getattr(legend, "legend_handles", None) or getattr(legend, "legendHandles", []):
+            handle.set_color("0.3")
     ax.set_xlim(summary.t_begin, max(summary.t_end, summary.t_begin + 1e-3))
     ax.set_ylim(min([r.window[0] for r in robots] + [d.along for d in (x.detection for x in engine.results) if d]) - 0.05,
                 end_of_line)
@@ -75,7 +87,7 @@ def write_timeline(engine, summary, stream: IO[bytes], fmt: str = "png", title: 
             bars = [(leg.t0, leg.duration) for leg in run.legs if leg.kind == kind]
             if bars:
                 gantt.broken_barh(bars, (k - 0.4, 0.8), facecolors=colour)
-        swaps = [(t0, t1 - t0) for t0, t1 in run.robot.exchanges]
+        swaps = [(t0, t1 - t0) for t0, t1 in run.exchanges]
         if swaps:  # the place is exchanged: the robot cannot place meanwhile
             gantt.broken_barh(swaps, (k - 0.4, 0.8), facecolors="none", edgecolors="0.4", hatch="///", lw=0.5)
     gantt.set_yticks(range(len(robots)), [r.name for r in robots])
@@ -83,7 +95,7 @@ def write_timeline(engine, summary, stream: IO[bytes], fmt: str = "png", title: 
     from matplotlib.patches import Patch
 
     handles = [Patch(color=c, label=k) for k, c in LEG_COLOURS.items()]
-    if any(run.robot.exchanges for run in engine.runs):
+    if any(run.exchanges for run in engine.runs):
         handles.append(Patch(facecolor="none", edgecolor="0.4", hatch="///", label="exchange"))
     gantt.legend(handles=handles, loc="upper right", fontsize=7, ncols=len(handles))
     _save(fig, stream, fmt)

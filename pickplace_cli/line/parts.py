@@ -5,7 +5,9 @@ hold-and-reorder window for detections that arrive out of time order.
 part. Columns (any order; the unit in brackets may be left out, but when given it must be this one):
 ``t[s]`` the detection time (any clock; the results use the same clock), ``along[m]`` and ``across[m]`` where the
 part was seen (line frame), optional ``angle[rad]`` (the part's angle about the vertical, carried to the results)
-and optional ``id`` (text; default the row number). Blank lines and lines starting with ``#`` are skipped.
+and optional ``id`` (text; default the row number); on a line with part types (``parts.types``) the column
+``type`` names each part's type (one of the declared names; a row with another is refused, naming the row, the field
+and the value). Blank lines and lines starting with ``#`` are skipped.
 
 **Out of order.** Detections must come in time order. With ``parts.reorder`` = W > 0 s each detection is held
 until one at least W s later has been read (or the input ends) and the held ones are passed on in time order,
@@ -24,7 +26,7 @@ import numpy as np
 
 from ..model.errors import TaskError
 
-COLUMNS = {"t": "s", "along": "m", "across": "m", "angle": "rad", "id": ""}
+COLUMNS = {"t": "s", "along": "m", "across": "m", "angle": "rad", "id": "", "type": ""}
 REQUIRED = ("t", "along", "across")
 #: the longest line accepted in a detection file [characters]
 MAX_LINE = 4096
@@ -36,7 +38,8 @@ MAX_PARTS = 100_000
 @dataclass(frozen=True)
 class Detection:
     """A part seen at time ``t`` [s] at ``along``, ``across`` [m] (line frame); ``angle`` [rad] or None; ``row``:
-    its row in the input (1 = the first data row; generated parts count from 1)."""
+    its row in the input (1 = the first data row; generated parts count from 1); ``type``: its part type's name (None
+    on a line without types)."""
 
     id: str
     t: float
@@ -44,6 +47,7 @@ class Detection:
     across: float
     angle: float | None = None
     row: int = 0
+    type: str | None = None
 
 
 @dataclass(frozen=True)
@@ -56,7 +60,7 @@ class BadRow:
     code: int = 1
 
 
-def _header(line: str, source: str) -> list[str]:
+def _header(line: str, source: str, types: list[str] | None = None) -> list[str]:
     names = []
     for cell in line.strip().split(","):
         cell = cell.strip()
@@ -73,6 +77,12 @@ def _header(line: str, source: str) -> list[str]:
         if name in names:
             raise TaskError(f"{source}:1: column {name!r} appears twice")
         names.append(name)
+    if types is None and "type" in names:
+        raise TaskError(f"{source}:1: column 'type': the line file declares no part types (parts.types); leave the "
+                        "column out or declare the types")
+    if types is not None and "type" not in names:
+        raise TaskError(f"{source}:1: header {line.strip()!r}: missing column 'type': the line file declares part types "
+                        f"({', '.join(types)}), so every detection names its type")
     missing = [c for c in REQUIRED if c not in names]
     if missing:
         raise TaskError(f"{source}:1: header {line.strip()!r}: missing column {missing[0]!r} (a detection file has "
@@ -80,7 +90,8 @@ def _header(line: str, source: str) -> list[str]:
     return names
 
 
-def _row(cells: list[str], names: list[str], row: int, lineno: int, source: str) -> Detection | BadRow:
+def _row(cells: list[str], names: list[str], row: int, lineno: int, source: str,
+         types: list[str] | None = None) -> Detection | BadRow:
     from ..model.text import plain_float
 
     where = f"row {row} ({source}:{lineno})"
@@ -91,6 +102,9 @@ def _row(cells: list[str], names: list[str], row: int, lineno: int, source: str)
         cell = cell.strip()
         if name == "id":
             values["id"] = cell or str(row)
+            continue
+        if name == "type":
+            values["type"] = cell
             continue
         if not cell and name == "angle":
             values[name] = None
@@ -104,7 +118,12 @@ def _row(cells: list[str], names: list[str], row: int, lineno: int, source: str)
         if abs(x) > 1e9:
             return BadRow(row, f"{where}: {name} = {cell!r}: must lie within ±1e9 {COLUMNS[name]}", values.get("id", ""))
         values[name] = x
-    return Detection(values.get("id", str(row)), values["t"], values["along"], values["across"], values.get("angle"), row)
+    kind = values.get("type")
+    if types is not None and kind not in types:
+        return BadRow(row, f"{where}: type = {kind!r}: not a part type of the line file (parts.types: "
+                           f"{', '.join(types)})", values.get("id", ""))
+    return Detection(values.get("id", str(row)), values["t"], values["along"], values["across"], values.get("angle"), row,
+                     kind)
 
 
 def bounded_lines(readline, limit: int = MAX_LINE, source: str = "detections") -> Iterator[str]:
@@ -128,10 +147,12 @@ def bounded_lines(readline, limit: int = MAX_LINE, source: str = "detections") -
                     break
 
 
-def read_detections(lines: Iterable[str], source: str = "detections") -> Iterator[Detection | BadRow]:
+def read_detections(lines: Iterable[str], source: str = "detections",
+                    types: list[str] | None = None) -> Iterator[Detection | BadRow]:
     """Detections (or BadRows) from CSV text lines, lazily (a stream is answered row by row). A missing or
     wrong header is a TaskError (nothing can be read); a bad row is a BadRow and reading goes on; more than
-    :data:`MAX_PARTS` rows is a TaskError at the row after them."""
+    :data:`MAX_PARTS` rows is a TaskError at the row after them. ``types``: the line's part types (None: none; then
+    a ``type`` column is refused, else it is required and a row naming another type is a BadRow)."""
     names = None
     row = 0
     for lineno, line in enumerate(lines, 1):
@@ -149,13 +170,13 @@ def read_detections(lines: Iterable[str], source: str = "detections") -> Iterato
 
             raise TaskError(f"{source}:{lineno}: NUL bytes: a binary file, not a detection CSV{utf16_hint(line)}")
         if names is None:
-            names = _header(text, source)
+            names = _header(text, source, types)
             continue
         row += 1
         if row > MAX_PARTS:
             raise TaskError(f"{source}:{lineno}: more than {MAX_PARTS} detections in one run (the most a run keeps: "
                             "about 0.14 MB a part); run the rest as another run")
-        yield _row(text.split(","), names, row, lineno, source)
+        yield _row(text.split(","), names, row, lineno, source, types)
     if names is None:
         raise TaskError(f"{source}: no header: a detection file starts with t[s],along[m],across[m]")
 
@@ -165,10 +186,13 @@ def expected_parts(gen) -> float:
     return float(gen.count) if gen.count is not None else float(gen.rate) * float(gen.duration)
 
 
-def generate(gen, belt_width: float) -> list[Detection]:
+def generate(gen, belt_width: float, types: dict | None = None) -> list[Detection]:
     """The parts of a generator spec (:class:`~pickplace_cli.line.spec.Generator`): arrival times (regular or
     Poisson), across uniform over the spread, along = ``detect_at``; the same seed gives the same parts. TaskError
-    when it would make more than :data:`MAX_PARTS` (a Poisson stream's draws are capped there too)."""
+    when it would make more than :data:`MAX_PARTS` (a Poisson stream's draws are capped there too). ``types``
+    (name → :class:`~pickplace_cli.line.spec.PartType`): each part gets a type by the shares, drawn after every
+    other number from the same seed (so a line without types makes the very same parts): type k when the uniform
+    draw u lies in [S_(k−1), S_k), S_k the shares' running sum."""
     if expected_parts(gen) > MAX_PARTS:
         raise TaskError(f"parts.generate: {expected_parts(gen):.6g} parts, more than the {MAX_PARTS} a run may have "
                         "(about 0.14 MB a part): give a lower count, rate or duration")
@@ -194,9 +218,21 @@ def generate(gen, belt_width: float) -> list[Detection]:
     spread = float(belt_width if gen.spread is None else gen.spread)
     across = rng.uniform(-spread / 2, spread / 2, len(t)) if spread > 0 else np.zeros(len(t))
     angle = rng.uniform(-math.pi, math.pi, len(t)) if gen.angles else None
+    kinds = _draw_types(rng, types, len(t))
     along = float(gen.detect_at)
-    return [Detection(str(k + 1), float(t[k]), along, float(across[k]), None if angle is None else float(angle[k]), k + 1)
-            for k in range(len(t))]
+    return [Detection(str(k + 1), float(t[k]), along, float(across[k]), None if angle is None else float(angle[k]), k + 1,
+                      kinds[k]) for k in range(len(t))]
+
+
+def _draw_types(rng, types: dict | None, n: int) -> list:
+    """n type names drawn by the shares (``generate``), or n times None without types."""
+    if types is None:
+        return [None] * n
+    names = list(types)
+    edges = np.cumsum([float(types[k].share) for k in names])
+    edges[-1] = max(edges[-1], 1.0)  # the shares add up to 1 within 1e-9: every draw in [0, 1) has a type
+    idx = np.searchsorted(edges, rng.random(n), side="right")
+    return [names[min(int(i), len(names) - 1)] for i in idx]
 
 
 def in_time_order(items: Iterable[Detection | BadRow], window: float = 0.0) -> Iterator[Detection | BadRow]:

@@ -38,13 +38,18 @@ def _text(s) -> str:
 
 
 class PartsCsv:
-    """The per-part CSV: :meth:`header` once, then :meth:`row` per answered part."""
+    """The per-part CSV: :meth:`header` once, then :meth:`row` per answered part. ``typed`` (a line with part types):
+    a ``type`` column after ``angle[rad]``."""
 
-    def __init__(self, stream: IO[str]) -> None:
+    def __init__(self, stream: IO[str], typed: bool = False) -> None:
         self.stream = stream
+        self.typed = typed
 
     def header(self) -> None:
-        self.stream.write(",".join(PART_COLUMNS) + "\n")
+        cols = list(PART_COLUMNS)
+        if self.typed:
+            cols.insert(cols.index("angle[rad]") + 1, "type")
+        self.stream.write(",".join(cols) + "\n")
 
     def row(self, res) -> None:
         d = res.as_dict()
@@ -55,6 +60,8 @@ class PartsCsv:
                  _num(d.get("t_placed_s")), _num(d.get("t_free_s")), _num(d.get("target")),
                  _num(d.get("turn_rad")), str(d["exit_code"]),
                  _text(d.get("reason"))]
+        if self.typed:
+            cells.insert(PART_COLUMNS.index("angle[rad]") + 1, _text(d.get("type")))
         self.stream.write(",".join(cells) + "\n")
 
 
@@ -83,7 +90,8 @@ def summary_json(summary, line_name: str, compact: bool = False) -> str:
 
 def write_robots_csv(summary, stream: IO[str]) -> None:
     """One row per robot: picks, picks/min, busy, idle, utilisation, per motor RMS over the run, rated and use,
-    and the peak use of every limit (columns: the union over the robots)."""
+    and the peak use of every limit (columns: the union over the robots); on a line with part types its picks of each
+    type (``picks_TYPE``)."""
     joints = []
     for r in summary.robots:
         joints += [j for j in r.joints if j not in joints]
@@ -92,6 +100,8 @@ def write_robots_csv(summary, stream: IO[str]) -> None:
     for j in joints:
         head += [f"rms_{j}[N*m]", f"rated_{j}[N*m]", f"rms_use_{j}[-]"]
     head += [f"peak_use_{j}_{q.replace(' ', '_')}[-]" for j, q in keys]
+    types = [t.name for t in summary.types] if summary.types else []
+    head += [f"picks_{t}" for t in types]  # a line with part types: each robot's picks of each type
     stream.write(",".join(head) + "\n")
     for r in summary.robots:
         cells = [_text(r.name), str(r.picks), _num(r.picks_per_minute), _num(r.busy), _num(r.idle), _num(r.utilisation)]
@@ -101,6 +111,7 @@ def write_robots_csv(summary, stream: IO[str]) -> None:
             x, lim = rms.get(j), rated.get(j)
             cells += [_num(x), _num(lim), _num(x / lim if x is not None and lim is not None and lim > 0 else None)]
         cells += [_num(r.peak_use.get(k)) for k in keys]
+        cells += [str((r.type_picks or {}).get(t, 0)) for t in types]
         stream.write(",".join(cells) + "\n")
 
 
@@ -115,6 +126,13 @@ def interval_text(iv) -> list[str]:
     return [f"miss rate {100 * iv.miss.estimate:.1f} ± {100 * iv.miss.half:.1f} % ({level}, batch means over "
             f"{iv.batches} windows of {iv.window:.3g} s; {wil})",
             f"picks/min {iv.picks_per_minute.estimate:.1f} ± {iv.picks_per_minute.half:.1f} ({level}, batch means)"]
+
+
+def type_text(ts) -> list[str]:
+    """A part type's figures as lines of text: its counts, then its intervals (as :func:`interval_text`)."""
+    head = (f"type {ts.name}: {ts.parts} parts, {ts.picked} picked, {ts.missed} missed ({100 * ts.miss_rate:.1f} %): "
+            f"{ts.picks_per_minute:.1f} picks/min")
+    return [head] + ["  " + x for x in interval_text(ts.intervals)]
 
 
 def print_table(summary, console=None) -> None:
@@ -142,5 +160,5 @@ def print_table(summary, console=None) -> None:
         t.add_row(r.name, str(r.picks), f"{r.picks_per_minute:.1f}", f"{100 * r.utilisation:.1f} %",
                   f"{r.idle:.2f}", peak, rms)
     console.print(t)
-    for text in interval_text(summary.intervals):
+    for text in interval_text(summary.intervals) + [x for ts in summary.types or [] for x in type_text(ts)]:
         console.print(text, soft_wrap=True, markup=False)

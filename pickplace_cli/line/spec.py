@@ -155,7 +155,11 @@ class RobotSpec(_Model):
     base: Xyz = Field(description="Origin of its base frame [along, across, height above the belt] in m")
     window: tuple[Num, Num] = Field(description="Reach window [start, end] along the belt in m: where it may meet "
                                                 "a part and track it")
-    place: Place = Field(description="Where it puts the parts")
+    place: Optional[Place] = Field(default=None, description="Where it puts the parts (every part type, when the "
+                                   "line has several: one place for all)")
+    places: Optional[dict[str, Place]] = Field(default=None, min_length=1, description="Or, on a line with part "
+                                               "types (parts.types): a place per type, keyed by the type's name; the "
+                                               "robot takes only these types")
     home: Optional[Xyz] = Field(default=None, description="Rest point [along, across, height] in m where it starts "
                                                            "(default: its first place point)")
     time: Union[Literal["limits", "auto", "fit"], Num, None] = Field(
@@ -173,6 +177,8 @@ class RobotSpec(_Model):
 
     @model_validator(mode="after")
     def _window(self) -> "RobotSpec":
+        if (self.place is None) == (self.places is None):
+            raise ValueError("give one of place (every part type) or places (a place per part type)")
         if not self.window[0] < self.window[1]:
             raise ValueError(f"window = {list(self.window)} m: needs start < end along the belt")
         if isinstance(self.time, float) and not self.time > 0:
@@ -201,17 +207,32 @@ class Generator(_Model):
         return self
 
 
+#: a part type's name: letters, digits, _ and - (it is a CSV cell and a key)
+TYPE_NAME = r"^[A-Za-z][A-Za-z0-9_-]{0,39}$"
+
+
+class PartType(_Model):
+    """One kind of part on the belt (a product): its share of the generated parts."""
+
+    share: Num = Field(ge=0, le=1, description="Share of the generated parts of this type, 0 … 1 (the types' shares "
+                                               "add up to 1); detections name their type themselves")
+
+
 class Parts(_Model):
     """Where the parts come from and how they are seen."""
 
     detections: Optional[str] = Field(default=None, description="A detection CSV (t[s], along[m], across[m], "
-                                                                "optional angle[rad], id); relative to the line file")
+                                                                "optional angle[rad], id; type with parts.types); "
+                                                                "relative to the line file")
     generate: Optional[Generator] = Field(default=None, description="A seeded generator instead of a file")
     height: Num = Field(default=0.0, ge=0, le=1, description="Grip point above the belt surface in m")
     latency: Num = Field(default=0.0, ge=0, le=10, description="Seconds from a detection until a robot may start "
                                                                "its move (vision, planning, bus)")
     reorder: Num = Field(default=0.0, ge=0, le=60, description="Seconds a detection may come late: detections are "
                                                                "held this long and put in time order")
+    types: Optional[dict[str, PartType]] = Field(default=None, min_length=1, max_length=100, description="Part "
+                                                 "types by name (default none: one kind of part): generated parts get "
+                                                 "a type by the shares, detections name it in their type column")
 
     @model_validator(mode="after")
     def _source(self) -> "Parts":
@@ -321,7 +342,62 @@ def check_rules(line: Line, source: str = "line") -> None:
             and line.parts.generate.spread > line.belt.width + 1e-12:
         raise ProfileError(f"{source}: parts.generate.spread = {line.parts.generate.spread:g} m: wider than the belt "
                            f"(belt.width = {line.belt.width:g} m)")
+    check_types(line, source)
     check_windows(line, source)
+
+
+#: how far the part types' shares may add up from 1
+SHARE_TOLERANCE = 1e-9
+
+
+def check_types(line: Line, source: str = "line") -> None:
+    """Part types: names, shares adding up to 1 (within ``SHARE_TOLERANCE``), every robot's ``places`` keyed by
+    declared types. ProfileError (exit 1), one line."""
+    import re
+
+    types = line.parts.types
+    if types is None:
+        bad = next((r for r in line.robots if r.places is not None), None)
+        if bad is not None:
+            raise ProfileError(f"{source}: robot {bad.name}: places = {sorted(bad.places)}: places per part type need "
+                               "the types declared in parts.types (or give place: one place for every part)")
+        return
+    for name in types:
+        if not re.match(TYPE_NAME, name):
+            raise ProfileError(f"{source}: parts.types: name {name!r}: a type's name is a letter, then letters, digits, "
+                               "_ or - (at most 40)")
+    total = math.fsum(t.share for t in types.values())
+    if abs(total - 1.0) > SHARE_TOLERANCE:
+        raise ProfileError(f"{source}: parts.types: the shares {', '.join(f'{k} {t.share:.12g}' for k, t in types.items())} "
+                           f"add up to {total:.12g}: they must add up to 1 (within {SHARE_TOLERANCE:g})")
+    for r in line.robots:
+        for name in r.places or {}:
+            if name not in types:
+                raise ProfileError(f"{source}: robot {r.name}: places.{name}: not a part type of parts.types "
+                                   f"({', '.join(types)})")
+
+
+def type_names(line: Line) -> list[str] | None:
+    """The part types' names in file order (None: one kind of part)."""
+    return None if line.parts.types is None else list(line.parts.types)
+
+
+def robot_places(robot: RobotSpec, types: list[str] | None) -> dict:
+    """{type: Place} of the types the robot takes (one place for every type, or its ``places``); {None: place} on
+    a line without types."""
+    if types is None:
+        return {None: robot.place}
+    if robot.places is None:
+        return {t: robot.place for t in types}
+    return {t: robot.places[t] for t in types if t in robot.places}
+
+
+def untaken_types(line: Line) -> list[str]:
+    """The part types no robot of the line takes (every part of them is missed)."""
+    types = type_names(line)
+    if types is None:
+        return []
+    return [t for t in types if not any(robot_places(r, types).get(t) is not None for r in line.robots)]
 
 
 def robot_bands(line: Line) -> list[tuple[float, float]]:

@@ -13,6 +13,11 @@ from upstream (0) to downstream.
   with an ``overlap`` tolerance the robots whose band is within that distance are asked after it, upstream first.
 * ``skip`` — the n-th part is robot k's with k = (n − 1) mod (skip + 1): each robot takes one part and lets
   ``skip`` pass; with ``pass_on`` a part its robot cannot take is offered to the robots downstream of it.
+
+**Part types.** On a line with several part types a robot takes only the types it has a place for: every strategy
+makes its choice as above, and the robots that do not take the part's type are then left out of it (the reason
+says so). Under ``skip`` a part whose robot does not take its type goes on to the robots downstream of it with
+``pass_on`` and is missed without; under ``quota`` the shares stay shares of all parts.
 """
 
 from __future__ import annotations
@@ -42,8 +47,17 @@ class Sharing:
         skip = getattr(spec, "skip", None)
         self.skip = int(n_robots - 1 if skip is None else skip)
 
-    def order(self, across: float, n: int) -> tuple[list[int], dict[int, str]]:
-        return _ORDER[StrategyName(self.spec.kind)](self, across, n)
+    def order(self, across: float, n: int, takes: set | None = None,
+              kind: str | None = None) -> tuple[list[int], dict[int, str]]:
+        """(robots to ask in turn, {robot: reason left out}) for the n-th part at ``across`` [m]; ``takes``: the
+        robots that take its type ``kind`` (None: every robot)."""
+        ask, out = _ORDER[StrategyName(self.spec.kind)](self, across, n)
+        if takes is None:
+            return ask, out
+        for i in ask:
+            if i not in takes:
+                out[i] = f"takes no parts of type {kind} (no place for them)"
+        return [i for i in ask if i in takes], out
 
     def picked(self, i: int) -> None:
         self.picks[i] += 1

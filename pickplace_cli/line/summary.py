@@ -41,6 +41,8 @@ class RobotSummary:
     legs: int
     exact_legs: int
     exchanges: int = 0
+    #: picks per part type (None: a line without types)
+    type_picks: Any = None
 
     @property
     def picks_per_minute(self) -> float:
@@ -77,7 +79,44 @@ class RobotSummary:
             "rated_torque_N_m": {j: (float(x) if np.isfinite(x) else None) for j, x in zip(self.joints, self.rated)},
             "rms_use": {j: (float(u) if np.isfinite(u) else None) for j, u in zip(self.joints, self.rms_use)},
             "peak_use": {f"{j} {q}": float(u) for (j, q), u in sorted(self.peak_use.items())},
+            **({} if self.type_picks is None else {"picks_by_type": dict(self.type_picks)}),
         }
+
+
+@dataclass
+class TypeSummary:
+    """One part type of a line with several: its parts, picked, missed, share of the generated parts (None: not
+    generated), the line's parts/min fed (its rate is that times its share of the parts: as a robot's) and its
+    intervals (:mod:`~pickplace_cli.line.confidence`, over this type's parts alone)."""
+
+    name: str
+    parts: int
+    picked: int
+    line_parts: int
+    line_parts_per_minute: float
+    share: float | None = None
+    intervals: Any = None
+
+    @property
+    def missed(self) -> int:
+        return self.parts - self.picked
+
+    @property
+    def miss_rate(self) -> float:
+        return self.missed / self.parts if self.parts else 0.0
+
+    @property
+    def parts_per_minute(self) -> float:
+        return self.line_parts_per_minute * self.parts / self.line_parts if self.line_parts else 0.0
+
+    @property
+    def picks_per_minute(self) -> float:
+        return self.line_parts_per_minute * self.picked / self.line_parts if self.line_parts else 0.0
+
+    def as_dict(self) -> dict[str, Any]:
+        return {"parts": self.parts, "picked": self.picked, "missed": self.missed, "miss_rate": self.miss_rate,
+                "parts_per_minute": self.parts_per_minute, "picks_per_minute": self.picks_per_minute,
+                "share": self.share, "intervals": None if self.intervals is None else self.intervals.as_dict()}
 
 
 @dataclass
@@ -97,6 +136,8 @@ class LineSummary:
     intervals: Any = None
     #: --until: {"precision", "reached", "max_s"} (None without it)
     until: Any = None
+    #: per part type (a line with several): :class:`TypeSummary` in the file's order (None: one kind of part)
+    types: Any = None
 
     @property
     def span(self) -> float:
@@ -138,6 +179,7 @@ class LineSummary:
             "t_end_s": self.t_end if math.isfinite(self.t_end) else None, "span_s": self.span,
             "intervals": None if self.intervals is None else self.intervals.as_dict(),
             **({} if self.until is None else {"until": dict(self.until)}),
+            **({} if self.types is None else {"types": {t.name: t.as_dict() for t in self.types}}),
             "exit_code": self.exit_code(), "violations": self.violations(), "warnings": list(self.warnings),
             "robots": [r.as_dict() for r in self.robots],
         }
@@ -176,16 +218,30 @@ def summarise(engine) -> LineSummary:
     from .confidence import summary_intervals
 
     out.intervals = summary_intervals(out, engine.results)
+    if engine.types is not None:
+        from .confidence import run_intervals, type_arrays
+
+        shares = engine.line.parts.types
+        out.types = []
+        for kind in engine.types:
+            t, missed = type_arrays(engine.results, kind)
+            ts = TypeSummary(kind, len(t), int(len(t) - missed.sum()), parts, out.parts_per_minute,
+                             float(shares[kind].share) if engine.line.parts.generate is not None else None)
+            ts.intervals = run_intervals(t, missed, ts.picks_per_minute)
+            out.types.append(ts)
     for run in engine.runs:
         r = run.robot
         integral, busy = sequence_integral(run.legs, r.home_torque, t_begin, t_end)
         rms = np.sqrt(integral / span) if span > 0 else np.zeros_like(integral)
         uses = [leg.use for leg in run.legs if leg.use is not None and len(leg.use)]
-        peak = dict(zip(r.use_keys, np.max(uses, axis=0).tolist())) if uses else {}
+        # the limits' keys of whichever of the robot's places checked a leg (one profile: the same columns in all)
+        keys = next((x.use_keys for x in getattr(run, "instances", [r]) if x.use_keys), r.use_keys)
+        peak = dict(zip(keys, np.max(uses, axis=0).tolist())) if uses else {}
         if r.limit_use != 1.0:  # planned against use × rating: the use of the ratings themselves
             peak = {k: (v * r.limit_use if not k[1].startswith(("position", "workcell", "singularity")) else v)
                     for k, v in peak.items()}
         out.robots.append(RobotSummary(r.name, run.picks, busy, span, out.parts_per_minute, parts, peak, r.joint_names,
                                        rms, r.rated,
-                                       len(run.legs), sum(1 for leg in run.legs if leg.exact), len(r.exchanges)))
+                                       len(run.legs), sum(1 for leg in run.legs if leg.exact), len(run.exchanges),
+                                       None if engine.types is None else {k: run.type_picks.get(k, 0) for k in engine.types}))
     return out

@@ -93,7 +93,7 @@ def run_case(args: tuple) -> dict:
 
         check_rules(cl, "line")
         eng = LineEngine(cl, profiles)
-        items = detections if detections is not None else generate(cl.parts.generate, cl.belt.width)
+        items = detections if detections is not None else generate(cl.parts.generate, cl.belt.width, cl.parts.types)
         try:
             eng.check_speed()
         except UnreachableError as exc:  # a belt too fast for every robot: every part is missed (a result)

@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import fcntl
 import os
-import pty
 import select
 import signal
 import socket
@@ -20,6 +19,7 @@ from typer.testing import CliRunner
 from pickplace_cli.cli import app
 from tests.cli.test_cli_line import LINE  # the same two-robot line
 from tests.procs import children, group, kill_group
+from tests.terminal import stderr_on_terminal
 
 runner = CliRunner()
 CAP = 240.0  # s: the most any wait here lasts (a busy 2-core machine)
@@ -282,27 +282,6 @@ def test_line_file_values_out_of_range(line_file, edit, code, text):
 @pytest.mark.parametrize("no_color", [None, "1"])
 def test_the_table_honours_no_color(line_file, no_color):
     """On a terminal (a pseudo-terminal) the robots' table is styled; with NO_COLOR set it has no escape sequence."""
-    leader, follower = pty.openpty()
-    env = {k: v for k, v in os.environ.items() if k not in ("NO_COLOR", "TERM")}
-    env["TERM"] = "xterm-256color"
-    if no_color:
-        env["NO_COLOR"] = no_color
-    try:
-        proc = subprocess.Popen(_cli("line", line_file, "-o", os.devnull), stdout=subprocess.DEVNULL, stderr=follower,
-                                env=env)
-        os.close(follower)
-        chunks = []
-        while True:
-            try:
-                data = os.read(leader, 65536)
-            except OSError:
-                break
-            if not data:
-                break
-            chunks.append(data)
-        proc.wait(CAP)
-    finally:
-        os.close(leader)
-    out = b"".join(chunks)
+    out = stderr_on_terminal(_cli("line", line_file, "-o", os.devnull), no_color, CAP)
     assert b"line: 12 parts" in out
     assert (b"\x1b[" in out) is (no_color is None)

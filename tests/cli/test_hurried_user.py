@@ -19,6 +19,7 @@ from typer.testing import CliRunner
 
 from pickplace_cli.cli import app
 from pickplace_cli.model.profile import resolve_profile_path
+from tests.terminal import stderr_on_terminal
 
 runner = CliRunner()
 ADEPT = ["--from", "-0.1525,0,-0.8", "--to", "0.1525,0,-0.8"]
@@ -378,27 +379,6 @@ def test_profile_list_path_and_init(tmp_path):
 def test_no_color_means_no_ansi_styling(no_color):
     """On a terminal (a pseudo-terminal) the limit table of a move that breaks a limit is styled (bold, red); with
     NO_COLOR set there is no escape sequence at all."""
-    leader, follower = pty.openpty()
-    env = {k: v for k, v in os.environ.items() if k not in ("NO_COLOR", "TERM")}
-    env["TERM"] = "xterm-256color"
-    if no_color:
-        env["NO_COLOR"] = no_color
-    try:
-        proc = subprocess.Popen(_cli("plan", *ADEPT, "--time", "0.1", "-o", os.devnull), stdout=subprocess.DEVNULL,
-                                stderr=follower, env=env)
-        os.close(follower)
-        chunks = []
-        while True:
-            try:
-                data = os.read(leader, 65536)
-            except OSError:
-                break
-            if not data:
-                break
-            chunks.append(data)
-        proc.wait(CAP)
-    finally:
-        os.close(leader)
-    out = b"".join(chunks)
+    out = stderr_on_terminal(_cli("plan", *ADEPT, "--time", "0.1", "-o", os.devnull), no_color, CAP)
     assert b"EXCEEDED" in out
     assert (b"\x1b[" in out) is (no_color is None)

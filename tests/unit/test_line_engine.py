@@ -12,7 +12,6 @@
 
 from __future__ import annotations
 
-import io
 import math
 
 import numpy as np
@@ -116,30 +115,14 @@ def test_no_robot_starts_a_move_before_the_last_one_ends(run):
 
 
 def test_rms_over_the_run_against_the_written_motor_torque(run):
-    from mcap.reader import make_reader
-    from mcap_ros2.decoder import DecoderFactory
-
-    from pickplace_cli.line.trajectories import robot_samples, sample_times, write_line_mcap
+    from tests.reference.line_rms import trapezoid_rms, written_run
 
     _, eng, s = run
-    t = sample_times(s.t_begin, s.t_end, 1000.0)
-    buf = io.BytesIO()
-    write_line_mcap([robot_samples(r, t) for r in eng.runs], s.t_begin, buf)
-    buf.seek(0)
-    series: dict = {}
-    reader = make_reader(buf, decoder_factories=[DecoderFactory()])
-    for _, channel, _, msg in reader.iter_decoded_messages(topics=[f"/{r.robot.name}/motor_states" for r in eng.runs]):
-        stamp = msg.header.stamp
-        series.setdefault(channel.topic, []).append((stamp.sec * 10**9 + stamp.nanosec, list(msg.effort)))
+    written = written_run(eng, s)
     for r in s.robots:
-        rows = series[f"/{r.name}/motor_states"]
-        ns = np.array([x[0] for x in rows], dtype=np.int64)
-        tt = (ns - ns[0]) * 1e-9
-        tau = np.array([x[1] for x in rows])
-        integral = np.trapezoid(tau**2, tt, axis=0)
-        rms = np.sqrt(integral / (tt[-1] - tt[0]))
+        tt, tau, _ = written[r.name]
         assert tt[-1] - tt[0] == pytest.approx(s.span, abs=2e-9)
-        assert np.allclose(r.rms, rms, rtol=5e-3), (r.name, r.rms, rms)
+        assert np.allclose(r.rms, trapezoid_rms(tt, tau), rtol=5e-3), (r.name, r.rms, trapezoid_rms(tt, tau))
 
 
 def test_a_robot_that_waits_meets_the_part_at_its_window(run):

@@ -22,7 +22,6 @@ computations:
 
 from __future__ import annotations
 
-import io
 import math
 
 import numpy as np
@@ -139,34 +138,16 @@ def test_a_robot_without_the_axis_leaves_the_parts_it_would_have_to_turn(run):
 
 
 def test_rms_over_the_run_against_the_written_motor_torque(run):
-    from mcap.reader import make_reader
-    from mcap_ros2.decoder import DecoderFactory
-
-    from pickplace_cli.line.trajectories import robot_samples, sample_times, write_line_mcap
+    from tests.reference.line_rms import trapezoid_rms, written_run
 
     _, eng, s = run
-    t = sample_times(s.t_begin, s.t_end, 1000.0)
-    buf = io.BytesIO()
-    write_line_mcap([robot_samples(r, t) for r in eng.runs], s.t_begin, buf)
-    buf.seek(0)
-    series: dict = {}
-    joints: dict = {}
-    reader = make_reader(buf, decoder_factories=[DecoderFactory()])
-    topics = [f"/{r.robot.name}/{k}" for r in eng.runs for k in ("motor_states", "joint_states")]
-    for _, channel, _, msg in reader.iter_decoded_messages(topics=topics):
-        stamp = msg.header.stamp
-        key = (stamp.sec * 10**9 + stamp.nanosec, list(msg.effort))
-        (series if channel.topic.endswith("motor_states") else joints).setdefault(channel.topic, []).append(
-            (key[0], list(msg.position), key[1]))
+    written = written_run(eng, s)
     for r in s.robots:
-        rows = series[f"/{r.name}/motor_states"]
-        ns = np.array([x[0] for x in rows], dtype=np.int64)
-        tt = (ns - ns[0]) * 1e-9
-        tau = np.array([x[2] for x in rows])
-        rms = np.sqrt(np.trapezoid(tau**2, tt, axis=0) / (tt[-1] - tt[0]))
+        tt, tau, _ = written[r.name]
+        assert tt[-1] - tt[0] == pytest.approx(s.span, abs=2e-9)
         assert len(r.rms) == (4 if r.name == "d4" else 3)
-        assert np.allclose(r.rms, rms, rtol=5e-3), (r.name, r.rms, rms)
-    q4 = np.array([x[1][3] for x in joints["/d4/joint_states"]])
+        assert np.allclose(r.rms, trapezoid_rms(tt, tau), rtol=5e-3), (r.name, r.rms, trapezoid_rms(tt, tau))
+    q4 = written["d4"][2][:, 3]
     assert np.ptp(q4) > 1.0  # the written fourth axis turns
     assert np.abs(q4).max() <= 2 * math.pi  # and stays in its range
 
