@@ -313,6 +313,21 @@ def _unit_check(head: Header, name: str, want: str, source: str) -> None:
                         f"{want}; check reads it in {want} (a file in other units: give the profile that names them)")
 
 
+def _rate_unit(head: Header, name: str, label: str, per: str, power: str, source: str) -> float:
+    """The time unit [s] of a derivative column ``name`` of a ``label`` quantity: the header's ``label/s``,
+    ``label/ms`` or ``label/us`` (with ``power`` "^2" for an acceleration); a column without a unit is per the
+    master's unit ``per``. TaskError for any other unit."""
+    got = head.unit(name)
+    if got == "":
+        return TIME_UNITS[per]
+    for tu in ("s", "ms", "us", "µs"):
+        if got == f"{label}/{tu}{power}":
+            return TIME_UNITS[tu]
+    raise TaskError(f"{source}:{head.line}: column {name}[{got}]: the profile's controller.joints gives {name} in "
+                    f"{label}/{per}{power}; check reads it in {label} per s, ms or us{power and ' squared'} (a file in "
+                    "other units: give the profile that names them)")
+
+
 @dataclass(frozen=True)
 class Table:
     """A table a kernel interpolates, in the model's joint units: ``kind`` (pvt, cam, cam-table), the points' times
@@ -345,12 +360,13 @@ def read_table(text: str, source: str, kind: str, joint_names: tuple[str, ...], 
                         f"ms or us (the header's unit {tunit!r} is not one of them)")
     k_t = TIME_UNITS[tunit]
     per = tunit or "s"
-    for name, label in zip(names, labels):
+    k_vel, k_acc = [], []  # each derivative column's own time unit [s per unit]: plan --pvt-integer writes t[ms] and
+    for name, label in zip(names, labels):  # velocities in counts/s
         _unit_check(head, name, label, source)
         if kind in ("pvt", "cam"):
-            _unit_check(head, f"{name}_vel", f"{label}/{per}", source)
+            k_vel.append(_rate_unit(head, f"{name}_vel", label, per, "", source))
         if kind == "cam":
-            _unit_check(head, f"{name}_acc", f"{label}/{per}^2", source)
+            k_acc.append(_rate_unit(head, f"{name}_acc", label, per, "^2", source))
     cols = [tname] + (["dt"] if kind == "pvt" else [])
     for name in names:
         cols += [name] + ([f"{name}_vel"] if kind in ("pvt", "cam") else []) + ([f"{name}_acc"] if kind == "cam" else [])
@@ -391,8 +407,8 @@ def read_table(text: str, source: str, kind: str, joint_names: tuple[str, ...], 
     block = data[:, off:].reshape(len(t), len(names), width)
     scale = np.asarray(drive.scale) if drive is not None else np.ones(len(names))
     q = drive.joint_position(block[:, :, 0]) if drive is not None else block[:, :, 0].copy()
-    qd = block[:, :, 1] / scale / k_t if width > 1 else None
-    qdd = block[:, :, 2] / scale / k_t**2 if width > 2 else None
+    qd = block[:, :, 1] / scale / np.asarray(k_vel) if width > 1 else None
+    qdd = block[:, :, 2] / scale / np.asarray(k_acc) ** 2 if width > 2 else None
     return Table(kind, t, q, qd, qdd, lines_a)
 
 
@@ -443,8 +459,9 @@ def tool_motion(table: Table, tool_of):
 MAX_POINTS = 200_000
 
 #: one array of a table in Structured Text as ``plan --format pvt-st|cam-st|cam-table-st`` writes it (either dialect):
-#: ``NAME : ARRAY[1..n] OF LREAL := [ (* column [unit]: words *) values ];``
-_ST_ARRAY = r"(\w+)\s*:\s*ARRAY\s*\[\s*1\s*\.\.\s*(\d+)\s*\]\s*OF\s*LREAL\s*:=\s*\[\s*\(\*\s*([^*]*?)\*\)([^\]]*)\]"
+#: ``NAME : ARRAY[1..n] OF LREAL := [ (* column [unit]: words *) values ];`` (``OF DINT``: ``--pvt-integer``)
+_ST_ARRAY = (r"(\w+)\s*:\s*ARRAY\s*\[\s*1\s*\.\.\s*(\d+)\s*\]\s*OF\s*(?:LREAL|DINT)\s*:=\s*\[\s*\(\*\s*([^*]*?)\*\)"
+             r"([^\]]*)\]")
 
 
 def st_table_text(text: str, source: str) -> str | None:

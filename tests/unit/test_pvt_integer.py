@@ -155,3 +155,51 @@ def test_integer_st_parses_and_holds_the_csv_integers(dialect):
         body = re.search(rf"{st_name} : ARRAY\[1\.\.(\d+)\] OF DINT := \[ \(\*.*?\*\)(.*?)\];", text, re.S)
         assert body and int(body.group(1)) == len(rows) == 4  # the 300 ms segment split in two
         assert [int(v) for v in body.group(2).split(",")] == [int(r[k]) for r in rows], name
+
+
+@pytest.mark.parametrize("fmt,suffix", [("pvt", "csv"), ("pvt-st", "st")])
+def test_check_reads_the_integer_table_plan_writes(tmp_path, fmt, suffix):
+    """``check`` reads ``--pvt-integer`` (t[ms], velocities in counts/s, DINT arrays in ST) as the same motion as the
+    float table of the same plan: times exactly, positions to half a count, velocities to half a count/s (the
+    integer rounding, over K counts per rad), and judges it within every limit (exit 0)."""
+    from pickplace_cli.pipelines import check_read as cr
+    from pickplace_cli.robots import build_robot
+
+    out, ref = tmp_path / f"int.{suffix}", tmp_path / f"float.{suffix}"
+    common = ("plan", *ADEPT, "--cycle", "0.001", "-q", "-f", fmt)
+    assert run(*common, "--pvt-integer", "-o", str(out)).exit_code == 0
+    assert run(*common, "-o", str(ref)).exit_code == 0
+    prof = load_profile("delta-su2018")
+    robot = build_robot(prof.robot)
+    _, got, _ = cr.read_checked(out.read_text(), "int", prof, robot)
+    _, want, _ = cr.read_checked(ref.read_text(), "float", prof, robot)
+    assert np.allclose(got.t, want.t, rtol=0, atol=1e-12)  # whole ms both (ms · 1e-3 vs decimal s: round-off)
+    assert np.allclose(got.q, want.q, rtol=0, atol=0.5 / K + 1e-12)
+    assert np.allclose(got.qd, want.qd, rtol=0, atol=0.5 / K + 1e-12)  # not 1000 x: counts/s under t[ms]
+    assert run("check", str(out), "-q").exit_code == 0
+
+
+@pytest.mark.parametrize("unit,scale", [("counts/s", 1.0), ("counts/ms", 1e3), ("counts/us", 1e6)])
+def test_a_velocity_column_is_read_in_its_own_time_unit(unit, scale):
+    """A table's velocity column carries its own time unit, whatever the time column's: 1 count/<unit> is
+    ``scale`` counts/s, i.e. scale / K rad/s (K from the profile's numbers)."""
+    from pickplace_cli.pipelines import check_read as cr
+    from pickplace_cli.robots import build_robot
+
+    prof = load_profile("delta-su2018")
+    text = (f"t[ms],dt[ms],A1[counts],A1_vel[{unit}],A2[counts],A2_vel[{unit}],A3[counts],A3_vel[{unit}]\n"
+            "0,0,2000000,0,2000000,0,2000000,0\n10,10,2000001,1,2000002,2,2000003,3\n")
+    _, table, _ = cr.read_checked(text, "p.csv", prof, build_robot(prof.robot))
+    assert np.allclose(table.qd[1], np.array([1, 2, 3]) * scale / K, rtol=1e-12, atol=0)
+
+
+def test_a_velocity_in_an_unknown_time_unit_is_one_line():
+    from pickplace_cli.model.errors import TaskError
+    from pickplace_cli.pipelines import check_read as cr
+    from pickplace_cli.robots import build_robot
+
+    prof = load_profile("delta-su2018")
+    text = ("t[ms],dt[ms],A1[counts],A1_vel[counts/min],A2[counts],A2_vel[counts/s],A3[counts],A3_vel[counts/s]\n"
+            "0,0,1,0,1,0,1,0\n10,10,1,0,1,0,1,0\n")
+    with pytest.raises(TaskError, match=r"A1_vel\[counts/min\].*per s, ms or us"):
+        cr.read_checked(text, "p.csv", prof, build_robot(prof.robot))
