@@ -488,6 +488,52 @@ def st_table_text(text: str, source: str) -> str | None:
     return "\n".join(rows) + "\n"
 
 
+#: one array of a cam object (``plan -f cam-st|cam-table-st --cam-object codesys|twincat``), indexed from 0 or 1:
+#: ``NAME : ARRAY[a..b] OF LREAL := [ (* words [unit] *) values ];``
+_CAM_ARRAY = (r"(\w+)\s*:\s*ARRAY\s*\[\s*(\d+)\s*\.\.\s*(\d+)\s*\]\s*OF\s*LREAL\s*:=\s*\[\s*\(\*\s*([^*]*?)\*\)"
+              r"([^\]]*)\]")
+#: a cam object's array name suffix → the column plan -f cam|cam-table writes (the jerk column is not read)
+_CAM_SUFFIX = {"_y": "", "_v": "_vel", "_a": "_acc"}
+
+
+def cam_object_text(text: str, source: str) -> str | None:
+    """A cam object program (``PRG_PickplaceCams`` of ``plan -f cam-st|cam-table-st --cam-object codesys|twincat``)
+    as the CSV ``plan -f cam|cam-table`` writes: the master (``fMaster``, or for CODESYS's equidistant table the
+    ``xStart`` … ``xEnd`` its points span equally), each joint's ``NAME_y``, ``NAME_v``, ``NAME_a`` arrays as
+    ``NAME``, ``NAME_vel``, ``NAME_acc`` with the units their comments give; None when ``text`` is not one."""
+    import re
+
+    if "PROGRAM PRG_PickplaceCams" not in text:
+        return None
+    cols: list[tuple[str, list[str]]] = []
+    master = None
+    for name, lo, hi, comment, body in re.findall(_CAM_ARRAY, text):
+        values = [v.strip() for v in body.split(",") if v.strip()]
+        if len(values) != int(hi) - int(lo) + 1:
+            raise TaskError(f"{source}: {name}: {len(values)} values for ARRAY[{lo}..{hi}]: a cam's arrays must be "
+                            "complete")
+        unit = comment.rsplit("[", 1)[1].split("]", 1)[0].strip() if "[" in comment else ""
+        if name == "fMaster":
+            master = (f"master[{unit}]", values)
+            continue
+        for suffix, column in _CAM_SUFFIX.items():
+            if name.endswith(suffix):
+                cols.append((f"{name[: -len(suffix)]}{column}[{unit}]", values))
+    if master is None:  # CODESYS's SMC_CAMTable: equidistant points from xStart to xEnd
+        ends = {k: (float(v), u) for k, v, u in re.findall(
+            r"\b(xStart|xEnd)\s*:\s*LREAL\s*:=\s*([^;]+);\s*\(\*[^\[]*\[([^\]]*)\]", text)}
+        if set(ends) != {"xStart", "xEnd"} or not cols:
+            raise TaskError(f"{source}: a cam object without its master (no fMaster array, no xStart and xEnd)")
+        x = np.linspace(ends["xStart"][0], ends["xEnd"][0], len(cols[0][1]))
+        master = (f"master[{ends['xStart'][1]}]", [repr(float(v)) for v in x])
+    cols.insert(0, master)
+    if len(cols) < 2 or len({len(v) for _, v in cols}) != 1:
+        raise TaskError(f"{source}: not a cam object plan writes (no slave arrays, or arrays of different lengths)")
+    rows = [",".join(c[0] for c in cols)]
+    rows += [",".join(v[k] for _, v in cols) for k in range(len(cols[0][1]))]
+    return "\n".join(rows) + "\n"
+
+
 def read_checked(text: str, source: str, profile, robot):
     """What ``check`` judges in a file: ("samples", [Samples …]) of a file of joint or drive positions (drive units
     converted to the model's), ("table", Table) of a PVT or cam table, ("cam-table", Samples) of an equidistant cam
@@ -499,6 +545,8 @@ def read_checked(text: str, source: str, profile, robot):
 
     drive = drive_map(profile)
     st = st_table_text(text, source)
+    if st is None:
+        st = cam_object_text(text, source)
     if st is not None:  # the same table in Structured Text: its arrays as CSV columns (line k + 1 = point k)
         text, source = st, f"{source} (Structured Text; line k + 1 is point k)"
     head = read_header(text)
