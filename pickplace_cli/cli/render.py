@@ -240,7 +240,7 @@ def _print_verdict(report, quiet: bool, with_cycle: bool = True) -> None:
     )
     if any(CLOSED_NOTE in n for n in report.notes):  # a checked file that returns to its start is the whole cycle
         cycle = (f"cycle: {report.duration:.4f} s, the whole duty cycle (the file ends where it starts), "
-                 f"{60.0 / report.duration:.1f} picks/min")
+                 f"{60.0 / report.duration:.1f} picks/min")  # (its JSON: pipelines.check.WholeCycleReport)
     if not with_cycle:
         cycle = f"move {report.duration:.4f} s"
     if report.ok:

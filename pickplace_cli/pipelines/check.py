@@ -61,6 +61,22 @@ CLOSED_TOL = 1e-6
 CLOSED_NOTE = "it ends where it starts: one whole duty cycle, the RMS torque taken over the file (no dwell added)"
 
 
+class WholeCycleReport(LimitReport):
+    """The limit report of a file that is one whole duty cycle (:data:`CLOSED_NOTE`): its duty cycle is the file's
+    duration, not 2·(duration + dwell), and its picks per minute 60 over that."""
+
+    @property
+    def round_trip(self) -> float:
+        return self.duration + self.dwell
+
+
+def whole_cycle(report: LimitReport) -> LimitReport:
+    """``report`` as a :class:`WholeCycleReport` when its notes say the file is a whole cycle, else unchanged."""
+    if not any(CLOSED_NOTE in n for n in report.notes):
+        return report
+    return WholeCycleReport(report.rows, report.duration, report.dwell, report.notes)
+
+
 def closed_cycle(q: np.ndarray) -> bool:
     """Whether joint positions ``q`` (N, n) [rad or m] end where they start (``CLOSED_TOL``)."""
     q = np.asarray(q, float)
@@ -434,11 +450,12 @@ def check_file(path: str | Path, profile: Profile, smoothing: float | str = 0.0,
     kind, what, source = read_checked(text, source, profile, robot)  # joints, drive units, a table (check_read)
     if kind == "table":
         return [MoveCheck(None, int(what.lines[0]), int(what.lines[-1]),
-                          check_table(what, profile, source, not_held).rated(profile.limit_use))]
+                          whole_cycle(check_table(what, profile, source, not_held).rated(profile.limit_use)))]
     out = []
     for s in (what if kind == "samples" else [what]):
         out.append(MoveCheck(s.move, int(s.lines[0]), s.last_line,
-                             check_samples(s, profile, smoothing, source, strict, warn, not_held).rated(profile.limit_use)))
+                             whole_cycle(check_samples(s, profile, smoothing, source, strict, warn,
+                                                       not_held).rated(profile.limit_use))))
     return out
 
 

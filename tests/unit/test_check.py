@@ -201,9 +201,16 @@ def test_a_round_trip_table_is_one_whole_duty_cycle(tmp_path, fmt):
     got = {r.joint: r.peak for r in checked.report.rows if r.quantity == "rms motor torque"}
     for joint, rms in want.items():
         assert got[joint] == pytest.approx(rms, rel=5e-3), joint
-    res = CliRunner().invoke(app, ["check", str(table), "--no-hold-capacity"])
+    assert checked.report.round_trip == pytest.approx(0.466, abs=1e-9)  # 466 cycles of 1 ms
+    assert checked.report.picks_per_minute == pytest.approx(60 / 0.466, rel=1e-9)
+    res = CliRunner().invoke(app, ["check", str(table), "--no-hold-capacity", "--report", str(tmp_path / "r.json")])
     assert res.exit_code == 0
     assert "cycle: 0.4660 s, the whole duty cycle (the file ends where it starts), 128.8 picks/min" in res.stderr
+    import json
+
+    said = json.loads((tmp_path / "r.json").read_text())
+    said = said.get("limits", said)
+    assert said["cycle_time_round_trip_s"] == pytest.approx(0.466, abs=1e-9)
 
 
 def test_a_one_way_table_keeps_the_profiles_duty_cycle(tmp_path):
