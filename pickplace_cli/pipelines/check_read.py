@@ -534,6 +534,31 @@ def cam_object_text(text: str, source: str) -> str | None:
     return "\n".join(rows) + "\n"
 
 
+def json_samples_text(text: str, source: str) -> str | None:
+    """The samples of ``plan -f json`` (``{"columns": [...], "samples": {column: [values]}}``) as the CSV ``plan``
+    writes (the same columns and values); None when ``text`` is not a JSON document; TaskError for a JSON document
+    without them."""
+    import json
+
+    if not text.lstrip().startswith(("{", "[")):
+        return None
+    try:
+        doc = json.loads(text)
+    except ValueError as exc:
+        raise TaskError(f"{source}: not valid JSON ({exc}); check reads CSV, Structured Text and plan's JSON") from None
+    cols = doc.get("columns") if isinstance(doc, dict) else None
+    data = doc.get("samples") if isinstance(doc, dict) else None
+    if not (isinstance(cols, list) and cols and isinstance(data, dict) and all(c in data for c in cols)):
+        raise TaskError(f"{source}: a JSON document without plan's 'columns' and 'samples' (plan -f json writes them); "
+                        "check reads CSV, Structured Text and plan's JSON")
+    values = [data[c] for c in cols]
+    if any(not isinstance(v, list) for v in values) or len({len(v) for v in values}) != 1:
+        raise TaskError(f"{source}: samples: every column must be a list of the same length")
+    rows = [",".join(str(c) for c in cols)]
+    rows += [",".join(repr(v[k]) if not isinstance(v[k], str) else v[k] for v in values) for k in range(len(values[0]))]
+    return "\n".join(rows) + "\n"
+
+
 def read_checked(text: str, source: str, profile, robot):
     """What ``check`` judges in a file: ("samples", [Samples …]) of a file of joint or drive positions (drive units
     converted to the model's), ("table", Table) of a PVT or cam table, ("cam-table", Samples) of an equidistant cam
@@ -544,6 +569,9 @@ def read_checked(text: str, source: str, profile, robot):
     from ..export.drive import drive_map
 
     drive = drive_map(profile)
+    js = json_samples_text(text, source)
+    if js is not None:  # plan -f json: its samples as the CSV plan writes
+        text, source = js, f"{source} (JSON; line k + 1 is sample k)"
     st = st_table_text(text, source)
     if st is None:
         st = cam_object_text(text, source)

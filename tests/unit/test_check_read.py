@@ -283,3 +283,31 @@ def test_a_cam_object_without_its_master_is_one_line():
             "[counts] *)\n        0.0, 1.0];\nEND_VAR\n")
     with pytest.raises(TaskError, match="without its master"):
         cr.read_checked(text, "c.st", prof, build_robot(prof.robot))
+
+
+def test_plan_json_is_checked_as_its_csv(tmp_path):
+    """``plan -f json`` (a round trip: two moves) is checked as the CSV of the same plan: the same moves, the same
+    peaks (the JSON's values are the CSV's to 12 significant digits: 1e-6 relative on a peak)."""
+    prof = load_profile("delta-su2018")
+    common = ["--from", "-0.1525,0,-0.8", "--to", "0.1525,0,-0.8", "--round-trip", "--cycle", "0.001", "-q"]
+    from typer.testing import CliRunner
+
+    from pickplace_cli.cli import app
+
+    for name, fmt in (("r.json", "json"), ("r.csv", "csv")):
+        assert CliRunner().invoke(app, ["plan", *common, "-f", fmt, "-o", str(tmp_path / name)]).exit_code == 0
+    got = check_file(tmp_path / "r.json", prof)
+    want = check_file(tmp_path / "r.csv", prof)
+    assert [c.move for c in got] == [c.move for c in want] == [1, 2]
+    for a, b in zip(got, want):
+        assert [(r.joint, r.quantity) for r in a.report.rows] == [(r.joint, r.quantity) for r in b.report.rows]
+        assert np.allclose([r.peak for r in a.report.rows], [r.peak for r in b.report.rows], rtol=1e-6, atol=1e-12)
+        assert a.report.ok
+
+
+@pytest.mark.parametrize("text,words", [('{"a": 1}', "without plan's 'columns' and 'samples'"),
+                                        ('{"a":', "not valid JSON")])
+def test_other_json_is_one_line(text, words):
+    prof = load_profile("delta-su2018")
+    with pytest.raises(TaskError, match=words):
+        cr.read_checked(text, "x.json", prof, build_robot(prof.robot))
