@@ -130,8 +130,15 @@ def judge_table(a, prof, legs: list, track, grid):
         from ..export.cam_objects import table_size
 
         sized = partial(table_size, a.cam_object.value, kind)
+    written = None
+    if a.pvt_integer:  # judge the integers the drive receives, not the table before rounding
+        from functools import partial
+
+        from ..export.pvt_int import as_written
+
+        written = partial(as_written, drive=a.drive, joint_units=legs[0].joint.units)
     judged = judged_table(kind, grid, motion, tolerance, prof, 0.0 if a.round_trip else dwell, a.cycle_s,
-                          retime=retime, capacity=capacity, size=sized)
+                          retime=retime, capacity=capacity, size=sized, written=written)
     code = judged.report.exit_code()
     _print_table_verdict(a, judged, legs + ([track] if track is not None else []), motion.duration, retime)
     return judged, code

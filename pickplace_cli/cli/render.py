@@ -232,10 +232,15 @@ def _print_limit_table(report) -> None:
 def _print_verdict(report, quiet: bool, with_cycle: bool = True) -> None:
     from ..limits.report import percent
 
+    from ..pipelines.check import CLOSED_NOTE
+
     cycle = (
         f"cycle: {report.duration:.4f} s one way, {report.round_trip:.4f} s round trip "
         f"(dwell {report.dwell:g} s), {report.picks_per_minute:.1f} picks/min"
     )
+    if any(CLOSED_NOTE in n for n in report.notes):  # a checked file that returns to its start is the whole cycle
+        cycle = (f"cycle: {report.duration:.4f} s, the whole duty cycle (the file ends where it starts), "
+                 f"{60.0 / report.duration:.1f} picks/min")  # (its JSON: pipelines.check.WholeCycleReport)
     if not with_cycle:
         cycle = f"move {report.duration:.4f} s"
     if report.ok:

@@ -127,6 +127,18 @@ def integer_pvt(table, drive, joint_units=None) -> IntegerPvt:
     return IntegerPvt(t_ms, dt, pos, vel, tuple(drive.names), split)
 
 
+def as_written(table, drive, joint_units=None):
+    """The PVT ``table`` (a KnotTable, model units) as the drive receives it from :func:`integer_pvt`: its points
+    (split segments included) with the positions and velocities rounded to whole counts and counts/s, back in the
+    model's units (rad or m, per s): the table whose interpolation is judged, so the verdict is that of the integers
+    written, not of the values before rounding."""
+    from dataclasses import replace
+
+    pvt = integer_pvt(table, drive, joint_units)
+    return replace(table, t=pvt.t_ms / 1e3, q=drive.joint_position(pvt.pos.astype(float)),
+                   qd=pvt.vel.astype(float) / np.asarray(drive.scale, float))
+
+
 def format_integer_csv(pvt: IntegerPvt) -> str:
     """Header ``t[ms],dt[ms],NAME[counts],NAME_vel[counts/s],…`` and one row of integers per point (LF)."""
     head = ["t[ms]", "dt[ms]"]

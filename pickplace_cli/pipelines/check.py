@@ -53,6 +53,34 @@ CHECK_RESOLUTION = 1e-3
 HERMITE_DIVISOR = 15.5
 #: the file's x, y, z may differ from FK of its joint positions by this much [m] (12 significant digits: ~1e-12)
 TOOL_TOL = 1e-7
+#: a file without a move column whose last joint positions are its first to this [rad or m] returns to its start:
+#: it is one whole duty cycle (a round trip or belt cycle written as one table, a recording of a cycle), and the RMS
+#: torque is taken over the file itself, no dwell and no move back added (a one-way move's ends lie far apart)
+CLOSED_TOL = 1e-6
+#: the note that says so (the verdict's cycle line then gives the file's duration as the duty cycle)
+CLOSED_NOTE = "it ends where it starts: one whole duty cycle, the RMS torque taken over the file (no dwell added)"
+
+
+class WholeCycleReport(LimitReport):
+    """The limit report of a file that is one whole duty cycle (:data:`CLOSED_NOTE`): its duty cycle is the file's
+    duration, not 2·(duration + dwell), and its picks per minute 60 over that."""
+
+    @property
+    def round_trip(self) -> float:
+        return self.duration + self.dwell
+
+
+def whole_cycle(report: LimitReport) -> LimitReport:
+    """``report`` as a :class:`WholeCycleReport` when its notes say the file is a whole cycle, else unchanged."""
+    if not any(CLOSED_NOTE in n for n in report.notes):
+        return report
+    return WholeCycleReport(report.rows, report.duration, report.dwell, report.notes)
+
+
+def closed_cycle(q: np.ndarray) -> bool:
+    """Whether joint positions ``q`` (N, n) [rad or m] end where they start (``CLOSED_TOL``)."""
+    q = np.asarray(q, float)
+    return len(q) > 2 and bool(np.max(np.abs(q[-1] - q[0])) <= CLOSED_TOL)
 
 
 @dataclass(frozen=True)
@@ -98,7 +126,8 @@ def _check_branch(s: Samples, robot, pos: np.ndarray, source: str) -> None:
 
 
 def _motion_report(t: np.ndarray, pos: np.ndarray, robot, profile: Profile, smoothing: float, source: str,
-                   notes=None, tool: np.ndarray | None = None, rebuilt=None, not_held: str = ""):
+                   notes=None, tool: np.ndarray | None = None, rebuilt=None, not_held: str = "",
+                   dwell: float | None = None):
     """The limit report of the tool positions ``pos`` (N, 3) m (and angle, rad, a 4th column with a rotary axis) at
     ``t`` (N,) s from 0, through a reconstruction of
     the continuous motion (an interpolating spline split at the jerk steps found in the data,
@@ -108,7 +137,8 @@ def _motion_report(t: np.ndarray, pos: np.ndarray, robot, profile: Profile, smoo
     motion between samples is the septic Hermite interpolant (exact at every sample up to the jerk). ``rebuilt``:
     (evaluate(x, order), the times of its steps [s], the words) of a motion already rebuilt (a table). The tool's
     Cartesian capacity rows come from the same continuous motion (:func:`capacity_rows` on the check's grid);
-    ``not_held``: why they are not held ("" when they are: they then decide the verdict with the others)."""
+    ``not_held``: why they are not held ("" when they are: they then decide the verdict with the others).
+    ``dwell`` [s]: the duty cycle's dwell for the RMS torque (None: the profile's; 0 for a whole cycle)."""
     from scipy.interpolate import UnivariateSpline
 
     T = float(t[-1])
@@ -168,7 +198,7 @@ def _motion_report(t: np.ndarray, pos: np.ndarray, robot, profile: Profile, smoo
     margin = getattr(profile.robot, "singularity_margin", None)
     model = MotionModel(cpath, robot, limit_specs(profile), margin, profile.workcell.box)
     grid = check_grid(t / T, cpath.breakpoints, jumps=jumps)
-    report = check_limits(model, T, parts=model.parts(grid), dwell=profile.planning.dwell,
+    report = check_limits(model, T, parts=model.parts(grid), dwell=profile.planning.dwell if dwell is None else dwell,
                           notes=() if notes is None else notes(how))
     return report.with_rows(capacity_rows(cpath, T, profile.capacity, not_held, grid=grid)), how
 
@@ -200,10 +230,12 @@ def check_samples(s: Samples, profile: Profile, smoothing: float = 0.0, source: 
     _check_branch(s, robot, pos, source)
     T = float(t[-1])
     rest = f"; {s.rest} trailing samples at rest set aside as the dwell" if s.rest else ""
+    dwell = 0.0 if s.move is None and closed_cycle(s.q) else None
+    whole = f"; {CLOSED_NOTE}" if dwell is not None else ""
 
     def notes(how: str) -> tuple[str, ...]:
         return (f"{s.where(source)}: {len(t)} samples over {T:.6g} s{rest}; derivatives from {how}; joint positions "
-                "checked as given in the file",)
+                f"checked as given in the file{whole}",)
 
     if smoothing == "auto":
         from ..curves.sampled import noise_level
@@ -228,7 +260,7 @@ def check_samples(s: Samples, profile: Profile, smoothing: float = 0.0, source: 
             tool = None
     if getattr(robot, "rotary", False):  # the tool angle θ = FK of the fourth axis, one more column
         pos = np.column_stack([pos, robot.tool_angle(s.q)])
-    report, _ = _motion_report(t, pos, robot, profile, smoothing, source, notes, tool, not_held=not_held)
+    report, _ = _motion_report(t, pos, robot, profile, smoothing, source, notes, tool, not_held=not_held, dwell=dwell)
     others = []
     half = _half(len(t))
     if len(half) >= 6:
@@ -237,9 +269,9 @@ def check_samples(s: Samples, profile: Profile, smoothing: float = 0.0, source: 
         # alone are taken at the whole change (a jerk step they do not find rings however fine the samples)
         share = 1.0 / HERMITE_DIVISOR if tool is not None and not smoothing else 1.0
         others.append((_motion_report(t[half], pos[half], robot, profile, smoothing, source, None,
-                                      None if tool is None else tool[half])[0], share))
+                                      None if tool is None else tool[half], dwell=dwell)[0], share))
     if smoothing:  # what the smoothing takes away is as uncertain as the rest: the interpolated data's peaks
-        others.append((_motion_report(t, pos, robot, profile, 0.0, source)[0], 1.0))
+        others.append((_motion_report(t, pos, robot, profile, 0.0, source, dwell=dwell)[0], 1.0))
     report = _with_accuracy(report, others)
     # the position ranges on the file's own values (the model's inverse kinematics wraps revolute joints)
     specs = limit_specs(profile)
@@ -310,8 +342,12 @@ def check_table(table, profile: Profile, source: str, not_held: str = "") -> Lim
                                                                      robot.joint_units))
         note += (f"; its acceleration steps at the points by up to {jumps} (the torque there is checked on both "
                  "sides; the torque rate is that inside the segments)")
+    dwell = None
+    if closed_cycle(table.q):  # a round trip or belt cycle as one table: the duty cycle is the table itself
+        dwell = 0.0
+        note += f"; {CLOSED_NOTE}"
     report, _ = _motion_report(t, tool_of(table.q), robot, profile, 0.0, source, lambda how: (note,),
-                               rebuilt=(ev, steps, _HOW[table.kind]), not_held=not_held)
+                               rebuilt=(ev, steps, _HOW[table.kind]), not_held=not_held, dwell=dwell)
     report = _with_accuracy(report, [(report, 1.0)])
     u = 0.5 - 0.5 * np.cos(np.pi * np.arange(SEGMENT_POINTS) / (SEGMENT_POINTS - 1))
     x = np.append((t[:-1, None] + np.diff(t)[:, None] * u).ravel(), T)
@@ -414,11 +450,12 @@ def check_file(path: str | Path, profile: Profile, smoothing: float | str = 0.0,
     kind, what, source = read_checked(text, source, profile, robot)  # joints, drive units, a table (check_read)
     if kind == "table":
         return [MoveCheck(None, int(what.lines[0]), int(what.lines[-1]),
-                          check_table(what, profile, source, not_held).rated(profile.limit_use))]
+                          whole_cycle(check_table(what, profile, source, not_held).rated(profile.limit_use)))]
     out = []
     for s in (what if kind == "samples" else [what]):
         out.append(MoveCheck(s.move, int(s.lines[0]), s.last_line,
-                             check_samples(s, profile, smoothing, source, strict, warn, not_held).rated(profile.limit_use)))
+                             whole_cycle(check_samples(s, profile, smoothing, source, strict, warn,
+                                                       not_held).rated(profile.limit_use))))
     return out
 
 

@@ -313,6 +313,21 @@ def _unit_check(head: Header, name: str, want: str, source: str) -> None:
                         f"{want}; check reads it in {want} (a file in other units: give the profile that names them)")
 
 
+def _rate_unit(head: Header, name: str, label: str, per: str, power: str, source: str) -> float:
+    """The time unit [s] of a derivative column ``name`` of a ``label`` quantity: the header's ``label/s``,
+    ``label/ms`` or ``label/us`` (with ``power`` "^2" for an acceleration); a column without a unit is per the
+    master's unit ``per``. TaskError for any other unit."""
+    got = head.unit(name)
+    if got == "":
+        return TIME_UNITS[per]
+    for tu in ("s", "ms", "us", "µs"):
+        if got == f"{label}/{tu}{power}":
+            return TIME_UNITS[tu]
+    raise TaskError(f"{source}:{head.line}: column {name}[{got}]: the profile's controller.joints gives {name} in "
+                    f"{label}/{per}{power}; check reads it in {label} per s, ms or us{power and ' squared'} (a file in "
+                    "other units: give the profile that names them)")
+
+
 @dataclass(frozen=True)
 class Table:
     """A table a kernel interpolates, in the model's joint units: ``kind`` (pvt, cam, cam-table), the points' times
@@ -345,12 +360,13 @@ def read_table(text: str, source: str, kind: str, joint_names: tuple[str, ...], 
                         f"ms or us (the header's unit {tunit!r} is not one of them)")
     k_t = TIME_UNITS[tunit]
     per = tunit or "s"
-    for name, label in zip(names, labels):
+    k_vel, k_acc = [], []  # each derivative column's own time unit [s per unit]: plan --pvt-integer writes t[ms] and
+    for name, label in zip(names, labels):  # velocities in counts/s
         _unit_check(head, name, label, source)
         if kind in ("pvt", "cam"):
-            _unit_check(head, f"{name}_vel", f"{label}/{per}", source)
+            k_vel.append(_rate_unit(head, f"{name}_vel", label, per, "", source))
         if kind == "cam":
-            _unit_check(head, f"{name}_acc", f"{label}/{per}^2", source)
+            k_acc.append(_rate_unit(head, f"{name}_acc", label, per, "^2", source))
     cols = [tname] + (["dt"] if kind == "pvt" else [])
     for name in names:
         cols += [name] + ([f"{name}_vel"] if kind in ("pvt", "cam") else []) + ([f"{name}_acc"] if kind == "cam" else [])
@@ -391,8 +407,8 @@ def read_table(text: str, source: str, kind: str, joint_names: tuple[str, ...], 
     block = data[:, off:].reshape(len(t), len(names), width)
     scale = np.asarray(drive.scale) if drive is not None else np.ones(len(names))
     q = drive.joint_position(block[:, :, 0]) if drive is not None else block[:, :, 0].copy()
-    qd = block[:, :, 1] / scale / k_t if width > 1 else None
-    qdd = block[:, :, 2] / scale / k_t**2 if width > 2 else None
+    qd = block[:, :, 1] / scale / np.asarray(k_vel) if width > 1 else None
+    qdd = block[:, :, 2] / scale / np.asarray(k_acc) ** 2 if width > 2 else None
     return Table(kind, t, q, qd, qdd, lines_a)
 
 
@@ -443,8 +459,9 @@ def tool_motion(table: Table, tool_of):
 MAX_POINTS = 200_000
 
 #: one array of a table in Structured Text as ``plan --format pvt-st|cam-st|cam-table-st`` writes it (either dialect):
-#: ``NAME : ARRAY[1..n] OF LREAL := [ (* column [unit]: words *) values ];``
-_ST_ARRAY = r"(\w+)\s*:\s*ARRAY\s*\[\s*1\s*\.\.\s*(\d+)\s*\]\s*OF\s*LREAL\s*:=\s*\[\s*\(\*\s*([^*]*?)\*\)([^\]]*)\]"
+#: ``NAME : ARRAY[1..n] OF LREAL := [ (* column [unit]: words *) values ];`` (``OF DINT``: ``--pvt-integer``)
+_ST_ARRAY = (r"(\w+)\s*:\s*ARRAY\s*\[\s*1\s*\.\.\s*(\d+)\s*\]\s*OF\s*(?:LREAL|DINT)\s*:=\s*\[\s*\(\*\s*([^*]*?)\*\)"
+             r"([^\]]*)\]")
 
 
 def st_table_text(text: str, source: str) -> str | None:
@@ -471,6 +488,77 @@ def st_table_text(text: str, source: str) -> str | None:
     return "\n".join(rows) + "\n"
 
 
+#: one array of a cam object (``plan -f cam-st|cam-table-st --cam-object codesys|twincat``), indexed from 0 or 1:
+#: ``NAME : ARRAY[a..b] OF LREAL := [ (* words [unit] *) values ];``
+_CAM_ARRAY = (r"(\w+)\s*:\s*ARRAY\s*\[\s*(\d+)\s*\.\.\s*(\d+)\s*\]\s*OF\s*LREAL\s*:=\s*\[\s*\(\*\s*([^*]*?)\*\)"
+              r"([^\]]*)\]")
+#: a cam object's array name suffix → the column plan -f cam|cam-table writes (the jerk column is not read)
+_CAM_SUFFIX = {"_y": "", "_v": "_vel", "_a": "_acc"}
+
+
+def cam_object_text(text: str, source: str) -> str | None:
+    """A cam object program (``PRG_PickplaceCams`` of ``plan -f cam-st|cam-table-st --cam-object codesys|twincat``)
+    as the CSV ``plan -f cam|cam-table`` writes: the master (``fMaster``, or for CODESYS's equidistant table the
+    ``xStart`` … ``xEnd`` its points span equally), each joint's ``NAME_y``, ``NAME_v``, ``NAME_a`` arrays as
+    ``NAME``, ``NAME_vel``, ``NAME_acc`` with the units their comments give; None when ``text`` is not one."""
+    import re
+
+    if "PROGRAM PRG_PickplaceCams" not in text:
+        return None
+    cols: list[tuple[str, list[str]]] = []
+    master = None
+    for name, lo, hi, comment, body in re.findall(_CAM_ARRAY, text):
+        values = [v.strip() for v in body.split(",") if v.strip()]
+        if len(values) != int(hi) - int(lo) + 1:
+            raise TaskError(f"{source}: {name}: {len(values)} values for ARRAY[{lo}..{hi}]: a cam's arrays must be "
+                            "complete")
+        unit = comment.rsplit("[", 1)[1].split("]", 1)[0].strip() if "[" in comment else ""
+        if name == "fMaster":
+            master = (f"master[{unit}]", values)
+            continue
+        for suffix, column in _CAM_SUFFIX.items():
+            if name.endswith(suffix):
+                cols.append((f"{name[: -len(suffix)]}{column}[{unit}]", values))
+    if master is None:  # CODESYS's SMC_CAMTable: equidistant points from xStart to xEnd
+        ends = {k: (float(v), u) for k, v, u in re.findall(
+            r"\b(xStart|xEnd)\s*:\s*LREAL\s*:=\s*([^;]+);\s*\(\*[^\[]*\[([^\]]*)\]", text)}
+        if set(ends) != {"xStart", "xEnd"} or not cols:
+            raise TaskError(f"{source}: a cam object without its master (no fMaster array, no xStart and xEnd)")
+        x = np.linspace(ends["xStart"][0], ends["xEnd"][0], len(cols[0][1]))
+        master = (f"master[{ends['xStart'][1]}]", [repr(float(v)) for v in x])
+    cols.insert(0, master)
+    if len(cols) < 2 or len({len(v) for _, v in cols}) != 1:
+        raise TaskError(f"{source}: not a cam object plan writes (no slave arrays, or arrays of different lengths)")
+    rows = [",".join(c[0] for c in cols)]
+    rows += [",".join(v[k] for _, v in cols) for k in range(len(cols[0][1]))]
+    return "\n".join(rows) + "\n"
+
+
+def json_samples_text(text: str, source: str) -> str | None:
+    """The samples of ``plan -f json`` (``{"columns": [...], "samples": {column: [values]}}``) as the CSV ``plan``
+    writes (the same columns and values); None when ``text`` is not a JSON document; TaskError for a JSON document
+    without them."""
+    import json
+
+    if not text.lstrip().startswith(("{", "[")):
+        return None
+    try:
+        doc = json.loads(text)
+    except ValueError as exc:
+        raise TaskError(f"{source}: not valid JSON ({exc}); check reads CSV, Structured Text and plan's JSON") from None
+    cols = doc.get("columns") if isinstance(doc, dict) else None
+    data = doc.get("samples") if isinstance(doc, dict) else None
+    if not (isinstance(cols, list) and cols and isinstance(data, dict) and all(c in data for c in cols)):
+        raise TaskError(f"{source}: a JSON document without plan's 'columns' and 'samples' (plan -f json writes them); "
+                        "check reads CSV, Structured Text and plan's JSON")
+    values = [data[c] for c in cols]
+    if any(not isinstance(v, list) for v in values) or len({len(v) for v in values}) != 1:
+        raise TaskError(f"{source}: samples: every column must be a list of the same length")
+    rows = [",".join(str(c) for c in cols)]
+    rows += [",".join(repr(v[k]) if not isinstance(v[k], str) else v[k] for v in values) for k in range(len(values[0]))]
+    return "\n".join(rows) + "\n"
+
+
 def read_checked(text: str, source: str, profile, robot):
     """What ``check`` judges in a file: ("samples", [Samples …]) of a file of joint or drive positions (drive units
     converted to the model's), ("table", Table) of a PVT or cam table, ("cam-table", Samples) of an equidistant cam
@@ -481,7 +569,12 @@ def read_checked(text: str, source: str, profile, robot):
     from ..export.drive import drive_map
 
     drive = drive_map(profile)
+    js = json_samples_text(text, source)
+    if js is not None:  # plan -f json: its samples as the CSV plan writes
+        text, source = js, f"{source} (JSON; line k + 1 is sample k)"
     st = st_table_text(text, source)
+    if st is None:
+        st = cam_object_text(text, source)
     if st is not None:  # the same table in Structured Text: its arrays as CSV columns (line k + 1 = point k)
         text, source = st, f"{source} (Structured Text; line k + 1 is point k)"
     head = read_header(text)

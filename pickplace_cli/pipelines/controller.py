@@ -231,7 +231,8 @@ def _sized_table(timeline, table, judge, tolerance, fixed: int, size):
 
 
 def judged_table(kind: str, grid: np.ndarray, timeline: Motion, tolerance: float, profile, dwell: float,
-                 cycle: float | None, retime: bool = True, capacity: bool = False, size=None) -> JudgedTable:
+                 cycle: float | None, retime: bool = True, capacity: bool = False, size=None,
+                 written=None) -> JudgedTable:
     """The ``kind`` table of ``timeline`` (:func:`table_of`: its points from ``grid`` [s] within ``tolerance``)
     made to hold every limit of ``profile`` (at its limit use) as the drive rebuilds it
     (:func:`~pickplace_cli.limits.table.check_table`; per-cycle steps bounded over ``cycle`` [s], else over the
@@ -240,7 +241,8 @@ def judged_table(kind: str, grid: np.ndarray, timeline: Motion, tolerance: float
     report says whether it holds; a table that cannot be made to is returned with its violations. ``capacity``: the
     profile's Cartesian capacity is checked too (when the plan's duration rule holds it). ``size``: for a cam-table,
     (points the tolerance needs) → the count a controller's table type holds (None: any), which the table then has
-    (no points added)."""
+    (no points added). ``written``: (table) → the table as the file holds it (e.g. rounded to a drive's integer
+    units), which is then what is judged (None: the table itself)."""
     from ..export.interpolate import rebuild
     from ..limits.table import check_table
     from ..planner import motion_model_static
@@ -251,7 +253,7 @@ def judged_table(kind: str, grid: np.ndarray, timeline: Motion, tolerance: float
 
     def judge_on(g, read):
         def judge(table):
-            return check_table(rebuild(table, read), robot, specs, read, dwell, margin, box, samples=g,
+            return check_table(rebuild(written(table) if written is not None else table, read), robot, specs, read, dwell, margin, box, samples=g,
                                capacity=profile.capacity if capacity else None).rated(profile.limit_use)
         return judge
 

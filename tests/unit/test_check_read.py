@@ -224,3 +224,90 @@ def test_tables_without_controller_joints_name_the_model_joints():
     kind, table, _ = cr.read_checked(pvt, "p.csv", prof, robot)
     assert kind == "table" and table.kind == "pvt"
     assert np.allclose(table.q[1], [0.5, 0.35, 0.35], rtol=0, atol=1e-15)
+
+
+CAM_MOVE = ["-p", "delta-4axis", "--from", "-0.15,0,-0.8,0", "--to", "0.15,0,-0.8,1.2", "--cycle", "0.001", "-q"]
+
+
+def _plan(tmp_path, name: str, *args: str):
+    from typer.testing import CliRunner
+
+    from pickplace_cli.cli import app
+
+    out = tmp_path / name
+    assert CliRunner().invoke(app, ["plan", *CAM_MOVE, *args, "-o", str(out)]).exit_code == 0
+    return out.read_text()
+
+
+@pytest.mark.parametrize("fmt,plain,obj", [("cam-st", "cam", "codesys"), ("cam-st", "cam", "twincat"),
+                                           ("cam-table-st", "cam-table", "twincat")])
+def test_cam_objects_are_read_as_the_plain_table(tmp_path, fmt, plain, obj):
+    """A cam object program (``--cam-object``) is read as the same points as the plain CSV table of the same plan:
+    master, positions, velocities, accelerations, to the CSV's 12 significant digits (1e-9 relative)."""
+    prof = load_profile("delta-4axis")
+    robot = build_robot(prof.robot)
+    got = cr.read_checked(_plan(tmp_path, "o.st", "-f", fmt, "--cam-object", obj), "o.st", prof, robot)
+    want = cr.read_checked(_plan(tmp_path, "p.csv", "-f", plain), "p.csv", prof, robot)
+    assert got[0] == want[0]
+    a, b = got[1], want[1]
+    assert np.allclose(a.t, b.t, rtol=1e-9, atol=1e-12)
+    assert np.allclose(a.q, b.q, rtol=1e-9, atol=1e-12)
+    for x, y in ((getattr(a, "qd", None), getattr(b, "qd", None)), (getattr(a, "qdd", None), getattr(b, "qdd", None))):
+        assert (x is None) == (y is None)
+        if x is not None:
+            assert np.allclose(x, y, rtol=1e-9, atol=1e-6 * np.abs(y).max())
+
+
+def test_codesys_equidistant_cam_object_spans_xstart_to_xend(tmp_path):
+    """CODESYS's SMC_CAMTable holds the slave positions only: the master runs from xStart to xEnd in equal steps
+    (256 points here), and check judges it within every limit, as plan's table verdict says."""
+    import re
+
+    from typer.testing import CliRunner
+
+    from pickplace_cli.cli import app
+
+    text = _plan(tmp_path, "c.st", "-f", "cam-table-st", "--cam-object", "codesys")
+    x0 = float(re.search(r"xStart : LREAL := ([^;]+);", text).group(1))
+    x1 = float(re.search(r"xEnd : LREAL := ([^;]+);", text).group(1))
+    prof = load_profile("delta-4axis")
+    kind, s, _ = cr.read_checked(text, "c.st", prof, build_robot(prof.robot))
+    assert kind == "cam-table" and len(s.t) == 256
+    assert np.allclose(s.t, x0 + (x1 - x0) * np.arange(256) / 255, rtol=0, atol=1e-12)
+    assert CliRunner().invoke(app, ["check", "-p", "delta-4axis", str(tmp_path / "c.st"), "-q"]).exit_code == 0
+
+
+def test_a_cam_object_without_its_master_is_one_line():
+    prof = load_profile("delta-4axis")
+    text = ("PROGRAM PRG_PickplaceCams\nVAR CONSTANT\n    A1_y : ARRAY[0..1] OF LREAL := [ (* A1 slave position "
+            "[counts] *)\n        0.0, 1.0];\nEND_VAR\n")
+    with pytest.raises(TaskError, match="without its master"):
+        cr.read_checked(text, "c.st", prof, build_robot(prof.robot))
+
+
+def test_plan_json_is_checked_as_its_csv(tmp_path):
+    """``plan -f json`` (a round trip: two moves) is checked as the CSV of the same plan: the same moves, the same
+    peaks (the JSON's values are the CSV's to 12 significant digits: 1e-6 relative on a peak)."""
+    prof = load_profile("delta-su2018")
+    common = ["--from", "-0.1525,0,-0.8", "--to", "0.1525,0,-0.8", "--round-trip", "--cycle", "0.001", "-q"]
+    from typer.testing import CliRunner
+
+    from pickplace_cli.cli import app
+
+    for name, fmt in (("r.json", "json"), ("r.csv", "csv")):
+        assert CliRunner().invoke(app, ["plan", *common, "-f", fmt, "-o", str(tmp_path / name)]).exit_code == 0
+    got = check_file(tmp_path / "r.json", prof)
+    want = check_file(tmp_path / "r.csv", prof)
+    assert [c.move for c in got] == [c.move for c in want] == [1, 2]
+    for a, b in zip(got, want):
+        assert [(r.joint, r.quantity) for r in a.report.rows] == [(r.joint, r.quantity) for r in b.report.rows]
+        assert np.allclose([r.peak for r in a.report.rows], [r.peak for r in b.report.rows], rtol=1e-6, atol=1e-12)
+        assert a.report.ok
+
+
+@pytest.mark.parametrize("text,words", [('{"a": 1}', "without plan's 'columns' and 'samples'"),
+                                        ('{"a":', "not valid JSON")])
+def test_other_json_is_one_line(text, words):
+    prof = load_profile("delta-su2018")
+    with pytest.raises(TaskError, match=words):
+        cr.read_checked(text, "x.json", prof, build_robot(prof.robot))

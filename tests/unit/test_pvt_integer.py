@@ -44,7 +44,8 @@ def read_rows(path) -> tuple[list[str], list[list[str]]]:
 
 def test_round_trip_in_integer_units_follows_the_trajectory(tmp_path):
     out, ref = tmp_path / "int.csv", tmp_path / "float.csv"
-    common = ("plan", *ADEPT, "--round-trip", "--cycle", "0.001", "-q", "--tolerance", "1e-6")
+    # at 0.2 s (81 % of the capacity acceleration) no limit binds the table: its points are the float table's
+    common = ("plan", *ADEPT, "--time", "0.2", "--round-trip", "--cycle", "0.001", "-q", "--tolerance", "1e-6")
     assert run(*common, "-f", "pvt", "--pvt-integer", "-o", str(out)).exit_code == 0
     assert run(*common, "-f", "pvt", "-o", str(ref)).exit_code == 0
     head, rows = read_rows(out)
@@ -63,7 +64,8 @@ def test_round_trip_in_integer_units_follows_the_trajectory(tmp_path):
     np.testing.assert_array_equal(data[:, 2:], np.rint(fdata[:, 2:]))
     # the drive's cubic through the integer points follows the robot's inverse kinematics
     prof = load_profile("delta-su2018")
-    legs = [plan(THERE, prof, PlanOptions(cycle=0.001, fit=False)), plan(BACK, prof, PlanOptions(cycle=0.001, fit=False))]
+    opts = PlanOptions(time=0.2, cycle=0.001, fit=False)
+    legs = [plan(THERE, prof, opts), plan(BACK, prof, opts)]
     x = t_ms / 1000.0
     p, v = data[:, 2::2] / K, data[:, 3::2] / K
     at = np.concatenate([np.linspace(x[k], x[k + 1], 24, endpoint=False) for k in range(len(x) - 1)] + [x[-1:]])
@@ -155,3 +157,56 @@ def test_integer_st_parses_and_holds_the_csv_integers(dialect):
         body = re.search(rf"{st_name} : ARRAY\[1\.\.(\d+)\] OF DINT := \[ \(\*.*?\*\)(.*?)\];", text, re.S)
         assert body and int(body.group(1)) == len(rows) == 4  # the 300 ms segment split in two
         assert [int(v) for v in body.group(2).split(",")] == [int(r[k]) for r in rows], name
+
+
+@pytest.mark.parametrize("fmt,suffix", [("pvt", "csv"), ("pvt-st", "st")])
+def test_check_reads_the_integer_table_plan_writes(tmp_path, fmt, suffix):
+    """``check`` reads ``--pvt-integer`` (t[ms], velocities in counts/s, DINT arrays in ST) as the trajectory it was
+    written from: at each point the position and the velocity of the cycle-sampled CSV of the same plan, to half a
+    count and half a count/s (the rounding, over K counts per rad); and the drive's interpolation of those rounded
+    integers holds every limit there as plan's table verdict says (check exit 0; the Adept move at 1 ms sits at 100 %
+    of the capacity acceleration, where judging the values before rounding let the written table reach 100.4 %)."""
+    from pickplace_cli.pipelines import check_read as cr
+    from pickplace_cli.robots import build_robot
+
+    out, ref = tmp_path / f"int.{suffix}", tmp_path / "samples.csv"
+    common = ("plan", *ADEPT, "--cycle", "0.001", "-q")
+    assert run(*common, "-f", fmt, "--pvt-integer", "-o", str(out)).exit_code == 0
+    assert run(*common, "-o", str(ref)).exit_code == 0
+    prof = load_profile("delta-su2018")
+    _, got, _ = cr.read_checked(out.read_text(), "int", prof, build_robot(prof.robot))
+    head, rows = read_rows(ref)
+    samples = np.array(rows, dtype=float)
+    k = np.rint(got.t * 1000).astype(int)  # the points lie on the 1 ms grid, sample k at t = k ms
+    q = samples[k][:, [head.index(f"q{j}[rad]") for j in (1, 2, 3)]]
+    qd = samples[k][:, [head.index(f"qd{j}[rad/s]") for j in (1, 2, 3)]]
+    assert np.allclose(got.t, samples[k, 0], rtol=0, atol=1e-12)
+    assert np.allclose(got.q, q, rtol=0, atol=0.5 / K + 1e-11)  # 12 significant digits in the CSV
+    assert np.allclose(got.qd, qd, rtol=0, atol=0.5 / K + 1e-9)  # not 1000 x: counts/s under t[ms]
+    assert run("check", str(out), "-q").exit_code == 0
+
+
+@pytest.mark.parametrize("unit,scale", [("counts/s", 1.0), ("counts/ms", 1e3), ("counts/us", 1e6)])
+def test_a_velocity_column_is_read_in_its_own_time_unit(unit, scale):
+    """A table's velocity column carries its own time unit, whatever the time column's: 1 count/<unit> is
+    ``scale`` counts/s, i.e. scale / K rad/s (K from the profile's numbers)."""
+    from pickplace_cli.pipelines import check_read as cr
+    from pickplace_cli.robots import build_robot
+
+    prof = load_profile("delta-su2018")
+    text = (f"t[ms],dt[ms],A1[counts],A1_vel[{unit}],A2[counts],A2_vel[{unit}],A3[counts],A3_vel[{unit}]\n"
+            "0,0,2000000,0,2000000,0,2000000,0\n10,10,2000001,1,2000002,2,2000003,3\n")
+    _, table, _ = cr.read_checked(text, "p.csv", prof, build_robot(prof.robot))
+    assert np.allclose(table.qd[1], np.array([1, 2, 3]) * scale / K, rtol=1e-12, atol=0)
+
+
+def test_a_velocity_in_an_unknown_time_unit_is_one_line():
+    from pickplace_cli.model.errors import TaskError
+    from pickplace_cli.pipelines import check_read as cr
+    from pickplace_cli.robots import build_robot
+
+    prof = load_profile("delta-su2018")
+    text = ("t[ms],dt[ms],A1[counts],A1_vel[counts/min],A2[counts],A2_vel[counts/s],A3[counts],A3_vel[counts/s]\n"
+            "0,0,1,0,1,0,1,0\n10,10,1,0,1,0,1,0\n")
+    with pytest.raises(TaskError, match=r"A1_vel\[counts/min\].*per s, ms or us"):
+        cr.read_checked(text, "p.csv", prof, build_robot(prof.robot))
