@@ -19,7 +19,10 @@ def check(
         help="CSV with a header holding t [s] (or t[ms], t[us]) and q1 … qn [rad or m] (this tool's CSV works, also "
         "--batch and --round-trip output); or, with the profile's controller.joints, t and the drives' columns in "
         "their units (plan --columns plc, any dialect with a header), or a pvt, cam or cam-table table, CSV or "
-        "Structured Text (plan --format pvt|cam|cam-table and their -st forms, time master); '-' = stdin.",
+        "Structured Text (plan --format pvt|cam|cam-table and their -st forms, time master; integer PVT in counts; "
+        "the CODESYS/TwinCAT cam objects of --cam-object), or plan --format json; '-' = stdin. A file without a "
+        "move column that ends where it starts is judged as the whole duty cycle (RMS over the file). MCAP and "
+        "PLCopen XML are not read.",
     ),
     profile: Optional[str] = typer.Option(None, "--profile", "-p", help="Profile YAML file or shipped name. [default: delta-su2018]", rich_help_panel=Panel.LIMITS),
     smoothing: str = typer.Option(
@@ -62,7 +65,9 @@ def check(
     same dynamics and limit check as `plan`. Joint positions are checked as given (q1 = 5 rad is 5 rad, not
     wrapped). Every duration-dependent peak is estimated twice, from all samples and from every other one: the
     difference, and at least 0.1 % of the peak, is its accuracy (the "± %" column); a limit counts as exceeded when the peak less its accuracy is
-    beyond it, so a trajectory `plan` wrote as within its limits passes, and one 1 % faster fails.
+    beyond it, so a trajectory `plan` wrote as within its limits passes, and one 1 % faster fails. Known
+    exception, on the safe side: positions alone (a cam-table or positions-only file) of a `--time optimal` law
+    at 1 kHz can read a torque-rate peak high across the law's jerk steps (up to 15 % measured), and are then refused.
 
     A file's tool derivative columns (vx … jz [m/s, m/s², m/s³]) are used only where they agree with its
     positions (velocity within 1 %, acceleration 10 % of their peak on every interval, jerk 5 % on the median
