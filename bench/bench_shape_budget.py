@@ -46,7 +46,9 @@ def run(task: Task, name: str, consts: dict) -> tuple[float, float, bool]:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--budget", default=json.dumps(REDUCED), help="reduced search constants as JSON")
-    reduced = {k: tuple(v) if isinstance(v, list) else v for k, v in json.loads(ap.parse_args().budget).items()}
+    ap.add_argument("-o", "--output", default=None, help="append the summary (JSON lines) to this file")
+    args = ap.parse_args()
+    reduced = {k: tuple(v) if isinstance(v, list) else v for k, v in json.loads(args.budget).items()}
     stored = json.loads((Path(__file__).parent / "results" / "shape.json").read_text())
     moves = [("delta-su2018", Task([-0.1525, 0, -0.8], [0.1525, 0, -0.8], 0.025, 0.5), None)]
     moves += [(r["profile"], Task(r["from"], r["to"], r["height"], 0.5), r["t_slow"]) for r in stored["rows"]]
@@ -64,6 +66,12 @@ def main() -> None:
     print(f"budget {reduced}")
     print(f"{len(moves)} moves: duration change worst {max(grow) * 100:+.3f} %; CPU median shipped "
           f"{statistics.median(cpu_a) * 1e3:.0f} ms, reduced {statistics.median(cpu_b) * 1e3:.0f} ms")
+    if args.output:
+        with open(args.output, "a", encoding="utf-8") as out:
+            out.write(json.dumps({"budget": reduced, "moves": len(moves), "worst_change": max(grow),
+                                  "median_change": statistics.median(grow), "changes": grow,
+                                  "cpu_ms_median_shipped": statistics.median(cpu_a) * 1e3,
+                                  "cpu_ms_median_reduced": statistics.median(cpu_b) * 1e3}) + "\n")
 
 
 if __name__ == "__main__":
