@@ -2,6 +2,7 @@
 
     python bench/bench_shape_budget.py            # reads bench/results/shape.json (from bench/bench_shape.py)
     python bench/bench_shape_budget.py --budget '{"SHAPE_GRID": [3, 3, 2], "SHAPE_STARTS": 1}'
+    python bench/bench_shape_budget.py --peaks    # the screen without and with the asymmetric paths' exact peaks
 
 For each stored move (and the Adept cycle) plans ``--optimize shape --time fit`` with the shipped search
 constants and with a reduced budget (``--budget``: constants of ``timing/shape.py`` as JSON, default ``REDUCED``), and prints both durations, the stored slow-search duration
@@ -43,11 +44,42 @@ def run(task: Task, name: str, consts: dict) -> tuple[float, float, bool]:
             setattr(S, k, v)
 
 
+def peaks_skip(repeats: int = 3) -> None:
+    """The Adept cycle's ``--optimize shape --time fit`` plan with the screen skipping the asymmetric paths' exact
+    Cartesian peaks (shipped) and computing them, alternately in the same run: CPU medians and both results."""
+    import pickplace_cli.paths.bspline as PB
+
+    skip = PB.screen_bspline
+
+    def with_peaks(*a, **k):
+        return skip(*a, **{**k, "peaks": True})
+
+    task = Task([-0.1525, 0, -0.8], [0.1525, 0, -0.8], 0.025, 0.5)
+    cpu: dict = {"skip": [], "peaks": []}
+    got: dict = {}
+    try:
+        for _ in range(repeats):
+            for name, fn in (("skip", skip), ("peaks", with_peaks)):
+                PB.screen_bspline = fn
+                c0 = time.process_time()
+                r = plan(task, _profile("delta-su2018"), PlanOptions(time="fit", shape=True))
+                cpu[name].append(time.process_time() - c0)
+                got[name] = r.duration.seconds
+    finally:
+        PB.screen_bspline = skip
+    for name in cpu:
+        print(f"peaks {name:5s}: T {got[name]!r} s, CPU median {statistics.median(cpu[name]) * 1e3:.0f} ms")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--budget", default=json.dumps(REDUCED), help="reduced search constants as JSON")
     ap.add_argument("-o", "--output", default=None, help="append the summary (JSON lines) to this file")
+    ap.add_argument("--peaks", action="store_true", help="compare the screen without and with exact peaks")
     args = ap.parse_args()
+    if args.peaks:
+        peaks_skip()
+        return
     reduced = {k: tuple(v) if isinstance(v, list) else v for k, v in json.loads(args.budget).items()}
     stored = json.loads((Path(__file__).parent / "results" / "shape.json").read_text())
     moves = [("delta-su2018", Task([-0.1525, 0, -0.8], [0.1525, 0, -0.8], 0.025, 0.5), None)]
