@@ -101,6 +101,23 @@ def plan_bspline(
     ``mid`` (P3's knot τ9, default 1/2) make the knots asymmetric (:func:`general_knots`), a departure from
     [Li2018], whose path is symmetric in time: a Delta's arms are not placed symmetrically about a move, so its
     fastest path is not either."""
+    return _plan_bspline(task, k1, k2, table, arch, k3, k4, mid)
+
+
+def screen_bspline(task: Task, k1: float, k2: float, arch: float = 0.0, k3: float | None = None,
+                   k4: float | None = None, mid: float | None = None, peaks: bool = True) -> CartesianPath:
+    """:func:`plan_bspline` for the shape search's screen: with ``peaks`` False an asymmetric path (k3, k4, mid
+    given) skips its exact Cartesian peaks (NaN then: only the capacity's duration reads them, and the screen
+    without the capacity never does); the path itself is bitwise plan_bspline's. Never returned to a user."""
+    return _plan_bspline(task, k1, k2, None, arch, k3, k4, mid, peaks)
+
+
+def _plan_bspline(
+    task: Task, k1: float | None = None, k2: float | None = None, table: str | Path | None = None,
+    arch: float = 0.0, k3: float | None = None, k4: float | None = None, mid: float | None = None,
+    want_peaks: bool = True,
+) -> CartesianPath:
+    """:func:`plan_bspline`; with ``want_peaks`` False an asymmetric path's peaks are NaN (:func:`screen_bspline`)."""
     arch = check_arch(task, arch)
     general = not (k3 is None and k4 is None and mid is None)
     if (k1 is None) != (k2 is None):
@@ -136,7 +153,7 @@ def plan_bspline(
     via = arched_via(task, arch)[None]
     k1a, k2a = np.array([float(k1)]), np.array([float(k2)])
     if general:  # asymmetric knots: the batched de Boor recursion on them
-        b_all, c_all, pk_all = _deboor_knots(general_knots(k1, k2, k3, k4, mid)[None], via)
+        b_all, c_all, pk_all = _deboor_knots(general_knots(k1, k2, k3, k4, mid)[None], via, want_peaks)
     else:
         route = np.array([_route_one(k1a[0], k2a[0], via[0])])  # _route's decision, on floats (one move)
         b_all, c_all, pk_all = batch_paths(k1a, k2a, via, route=route)
@@ -456,9 +473,12 @@ def _deboor_paths(k1: np.ndarray, k2: np.ndarray, via: np.ndarray):
     return _deboor_knots(batch_li_knots(k1, k2), via)
 
 
-def _deboor_knots(knots: np.ndarray, via: np.ndarray):
-    """:func:`batch_paths` on any knot vectors (P, 17) by the batched Cox–de Boor recursion."""
+def _deboor_knots(knots: np.ndarray, via: np.ndarray, want_peaks: bool = True):
+    """:func:`batch_paths` on any knot vectors (P, 17) by the batched Cox–de Boor recursion (peaks NaN unless
+    ``want_peaks``)."""
     q = batch_control_points(knots, via)
     breaks, derivs = batch_pieces(knots, q)
+    if not want_peaks:
+        return breaks, batch_piece_coefficients(derivs, 0), np.full((len(knots), 3), np.nan)
     peaks = batch_norm_peaks(breaks, [batch_piece_coefficients(derivs, r) for r in (1, 2, 3)])
     return breaks, batch_piece_coefficients(derivs, 0), peaks

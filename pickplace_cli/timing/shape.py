@@ -187,7 +187,7 @@ def optimise_shape(task, profile, model_of, eta_fixed: float | None = None,
 
     from ..model.errors import PickplaceError
     from ..limits.grid import _extra_points
-    from ..paths import plan_path
+    from ..paths.bspline import screen_bspline
     from ..model.task import Task
     from . import _worst_utilisation, auto_duration, screened_root
 
@@ -205,8 +205,8 @@ def optimise_shape(task, profile, model_of, eta_fixed: float | None = None,
             return hit
         try:
             t = Task(task.p_from, task.p_to, task.height, eta)
-            path = plan_path(t, "bspline", k1=k1, k2=k2, arch=arch, **(
-                {} if k3 is None else {"k3": k3, "k4": k4, "mid": mid}))
+            path = screen_bspline(t, k1, k2, arch, *((None,) * 3 if k3 is None else (k3, k4, mid)),
+                                  peaks=capacity is not None)
             model = model_of(path)
             tau = _extra_points(path.breakpoints, path.jumps, SHAPE_SAMPLES)
             found = _worst_utilisation(model, dwell, tau)

@@ -123,3 +123,22 @@ def test_optimal_with_the_shape_is_never_slower_than_the_table_shape():
     assert shaped.report.ok and plain.report.ok
     assert shaped.duration.seconds <= plain.duration.seconds * (1 + 1e-9)
     assert "judged faster by the optimal law" in shaped.parameters["shape"]["note"]
+
+
+@pytest.mark.parametrize("task", [ADEPT, Task([-0.1, 0.05, -0.85], [0.12, -0.03, -0.78], 0.04, 0.3)])
+def test_screen_path_is_the_planned_path(task):
+    """The shape search's screen path (:func:`screen_bspline`, peaks skipped) is bitwise the path ``plan`` then
+    plans for the same parameters (every order at every τ, the same knots); its skipped peaks are NaN and, when
+    asked for, equal plan_bspline's exact ones. Tolerance: none, the same arithmetic."""
+    from pickplace_cli.paths.bspline import screen_bspline
+
+    params = {"k1": 0.25, "k2": 0.4, "arch": 0.006, "k3": 0.3, "k4": 0.15, "mid": 0.52}
+    planned = plan_path(task, "bspline", **params)
+    fast = screen_bspline(task, 0.25, 0.4, 0.006, 0.3, 0.15, 0.52, peaks=False)
+    full = screen_bspline(task, 0.25, 0.4, 0.006, 0.3, 0.15, 0.52, peaks=True)
+    for order in range(4):
+        assert np.array_equal(planned(TAU, order), fast(TAU, order))
+    assert np.array_equal(planned.breakpoints, fast.breakpoints)
+    assert all(np.isnan(v) for v in fast.peaks)
+    assert full.peaks == planned.peaks
+    assert dict(planned.parameters) == dict(fast.parameters)
