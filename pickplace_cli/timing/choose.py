@@ -166,8 +166,11 @@ def choose_optimal(path: CartesianPath, profile, model, dwell: float, model_of,
     from .bound import torque_bound
     from .optimal import optimal_law
 
-    fit = choose_duration(path, profile.capacity, "fit", model=model, dwell=dwell, hold_capacity=hold_capacity,
-                          check=check)
+    try:
+        fit = choose_duration(path, profile.capacity, "fit", model=model, dwell=dwell, hold_capacity=hold_capacity,
+                              check=check)
+    except TaskError as exc:  # the message names the rule the user asked for
+        raise TaskError(str(exc).replace("time = fit:", "time = optimal:", 1)) from None
     try:
         fit = replace(fit, t_bound=torque_bound(model))
     except ValueError:  # no motor torque or speed limit, or one exceeded at rest: no bound to show

@@ -211,6 +211,15 @@ def test_gantry_bspline_vel_fit_is_one_line_not_a_traceback():
     assert "sets no velocity, acceleration, jerk or motor limit" in _one_error_line(r.stderr)
 
 
+def test_the_error_names_the_rule_asked_for():
+    """--time optimal on a profile without timed joint limits: the line names `optimal`, not the fit inside it."""
+    r = run("plan", "-p", "gantry", "-t", "optimal", "--from", "-0.3,0,-0.5", "--to", "0.3,0.2,-0.5", "-q")
+    assert r.exit_code == 1
+    line = _one_error_line(r.stderr)
+    assert "time = optimal:" in line and "time = fit" not in line
+    assert "sets no velocity, acceleration, jerk or motor limit" in line
+
+
 @pytest.mark.parametrize("streamed", [False, True])
 def test_a_failing_row_does_not_lose_the_batch(tmp_path, streamed):
     """A file batch with such a row printed no JSON line at all for 3 rows, a stream stopped at it: every row now has
