@@ -496,8 +496,10 @@ def _duration_stage(task: Task, profile: Profile, options: PlanOptions, path, fa
         return choose_duration(path, profile.capacity, "limits", model=model, dwell=dwell, check=check,
                                parts=parts if parts is not None and model.path is path else None), path, model, ()
     if factory is None and (options.fit or options.time == "fit"):
+        same = parts is not None and model.path is path and options.time == "auto"  # auto screens as limits does
         return choose_duration(path, profile.capacity, options.time, model=model, dwell=dwell,
-                               hold_capacity=options.hold_capacity, check=check), path, model, ()
+                               hold_capacity=options.hold_capacity, check=check,
+                               parts=parts if same else None), path, model, ()
     return first, path, model, ()
 
 

@@ -36,11 +36,11 @@ def choose_duration(
         if model is None:
             raise TaskError("time = limits: needs the robot model (plan through pickplace_cli.planner.plan)")
         return _limits_duration(model, dwell, (tv, ta, tj, binding), check, parts)
+    if spec == "auto":  # the fit is only shown beside it: screened where the capacity binds, as time = limits
+        return Duration(t_auto, "auto", tv, ta, tj, binding, _fit_beside(model, dwell, t_auto, check, parts))
     t_fit = fit_binding = None
     if model is not None:
         t_fit, fit_binding = fit_duration(model, dwell, start=t_auto, check=check)
-    if spec == "auto":
-        return Duration(t_auto, "auto", tv, ta, tj, binding, t_fit)
     if spec in ("fit", "optimal"):
         if model is None:
             raise TaskError("time = fit: needs the robot model (plan through pickplace_cli.planner.plan)")
@@ -53,6 +53,23 @@ def choose_duration(
             )
         return Duration(t_fit, "fit", tv, ta, tj, fit_binding, t_fit)  # type: ignore[arg-type]
     return Duration(float(spec), "given", tv, ta, tj, "given", t_fit)
+
+
+def _fit_beside(model, dwell: float, t_auto: float, check=None, parts=None) -> float | None:
+    """The motors' fit [s] shown beside ``time = auto`` (None without a model or when no limit depends on the
+    duration). Where the Cartesian capacity binds (the screened fit clearly below ``t_auto``) the screened fit
+    (within ~1e-8, as :func:`_limits_duration` shows it), else the fit confirmed by the exact check."""
+    if model is None:
+        return None
+    from .fit import capacity_fit_s
+
+    found = fit_screen(model, dwell, parts)
+    if found is None:
+        return None
+    fit_s = float(capacity_fit_s(found[0], t_auto))
+    if fit_s == fit_s:
+        return fit_s
+    return fit_confirm(model, fit_precise(model, found, dwell), dwell, check=check, parts=found[2])
 
 
 def _limits_duration(model, dwell: float, auto: tuple, check=None, parts=None) -> Duration:

@@ -214,3 +214,26 @@ def test_batch_fit_screen_is_fit_screen_bitwise(which):
             continue
         assert got[k] == ref, (k, got[k], ref)
     assert (raised > 0) == (which == "delta-tight")
+
+
+@pytest.mark.parametrize("profile, a, b", [
+    ("delta-su2018", (-0.1525, 0.0, -0.8), (0.1525, 0.0, -0.8)),
+    ("delta-4axis", (-0.1, 0.05, -0.8), (0.12, -0.04, -0.8)),
+    ("scara-600", (0.3, -0.2, -0.1), (0.3, 0.2, -0.1)),
+])
+def test_auto_shows_the_fit_of_the_fit_rule(profile, a, b):
+    """``time = auto`` shows the motors' fit beside its own duration (screened where the capacity binds, as
+    ``time = limits`` does): the fit rule's own duration, found by its exact check, is the reference. The screened
+    value may sit above it by the screen's tolerance on the plan's first samples (5e-5, generous: ~1e-5 measured)
+    and below it by no more than round-off; the auto duration itself is the capacity's, with or without the fit."""
+    from pickplace_cli.planner import PlanOptions, plan
+
+    prof = load_profile(profile)
+    task = Task(np.array(a, float), np.array(b, float), 0.025)
+    auto = plan(task, prof, PlanOptions(time="auto"))
+    fit = plan(task, prof, PlanOptions(time="fit"))
+    bare = plan(task, prof, PlanOptions(time="auto", fit=False))
+    assert auto.duration.seconds == bare.duration.seconds
+    assert auto.duration.t_fit is not None
+    rel = auto.duration.t_fit / fit.duration.seconds - 1.0
+    assert -1e-9 <= rel <= 5e-5, rel
