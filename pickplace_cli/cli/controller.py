@@ -139,9 +139,42 @@ def judge_table(a, prof, legs: list, track, grid):
         written = partial(as_written, drive=a.drive, joint_units=legs[0].joint.units)
     judged = judged_table(kind, grid, motion, tolerance, prof, 0.0 if a.round_trip else dwell, a.cycle_s,
                           retime=retime, capacity=capacity, size=sized, written=written)
+    if written is not None:  # the deviation of the integers as written: the table's own plus what rounding adds
+        import numpy as np
+
+        judged = _rounded_deviation(judged, written)
+        if max(judged.table.max_error) > tolerance:  # fit closer by the rounding's share, so the integers hold it
+            rounding = float(np.max(judged.table.max_error - judged.fit_error))
+            if rounding < tolerance:
+                judged = _rounded_deviation(judged_table(
+                    kind, grid, motion, tolerance - rounding, prof, 0.0 if a.round_trip else dwell, a.cycle_s,
+                    retime=retime, capacity=capacity, size=sized, written=written), written, tolerance)
     code = judged.report.exit_code()
     _print_table_verdict(a, judged, legs + ([track] if track is not None else []), motion.duration, retime)
     return judged, code
+
+
+def _rounded_deviation(judged, written, tolerance: float | None = None):
+    """``judged`` with its table's ``max_error`` [rad or m per joint] that of the integers as the drive receives them
+    (``written``: the table rounded to counts, back in model units): the table's deviation from the trajectory plus the
+    largest difference between the drive's cubic through the rounded points and through the exact ones (each piece
+    sampled at 64 points: a cubic's difference, so the sampled maximum is within 0.1 % of the true one) — an upper
+    bound by the triangle inequality. ``tolerance``: the user's (the table was fitted to a smaller one)."""
+    from dataclasses import replace
+
+    import numpy as np
+
+    from ..export.interpolate import rebuild
+
+    table = judged.table
+    exact, rounded = rebuild(table), rebuild(written(table))
+    breaks = np.union1d(exact.breaks, rounded.breaks)
+    u = np.linspace(0.0, 1.0, 64, endpoint=False)
+    at = np.append((breaks[:-1, None] + np.diff(breaks)[:, None] * u).ravel(), breaks[-1])
+    rounding = np.max(np.abs(rounded(at) - exact(at)), axis=0)
+    tol = table.tolerance if tolerance is None else float(tolerance)
+    fit = np.asarray(table.max_error, float)
+    return replace(judged, table=replace(table, max_error=fit + rounding, tolerance=tol), fit_error=fit)
 
 
 def _print_table_verdict(a, judged, plans: list, planned: float, retime: bool) -> None:
@@ -205,8 +238,13 @@ def _points_line(a, judged) -> str:
         k = judged.step_cycles
         step = f"; master step {k} cycle{'s' if k > 1 else ''} ({k * judged.step * 1e3:.6g} ms)"
     err = max(table.max_error)
+    written = " of the integers as written (rounding included)" if a.pvt_integer else ""
     if err <= table.tolerance:
-        dev = f"max deviation {err:.3g} (rad or m) within --tolerance {table.tolerance:g}"
+        dev = f"max deviation{written} {err:.3g} (rad or m) within --tolerance {table.tolerance:g}"
+    elif judged.fit_error is not None:  # --pvt-integer: whole counts alone move the drive's cubic by that much
+        rounding = max(e - f for e, f in zip(table.max_error, judged.fit_error))
+        dev = (f"max deviation{written} {err:.3g} (rad or m), over --tolerance {table.tolerance:g}: rounding to whole "
+               f"counts alone moves the drive's cubic by up to {rounding:.3g}; give a larger --tolerance")
     else:  # one point a cycle and the tolerance needs a finer step: the drive's cycle, not the table, sets it
         dev = (f"max deviation between the points {err:.3g} (rad or m), over --tolerance {table.tolerance:g}: it needs a "
                "step finer than the cycle the drive reads the table at, and between two cycles the drive runs a "

@@ -127,6 +127,8 @@ class JudgedTable:
     duration: float
     step: float
     step_cycles: int | None = None
+    #: the table's own deviation per joint [rad or m] when ``table.max_error`` also holds a rounding's (``--pvt-integer``)
+    fit_error: np.ndarray | None = None
 
 
 def _segments_at(t: np.ndarray, times: list[float]) -> set[int]:

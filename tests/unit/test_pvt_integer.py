@@ -56,12 +56,11 @@ def test_round_trip_in_integer_units_follows_the_trajectory(tmp_path):
     t_ms, dt = data[:, 0], data[:, 1]
     assert dt[0] == 0 and np.all((dt[1:] >= 1) & (dt[1:] <= MAX_SEGMENT_MS)) and np.array_equal(np.cumsum(dt), t_ms)
     assert np.all(np.abs(data[:, 2:]) <= 2**31 - 1)
-    # the same points as the float table, each value that table's rounded to the nearest integer
+    # fitted closer than the float table by what rounding adds (so at least as many points), every point on a ms
     _, frows = read_rows(ref)
     fdata = np.array(frows, dtype=float)
-    assert len(fdata) == len(data)
-    np.testing.assert_array_equal(t_ms, np.rint(fdata[:, 0] * 1000))
-    np.testing.assert_array_equal(data[:, 2:], np.rint(fdata[:, 2:]))
+    assert len(data) >= len(fdata)
+    assert np.isin(np.rint(fdata[:, 0] * 1000)[[0, -1]], t_ms).all()
     # the drive's cubic through the integer points follows the robot's inverse kinematics
     prof = load_profile("delta-su2018")
     opts = PlanOptions(time=0.2, cycle=0.001, fit=False)
@@ -70,7 +69,7 @@ def test_round_trip_in_integer_units_follows_the_trajectory(tmp_path):
     p, v = data[:, 2::2] / K, data[:, 3::2] / K
     at = np.concatenate([np.linspace(x[k], x[k + 1], 24, endpoint=False) for k in range(len(x) - 1)] + [x[-1:]])
     err = np.abs(interpolate("pvt", x, p, v, None, at) - continuous_q("delta-su2018", legs, 0.1, at)).max(axis=0)
-    assert np.all(err <= 1e-6 + ROUNDING / K + 1e-12), err
+    assert np.all(err <= 1e-6), err  # the tolerance holds for the integers as written, rounding included
 
 
 def _drive(k: float, n: int = 2) -> DriveMap:
@@ -171,7 +170,9 @@ def test_check_reads_the_integer_table_plan_writes(tmp_path, fmt, suffix):
 
     out, ref = tmp_path / f"int.{suffix}", tmp_path / "samples.csv"
     common = ("plan", *ADEPT, "--cycle", "0.001", "-q")
-    assert run(*common, "-f", fmt, "--pvt-integer", "-o", str(out)).exit_code == 0
+    # 1.2e-6: the table's 0.95e-6 and rounding's 0.12e-6 fit in it, so the integer table is not re-fitted closer, nor
+    # re-timed, and its points lie on the samples
+    assert run(*common, "-f", fmt, "--pvt-integer", "--tolerance", "1.2e-6", "-o", str(out)).exit_code == 0
     assert run(*common, "-o", str(ref)).exit_code == 0
     prof = load_profile("delta-su2018")
     _, got, _ = cr.read_checked(out.read_text(), "int", prof, build_robot(prof.robot))
@@ -210,3 +211,31 @@ def test_a_velocity_in_an_unknown_time_unit_is_one_line():
             "0,0,1,0,1,0,1,0\n10,10,1,0,1,0,1,0\n")
     with pytest.raises(TaskError, match=r"A1_vel\[counts/min\].*per s, ms or us"):
         cr.read_checked(text, "p.csv", prof, build_robot(prof.robot))
+
+
+@pytest.mark.parametrize("tolerance", [1e-6, 3e-7])
+def test_the_stated_deviation_is_that_of_the_integers_as_written(tmp_path, tolerance):
+    """The summary's deviation bounds the deviation of the drive's cubic through the written integers from the robot's
+    inverse kinematics (measured here independently, 24 points a segment), and stays within --tolerance: the table is
+    fitted closer by what rounding to whole counts adds (1.2e-7 rad here, a third of 3e-7)."""
+    import json
+
+    out = tmp_path / "int.csv"
+    res = run("plan", *ADEPT, "--time", "0.2", "--round-trip", "--cycle", "0.001", "-q", "--tolerance", str(tolerance),
+              "-f", "pvt", "--pvt-integer", "-o", str(out), "--json")
+    assert res.exit_code == 0, res.stderr
+    summary = json.loads(res.stdout)
+    table = summary["table"] if "table" in summary else summary["plans"][0]["table"]
+    stated = np.array(table["max_error"])
+    assert table["tolerance"] == tolerance and np.all(stated <= tolerance), stated
+    data = np.array(read_rows(out)[1], dtype=np.int64)
+    t_ms = data[:, 0]
+    prof = load_profile("delta-su2018")
+    opts = PlanOptions(time=0.2, cycle=0.001, fit=False)
+    legs = [plan(THERE, prof, opts), plan(BACK, prof, opts)]
+    x = t_ms / 1000.0
+    p, v = data[:, 2::2] / K, data[:, 3::2] / K
+    at = np.concatenate([np.linspace(x[k], x[k + 1], 24, endpoint=False) for k in range(len(x) - 1)] + [x[-1:]])
+    err = np.abs(interpolate("pvt", x, p, v, None, at) - continuous_q("delta-su2018", legs, 0.1, at)).max(axis=0)
+    assert np.all(err <= stated * (1 + 1e-3) + 1e-12), (err, stated)
+    assert np.all(err <= tolerance), (err, tolerance)
