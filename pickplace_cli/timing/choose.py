@@ -223,7 +223,7 @@ def choose_optimal(path: CartesianPath, profile, model, dwell: float, model_of,
                 f"scaling ({fit.seconds:.6g} s); the uniform law of --time fit is used")
         return replace(fit, mode="optimal", t_optimal=fit.seconds, law="uniform (fallback)"), path, note
     note = (f"time = optimal: {t_opt:.4f} s = {t_opt / fit.seconds:.3f} × fit ({fit.seconds:.4f} s), "
-            f"{t_opt / fit.t_auto:.3f} × auto; optimiser: {law.iterations} SLSQP iterations, {law.message}")
+            f"{t_opt / fit.t_auto:.3f} × auto; optimiser: {law.iterations} {law.counted}, {law.message}")
     return (replace(fit, seconds=t_opt, mode="optimal", binding=binding, t_optimal=t_opt,
                     law=f"cubic B-spline b(τ), {composed.parameters['law_coefficients']} coefficients{refined}"),
             composed, note)

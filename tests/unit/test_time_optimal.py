@@ -185,32 +185,43 @@ def test_optimal_without_rated_torque_has_no_rms_rows():
     assert not any("RMS" in r.quantity for r in opt.report.rows)
 
 
-def test_law_holds_its_rows_between_the_grid_points(adept):
+@pytest.mark.parametrize("solver", ["sqp", "slsqp"])
+def test_law_holds_its_rows_between_the_grid_points(adept, solver):
     """The optimiser's rows on its own grid are not enough (a peak can sit between two points): after the
-    check rounds the law holds every row of the denser check grid to ``LAW_CHECK_TOL``, so the optimiser's
-    duration and the continuous check's agree (Adept cycle: within 2e-4; they differed by 1.3e-3 without)."""
+    check rounds the law holds every row of the denser check grid to the solver's check tolerance (SLSQP:
+    ``LAW_CHECK_TOL``; the SQP: ``SQP_CHECK_TOL`` on its check grid, uniform and Chebyshev-spaced points), so the
+    optimiser's duration and the continuous check's agree (Adept cycle: within 2e-4; they differed by 1.3e-3
+    without)."""
+    from pickplace_cli.timing import law_sqp
     from pickplace_cli.timing import optimal as O
 
     prof, fit, opt = adept
     model = motion_model(fit.cartesian.path, prof)
-    law = O.optimal_law(model, prof.planning.dwell, fit.duration.seconds)
+    law = O.optimal_law(model, prof.planning.dwell, fit.duration.seconds, solver=solver)
+    assert law.counted == {"sqp": "QP solves", "slsqp": "SLSQP iterations"}[solver]
     knots = law.law.t
     x = law.law.c * fit.duration.seconds**2
-    check = O._Problem(model, O._law_grid(model.path, O.LAW_CHECK_GRID), knots, fit.duration.seconds,
-                       prof.planning.dwell, None)
-    assert check.values(x)[: check.n_rows].min() >= -O.LAW_CHECK_TOL
-    assert opt.duration.seconds == pytest.approx(law.t_estimate, rel=2e-4)
+    grid, tol = ((law_sqp.check_grid(model.path), law_sqp.SQP_CHECK_TOL) if solver == "sqp"
+                 else (O._law_grid(model.path, O.LAW_CHECK_GRID), O.LAW_CHECK_TOL))
+    check = O._Problem(model, grid, knots, fit.duration.seconds, prof.planning.dwell, None)
+    assert check.values(x)[: check.n_rows].min() >= -tol
+    if solver == "sqp":  # the plan's law
+        assert opt.duration.seconds == pytest.approx(law.t_estimate, rel=2e-4)
 
 
 def test_law_coefficients_finer_law_is_not_slower(adept):
-    """--law-coefficients 37 solves the finer law from the 20-coefficient one: never slower than it (Adept: 0.9232
-    against 0.9267 × fit), every limit holding; the option is refused without --time optimal and outside 8 … 80.
-    The default (auto) keeps the Adept cycle's 20-coefficient law: it is less than 10 % faster than uniform."""
+    """--law-coefficients 60 solves a finer law than the default's 40 (the SQP's ``LAW_SQP_COEFFICIENTS``): not
+    slower than it (Adept: 0.9163 against 0.9172 × fit), and 20 not faster; every limit holding; the option is
+    refused without --time optimal and outside 8 … 80."""
+    from pickplace_cli.timing.optimal import LAW_SQP_COEFFICIENTS
+
     prof, fit, opt = adept
-    assert opt.parameters["law_coefficients"] == 20
-    fine = plan(ADEPT, prof, PlanOptions(time="optimal", law_coefficients=37))
-    assert fine.report.ok and fine.parameters["law_coefficients"] == 37
-    assert fine.duration.seconds <= opt.duration.seconds * (1 + 1e-6)
+    assert opt.parameters["law_coefficients"] == LAW_SQP_COEFFICIENTS == 40
+    fine = plan(ADEPT, prof, PlanOptions(time="optimal", law_coefficients=60))
+    coarse = plan(ADEPT, prof, PlanOptions(time="optimal", law_coefficients=20))
+    assert fine.report.ok and fine.parameters["law_coefficients"] == 60
+    assert coarse.report.ok and coarse.parameters["law_coefficients"] == 20
+    assert fine.duration.seconds <= opt.duration.seconds * (1 + 1e-4) <= coarse.duration.seconds * (1 + 2e-4)
     runner = CliRunner()
     base = ["plan", "--from", "-0.1525,0,-0.8", "--to", "0.1525,0,-0.8", "-q", "-o", "-"]
     r = runner.invoke(app, [*base, "--time", "fit", "--law-coefficients", "30"])

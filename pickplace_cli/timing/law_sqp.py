@@ -1,0 +1,299 @@
+"""The time law's structured solver: sequential quadratic programming with a feasible inner approximation.
+
+The problem is :mod:`pickplace_cli.timing.optimal`'s (read its docstring): minimise T = ∫dτ/√b over the law's
+cubic B-spline coefficients x (b = B·x, b′ = B′·x, b″ = B″·x on a τ grid) under every limit's rows. Its structure
+decides each row's treatment in the quadratic subproblem (QP) solved at every step from the current law x₀:
+
+* joint acceleration and motor torque (affine in (b, b′)) and every speed (b·q′² ≤ L²: linear in b): exact
+  linear rows;
+* joint jerk and motor torque rate, b·y² ≤ 1 with y affine in (b, b′, b″) (scaled by the limit): written
+  |y| ≤ b^(−1/2), whose right side is convex in b, so its tangent at b₀, b₀^(−1/2)·(1.5 − 0.5·b/b₀), lies below it
+  and the two linear rows ±y ≤ tangent are an inner approximation (convex–concave procedure): every QP step holds
+  these rows on the grid;
+* the Cartesian capacity (‖y‖ ≤ limit, vectors) and the RMS rows: linearised at x₀. The RMS row
+  2∫τ²/√b dτ + hold ≤ rated²·(2T + 2·dwell) is a convex function (τ²/√b is jointly convex in (τ, b)) less a concave
+  one; its convex part's curvature, weighted by the row's multiplier, joins the QP's Hessian (a Lagrangian
+  Hessian kept positive semi-definite), so the steps converge in a few iterations instead of zig-zagging along it;
+* the objective: its exact second-order model (T is convex in b: Hessian Bᵀ·diag(¾·w·b^(−5/2))·B).
+
+Each step is damped by a backtracking line search on an exact-penalty merit (T relative to its start plus μ × the
+linearised rows' violation), and bounded by a trust box on the coefficients (``SQP_TRUST`` of each, and the plan's
+``LAW_BOUNDS``). Only rows within ``SQP_ACTIVE`` of their limit at x₀ enter the QP; a row the step breaks joins and
+the step is solved again. The QP is dense and small (n ≤ 80 coefficients, a few hundred to two thousand rows): the
+dual active-set solver DAQP (Arnström, Bemporad & Axehill 2022, ``daqp`` on PyPI) solves it in well under a
+millisecond. The converged law is then checked on a denser grid, whose broken points join the grid and the solve
+goes on (:func:`solve_law`); the composed path is judged by the exact check of ``--time fit`` afterwards, as for
+every law.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: rows within this fraction of their limit (slack below it) at the current law enter the QP
+SQP_ACTIVE = 0.5
+#: the trust box: each coefficient moves by at most this fraction of itself per step
+SQP_TRUST = 1.0
+#: stop when T changes by less than this (relative) and no row is broken beyond ``SQP_FEASIBLE``
+SQP_TOL = 1e-6
+SQP_FEASIBLE = 1e-9
+#: steps at most (a solve converges in 4-8 on the shipped profiles' moves)
+SQP_ITERATIONS = 60
+DEBUG = False
+#: a check-grid peak of a row with less slack than this joins the grid with its neighbours when a row is broken there
+#: a row broken by more than this share of its limit on the check grid adds its points to the solve's grid (the exact
+#: check of the composed law then scales the whole law by about this share at most: finer costs rounds)
+SQP_CHECK_TOL = 1e-4
+SQP_PEAK = -SQP_CHECK_TOL
+#: Chebyshev-spaced points joining the uniform check grid (``LAW_CHECK_GRID``)
+SQP_CHECK_ENDS = 1001
+SQP_SPANS = False
+#: grid points per knot interval of the law (and at least LAW_GRID)
+SQP_POINTS_PER_KNOT = 6
+
+
+def available() -> bool:
+    """True when the QP solver (``daqp``) can be imported."""
+    try:
+        import daqp  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+class _Rows:
+    """The rows of the law's problem on one τ grid as dense matrices over the coefficients (scaled so that x ≡ 1
+    is the uniform law of duration ``t_fit``), built once per grid."""
+
+    def __init__(self, model, tau: np.ndarray, knots: np.ndarray, t_fit: float, dwell: float, capacity, data) -> None:
+        from .law_rows import _basis, _limit_rows, _stack
+
+        pr = data.take(tau)
+        rows = _stack(*_limit_rows(model, pr, pr.m, pr.dm, (pr.p1, pr.p2, pr.p3), capacity), len(tau))
+        B0, B1, B2 = _basis(knots, tau)
+        scale = 1.0 / t_fit**2
+        self.B0, self.B1 = B0 * scale, B1 * scale
+        B2 = B2 * scale
+        w = np.zeros(len(tau))
+        dt = np.diff(tau)
+        w[:-1] += dt / 2
+        w[1:] += dt / 2
+        self.w, self.tau, self.n = w, tau, B0.shape[1]
+
+        def lin(g, c):  # rows c0·b + c1·b′ + c2·b″ as matrices over x
+            return c[:, 0, None] * self.B0[g] + c[:, 1, None] * self.B1[g] + c[:, 2, None] * B2[g]
+
+        lg, lc = rows["lin_g"], rows["lin_c"]
+        qg, qc, qp = rows["quad_g"], rows["quad_c"], rows["quad_p"]
+        scalar = np.all(qc[:, :, 1:] == 0, axis=(1, 2)) & (qp == 1)
+        c = qc[:, :, 0]
+        speed = scalar & np.all(c[:, :3] == 0, axis=1)  # b·c3² ≤ 1: linear in b
+        dyn = scalar & ~speed
+        # exact linear rows A x ≤ u: accelerations and torques, then speeds
+        self.A = np.vstack([lin(lg, lc), c[speed, 3, None] ** 2 * self.B0[qg[speed]]])
+        self.u = np.concatenate([1.0 - lc[:, 3], np.ones(int(speed.sum()))])
+        # b·y² ≤ 1 rows (jerk, torque rate): y = Ay x + y3, b = Bg x
+        self.Ay, self.y3, self.Bg = lin(qg[dyn], c[dyn]), c[dyn, 3], self.B0[qg[dyn]]
+        # the other quadratic rows (the capacity's vectors, rows with b⁰): linearised from their values
+        other = ~scalar
+        self.other = {"lin_g": np.zeros(0, int), "lin_c": np.zeros((0, 4)), "quad_g": qg[other], "quad_c": qc[other],
+                      "quad_p": qp[other]}
+        self.Og0, self.Og1, self.Og2 = self.B0[qg[other]], self.B1[qg[other]], B2[qg[other]]
+        rated = [(i, s.drive.rated_torque) for i, s in enumerate(model.specs) if s.drive and s.drive.rated_torque]
+        ri = [i for i, _ in rated]
+        self.r2 = np.array([r for _, r in rated], float) ** 2
+        self.Ar, self.mr, self.Gr = pr.Am[:, ri], pr.m[:, ri] / 2, pr.Gm[:, ri]
+        self.hold = dwell * (pr.Gm[0, ri] ** 2 + pr.Gm[-1, ri] ** 2)
+        self.dwell = dwell
+
+    def duration(self, x: np.ndarray) -> float:
+        return float(self.w @ (self.B0 @ x) ** -0.5)
+
+    def rms(self, x: np.ndarray, weights: np.ndarray | None = None):
+        """The RMS rows g_j = (2∫τ_j²/√b + hold_j) / (rated_j²·(2T + 2·dwell)) − 1 ≤ 0; with ``weights`` (one per row,
+        the multipliers) also their gradients (of the numerator less rated²·(2T + 2·dwell), over the denominator at
+        x: the linearisation of g_j·den_j) and Σ_j weight_j × the Hessian of row j's convex part over its denominator
+        (τ²/√b per grid point, jointly convex in (τ, b): its Hessian in (b, b′) mapped to x)."""
+        b, b1 = self.B0 @ x, self.B1 @ x
+        ib = b**-0.5
+        y = self.Ar * b[:, None] + self.mr * b1[:, None] + self.Gr
+        T = self.w @ ib
+        den = self.r2 * (2 * T + 2 * self.dwell)
+        g = (2 * ((self.w * ib) @ y**2) + self.hold) / den - 1.0
+        if weights is None:
+            return g
+        wi = self.w * ib
+        dT = self.B0.T @ (self.w * -0.5 * ib**3)
+        dCb = wi[:, None] * (2 * y * self.Ar) - (self.w * 0.5 * ib**3)[:, None] * y**2
+        dCb1 = wi[:, None] * (2 * y * self.mr)
+        J = (2 * (self.B0.T @ dCb + self.B1.T @ dCb1).T - 2 * self.r2[:, None] * dT[None, :]) / den[:, None]
+        k = 2 * np.asarray(weights, float) / den  # per row
+        if not np.any(k):
+            return g, J, np.zeros((self.n, self.n))
+        a, c = self.Ar, self.mr
+        fyy, fyb, fbb = 2 * ib[:, None], -y * (ib**3)[:, None], 0.75 * y**2 * (ib**5)[:, None]
+        hbb = ((fyy * a * a + 2 * fyb * a + fbb) @ k) * self.w
+        hbc = ((fyy * a * c + fyb * c) @ k) * self.w
+        hcc = ((fyy * c * c) @ k) * self.w
+        cross = (self.B0.T * hbc) @ self.B1
+        return g, J, (self.B0.T * hbb) @ self.B0 + cross + cross.T + (self.B1.T * hcc) @ self.B1
+
+    def others(self, x: np.ndarray, jac: bool = False):
+        """The linearised rows' values (≥ 0 when held) and, with ``jac``, their gradients over x."""
+        from .law_rows import _rows
+
+        if not len(self.other["quad_g"]):
+            return (np.zeros(0), np.zeros((0, self.n))) if jac else np.zeros(0)
+        g = self.other["quad_g"]
+        bb, bb1, bb2 = np.zeros(len(self.tau)), np.zeros(len(self.tau)), np.zeros(len(self.tau))
+        bb[g], bb1[g], bb2[g] = self.Og0 @ x, self.Og1 @ x, self.Og2 @ x
+        if not jac:
+            return _rows(self.other, bb, bb1, bb2, jac=False)
+        v, a0, a1, a2 = _rows(self.other, bb, bb1, bb2)
+        return v, a0[:, None] * self.Og0 + a1[:, None] * self.Og1 + a2[:, None] * self.Og2
+
+    def worst(self, x: np.ndarray) -> float:
+        """The largest share by which a row is broken (≤ 0 when every row holds on the grid)."""
+        s_lin, s_dyn = self.slack(x)
+        return float(max(np.max(-s_lin, initial=-1.0), np.max(-s_dyn, initial=-1.0), np.max(self.rms(x), initial=-1.0),
+                         np.max(-self.others(x), initial=-1.0)))
+
+    def slack(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(slack of the exact linear rows, slack of the b·y² ≤ 1 rows as 1 − b·y²): ≥ 0 when held."""
+        y = self.Ay @ x + self.y3
+        return self.u - self.A @ x, 1.0 - (self.Bg @ x) * y**2
+
+
+def _qp(*args, **kw):
+    """DAQP's dense QP: minimise ½·dxᵀP·dx + gᵀdx subject to lower ≤ [dx; A·dx] ≤ upper."""
+    import daqp
+
+    return daqp.solve(*args, **kw)
+
+
+def solve_sqp(rows: _Rows, x: np.ndarray, lo: float, hi: float) -> tuple[np.ndarray, int, str]:
+    """The SQP iterations from ``x`` (a law that holds the rows) on ``rows``; coefficients within [lo, hi].
+    Returns (x, QP solves, message)."""
+    n = rows.n
+    T = rows.duration(x)
+    lam = np.zeros(len(rows.r2))
+    keep_lin, keep_dyn = None, None
+    solves, message = 0, "SQP: iteration limit"
+    for it in range(SQP_ITERATIONS):
+        b = rows.B0 @ x
+        gT = rows.B0.T @ (rows.w * -0.5 * b**-1.5)
+        HT = (rows.B0.T * (rows.w * 0.75 * b**-2.5)) @ rows.B0
+        g, J, Hc = rows.rms(x, lam)
+        den = rows.r2 * (2 * T + 2 * rows.dwell)
+        # the Lagrangian's curvature: the objective's and the RMS rows' convex parts', less their concave parts' share
+        # of the objective's (kept ≥ 1e-3 of it: positive definite whatever the multipliers)
+        P = max(1.0 - float(np.sum(lam * 2 * rows.r2 / den)), 1e-3) * HT + Hc
+        ov, oJ = rows.others(x, jac=True)
+        s_lin, s_dyn = rows.slack(x)
+        if keep_lin is None:
+            keep_lin, keep_dyn = s_lin < SQP_ACTIVE, s_dyn < SQP_ACTIVE
+        keep_lin |= s_lin < SQP_ACTIVE
+        keep_dyn |= s_dyn < SQP_ACTIVE
+        for _ in range(4):  # a row the step breaks joins, and the step is solved again
+            b0 = rows.Bg[keep_dyn] @ x
+            s0 = b0**-0.5
+            tang = (0.5 * s0 / b0)[:, None] * rows.Bg[keep_dyn]
+            Ay = rows.Ay[keep_dyn]
+            A = np.vstack([rows.A[keep_lin], Ay + tang, -Ay + tang, J, -oJ])
+            rhs = np.concatenate([s_lin[keep_lin], 1.5 * s0 - rows.y3[keep_dyn] - Ay @ x - tang @ x,
+                                  1.5 * s0 + rows.y3[keep_dyn] + Ay @ x - tang @ x, -g, ov])
+            box_hi = np.minimum(hi, x * (1 + SQP_TRUST)) - x
+            box_lo = np.maximum(lo, x / (1 + SQP_TRUST)) - x
+            ub = np.concatenate([box_hi, rhs])
+            lb = np.concatenate([box_lo, np.full(len(rhs), -1e30)])
+            dx, _, flag, info = _qp(np.ascontiguousarray(P), np.ascontiguousarray(gT), np.ascontiguousarray(A),
+                                           ub, lb, np.zeros(len(ub), dtype=np.int32), primal_tol=1e-10)
+            solves += 1
+            if flag < 0:  # the QP failed (infeasible, cycling): keep the last law
+                return x, solves, f"SQP: the QP solver stopped (DAQP exit flag {flag}) after {it} steps"
+            dx = np.asarray(dx, float)
+            s_lin_n, s_dyn_n = rows.slack(x + dx)
+            new_lin = ~keep_lin & (s_lin_n < 0)
+            new_dyn = ~keep_dyn & (s_dyn_n < 0)
+            if not (new_lin.any() or new_dyn.any()):
+                break
+            keep_lin |= new_lin | (~keep_lin & (s_lin_n < SQP_ACTIVE))
+            keep_dyn |= new_dyn | (~keep_dyn & (s_dyn_n < SQP_ACTIVE))
+        lam_all = np.asarray(info["lam"], float)
+        m_lin, m_dyn = int(keep_lin.sum()), int(keep_dyn.sum())
+        lam = np.maximum(lam_all[n + m_lin + 2 * m_dyn: n + m_lin + 2 * m_dyn + len(g)], 0.0)
+        mu = 10.0 * max(1.0, float(np.max(lam_all[n:], initial=0.0)))
+
+        # the rows the QP held (every other row has ≥ SQP_ACTIVE of slack at x and holds at x + dx, and the
+        # linear and inner-approximated rows' sets are convex: it holds on the whole step)
+        Ak, uk, Ayk, y3k, Bgk = rows.A[keep_lin], rows.u[keep_lin], rows.Ay[keep_dyn], rows.y3[keep_dyn], rows.Bg[keep_dyn]
+
+        def violation(xx, rms=None, oth=None):
+            sl, sd = uk - Ak @ xx, 1.0 - (Bgk @ xx) * (Ayk @ xx + y3k) ** 2
+            rms = rows.rms(xx) if rms is None else rms
+            oth = rows.others(xx) if oth is None else oth
+            return (np.sum(np.maximum(rms, 0.0)) + np.sum(np.maximum(-oth, 0.0)) + np.sum(np.maximum(-sl, 0.0))
+                    + np.sum(np.maximum(-sd, 0.0)))
+
+        def merit(xx):
+            return rows.duration(xx) / T + mu * violation(xx)
+
+        m0 = merit(x)
+        pred = float(gT @ dx) / T - mu * violation(x, g, ov)
+        alpha = 1.0
+        for _ in range(30):
+            xn = x + alpha * dx
+            if merit(xn) <= m0 + 1e-4 * alpha * min(pred, 0.0):
+                break
+            alpha *= 0.5
+        else:
+            return x, solves, f"SQP: no descent after {it} steps (line search)"
+        Tn = rows.duration(xn)
+        change = abs(T - Tn) / T
+        if DEBUG:
+            print(it, Tn, alpha, violation(xn), flag, len(ub), np.sum(lam), mu)
+        x, T = xn, Tn
+        if change < SQP_TOL and (violation(x) <= SQP_FEASIBLE or alpha < 1e-3):
+            return x, solves, f"SQP: converged in {it + 1} steps"
+    return x, solves, message
+
+
+def check_grid(path) -> np.ndarray:
+    """The grid on which a solved law is checked: ``LAW_CHECK_GRID`` uniform points and ``SQP_CHECK_ENDS``
+    Chebyshev-spaced ones, denser at the ends, where the path is slow, b small and the rows vary fastest in τ (peaks
+    between 1001 uniform points there broke a row by 0.2 % on the Adept cycle), with the path's knots and jump sides."""
+    from .law_rows import LAW_CHECK_GRID, _law_grid
+
+    return np.union1d(_law_grid(path, LAW_CHECK_GRID), _law_grid(path, SQP_CHECK_ENDS, spans=False, clustered=True))
+
+
+def solve_law(model, dwell: float, t_fit: float, knots: np.ndarray, capacity, data, x: np.ndarray, lo: float,
+              hi: float, points: int) -> tuple[np.ndarray, float, int, str, float]:
+    """The law on ``knots`` from ``x`` (relative coefficients holding every row): :func:`solve_sqp` on the grid of
+    ``points`` uniform points (and the path's knots, jump sides and span nodes), then on that grid with the points of
+    the denser check grid where a row is broken beyond ``LAW_CHECK_TOL`` (``LAW_CHECK_ROUNDS`` at most). Returns
+    (x, the duration estimate [s], QP solves, message)."""
+    from .law_rows import LAW_CHECK_ROUNDS, _law_grid, _Problem
+
+    path = model.path
+    # the law's own knots join the grid: b‴ steps there, so a jerk or torque-rate row has a kink, often its peak
+    tau = np.union1d(_law_grid(path, points, spans=SQP_SPANS), np.unique(knots))
+    check = _Problem(model, check_grid(path), knots, t_fit, dwell, capacity, data)
+    total, rounds = 0, 0
+    for rounds in range(1, LAW_CHECK_ROUNDS + 2):
+        rows = _Rows(model, tau, knots, t_fit, dwell, capacity, data)
+        x, solves, message = solve_sqp(rows, x, lo, hi)
+        total += solves
+        v = check.values(x)[: check.n_rows]
+        if not (v < -SQP_CHECK_TOL).any():
+            break
+        # every local peak of a row within SQP_PEAK of its limit on the check grid joins, with its neighbours: the
+        # peaks the next solve moves towards are then on the grid too (adding only the broken points took a round
+        # for each neighbour)
+        V = v.reshape(-1, len(check.tau))
+        mid = V[:, 1:-1]
+        peak = (mid <= V[:, :-2]) & (mid <= V[:, 2:]) & (mid < SQP_PEAK)
+        at = np.flatnonzero(peak.any(axis=0)) + 1
+        near = np.clip((at[:, None] + np.arange(-1, 2)).ravel(), 0, len(check.tau) - 1)
+        tau = np.union1d(tau, np.concatenate([check.tau[near], np.unique(check.row_tau[v < -SQP_CHECK_TOL])]))
+    return x, rows.duration(x), total, f"{message} ({rounds} grid round(s), {len(tau)} points)", rows.worst(x)
