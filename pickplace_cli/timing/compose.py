@@ -43,8 +43,8 @@ _XG, _WG = np.polynomial.legendre.leggauss(8)
 
 
 class _Cubic:
-    """A cubic spline b(τ) as pieces: breaks (m + 1,), coefficients (m, 4) in powers of (τ − break), highest first;
-    ``at(τ)`` → (b, b′, b″)."""
+    """A spline b(τ) (cubic, or of any degree) as pieces: breaks (m + 1,), coefficients (m, k + 1) in powers of
+    (τ − break), highest first; ``at(τ)`` → (b, b′, b″)."""
 
     def __init__(self, spline) -> None:
         from scipy.interpolate import PPoly
@@ -58,8 +58,19 @@ class _Cubic:
     def at(self, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         i = np.clip(np.searchsorted(self.breaks, tau, side="right") - 1, 0, len(self.coef) - 1)
         s = tau - self.breaks[i]
-        c3, c2, c1, c0 = self.coef[i].T
-        return ((c3 * s + c2) * s + c1) * s + c0, (3.0 * c3 * s + 2.0 * c2) * s + c1, 6.0 * c3 * s + 2.0 * c2
+        c = self.coef[i]
+        k = c.shape[1] - 1
+        if k == 3:
+            c3, c2, c1, c0 = c.T
+            return ((c3 * s + c2) * s + c1) * s + c0, (3.0 * c3 * s + 2.0 * c2) * s + c1, 6.0 * c3 * s + 2.0 * c2
+        b, b1, b2 = c[:, 0], k * c[:, 0], k * (k - 1) * c[:, 0]
+        for j in range(1, k + 1):  # Horner on b and its first two derivatives (power k − j)
+            b = b * s + c[:, j]
+            if j < k:
+                b1 = b1 * s + (k - j) * c[:, j]
+            if j < k - 1:
+                b2 = b2 * s + (k - j) * (k - j - 1) * c[:, j]
+        return b, b1, b2
 
 
 def _gauss(b: _Cubic, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:

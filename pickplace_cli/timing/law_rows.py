@@ -17,12 +17,19 @@ LAW_CHECK_ROUNDS = 2
 LAW_CHECK_TOL = 1e-5
 
 
+def degree(knots: np.ndarray) -> int:
+    """The degree of a B-spline with full ``knots`` (its first knot repeated degree + 1 times)."""
+    return int(np.count_nonzero(np.asarray(knots) == knots[0])) - 1
+
+
 def _basis(knots: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(B, B′, B″): the cubic B-spline basis on ``knots`` (full, end knots repeated) and its derivatives at x."""
+    """(B, B′, B″): the B-spline basis on ``knots`` (full, end knots repeated: their count less one is the degree,
+    3 for the SLSQP's law) and its derivatives at x."""
     from scipy.interpolate import BSpline
 
-    n = len(knots) - 4
-    spl = BSpline(knots, np.eye(n), 3, extrapolate=False)
+    k = degree(knots)
+    n = len(knots) - k - 1
+    spl = BSpline(knots, np.eye(n), k, extrapolate=False)
     xc = np.clip(x, knots[0], knots[-1])
     return np.nan_to_num(spl(xc)), np.nan_to_num(spl.derivative(1)(xc)), np.nan_to_num(spl.derivative(2)(xc))
 

@@ -50,6 +50,10 @@ SQP_CHECK_ENDS = 1001
 SQP_SPANS = False
 #: grid points per knot interval of the law (and at least LAW_GRID)
 SQP_POINTS_PER_KNOT = 6
+#: the degree of the SQP's law b(τ): quintic, so b‴ and b⁗ are continuous and the composed motion's snap has no
+#: steps at the law's knots (a cubic law's snap steps there, which a reader of the sampled file — ``check`` — cannot
+#: tell from the samples alone: its torque rate then read up to 0.7 % high across a knot between two samples)
+SQP_DEGREE = 5
 
 
 def available() -> bool:

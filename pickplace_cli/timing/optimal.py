@@ -149,8 +149,8 @@ def _sqp_law(model, dwell: float, t_fit: float, coefficients: int, capacity) -> 
     caller falls back to SLSQP)."""
     from . import law_sqp
 
-    knots = _knots(coefficients)
-    points = max(LAW_GRID, law_sqp.SQP_POINTS_PER_KNOT * (coefficients - 3) + 1)
+    knots = _knots(coefficients, law_sqp.SQP_DEGREE)
+    points = max(LAW_GRID, law_sqp.SQP_POINTS_PER_KNOT * (coefficients - law_sqp.SQP_DEGREE) + 1)
     data = _GridData(model, np.concatenate([_shared_grid(model.path, coefficients), law_sqp.check_grid(model.path),
                                             knots]))
     x, t_est, solves, message, worst = law_sqp.solve_law(model, dwell, t_fit, knots, capacity, data,
@@ -281,9 +281,9 @@ def _refined_knots(law, path, coefficients: int, weight: float = 1.0) -> np.ndar
     return np.concatenate([[0.0] * 3, np.sort(inner), [1.0] * 3])
 
 
-def _knots(coefficients: int) -> np.ndarray:
-    """The law's knots: uniform in τ, the ends repeated (cubic)."""
-    return np.concatenate([[0.0] * 3, np.linspace(0.0, 1.0, coefficients - 2), [1.0] * 3])
+def _knots(coefficients: int, degree: int = 3) -> np.ndarray:
+    """The law's knots: uniform in τ, the ends repeated (``degree`` 3: cubic)."""
+    return np.concatenate([[0.0] * degree, np.linspace(0.0, 1.0, coefficients - degree + 1), [1.0] * degree])
 
 
 def _check_rounds(model, knots, t_fit: float, dwell: float, capacity, x: np.ndarray, points: int = 0,
@@ -321,4 +321,6 @@ def _check_rounds(model, knots, t_fit: float, dwell: float, capacity, x: np.ndar
 def _law_spline(knots: np.ndarray, coef: np.ndarray):
     from scipy.interpolate import BSpline
 
-    return BSpline(knots, coef, 3, extrapolate=False)
+    from .law_rows import degree
+
+    return BSpline(knots, coef, degree(knots), extrapolate=False)
