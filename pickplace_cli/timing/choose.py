@@ -172,6 +172,9 @@ def choose_duration_for(
     return Duration(t_fit, "fit", tv, ta, tj, fit_binding, t_fit), path
 
 
+_DEGREE = {3: "cubic", 5: "quintic"}
+
+
 def choose_optimal(path: CartesianPath, profile, model, dwell: float, model_of,
                    hold_capacity: bool = False, coefficients: int | None = None, check=None) -> tuple[Duration, CartesianPath, str]:
     """``--time optimal``: the fit of the uniform law, then the optimised non-uniform law on the same path
@@ -225,5 +228,6 @@ def choose_optimal(path: CartesianPath, profile, model, dwell: float, model_of,
     note = (f"time = optimal: {t_opt:.4f} s = {t_opt / fit.seconds:.3f} × fit ({fit.seconds:.4f} s), "
             f"{t_opt / fit.t_auto:.3f} × auto; optimiser: {law.iterations} {law.counted}, {law.message}")
     return (replace(fit, seconds=t_opt, mode="optimal", binding=binding, t_optimal=t_opt,
-                    law=f"cubic B-spline b(τ), {composed.parameters['law_coefficients']} coefficients{refined}"),
+                    law=f"{_DEGREE.get(law.law.k, 'B-spline')} B-spline b(τ), {composed.parameters['law_coefficients']} "
+                        f"coefficients{refined}"),
             composed, note)

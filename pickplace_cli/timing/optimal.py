@@ -137,10 +137,10 @@ def _solve(prob: _Problem, x: np.ndarray, keep: np.ndarray, t_fit: float) -> tup
 #: "slsqp" (scipy's SLSQP on 20 coefficients refined to 40: the solver before it, kept as the fallback and for the
 #: benchmarks' comparison)
 LAW_SOLVER = "sqp"
-#: coefficients of the SQP's law (uniform knots) under ``--law-coefficients auto``: on the shipped profiles' random
-#: moves 40 give the SLSQP's refined law's duration (within ±0.1 %) at a tenth of its time; 60 are 0.1-0.3 % shorter
-#: for about twice the time of 40 (``python bench/bench_law_solver.py``)
-LAW_SQP_COEFFICIENTS = 40
+#: coefficients of the SQP's quintic law (uniform knots) under ``--law-coefficients auto``: 40 left a PH move 0.9 %
+#: above the 80-coefficient SLSQP solve where 60 are 0.7 % below it, and 60 are 0.1-0.3 % shorter than 40 elsewhere,
+#: for about 1.5-2 × the time (``python bench/bench_law_solver.py``)
+LAW_SQP_COEFFICIENTS = 60
 
 
 def _sqp_law(model, dwell: float, t_fit: float, coefficients: int, capacity) -> LawResult | None:

@@ -18,12 +18,13 @@ from pickplace_cli.timing.optimal import optimal_law
 ADEPT = Task([-0.1525, 0, -0.8], [0.1525, 0, -0.8], 0.025, 0.5)
 
 
-def _random_law(seed: int, n: int = 20) -> BSpline:
-    """A cubic B-spline b(τ) > 0 on uniform knots, coefficients log-uniform over a factor 30 (a law ten times
-    slower than elsewhere in places: harder than the optimiser's, which stays within a factor ~10)."""
+def _random_law(seed: int, n: int = 20, k: int = 3) -> BSpline:
+    """A B-spline b(τ) > 0 of degree ``k`` (3: the SLSQP's law, 5: the SQP's) on uniform knots, coefficients
+    log-uniform over a factor 30 (a law ten times slower than elsewhere in places: harder than the optimiser's,
+    which stays within a factor ~10)."""
     rng = np.random.default_rng(seed)
-    knots = np.concatenate([[0.0] * 3, np.linspace(0.0, 1.0, n - 2), [1.0] * 3])
-    return BSpline(knots, 100.0 * np.exp(rng.uniform(np.log(1 / 30), 0.0, n)), 3, extrapolate=False)
+    knots = np.concatenate([[0.0] * k, np.linspace(0.0, 1.0, n - k + 1), [1.0] * k])
+    return BSpline(knots, 100.0 * np.exp(rng.uniform(np.log(1 / 30), 0.0, n)), k, extrapolate=False)
 
 
 def _reference(path, b, u: np.ndarray):
@@ -41,12 +42,12 @@ def _reference(path, b, u: np.ndarray):
             d3 * (s1**3)[:, None] + 3 * d2 * (s1 * s2)[:, None] + d1 * s3[:, None]]
 
 
-@pytest.mark.parametrize("seed", [1, 2, 3])
-def test_composed_motion_is_the_independent_composition(seed):
+@pytest.mark.parametrize("seed,k", [(1, 3), (2, 3), (3, 3), (4, 5), (5, 5)])
+def test_composed_motion_is_the_independent_composition(seed, k):
     # position to 1e-11 m (the inverse's tolerance 1e-11 in τ times |p′| ≲ 1 m), every derivative to 1e-8 of its
     # largest value (the reference's own quad/brentq error is ~1e-13 in τ; the derivatives are exact at the composed τ)
     path = plan_path(ADEPT, "bspline")
-    b = _random_law(seed)
+    b = _random_law(seed, k=k)
     got = compose(path, b)
     u = np.random.default_rng(seed).uniform(0.0, 1.0, 40)
     ref = _reference(path, b, u)
