@@ -273,6 +273,14 @@ def solve_sqp(rows: _Rows, x: np.ndarray, lo: float, hi: float) -> tuple[np.ndar
     return x, solves, message
 
 
+def solve_grid(path, points: int, knots: np.ndarray) -> np.ndarray:
+    """The solve's first grid: ``points`` uniform points, the path's knots and jump sides, and the law's own knots (a
+    row's derivative may kink there: often its peak)."""
+    from .law_rows import _law_grid
+
+    return np.union1d(_law_grid(path, points, spans=SQP_SPANS), np.unique(knots))
+
+
 def check_grid(path) -> np.ndarray:
     """The grid on which a solved law is checked: ``LAW_CHECK_GRID`` uniform points and ``SQP_CHECK_ENDS``
     Chebyshev-spaced ones, denser at the ends, where the path is slow, b small and the rows vary fastest in τ (peaks
@@ -291,8 +299,7 @@ def solve_law(model, dwell: float, t_fit: float, knots: np.ndarray, capacity, da
     from .law_rows import LAW_CHECK_ROUNDS, _law_grid, _Problem
 
     path = model.path
-    # the law's own knots join the grid: b‴ steps there, so a jerk or torque-rate row has a kink, often its peak
-    tau = np.union1d(_law_grid(path, points, spans=SQP_SPANS), np.unique(knots))
+    tau = solve_grid(path, points, knots)
     check = _Problem(model, check_grid(path), knots, t_fit, dwell, capacity, data)
     total, rounds = 0, 0
     for rounds in range(1, LAW_CHECK_ROUNDS + 2):

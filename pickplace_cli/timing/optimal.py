@@ -151,8 +151,8 @@ def _sqp_law(model, dwell: float, t_fit: float, coefficients: int, capacity) -> 
 
     knots = _knots(coefficients, law_sqp.SQP_DEGREE)
     points = max(LAW_GRID, law_sqp.SQP_POINTS_PER_KNOT * (coefficients - law_sqp.SQP_DEGREE) + 1)
-    data = _GridData(model, np.concatenate([_shared_grid(model.path, coefficients), law_sqp.check_grid(model.path),
-                                            knots]))
+    data = _GridData(model, np.concatenate([law_sqp.solve_grid(model.path, points, knots),
+                                            law_sqp.check_grid(model.path)]))
     x, t_est, solves, message, worst = law_sqp.solve_law(model, dwell, t_fit, knots, capacity, data,
                                                          np.ones(coefficients), *LAW_BOUNDS, points)
     if not (np.all(np.isfinite(x)) and worst <= 1e-6):

@@ -211,7 +211,7 @@ def test_law_holds_its_rows_between_the_grid_points(adept, solver):
 
 def test_law_coefficients_finer_law_is_not_slower(adept):
     """--law-coefficients 80 solves a finer law than the default's 60 (the SQP's ``LAW_SQP_COEFFICIENTS``): not
-    slower than it (Adept: 0.12105 against 0.12134 s), and 40 not faster; every limit holding; the option is refused
+    slower than it (Adept: 0.12122 against 0.12134 s), and 40 not faster; every limit holding; the option is refused
     without --time optimal and outside 8 … 80."""
     from pickplace_cli.timing.optimal import LAW_SQP_COEFFICIENTS
 
