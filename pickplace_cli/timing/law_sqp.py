@@ -40,13 +40,12 @@ SQP_FEASIBLE = 1e-9
 #: steps at most (a solve converges in 4-8 on the shipped profiles' moves)
 SQP_ITERATIONS = 60
 DEBUG = False
-#: a check-grid peak of a row with less slack than this joins the grid with its neighbours when a row is broken there
 #: a row broken by more than this share of its limit on the check grid adds its points to the solve's grid (the exact
 #: check of the composed law then scales the whole law by about this share at most: finer costs rounds)
 SQP_CHECK_TOL = 1e-4
-SQP_PEAK = -SQP_CHECK_TOL
 #: Chebyshev-spaced points joining the uniform check grid (``LAW_CHECK_GRID``)
 SQP_CHECK_ENDS = 1001
+#: the solve's grid without the span nodes of the path (the SLSQP's grid has them: 15 Gauss-Kronrod nodes per span)
 SQP_SPANS = False
 #: grid points per knot interval of the law (and at least LAW_GRID)
 SQP_POINTS_PER_KNOT = 6
@@ -55,12 +54,14 @@ SQP_POINTS_PER_KNOT = 6
 #: tell from the samples alone: its torque rate then read up to 0.7 % high across a knot between two samples)
 SQP_DEGREE = 5
 #: weight of the smoothing term SQP_SMOOTH·T₀·‖Δ³x‖² (third differences of the coefficients, relative to the
-#: duration): without it the law follows its binding rows with wiggles a few knots wide, which the motion carries
-#: into its snap; a reader of the sampled motion (``check`` on positions alone, or the septic Hermite through the
-#: tool's derivatives) then saw the torque rate up to 1-7 % high on 4 moves of tests/property/test_plan_check_agreement.py
-#: and refused files the plan had written as within their limits. 3e-3 passes them; it costs 0.07 % of the duration
-#: on the Adept cycle, 0.2-0.5 % on some moves (a SCARA move 0.27066 → 0.27197 s); 1e-3 left one file refused, and
-#: smoothing only the first and last coefficients (where the law is freest) cost as much
+#: duration): the law that minimises T alone follows its binding rows with wiggles a few knots wide, which the motion
+#: carries into its snap; a reader of the sampled motion (``check`` on positions alone, or the septic Hermite through
+#: the tool's derivatives) then saw the torque rate up to 1-7 % high on 4 moves of
+#: tests/property/test_plan_check_agreement.py and refused files the plan had written as within their limits. With
+#: 3e-3 they pass; it costs 0.07-0.7 % of the duration on those moves and up to 2.6 % on long gantry moves (against
+#: the law without it). 1e-3 left one of those files refused; smoothing only the first and last coefficients cost as
+#: much; solving without it first and keeping the smoothed law only when it cost < 0.7 % doubled the time and left
+#: another file refused
 SQP_SMOOTH = 3e-3
 
 
@@ -183,14 +184,14 @@ def _qp(*args, **kw):
     return daqp.solve(*args, **kw)
 
 
-def solve_sqp(rows: _Rows, x: np.ndarray, lo: float, hi: float) -> tuple[np.ndarray, int, str]:
+def solve_sqp(rows: _Rows, x: np.ndarray, lo: float, hi: float, smooth: float = 0.0) -> tuple[np.ndarray, int, str]:
     """The SQP iterations from ``x`` (a law that holds the rows) on ``rows``; coefficients within [lo, hi].
     Returns (x, QP solves, message)."""
     n = rows.n
     T = rows.duration(x)
     # the smoothing term SQP_SMOOTH·T₀·‖Δ³x‖² (third differences of the coefficients): quadratic, so exact in the QP
     D = np.diff(np.eye(n), 3, axis=0)
-    S = SQP_SMOOTH * T * (D.T @ D)
+    S = smooth * T * (D.T @ D)
     lam = np.zeros(len(rows.r2))
     keep_lin, keep_dyn = None, None
     solves, message = 0, "SQP: iteration limit"
@@ -291,31 +292,34 @@ def check_grid(path) -> np.ndarray:
 
 
 def solve_law(model, dwell: float, t_fit: float, knots: np.ndarray, capacity, data, x: np.ndarray, lo: float,
-              hi: float, points: int) -> tuple[np.ndarray, float, int, str, float]:
-    """The law on ``knots`` from ``x`` (relative coefficients holding every row): :func:`solve_sqp` on the grid of
-    ``points`` uniform points (and the path's knots, jump sides and span nodes), then on that grid with the points of
-    the denser check grid where a row is broken beyond ``LAW_CHECK_TOL`` (``LAW_CHECK_ROUNDS`` at most). Returns
-    (x, the duration estimate [s], QP solves, message)."""
-    from .law_rows import LAW_CHECK_ROUNDS, _law_grid, _Problem
+              hi: float, points: int, smooth: float = 0.0, grid: np.ndarray | None = None,
+              max_rounds: int | None = None):
+    """The law on ``knots`` from ``x`` (relative coefficients): :func:`solve_sqp` (with the smoothing weight
+    ``smooth``) on the grid ``grid``, or of ``points`` uniform points (:func:`solve_grid`), then on that grid with
+    the points of the check grid (:func:`check_grid`) where a row is broken beyond ``SQP_CHECK_TOL`` and the local
+    peaks of those rows (``max_rounds`` more rounds at most, default ``LAW_CHECK_ROUNDS``). Returns (x, the duration
+    estimate [s], QP solves, message, the largest broken share of a row on the last grid — ≤ 0 when every row holds
+    there —, the last grid)."""
+    from .law_rows import LAW_CHECK_ROUNDS, _Problem
 
     path = model.path
-    tau = solve_grid(path, points, knots)
+    tau = solve_grid(path, points, knots) if grid is None else grid
     check = _Problem(model, check_grid(path), knots, t_fit, dwell, capacity, data)
     total, rounds = 0, 0
-    for rounds in range(1, LAW_CHECK_ROUNDS + 2):
+    for rounds in range(1, (LAW_CHECK_ROUNDS if max_rounds is None else max_rounds) + 2):
         rows = _Rows(model, tau, knots, t_fit, dwell, capacity, data)
-        x, solves, message = solve_sqp(rows, x, lo, hi)
+        x, solves, message = solve_sqp(rows, x, lo, hi, smooth)
         total += solves
         v = check.values(x)[: check.n_rows]
         if not (v < -SQP_CHECK_TOL).any():
             break
-        # every local peak of a row within SQP_PEAK of its limit on the check grid joins, with its neighbours: the
-        # peaks the next solve moves towards are then on the grid too (adding only the broken points took a round
-        # for each neighbour)
+        # every local peak of a broken row on the check grid joins, with its neighbours: the peaks the next solve
+        # moves towards are then on the grid too (adding only the broken points took a round for each neighbour)
         V = v.reshape(-1, len(check.tau))
         mid = V[:, 1:-1]
-        peak = (mid <= V[:, :-2]) & (mid <= V[:, 2:]) & (mid < SQP_PEAK)
+        peak = (mid <= V[:, :-2]) & (mid <= V[:, 2:]) & (mid < -SQP_CHECK_TOL)
         at = np.flatnonzero(peak.any(axis=0)) + 1
         near = np.clip((at[:, None] + np.arange(-1, 2)).ravel(), 0, len(check.tau) - 1)
         tau = np.union1d(tau, np.concatenate([check.tau[near], np.unique(check.row_tau[v < -SQP_CHECK_TOL])]))
-    return x, rows.duration(x), total, f"{message} ({rounds} grid round(s), {len(tau)} points)", rows.worst(x)
+    return (x, rows.duration(x), total, f"{message} ({rounds} grid round(s), {len(tau)} points)", rows.worst(x),
+            rows.tau)

@@ -144,17 +144,18 @@ LAW_SQP_COEFFICIENTS = 60
 
 
 def _sqp_law(model, dwell: float, t_fit: float, coefficients: int, capacity) -> LawResult | None:
-    """The law of ``coefficients`` uniform knots by the structured SQP (:mod:`~pickplace_cli.timing.law_sqp`) from
-    the uniform law; None when its answer breaks a row of its own (last) grid by more than 1e-6 of the limit (the
-    caller falls back to SLSQP)."""
+    """The law of ``coefficients`` uniform knots by the structured SQP (:mod:`~pickplace_cli.timing.law_sqp`, with its
+    smoothing term ``SQP_SMOOTH``) from the uniform law; None when its answer breaks a row of its own (last) grid by
+    more than 1e-6 of the limit (the caller falls back to SLSQP)."""
     from . import law_sqp
 
     knots = _knots(coefficients, law_sqp.SQP_DEGREE)
     points = max(LAW_GRID, law_sqp.SQP_POINTS_PER_KNOT * (coefficients - law_sqp.SQP_DEGREE) + 1)
     data = _GridData(model, np.concatenate([law_sqp.solve_grid(model.path, points, knots),
                                             law_sqp.check_grid(model.path)]))
-    x, t_est, solves, message, worst = law_sqp.solve_law(model, dwell, t_fit, knots, capacity, data,
-                                                         np.ones(coefficients), *LAW_BOUNDS, points)
+    x, t_est, solves, message, worst, _ = law_sqp.solve_law(model, dwell, t_fit, knots, capacity, data,
+                                                            np.ones(coefficients), *LAW_BOUNDS, points,
+                                                            smooth=law_sqp.SQP_SMOOTH)
     if not (np.all(np.isfinite(x)) and worst <= 1e-6):
         return None
     b = _law_spline(knots, x / t_fit**2)

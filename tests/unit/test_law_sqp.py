@@ -104,8 +104,9 @@ def test_law_holds_its_rows_and_the_plan_its_limits(name, task):
     n = O.LAW_SQP_COEFFICIENTS
     knots = O._knots(n, law_sqp.SQP_DEGREE)
     data = O._GridData(model, law_sqp.check_grid(model.path))
-    x, t_est, solves, message, worst = law_sqp.solve_law(model, prof.planning.dwell, fit.duration.seconds, knots,
-                                                         None, data, np.ones(n), *O.LAW_BOUNDS, 6 * (n - 5) + 1)
+    x, t_est, solves, message, worst, _ = law_sqp.solve_law(model, prof.planning.dwell, fit.duration.seconds, knots,
+                                                         None, data, np.ones(n), *O.LAW_BOUNDS, 6 * (n - 5) + 1,
+                                                         smooth=law_sqp.SQP_SMOOTH)
     assert worst <= 1e-9 and "converged" in message, (worst, message)
     opt = plan(task, prof, PlanOptions(time="optimal"))
     assert opt.parameters["law_coefficients"] == n
