@@ -63,6 +63,15 @@ SQP_DEGREE = 5
 #: much; solving without it first and keeping the smoothed law only when it cost < 0.7 % doubled the time and left
 #: another file refused
 SQP_SMOOTH = 3e-3
+#: … for a law of about this duration [s] or shorter; a longer one gets SQP_SMOOTH·(SQP_SMOOTH_T / T)²: its wiggles
+#: span proportionally more samples (a few knots of T/60 each), and the reconstruction's error falls with the
+#: samples per wiggle; on long gantry moves the full weight cost 1-2.6 % of the duration
+SQP_SMOOTH_T = 0.2
+
+
+def smoothing(t_fit: float) -> float:
+    """The smoothing weight for a law whose uniform duration is ``t_fit`` [s] (``SQP_SMOOTH``, ``SQP_SMOOTH_T``)."""
+    return SQP_SMOOTH * min(1.0, (SQP_SMOOTH_T / t_fit) ** 2)
 
 
 def available() -> bool:

@@ -155,7 +155,7 @@ def _sqp_law(model, dwell: float, t_fit: float, coefficients: int, capacity) -> 
                                             law_sqp.check_grid(model.path)]))
     x, t_est, solves, message, worst, _ = law_sqp.solve_law(model, dwell, t_fit, knots, capacity, data,
                                                             np.ones(coefficients), *LAW_BOUNDS, points,
-                                                            smooth=law_sqp.SQP_SMOOTH)
+                                                            smooth=law_sqp.smoothing(t_fit))
     if not (np.all(np.isfinite(x)) and worst <= 1e-6):
         return None
     b = _law_spline(knots, x / t_fit**2)

@@ -106,7 +106,7 @@ def test_law_holds_its_rows_and_the_plan_its_limits(name, task):
     data = O._GridData(model, law_sqp.check_grid(model.path))
     x, t_est, solves, message, worst, _ = law_sqp.solve_law(model, prof.planning.dwell, fit.duration.seconds, knots,
                                                          None, data, np.ones(n), *O.LAW_BOUNDS, 6 * (n - 5) + 1,
-                                                         smooth=law_sqp.SQP_SMOOTH)
+                                                         smooth=law_sqp.smoothing(fit.duration.seconds))
     assert worst <= 1e-9 and "converged" in message, (worst, message)
     opt = plan(task, prof, PlanOptions(time="optimal"))
     assert opt.parameters["law_coefficients"] == n
