@@ -267,7 +267,10 @@ def judged_table(kind: str, grid: np.ndarray, timeline: Motion, tolerance: float
     for attempt in range(RETIMES + 1):
         used = k
         if attempt:
-            line, g = stretched(timeline, k, cycle, step)
+            # an equidistant table without a known cycle is re-timed to whole sample periods too: it is then read at
+            # exactly that period (a drive reading it at the sample period off its points ran a sharp law's
+            # acceleration 3.5 % past the limit between them)
+            line, g = stretched(timeline, k, cycle if cycle is not None or kind != "cam-table" else step, step)
         # an equidistant table is read every cycle: whole cycles of the duration (without a cycle, whole steps of
         # about the sample period)
         read = line.duration / max(1, round(line.duration / step)) if kind == "cam-table" else step
