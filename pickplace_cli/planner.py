@@ -243,10 +243,12 @@ def _optimised_shape(task: Task, profile: Profile, options: PlanOptions) -> tupl
         raise UsageError(f"--optimize shape minimises the fitted duration: use it with time limits, fit or optimal "
                          f"(not {options.time})")
     hold = options.hold_capacity or options.time == "limits"
-    given = {k for k, v in options.method_params.items() if v is not None and k in ("k1", "k2", "arch", "k3", "k4", "mid")}
+    chosen = ("k1", "k2", "arch", "k3", "k4", "mid", "eta_down", "mid_x")  # the family's shape parameters
+    given = {k for k, v in options.method_params.items() if v is not None and k in chosen}
     if given:
-        raise UsageError(f"--optimize shape chooses k1, k2, the arch and k3, k4, mid itself: drop --{'/--'.join(sorted(given))}")
-    base = {k: v for k, v in options.method_params.items() if v is not None and k not in ("k1", "k2", "arch", "k3", "k4", "mid")}
+        raise UsageError(f"--optimize shape chooses k1, k2, the arch and k3, k4, mid itself and searches Li's placement "
+                         f"of the via points (eta_down = η, mid_x = 1/2): drop --{'/--'.join(sorted(given))}")
+    base = {k: v for k, v in options.method_params.items() if v is not None and k not in chosen}
 
     def model_of(p):
         return motion_model(turned(p, task, options.turn_during), profile)

@@ -106,3 +106,13 @@ def test_cli_bad_value_one_line_exit_1(item):
     assert r.exit_code == 1, r.output
     lines = [ln for ln in r.output.strip().splitlines() if ln.strip()]
     assert len(lines) == 1 and item.split("=")[0] in lines[0], r.output
+
+
+def test_cli_optimize_shape_refuses_the_placement_parameters():
+    """--optimize shape searches Li's placement of the via points: a given eta_down / mid_x is refused (exit 2,
+    one line) rather than planned beside a shape searched without it."""
+    r = CliRunner().invoke(app, ["plan", "--from", "-0.1525,0,-0.8", "--to", "0.1525,0,-0.8", "--optimize", "shape",
+                                 "--time", "fit", "--param", "eta_down=0.2"])
+    assert r.exit_code == 2, r.output
+    lines = [ln for ln in r.output.strip().splitlines() if ln.strip()]
+    assert len(lines) == 1 and "eta_down" in lines[0], r.output
