@@ -118,7 +118,8 @@ def plan(
     ),
     param: Optional[list[str]] = typer.Option(
         None, "--param", help="A method parameter NAME=VALUE (repeatable): ph m=, r= (corner extents in m); "
-        "lame m= (exponent, >= 3); piecewise-poly ratio= (τv/τu); bspline-vel margin=, tau6= … lambda3=. "
+        "lame m= (exponent, >= 3); piecewise-poly ratio= (τv/τu); bspline arch= (m), k3=, k4=, mid= (-), "
+        "eta_down= (set-down ratio, -), mid_x= (apex along the span, -); bspline-vel margin=, tau6= … lambda3=. "
         "[default: the paper's values]",
         rich_help_panel=Panel.METHOD,
     ),
