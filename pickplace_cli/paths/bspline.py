@@ -136,6 +136,17 @@ def screen_bspline(task: Task, k1: float, k2: float, arch: float = 0.0, k3: floa
     return _plan_bspline(task, k1, k2, None, arch, k3, k4, mid, peaks, eta_down, mid_x)
 
 
+def check_placement(eta_down: float | None, mid_x: float | None) -> tuple[float | None, float | None]:
+    """``eta_down``, ``mid_x`` as floats (None stays None); TaskError naming one outside its range."""
+    if eta_down is not None:
+        eta_down = check_fraction("eta_down", eta_down, ETA_DOWN_RANGE, "the set-down ratio (P4 at eta_down of the "
+                                  "set-down end's rise to the clearance)")
+    if mid_x is not None:
+        mid_x = check_fraction("mid_x", mid_x, MID_X_RANGE, "the midpoint's horizontal placement (fraction of the "
+                               "span from P1)")
+    return eta_down, mid_x
+
+
 def _plan_bspline(
     task: Task, k1: float | None = None, k2: float | None = None, table: str | Path | None = None,
     arch: float = 0.0, k3: float | None = None, k4: float | None = None, mid: float | None = None,
@@ -143,12 +154,7 @@ def _plan_bspline(
 ) -> CartesianPath:
     """:func:`plan_bspline`; with ``want_peaks`` False an asymmetric path's peaks are NaN (:func:`screen_bspline`)."""
     arch = check_arch(task, arch)
-    if eta_down is not None:
-        eta_down = check_fraction("eta_down", eta_down, ETA_DOWN_RANGE, "the set-down ratio (P4 at eta_down of the "
-                                  "set-down end's rise to the clearance)")
-    if mid_x is not None:
-        mid_x = check_fraction("mid_x", mid_x, MID_X_RANGE, "the midpoint's horizontal placement (fraction of the "
-                               "span from P1)")
+    eta_down, mid_x = check_placement(eta_down, mid_x)
     general = not (k3 is None and k4 is None and mid is None)
     if (k1 is None) != (k2 is None):
         raise TaskError("k1/k2: give both time-ratio factors or neither (then they come from the table)")
