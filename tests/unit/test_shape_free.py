@@ -116,3 +116,35 @@ def test_cli_optimize_shape_refuses_the_placement_parameters():
     assert r.exit_code == 2, r.output
     lines = [ln for ln in r.output.strip().splitlines() if ln.strip()]
     assert len(lines) == 1 and "eta_down" in lines[0], r.output
+
+
+#: the free-path minimum time of the Adept cycle on delta-su2018 (tests/reference/free_path.py, 12 intervals per
+#: phase, best of four starts; bench/results/free_path.json): computing it takes ~3 min per case, so these cached
+#: figures are used here; tests/unit/test_free_path_reference.py (slow) computes a coarse one and checks the
+#: shipped search against it
+REF_MOTORS, REF_CAPACITY = 0.10296385452799534, 0.12888472924248914
+
+
+def test_shipped_search_against_the_free_path_minimum():
+    """``--optimize shape --time optimal``: every limit held, never below the free-path minimum (a plan faster than
+    it would mean a limit mis-evaluated), and within 3 % of it (measured 1.027 × motors alone, 1.028 × with the
+    capacity: the 1 % aim is not reached by the shipped search; bench/bench_shape_limit.py)."""
+    prof = load_profile("delta-su2018")
+    for capacity, ref in ((False, REF_MOTORS), (True, REF_CAPACITY)):
+        got = plan(ADEPT, prof, PlanOptions(time="optimal", shape=True, hold_capacity=capacity))
+        assert got.report.ok
+        assert 0.995 * ref <= got.duration.seconds <= 1.03 * ref, (capacity, got.duration.seconds / ref)
+
+
+def test_law_polished_placement_shape_against_the_free_path_minimum():
+    """The best nine-parameter shape bench/bench_shape_limit.py found (Nelder-Mead on the optimal law's duration,
+    40 law solves, motors alone): planned with the optimal law, its check holds and its duration lies within
+    1.6 % of the free-path minimum (measured 1.0149 ×) and not below it."""
+    prof = load_profile("delta-su2018")
+    task = Task(ADEPT.p_from, ADEPT.p_to, ADEPT.height, 0.10333333333333339)
+    params = {"k1": 0.18659928566624603, "k2": 0.7852149693961702, "arch": 0.19638555591867596 * ADEPT.height,
+              "k3": 0.3304290331284749, "k4": 0.12422663343242493, "mid": 0.47908282751154624,
+              "eta_down": 0.10000000000000003, "mid_x": 0.5096538468051957}
+    got = plan(task, prof, PlanOptions(time="optimal", method_params=params))
+    assert got.report.ok
+    assert REF_MOTORS <= got.duration.seconds <= 1.016 * REF_MOTORS, got.duration.seconds / REF_MOTORS
