@@ -148,3 +148,27 @@ def test_law_polished_placement_shape_against_the_free_path_minimum():
     got = plan(task, prof, PlanOptions(time="optimal", method_params=params))
     assert got.report.ok
     assert REF_MOTORS <= got.duration.seconds <= 1.016 * REF_MOTORS, got.duration.seconds / REF_MOTORS
+
+
+@pytest.mark.parametrize("extra", [["--shape-law-evals", "5", "--time", "fit", "--optimize", "shape"],
+                                   ["--shape-law-evals", "5", "--time", "optimal"],
+                                   ["--shape-law-evals", "-1", "--time", "optimal", "--optimize", "shape"]])
+def test_cli_shape_law_evals_usage_exit_2(extra):
+    r = CliRunner().invoke(app, ["plan", "--from", "-0.1525,0,-0.8", "--to", "0.1525,0,-0.8"] + extra)
+    assert r.exit_code == 2, r.output
+    assert "shape-law-evals" in r.output and "Traceback" not in r.output
+
+
+def test_law_judged_search_against_the_free_path_minimum():
+    """``shape_law_evals`` = 30 (Nelder-Mead on the optimal law's duration after the screened search): never slower
+    than the screened search's shape (it keeps a shape only when the law says faster), its check holds, not below
+    the free-path minimum, and within 2 % of it on the Adept cycle, motors alone (the 1 % aim is not reached;
+    measured figure in the CHANGELOG and bench/bench_shape_limit.py); the note says the budget searched."""
+    prof = load_profile("delta-su2018")
+    base = plan(ADEPT, prof, PlanOptions(time="optimal", shape=True))
+    got = plan(ADEPT, prof, PlanOptions(time="optimal", shape=True, shape_law_evals=30))
+    assert got.report.ok
+    assert REF_MOTORS <= got.duration.seconds <= base.duration.seconds * (1 + 1e-9)
+    assert got.duration.seconds <= 1.02 * REF_MOTORS, got.duration.seconds / REF_MOTORS
+    print("ratio", got.duration.seconds / REF_MOTORS, got.parameters["shape"]["note"])
+    assert "law solves" in got.parameters["shape"]["note"]
