@@ -14,7 +14,9 @@ For the motors alone and with the Cartesian capacity held (``--hold-capacity``),
   shape, over the seven-parameter family and over nine parameters (plus ``eta_down`` and ``mid_x``, the via
   points' placement): whether those degrees of freedom close the gap.
 
-Results go to ``bench/results/shape_limit.json``. Timings on 2 shared cores: CPU seconds are the steadier figure.
+``--others``: on another Delta move and a SCARA move (no free-path reference there: the reference models the
+Delta only, at these ends not computed), ``--optimize shape --time optimal`` with and without ``--shape-law-evals``
+(``--evals``) and the ratio between them. Results go to ``bench/results/shape_limit.json``. Timings on 2 shared cores: CPU seconds are the steadier figure.
 """
 
 from __future__ import annotations
@@ -106,14 +108,45 @@ def run_case(prof, capacity: bool, evals: int, ref_T: float) -> dict:
     return row
 
 
+OTHERS = (("delta-su2018", Task([-0.1, 0.05, -0.85], [0.12, -0.03, -0.78], 0.04, 0.3)),
+          ("scara-600", Task([0.3, -0.2, -0.12], [0.5, 0.2, -0.12], 0.03, 0.5)))
+
+
+@single_blas_thread
+def others(evals: int) -> list[dict]:
+    from tests.property.test_limit_truth import _profile
+
+    rows = []
+    for name, task in OTHERS:
+        prof = _profile(name)
+        row = {"profile": name}
+        for key, n in (("screened", 0), ("law_judged", evals)):
+            c0 = time.process_time()
+            got = plan(task, prof, PlanOptions(time="optimal", shape=True, shape_law_evals=n))
+            row[key] = {"T": got.duration.seconds, "ok": bool(got.report.ok), "cpu_s": time.process_time() - c0}
+        row["ratio"] = row["law_judged"]["T"] / row["screened"]["T"]
+        print(f"{name} {task.p_from.tolist()} -> {task.p_to.tolist()}: shape + optimal T {row['screened']['T']:.5f} s "
+              f"(CPU {row['screened']['cpu_s']:.1f} s), with --shape-law-evals {evals} T {row['law_judged']['T']:.5f} s "
+              f"= {row['ratio']:.4f} × (CPU {row['law_judged']['cpu_s']:.1f} s), ok {row['law_judged']['ok']}",
+              flush=True)
+        rows.append(row)
+    return rows
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--evals", type=int, default=40, help="law solves per Nelder-Mead run (0: skip)")
     ap.add_argument("--case", choices=("motors", "capacity", "both"), default="both")
     ap.add_argument("--reference", action="store_true", help="recompute the free-path reference (CasADi, ~3 min each)")
+    ap.add_argument("--others", action="store_true", help="only the other moves (Delta, SCARA)")
     ap.add_argument("-o", "--output", default=str(Path(__file__).parent / "results" / "shape_limit.json"))
     args = ap.parse_args()
     prof = load_profile("delta-su2018")
+    if args.others:
+        out_o = {"others": others(args.evals)}
+        Path(args.output).parent.mkdir(parents=True, exist_ok=True)
+        Path(args.output).write_text(json.dumps(out_o, indent=1))
+        return
     cached = json.loads((Path(__file__).parent / "results" / "free_path.json").read_text())
     out = {}
     for capacity in (False, True):
