@@ -49,6 +49,9 @@ class PlanOptions:
         With ``shape``: keep the task's η [-].
     hold_capacity : bool
         ``fit``/``optimal`` also hold the Cartesian capacity [m/s, m/s², m/s³].
+    shape_law_evals : int
+        With ``shape`` and ``optimal``: Nelder-Mead over the shape family with the optimal law's duration [s] as the
+        objective, at most this many law solves [-] (0: the screened search alone).
     law_coefficients : int or None
         ``optimal``: coefficients [-] of the time law's cubic B-spline; None: automatic (20, refined to 40).
     cycle : float or None
@@ -74,6 +77,7 @@ class PlanOptions:
     shape: bool = False  # bspline: choose k1, k2 (and η unless hold_eta) for the smallest duration on the robot
     hold_eta: bool = False  # with shape: keep the task's η (the user gave it), search k1, k2 only
     hold_capacity: bool = False  # fit/optimal also hold the profile's Cartesian capacity (|v|, |a|, |j|)
+    shape_law_evals: int = 0  # with shape and optimal: this many more shapes judged by the optimal law itself
     law_coefficients: int | None = None  # optimal: coefficients of the time law's cubic B-spline (None: auto, 20
     # refined to 40 when the law is far from uniform; more: finer, slower)
     cycle: float | None = None  # s: the controller's cycle (duration and dwell rounded up to whole cycles, one
@@ -243,10 +247,12 @@ def _optimised_shape(task: Task, profile: Profile, options: PlanOptions) -> tupl
         raise UsageError(f"--optimize shape minimises the fitted duration: use it with time limits, fit or optimal "
                          f"(not {options.time})")
     hold = options.hold_capacity or options.time == "limits"
-    given = {k for k, v in options.method_params.items() if v is not None and k in ("k1", "k2", "arch", "k3", "k4", "mid")}
+    chosen = ("k1", "k2", "arch", "k3", "k4", "mid", "eta_down", "mid_x")  # the family's shape parameters
+    given = {k for k, v in options.method_params.items() if v is not None and k in chosen}
     if given:
-        raise UsageError(f"--optimize shape chooses k1, k2, the arch and k3, k4, mid itself: drop --{'/--'.join(sorted(given))}")
-    base = {k: v for k, v in options.method_params.items() if v is not None and k not in ("k1", "k2", "arch", "k3", "k4", "mid")}
+        raise UsageError(f"--optimize shape chooses k1, k2, the arch and k3, k4, mid itself and searches Li's placement "
+                         f"of the via points (eta_down = η, mid_x = 1/2): drop --{'/--'.join(sorted(given))}")
+    base = {k: v for k, v in options.method_params.items() if v is not None and k not in chosen}
 
     def model_of(p):
         return motion_model(turned(p, task, options.turn_during), profile)
@@ -264,7 +270,8 @@ def _optimised_shape(task: Task, profile: Profile, options: PlanOptions) -> tupl
     found = optimise_shape(task, profile, model_of, eta_fixed=task.eta if options.hold_eta else None,
                            table_shape=table_shape, capacity=profile.capacity if hold else None)
     if options.time == "optimal":  # the screen ranks by the uniform law: the law judges the winner and the table's
-        found = shape_module.judge_by_law(task, profile, found, model_of, hold, shape_module.LAW_POLISH_EVALS)
+        found = shape_module.judge_by_law(task, profile, found, model_of, hold,
+                                           options.shape_law_evals or shape_module.LAW_POLISH_EVALS)
     shaped = replace(task, eta=found.eta)
     info = {"k1": found.k1, "k2": found.k2, "eta": found.eta, "arch": found.arch, "k3": found.k3, "k4": found.k4,
             "mid": found.mid, "screened_fit_s": found.t_screen,

@@ -181,6 +181,9 @@ def _check_shape_usage(a) -> None:
     if shape and a.time not in ("fit", "optimal", "limits"):
         _usage(f"--optimize shape minimises the fitted duration on the robot's limits: use it with --time limits "
                f"(the default), fit or optimal (not --time {a.time})")
+    if a.shape_law_evals and not (shape and a.time == "optimal"):
+        _usage(f"--shape-law-evals judges shapes by the optimal law: use it with --optimize shape --time optimal "
+               f"(not {'--time ' + str(a.time) if shape else 'without --optimize shape'})")
     if _law_coefficients(a.law_coefficients) is not None and a.time != "optimal":
         _usage(f"--law-coefficients shapes the time law of --time optimal (--time {a.time} scales the path uniformly)")
     if a.hold_capacity and a.time not in ("fit", "optimal"):

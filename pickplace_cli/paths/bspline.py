@@ -66,15 +66,36 @@ def check_arch(task: Task, arch: float) -> float:
     return a
 
 
-def arched_via(task: Task, arch: float) -> np.ndarray:
+def arched_via(task: Task, arch: float, eta_down: float | None = None, mid_x: float | None = None) -> np.ndarray:
     """The via points P1 … P5 (5, 3) [m, displacement from P1] of the widened family: [Li2018, Eq. (11)] with the
     midpoint P3 raised by ``arch`` [m] above the clearance; P2, P4 stay at η of the rise to the clearance
-    (η·h over equal end heights), so the lift-off/set-down heights keep their meaning. ``arch = 0`` is the
-    Li path's own via points, bitwise."""
+    (η·h over equal end heights), so the lift-off/set-down heights keep their meaning. ``eta_down`` [-] puts
+    P4 at that ratio of the set-down end's rise instead (lift-off and set-down at two heights); ``mid_x`` [-]
+    places P3 horizontally at that fraction of the way from P1 to P5 (Li: 1/2). ``arch = 0`` with both None is
+    the Li path's own via points, bitwise."""
     via = task.via_points() - task.p_from
     if arch:
         via[2, 2] += arch
+    if eta_down is not None:
+        z5 = task.p_to[2] - task.p_from[2]
+        via[3, 2] = z5 + eta_down * (task.z_top - task.p_to[2])
+    if mid_x is not None:
+        via[2, :2] = mid_x * via[4, :2]
     return via
+
+
+#: ranges of ``eta_down`` (the set-down ratio, as η: Task's own bound kept off 0 and 1 by the search's) and
+#: ``mid_x`` (P3's horizontal placement as a fraction of the span)
+ETA_DOWN_RANGE = (0.01, 0.99)
+MID_X_RANGE = (0.2, 0.8)
+
+
+def check_fraction(name: str, value: float, bounds: tuple[float, float], what: str) -> float:
+    """``value`` as a float; TaskError naming the parameter, value and range unless finite and within ``bounds``."""
+    v = float(value)
+    if not (np.isfinite(v) and bounds[0] <= v <= bounds[1]):
+        raise TaskError(f"{name} = {value!r}: {what} must lie in [{bounds[0]:g}, {bounds[1]:g}]")
+    return v
 
 
 #: range of the midpoint's knot τ9 (Li: 1/2) of the asymmetric family
@@ -92,6 +113,7 @@ def general_knots(k1: float, k2: float, k3: float, k4: float, mid: float) -> np.
 def plan_bspline(
     task: Task, k1: float | None = None, k2: float | None = None, table: str | Path | None = None,
     arch: float = 0.0, k3: float | None = None, k4: float | None = None, mid: float | None = None,
+    eta_down: float | None = None, mid_x: float | None = None,
 ) -> CartesianPath:
     """CartesianPath of the B-spline method; k1, k2 from the look-up table at λ unless both are given.
 
@@ -100,25 +122,39 @@ def plan_bspline(
     the apex: :func:`arched_via`); ``k3``, ``k4`` (the set-down side's time-ratio factors, default k1, k2) and
     ``mid`` (P3's knot τ9, default 1/2) make the knots asymmetric (:func:`general_knots`), a departure from
     [Li2018], whose path is symmetric in time: a Delta's arms are not placed symmetrically about a move, so its
-    fastest path is not either."""
-    return _plan_bspline(task, k1, k2, table, arch, k3, k4, mid)
+    fastest path is not either. ``eta_down`` [-] (default η) sets the set-down height apart from the lift-off's
+    and ``mid_x`` [-] (default 1/2) places P3 along the span (:func:`arched_via`)."""
+    return _plan_bspline(task, k1, k2, table, arch, k3, k4, mid, eta_down=eta_down, mid_x=mid_x)
 
 
 def screen_bspline(task: Task, k1: float, k2: float, arch: float = 0.0, k3: float | None = None,
-                   k4: float | None = None, mid: float | None = None, peaks: bool = True) -> CartesianPath:
+                   k4: float | None = None, mid: float | None = None, peaks: bool = True,
+                   eta_down: float | None = None, mid_x: float | None = None) -> CartesianPath:
     """:func:`plan_bspline` for the shape search's screen: with ``peaks`` False an asymmetric path (k3, k4, mid
     given) skips its exact Cartesian peaks (NaN then: only the capacity's duration reads them, and the screen
     without the capacity never does); the path itself is bitwise plan_bspline's. Never returned to a user."""
-    return _plan_bspline(task, k1, k2, None, arch, k3, k4, mid, peaks)
+    return _plan_bspline(task, k1, k2, None, arch, k3, k4, mid, peaks, eta_down, mid_x)
+
+
+def check_placement(eta_down: float | None, mid_x: float | None) -> tuple[float | None, float | None]:
+    """``eta_down``, ``mid_x`` as floats (None stays None); TaskError naming one outside its range."""
+    if eta_down is not None:
+        eta_down = check_fraction("eta_down", eta_down, ETA_DOWN_RANGE, "the set-down ratio (P4 at eta_down of the "
+                                  "set-down end's rise to the clearance)")
+    if mid_x is not None:
+        mid_x = check_fraction("mid_x", mid_x, MID_X_RANGE, "the midpoint's horizontal placement (fraction of the "
+                               "span from P1)")
+    return eta_down, mid_x
 
 
 def _plan_bspline(
     task: Task, k1: float | None = None, k2: float | None = None, table: str | Path | None = None,
     arch: float = 0.0, k3: float | None = None, k4: float | None = None, mid: float | None = None,
-    want_peaks: bool = True,
+    want_peaks: bool = True, eta_down: float | None = None, mid_x: float | None = None,
 ) -> CartesianPath:
     """:func:`plan_bspline`; with ``want_peaks`` False an asymmetric path's peaks are NaN (:func:`screen_bspline`)."""
     arch = check_arch(task, arch)
+    eta_down, mid_x = check_placement(eta_down, mid_x)
     general = not (k3 is None and k4 is None and mid is None)
     if (k1 is None) != (k2 is None):
         raise TaskError("k1/k2: give both time-ratio factors or neither (then they come from the table)")
@@ -150,7 +186,7 @@ def _plan_bspline(
             raise TaskError(f"mid = {mid!r}: the midpoint's knot must lie in [{MID_RANGE[0]:g}, {MID_RANGE[1]:g}]")
     # numpy only (no scipy import on the online path), and the very arithmetic of the batch verdict
     # engine (P = 1): control points, the exact polynomial of every piece, the exact peaks
-    via = arched_via(task, arch)[None]
+    via = arched_via(task, arch, eta_down, mid_x)[None]
     k1a, k2a = np.array([float(k1)]), np.array([float(k2)])
     if general:  # asymmetric knots: the batched de Boor recursion on them
         b_all, c_all, pk_all = _deboor_knots(general_knots(k1, k2, k3, k4, mid)[None], via, want_peaks)
@@ -210,6 +246,8 @@ def _plan_bspline(
         method="bspline",
         parameters={"k1": float(k1), "k2": float(k2), "k_source": source, "lambda": task.lam, "eta": task.eta,
                     **({"arch": arch} if arch else {}),
+                    **({"eta_down": eta_down} if eta_down is not None else {}),
+                    **({"mid_x": mid_x} if mid_x is not None else {}),
                     **({"k3": float(k3), "k4": float(k4), "mid": mid} if general else {})},
         peaks=peaks,  # type: ignore[arg-type]
         breakpoints=breaks,
