@@ -145,7 +145,7 @@ def test_without_daqp_the_slsqp_solver_is_used(monkeypatch):
 def test_within_its_stated_gap_of_the_ipopt_transcription(name, task, above):
     """Against IPOPT on 160 cosine-spaced intervals (another formulation, another solver, started from the uniform
     law and from the SLSQP solver's law, the shortest kept): the plan is at most ``above`` longer (measured: Adept
-    +0.55 %, the SCARA move +0.61 %; bench/results/law_solver.json for more) and not more than 0.3 % shorter (the
+    +0.34 %, the SCARA move +0.61 %; bench/results/law_solver.json for more) and not more than 0.3 % shorter (the
     reference holds its limits at its points only)."""
     pytest.importorskip("casadi", reason="the reference needs casadi (the test extra)")
     from tests.reference.optimal_ipopt import reference_duration
