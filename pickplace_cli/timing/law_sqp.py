@@ -39,7 +39,6 @@ SQP_TOL = 1e-6
 SQP_FEASIBLE = 1e-9
 #: steps at most (a solve converges in 4-8 on the shipped profiles' moves)
 SQP_ITERATIONS = 60
-DEBUG = False
 #: a row broken by more than this share of its limit on the check grid adds its points to the solve's grid (the exact
 #: check of the composed law then scales the whole law by about this share at most: finer costs rounds)
 SQP_CHECK_TOL = 1e-4
@@ -83,12 +82,45 @@ def available() -> bool:
     return True
 
 
+class _Band:
+    """Rows of a matrix over the law's coefficients, each nonzero on k + 1 consecutive columns only (a degree-k
+    B-spline's basis at one τ): ``v`` (m, k + 1) the values, ``c`` (m,) each row's first column. The problem's rows
+    (thousands: grid points × joints × limits) are held this way; only the few hundred a QP holds are made dense."""
+
+    __slots__ = ("v", "c", "at")
+
+    def __init__(self, v: np.ndarray, c: np.ndarray, at: np.ndarray | None = None) -> None:
+        self.v, self.c = v, c
+        self.at = c[:, None] + np.arange(v.shape[1]) if at is None else at  # every entry's column
+
+    def __getitem__(self, mask) -> "_Band":
+        return _Band(self.v[mask], self.c[mask], self.at[mask])
+
+    def __len__(self) -> int:
+        return len(self.c)
+
+    def dot(self, x: np.ndarray) -> np.ndarray:
+        return np.einsum("ij,ij->i", self.v, x[self.at])
+
+    def scaled(self, s: np.ndarray) -> "_Band":
+        return _Band(self.v * s[:, None], self.c, self.at)
+
+    def dense(self, n: int) -> np.ndarray:
+        out = np.zeros((len(self.c), n))
+        np.put_along_axis(out, self.at, self.v, axis=1)
+        return out
+
+    @staticmethod
+    def stack(*bands: "_Band") -> "_Band":
+        return _Band(np.vstack([b.v for b in bands]), np.concatenate([b.c for b in bands]))
+
+
 class _Rows:
     """The rows of the law's problem on one τ grid as dense matrices over the coefficients (scaled so that x ≡ 1
     is the uniform law of duration ``t_fit``), built once per grid."""
 
     def __init__(self, model, tau: np.ndarray, knots: np.ndarray, t_fit: float, dwell: float, capacity, data) -> None:
-        from .law_rows import _basis, _limit_rows, _stack
+        from .law_rows import _basis, _limit_rows, _stack, degree
 
         pr = data.take(tau)
         rows = _stack(*_limit_rows(model, pr, pr.m, pr.dm, (pr.p1, pr.p2, pr.p3), capacity), len(tau))
@@ -96,14 +128,20 @@ class _Rows:
         scale = 1.0 / t_fit**2
         self.B0, self.B1 = B0 * scale, B1 * scale
         B2 = B2 * scale
+        # each τ's band of nonzero basis functions: the k + 1 from the knot interval holding τ
+        k = degree(knots)
+        n = B0.shape[1]
+        first = np.clip(np.searchsorted(knots, tau, side="right") - 1 - k, 0, n - k - 1)
+        at = first[:, None] + np.arange(k + 1)
+        L0, L1, L2 = (np.take_along_axis(B, at, axis=1) for B in (self.B0, self.B1, B2))
         w = np.zeros(len(tau))
         dt = np.diff(tau)
         w[:-1] += dt / 2
         w[1:] += dt / 2
         self.w, self.tau, self.n = w, tau, B0.shape[1]
 
-        def lin(g, c):  # rows c0·b + c1·b′ + c2·b″ as matrices over x
-            return c[:, 0, None] * self.B0[g] + c[:, 1, None] * self.B1[g] + c[:, 2, None] * B2[g]
+        def lin(g, c):  # rows c0·b + c1·b′ + c2·b″ over x, banded
+            return _Band(c[:, 0, None] * L0[g] + c[:, 1, None] * L1[g] + c[:, 2, None] * L2[g], first[g])
 
         lg, lc = rows["lin_g"], rows["lin_c"]
         qg, qc, qp = rows["quad_g"], rows["quad_c"], rows["quad_p"]
@@ -112,10 +150,12 @@ class _Rows:
         speed = scalar & np.all(c[:, :3] == 0, axis=1)  # b·c3² ≤ 1: linear in b
         dyn = scalar & ~speed
         # exact linear rows A x ≤ u: accelerations and torques, then speeds
-        self.A = np.vstack([lin(lg, lc), c[speed, 3, None] ** 2 * self.B0[qg[speed]]])
+        gs = qg[speed]
+        self.A = _Band.stack(lin(lg, lc), _Band(c[speed, 3, None] ** 2 * L0[gs], first[gs]))
         self.u = np.concatenate([1.0 - lc[:, 3], np.ones(int(speed.sum()))])
-        # b·y² ≤ 1 rows (jerk, torque rate): y = Ay x + y3, b = Bg x
-        self.Ay, self.y3, self.Bg = lin(qg[dyn], c[dyn]), c[dyn, 3], self.B0[qg[dyn]]
+        # b·y² ≤ 1 rows (jerk, torque rate): y = Ay x + y3, b = Bg x (the same columns as Ay's)
+        gd = qg[dyn]
+        self.Ay, self.y3, self.Bg = lin(gd, c[dyn]), c[dyn, 3], _Band(L0[gd], first[gd])
         # the other quadratic rows (the capacity's vectors, rows with b⁰): linearised from their values
         other = ~scalar
         self.other = {"lin_g": np.zeros(0, int), "lin_c": np.zeros((0, 4)), "quad_g": qg[other], "quad_c": qc[other],
@@ -182,8 +222,8 @@ class _Rows:
 
     def slack(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(slack of the exact linear rows, slack of the b·y² ≤ 1 rows as 1 − b·y²): ≥ 0 when held."""
-        y = self.Ay @ x + self.y3
-        return self.u - self.A @ x, 1.0 - (self.Bg @ x) * y**2
+        y = self.Ay.dot(x) + self.y3
+        return self.u - self.A.dot(x), 1.0 - self.Bg.dot(x) * y**2
 
 
 def _qp(*args, **kw):
@@ -191,6 +231,51 @@ def _qp(*args, **kw):
     import daqp
 
     return daqp.solve(*args, **kw)
+
+
+class _Active:
+    """The rows active in the last QP (by their place among all the problem's rows), DAQP's warm start for the next
+    one: the SQP's steps keep nearly the same active set, and a QP started from it takes a few active-set iterations
+    instead of a hundred."""
+
+    def __init__(self, rows: _Rows) -> None:
+        self.n = rows.n
+        self.box = np.zeros(rows.n, np.int8)  # +1: at its upper bound, −1: at its lower
+        self.lin, self.up, self.down = np.zeros(len(rows.A), bool), np.zeros(len(rows.Ay), bool), np.zeros(len(rows.Ay), bool)
+        self.tail = None  # the RMS and linearised rows (always all of them)
+
+    def sense(self, keep_lin: np.ndarray, keep_dyn: np.ndarray, m: int) -> np.ndarray:
+        """DAQP's ``sense`` of the QP over the rows ``keep_*`` (``m`` constraints, the box first): 1 active (at the
+        upper bound), 3 active at the lower bound."""
+        out = np.zeros(m, np.int32)
+        out[: self.n][self.box > 0], out[: self.n][self.box < 0] = 1, 3
+        rows = [self.lin[keep_lin], self.up[keep_dyn], self.down[keep_dyn]]
+        if self.tail is not None and self.n + sum(map(len, rows)) + len(self.tail) == m:
+            rows.append(self.tail)
+        act = np.concatenate(rows)
+        out[self.n: self.n + len(act)][act] = 1
+        return out
+
+    def record(self, lam: np.ndarray, keep_lin: np.ndarray, keep_dyn: np.ndarray) -> None:
+        n, ml, md = self.n, int(keep_lin.sum()), int(keep_dyn.sum())
+        self.box = np.sign(lam[:n]).astype(np.int8)
+        for full, keep, part in ((self.lin, keep_lin, lam[n: n + ml]), (self.up, keep_dyn, lam[n + ml: n + ml + md]),
+                                 (self.down, keep_dyn, lam[n + ml + md: n + ml + 2 * md])):
+            full[:] = False
+            full[keep] = part != 0
+        self.tail = lam[n + ml + 2 * md:] != 0
+
+
+def _warm_qp(P, g, A, ub, lb, warm: _Active, keep_lin, keep_dyn):
+    """The step's QP (:func:`_qp`) started from the last QP's active set; solved again from none when that start
+    fails. Returns (dx, DAQP's exit flag, its info, QPs solved)."""
+    args = (np.ascontiguousarray(P), np.ascontiguousarray(g), np.ascontiguousarray(A), ub, lb)
+    sense = warm.sense(keep_lin, keep_dyn, len(ub))
+    dx, _, flag, info = _qp(*args, sense, primal_tol=1e-10)
+    if flag >= 0 or not sense.any():
+        return np.asarray(dx, float), flag, info, 1
+    dx, _, flag, info = _qp(*args, np.zeros(len(ub), np.int32), primal_tol=1e-10)
+    return np.asarray(dx, float), flag, info, 2
 
 
 def solve_sqp(rows: _Rows, x: np.ndarray, lo: float, hi: float, smooth: float = 0.0) -> tuple[np.ndarray, int, str]:
@@ -203,6 +288,7 @@ def solve_sqp(rows: _Rows, x: np.ndarray, lo: float, hi: float, smooth: float = 
     S = smooth * T * (D.T @ D)
     lam = np.zeros(len(rows.r2))
     keep_lin, keep_dyn = None, None
+    warm = _Active(rows)
     solves, message = 0, "SQP: iteration limit"
     for it in range(SQP_ITERATIONS):
         b = rows.B0 @ x
@@ -220,23 +306,24 @@ def solve_sqp(rows: _Rows, x: np.ndarray, lo: float, hi: float, smooth: float = 
         keep_lin |= s_lin < SQP_ACTIVE
         keep_dyn |= s_dyn < SQP_ACTIVE
         for _ in range(4):  # a row the step breaks joins, and the step is solved again
-            b0 = rows.Bg[keep_dyn] @ x
+            Bg, Ay = rows.Bg[keep_dyn], rows.Ay[keep_dyn]
+            b0 = Bg.dot(x)
             s0 = b0**-0.5
-            tang = (0.5 * s0 / b0)[:, None] * rows.Bg[keep_dyn]
-            Ay = rows.Ay[keep_dyn]
-            A = np.vstack([rows.A[keep_lin], Ay + tang, -Ay + tang, J, -oJ])
-            rhs = np.concatenate([s_lin[keep_lin], 1.5 * s0 - rows.y3[keep_dyn] - Ay @ x - tang @ x,
-                                  1.5 * s0 + rows.y3[keep_dyn] + Ay @ x - tang @ x, -g, ov])
+            tang = Bg.scaled(0.5 * s0 / b0)  # the same columns as Ay's
+            ya, ta = Ay.dot(x), tang.dot(x)
+            A = np.vstack([rows.A[keep_lin].dense(n), _Band(Ay.v + tang.v, Ay.c, Ay.at).dense(n),
+                           _Band(tang.v - Ay.v, Ay.c, Ay.at).dense(n), J, -oJ])
+            rhs = np.concatenate([s_lin[keep_lin], 1.5 * s0 - rows.y3[keep_dyn] - ya - ta,
+                                  1.5 * s0 + rows.y3[keep_dyn] + ya - ta, -g, ov])
             box_hi = np.minimum(hi, x * (1 + SQP_TRUST)) - x
             box_lo = np.maximum(lo, x / (1 + SQP_TRUST)) - x
             ub = np.concatenate([box_hi, rhs])
             lb = np.concatenate([box_lo, np.full(len(rhs), -1e30)])
-            dx, _, flag, info = _qp(np.ascontiguousarray(P), np.ascontiguousarray(gT), np.ascontiguousarray(A),
-                                           ub, lb, np.zeros(len(ub), dtype=np.int32), primal_tol=1e-10)
-            solves += 1
+            dx, flag, info, tries = _warm_qp(P, gT, A, ub, lb, warm, keep_lin, keep_dyn)
+            solves += tries
             if flag < 0:  # the QP failed (infeasible, cycling): keep the last law
                 return x, solves, f"SQP: the QP solver stopped (DAQP exit flag {flag}) after {it} steps"
-            dx = np.asarray(dx, float)
+            warm.record(np.asarray(info["lam"], float), keep_lin, keep_dyn)
             s_lin_n, s_dyn_n = rows.slack(x + dx)
             new_lin = ~keep_lin & (s_lin_n < 0)
             new_dyn = ~keep_dyn & (s_dyn_n < 0)
@@ -254,7 +341,7 @@ def solve_sqp(rows: _Rows, x: np.ndarray, lo: float, hi: float, smooth: float = 
         Ak, uk, Ayk, y3k, Bgk = rows.A[keep_lin], rows.u[keep_lin], rows.Ay[keep_dyn], rows.y3[keep_dyn], rows.Bg[keep_dyn]
 
         def violation(xx, rms=None, oth=None):
-            sl, sd = uk - Ak @ xx, 1.0 - (Bgk @ xx) * (Ayk @ xx + y3k) ** 2
+            sl, sd = uk - Ak.dot(xx), 1.0 - Bgk.dot(xx) * (Ayk.dot(xx) + y3k) ** 2
             rms = rows.rms(xx) if rms is None else rms
             oth = rows.others(xx) if oth is None else oth
             return (np.sum(np.maximum(rms, 0.0)) + np.sum(np.maximum(-oth, 0.0)) + np.sum(np.maximum(-sl, 0.0))
@@ -275,8 +362,6 @@ def solve_sqp(rows: _Rows, x: np.ndarray, lo: float, hi: float, smooth: float = 
             return x, solves, f"SQP: no descent after {it} steps (line search)"
         Tn = rows.duration(xn)
         change = abs(T - Tn) / T
-        if DEBUG:
-            print(it, Tn, alpha, violation(xn), flag, len(ub), np.sum(lam), mu)
         x, T = xn, Tn
         if change < SQP_TOL and (violation(x) <= SQP_FEASIBLE or alpha < 1e-3):
             return x, solves, f"SQP: converged in {it + 1} steps"

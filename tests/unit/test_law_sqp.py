@@ -173,3 +173,51 @@ def test_profile_without_rated_torque_has_no_rms_rows():
     fit = plan(task, stripped, PlanOptions(time="fit"))
     assert opt.report.ok and opt.duration.seconds < fit.duration.seconds
     assert not any(r.quantity.startswith("rms") and r.joint in ("q1", "q2", "q3") for r in opt.report.rows)
+
+
+@pytest.mark.parametrize("name, task", [("delta-su2018", ADEPT), GANTRY])
+def test_banded_rows_equal_the_problem_rows(name, task):
+    """The SQP's rows, held banded (k + 1 basis functions per τ), against the SLSQP solver's own rows on the same grid
+    (``law_rows._Problem``: dense basis from scipy's BSpline, every row evaluated by ``law_rows._rows``): the same
+    multiset of slacks at a random law, to 1e-12; and each banded matrix made dense against the product with the
+    dense basis."""
+    prof, fit, model = _setup(name, task)
+    rows, knots, tau, data = _rows(prof, fit, model)
+    x = np.exp(np.random.default_rng(7).uniform(-0.4, 0.4, rows.n))
+    s_lin, s_dyn = rows.slack(x)
+    ours = np.sort(np.concatenate([s_lin, s_dyn, rows.others(x)]))
+    prob = O._Problem(model, tau, knots, fit.duration.seconds, prof.planning.dwell, None, data)
+    theirs = np.sort(prob.values(x)[: prob.n_rows])
+    np.testing.assert_allclose(ours, theirs, rtol=0, atol=1e-12)
+    for band in (rows.A, rows.Ay, rows.Bg):
+        np.testing.assert_allclose(band.dense(rows.n) @ x, band.dot(x), rtol=1e-13, atol=1e-13)
+    dense = BSpline(knots, np.eye(rows.n), law_sqp.SQP_DEGREE)(tau) / fit.duration.seconds**2
+    # every row of Bg (b at one grid point) is a row of the dense basis
+    Bg = rows.Bg.dense(rows.n)
+    assert np.abs(Bg[:, None, :] - dense[None, :, :]).max(axis=2).min(axis=1).max() <= 1e-12 * np.abs(dense).max()
+    assert np.abs(rows.B0 - dense).max() <= 1e-12 * np.abs(dense).max()
+
+
+def test_warm_started_qps_equal_cold_ones(monkeypatch):
+    """Every QP of a solve (started from the last QP's active set) solved again from no active set by DAQP: the same
+    step to 1e-9 of the largest coefficient change."""
+    import daqp
+
+    calls = []
+    real = law_sqp._qp
+
+    def record(*args, **kw):
+        out = real(*args, **kw)
+        calls.append((args, kw, np.asarray(out[0], float), out[2]))
+        return out
+
+    monkeypatch.setattr(law_sqp, "_qp", record)
+    prof, fit, model = _setup("delta-su2018", ADEPT)
+    O.optimal_law(model, prof.planning.dwell, fit.duration.seconds)
+    warm = [c for c in calls if np.any(c[0][5])]
+    assert len(warm) >= len(calls) // 2  # most steps start warm
+    for args, kw, dx, flag in calls:
+        assert flag >= 0
+        cold = daqp.solve(*args[:5], np.zeros(len(args[3]), np.int32), **kw)
+        assert cold[2] >= 0
+        np.testing.assert_allclose(dx, np.asarray(cold[0]), rtol=0, atol=1e-9 * max(1.0, np.abs(dx).max()))
