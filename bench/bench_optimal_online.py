@@ -35,17 +35,16 @@ from pathlib import Path
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("OMP_NUM_THREADS", "1")
 
-import numpy as np  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from pickplace_cli.model.errors import PickplaceError  # noqa: E402
 from pickplace_cli.model.task import Task  # noqa: E402
 from pickplace_cli.planner import PlanOptions, motion_model, plan  # noqa: E402
-from tests.property.test_limit_truth import REGIONS, _profile  # noqa: E402
+from bench.moves import ADEPT, PROFILES, measured  # noqa: E402
+from tests.property.test_limit_truth import _profile  # noqa: E402
 from tests.reference.optimal_ipopt import reference_duration  # noqa: E402
 
-PROFILES = ("delta-su2018", "delta-4axis", "scara-600", "gantry")
 
 
 def timed(task, prof, options) -> tuple[object, float, float]:
@@ -92,26 +91,12 @@ def main() -> None:
     args = ap.parse_args()
     from pickplace_cli.model.threads import single_blas_thread
 
+    plan(ADEPT, _profile("delta-su2018"), PlanOptions(time="optimal"))  # imports and caches warm
     rows = []
-    adept = Task([-0.1525, 0, -0.8], [0.1525, 0, -0.8], 0.025, 0.5)
-    work = [("adept", "delta-su2018", adept)]
-    for name in PROFILES:
-        (lo, hi), (h0, h1) = REGIONS[name]
-        rng = np.random.default_rng(args.seed + PROFILES.index(name))
-        for _ in range(args.moves * 3):  # candidates; the unplannable ones are skipped
-            p0, p1 = rng.uniform(lo, hi), rng.uniform(lo, hi)
-            if np.linalg.norm(p1[:2] - p0[:2]) >= 0.05:
-                work.append((name, name, Task(p0, p1, float(rng.uniform(h0, h1)), 0.5)))
-    done: dict = {}
-    plan(adept, _profile("delta-su2018"), PlanOptions(time="optimal"))  # imports and caches warm
-    for label, name, task in work:
-        if label != "adept" and done.get(label, 0) >= args.moves:
-            continue
-        res = single_blas_thread(one)(label, _profile(name), task, not args.no_shape)
-        if res is None:
-            continue
-        done[label] = done.get(label, 0) + 1
+    measure = single_blas_thread(lambda label, prof, task: one(label, prof, task, not args.no_shape))
+    for res in measured(args.seed, args.moves, measure):
         rows.append(res)
+        label = res["profile"]
         print(f"{label:13s} default {res['cpu_default'] * 1e3:6.1f} ms  optimal {res['cpu_optimal'] * 1e3:6.1f} ms "
               f"(wall {res['wall_optimal'] * 1e3:6.1f})  shape+optimal {res.get('cpu_shape', float('nan')) * 1e3:6.0f} ms  "
               f"solve {res['cpu_solve'] * 1e3:6.1f} ms  "

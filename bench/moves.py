@@ -1,0 +1,44 @@
+"""The moves of the ``--time optimal`` benchmarks (``bench_law_solver.py``, ``bench_optimal_online.py``): the Adept
+cycle on delta-su2018, then random moves of each shipped profile in its region of ``tests/property/test_limit_truth``
+(both ends drawn uniformly, at least 5 cm apart horizontally, a clearance drawn in its range), the same for the same
+seed. Not a benchmark itself."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+
+import numpy as np
+
+from pickplace_cli.model.task import Task
+from tests.property.test_limit_truth import REGIONS, _profile
+
+PROFILES = ("delta-su2018", "delta-4axis", "scara-600", "gantry")
+ADEPT = Task([-0.1525, 0, -0.8], [0.1525, 0, -0.8], 0.025, 0.5)
+
+
+def candidates(seed: int, moves: int) -> list[tuple[str, str, Task]]:
+    """(label, profile name, move): the Adept cycle, then 3 × ``moves`` candidates per profile (drawn with the seed
+    ``seed`` + the profile's place in ``PROFILES``; the unplannable ones are skipped by :func:`measured`)."""
+    work = [("adept", "delta-su2018", ADEPT)]
+    for name in PROFILES:
+        (lo, hi), (h0, h1) = REGIONS[name]
+        rng = np.random.default_rng(seed + PROFILES.index(name))
+        for _ in range(moves * 3):
+            p0, p1 = rng.uniform(lo, hi), rng.uniform(lo, hi)
+            if np.linalg.norm(p1[:2] - p0[:2]) >= 0.05:
+                work.append((name, name, Task(p0, p1, float(rng.uniform(h0, h1)), 0.5)))
+    return work
+
+
+def measured(seed: int, moves: int, measure: Callable[[str, object, Task], dict | None]) -> Iterator[dict]:
+    """``measure(label, profile, move)`` on the Adept cycle and the first ``moves`` candidates of each profile it
+    answers (None: an unplannable move, skipped)."""
+    done: dict = {}
+    for label, name, task in candidates(seed, moves):
+        if label != "adept" and done.get(label, 0) >= moves:
+            continue
+        res = measure(label, _profile(name), task)
+        if res is None:
+            continue
+        done[label] = done.get(label, 0) + 1
+        yield res
