@@ -10,6 +10,7 @@ For the motors alone and with the Cartesian capacity held (``--hold-capacity``),
 * ``--optimize shape --time optimal`` with Li's family only (``timing.shape.ARCH_RANGE = (0, 0)``) and with the
   shipped widened family (arch, k3, k4, mid), their ratio to T_ref and CPU time (``time.process_time``, one BLAS
   thread);
+* ``--shape-law-evals`` ``--evals`` (the shipped law-judged search: COBYQA from the screened shape);
 * Nelder-Mead with the optimal law's duration as the objective (``--evals`` law solves) from the shipped
   shape, over the seven-parameter family and over nine parameters (plus ``eta_down`` and ``mid_x``, the via
   points' placement): whether those degrees of freedom close the gap.
@@ -99,6 +100,13 @@ def run_case(prof, capacity: bool, evals: int, ref_T: float) -> dict:
         print(f"  --optimize shape --time optimal, {name}: T {r['T']:.5f} s = {r['T'] / ref_T:.4f} × ref, ok {r['ok']}, "
               f"CPU {r['cpu_s']:.2f} s (wall {r['wall_s']:.2f} s)", flush=True)
     if evals:
+        c0 = time.process_time()
+        got = plan(Task(P_FROM, P_TO, HEIGHT, 0.5), prof,
+                   PlanOptions(time="optimal", shape=True, hold_capacity=capacity, shape_law_evals=evals))
+        row["shipped_law_evals"] = r = {"T": got.duration.seconds, "ok": bool(got.report.ok), "evals": evals,
+                                        "cpu_s": time.process_time() - c0}
+        print(f"  --shape-law-evals {evals} (shipped: COBYQA from the screened shape): T {r['T']:.5f} s = "
+              f"{r['T'] / ref_T:.4f} × ref, ok {r['ok']}, CPU {r['cpu_s']:.1f} s", flush=True)
         for name, placement in (("law_7", False), ("law_9_placement", True)):
             r = law_polish(prof, capacity, row["widened"]["shape"], evals, placement)
             row[name] = r

@@ -50,10 +50,11 @@ class PlanOptions:
     hold_capacity : bool
         ``fit``/``optimal`` also hold the Cartesian capacity [m/s, m/s², m/s³].
     shape_law_evals : int
-        With ``shape`` and ``optimal``: Nelder-Mead over the shape family with the optimal law's duration [s] as the
+        With ``shape`` and ``optimal``: COBYQA over the shape family with the optimal law's duration [s] as the
         objective, at most this many law solves [-] (0: the screened search alone).
     law_coefficients : int or None
-        ``optimal``: coefficients [-] of the time law's cubic B-spline; None: automatic (20, refined to 40).
+        ``optimal``: coefficients [-] of the time law's B-spline; None: automatic (the SQP solver's quintic law of 60;
+        the SLSQP solver's cubic law of 20, refined to 40).
     cycle : float or None
         The controller's cycle [s]: duration and dwell rounded up to whole cycles, one sample per cycle.
     limit_use : float or None

@@ -175,9 +175,10 @@ def plan(
     ),
     shape_law_evals: int = typer.Option(
         0, "--shape-law-evals", min=0, max=1000, help="With --optimize shape --time optimal: after the screened search, "
-        "Nelder-Mead over the shape family with the optimal law's duration [s] itself as the objective, at most this "
-        "many law solves (0-1000; each ~0.1 s CPU, ~0.5-3 s with the SLSQP solver). 30 brings the Adept cycle from "
-        "1.021 to 1.015 × the free-path minimum time with the capacity held (motors alone: 1.016 to 1.015 ×). [default: 0, the screened search alone]",
+        "COBYQA (scipy's model-based solver) over the shape family with the optimal law's duration [s] itself as the "
+        "objective, at most this many law solves (0-1000; each ~0.1 s CPU, ~0.5-3 s with the SLSQP solver). 30 bring "
+        "the Adept cycle from 1.016 to 1.011 × the free-path minimum time (capacity held: 1.021 to 1.013 ×). "
+        "[default: 0, the screened search alone]",
         rich_help_panel=Panel.METHOD,
     ),
     rate: Optional[float] = typer.Option(None, "--rate", help="Samples per second in Hz. [default: profile]", rich_help_panel=Panel.METHOD),

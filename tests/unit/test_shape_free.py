@@ -160,15 +160,15 @@ def test_cli_shape_law_evals_usage_exit_2(extra):
 
 
 def test_law_judged_search_against_the_free_path_minimum():
-    """``shape_law_evals`` = 30 (Nelder-Mead on the optimal law's duration after the screened search): never slower
-    than the screened search's shape (it keeps a shape only when the law says faster), its check holds, not below
-    the free-path minimum, and within 2 % of it on the Adept cycle, motors alone (the 1 % aim is not reached;
-    measured figure in the CHANGELOG and bench/bench_shape_limit.py); the note says the budget searched."""
+    """``shape_law_evals`` = 30 (COBYQA on the optimal law's duration after the screened search): never slower than
+    the screened search's shape (it keeps a shape only when the law says faster), its check holds, not below the
+    free-path minimum, and within 1.5 % of it on the Adept cycle, motors alone (measured 1.011 ×: the 1 % aim is not
+    reached; bench/bench_shape_limit.py); the note says the budget searched."""
     prof = load_profile("delta-su2018")
     base = plan(ADEPT, prof, PlanOptions(time="optimal", shape=True))
     got = plan(ADEPT, prof, PlanOptions(time="optimal", shape=True, shape_law_evals=30))
     assert got.report.ok
     assert REF_MOTORS <= got.duration.seconds <= base.duration.seconds * (1 + 1e-9)
-    assert got.duration.seconds <= 1.02 * REF_MOTORS, got.duration.seconds / REF_MOTORS
+    assert got.duration.seconds <= 1.015 * REF_MOTORS, got.duration.seconds / REF_MOTORS
     print("ratio", got.duration.seconds / REF_MOTORS, got.parameters["shape"]["note"])
     assert "law solves" in got.parameters["shape"]["note"]
