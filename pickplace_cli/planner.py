@@ -79,8 +79,8 @@ class PlanOptions:
     hold_eta: bool = False  # with shape: keep the task's η (the user gave it), search k1, k2 only
     hold_capacity: bool = False  # fit/optimal also hold the profile's Cartesian capacity (|v|, |a|, |j|)
     shape_law_evals: int = 0  # with shape and optimal: this many more shapes judged by the optimal law itself
-    law_coefficients: int | None = None  # optimal: coefficients of the time law's cubic B-spline (None: auto, 20
-    # refined to 40 when the law is far from uniform; more: finer, slower)
+    law_coefficients: int | None = None  # optimal: coefficients of the time law's B-spline (None: auto, the SQP's
+    # quintic law of 60, or SLSQP's cubic law of 20 refined to 40 when far from uniform; more: finer, slower)
     cycle: float | None = None  # s: the controller's cycle (duration and dwell rounded up to whole cycles, one
     # sample per cycle: :mod:`pickplace_cli.timing.cycle`); None: sampled at ``rate``
     limit_use: float | None = None  # fraction (0, 1] of every timed limit's rating to plan to; None: the profile's
