@@ -1,9 +1,11 @@
 """``--time optimal``'s two solvers of the time law, same moves, same run: the structured SQP (the default,
-``timing/law_sqp.py``, 40 coefficients) against scipy's SLSQP (the solver before it: 20 coefficients refined to 40
+``timing/law_sqp.py``, a quintic law of 60 coefficients) against scipy's SLSQP (the solver before it: 20 coefficients refined to 40
 when the law is more than 10 % faster than uniform).
 
     python bench/bench_law_solver.py --moves 5                 # Adept cycle + 5 random moves per shipped profile
     python bench/bench_law_solver.py --moves 3 --reference     # also the gap to the IPOPT transcription (slow)
+    python bench/bench_law_solver.py --moves 3 --smooth 0 -o /tmp/s0.json \
+        --reference-from bench/results/law_solver.json          # a variant of the SQP against the same references
 
 For each move (the Adept cycle on delta-su2018, and random moves of delta-su2018, delta-4axis, scara-600 and the
 gantry with drives, as ``bench/bench_optimal_online.py`` makes them): the cold in-process CPU time (one BLAS thread,
@@ -46,6 +48,15 @@ def cpu(fn):
     return out, time.process_time() - c0
 
 
+#: reference durations [s] read from an earlier run (``--reference-from``), by move
+KNOWN: dict = {}
+
+
+def _key(row: dict) -> tuple:
+    return row["profile"], tuple(round(v, 9) for v in row["from"]), tuple(round(v, 9) for v in row["to"]), \
+        round(row["height"], 9)
+
+
 def one(label: str, prof, task: Task, reference: bool) -> dict | None:
     row: dict = {"profile": label, "from": task.p_from.tolist(), "to": task.p_to.tolist(), "height": task.height}
     try:
@@ -69,11 +80,13 @@ def one(label: str, prof, task: Task, reference: bool) -> dict | None:
         row[f"law_{solver}"] = opt.duration.law
     row["t_fit"] = fit.duration.seconds
     row["ratio"] = row["t_sqp"] / row["t_slsqp"]
-    if reference:
+    t_ref = KNOWN.get(_key(row))
+    if reference and t_ref is None:
         from tests.reference.optimal_ipopt import reference_duration
 
         t_ref = min(reference_duration(model, prof.planning.dwell, fit.duration.seconds, law=laws[s], scales=(1.0,))
                     for s in SOLVERS)
+    if t_ref is not None:
         row["t_ref"] = t_ref
         for solver in SOLVERS:
             row[f"gap_{solver}"] = row[f"t_{solver}"] / t_ref - 1.0
@@ -86,8 +99,25 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=500)
     ap.add_argument("--reference", action="store_true", help="also the IPOPT reference's gap (~10-40 s per move)")
     ap.add_argument("-o", "--output", default=str(Path(__file__).parent / "results" / "law_solver.json"))
+    ap.add_argument("--smooth", type=float, default=None,
+                    help="the SQP's smoothing weight (law_sqp.SQP_SMOOTH; 0: none) instead of the shipped one")
+    ap.add_argument("--coefficients", type=int, default=None,
+                    help="the SQP law's coefficients (optimal.LAW_SQP_COEFFICIENTS) instead of the shipped 60")
+    ap.add_argument("--reference-from", metavar="JSON", default=None,
+                    help="the IPOPT references of an earlier run's results file, for the moves it holds (a variant's "
+                         "gaps without solving them again)")
     args = ap.parse_args()
     from pickplace_cli.model.threads import single_blas_thread
+
+    if args.reference_from:
+        KNOWN.update({_key(r): r["t_ref"] for r in json.loads(Path(args.reference_from).read_text())["moves"]
+                      if "t_ref" in r})
+    from pickplace_cli.timing import law_sqp
+
+    if args.smooth is not None:
+        law_sqp.SQP_SMOOTH = args.smooth
+    if args.coefficients is not None:
+        O.LAW_SQP_COEFFICIENTS = args.coefficients
 
     for solver in SOLVERS:  # imports and caches warm for both
         O.LAW_SOLVER = solver
@@ -97,14 +127,16 @@ def main() -> None:
     measure = single_blas_thread(lambda label, prof, task: one(label, prof, task, args.reference))
     for res in measured(args.seed, args.moves, measure):
         rows.append(res)
+        Path(args.output).write_text(json.dumps({"partial": True, "moves": rows}, indent=1))  # a run cut short keeps these
         label = res["profile"]
         gaps = (f"  gap sqp {res['gap_sqp'] * 100:+.3f} %  slsqp {res['gap_slsqp'] * 100:+.3f} %"
-                if args.reference else "")
+                if "t_ref" in res else "")
         print(f"{label:13s} default {res['cpu_default'] * 1e3:5.1f} ms  optimal: sqp {res['cpu_sqp'] * 1e3:6.1f} ms "
               f"(solve {res['solve_sqp'] * 1e3:5.1f})  slsqp {res['cpu_slsqp'] * 1e3:6.1f} ms (solve "
               f"{res['solve_slsqp'] * 1e3:6.1f})  T sqp {res['t_sqp']:.5f}  slsqp {res['t_slsqp']:.5f}  "
               f"ratio {res['ratio']:.5f}{gaps}  ok={res['ok_sqp']}/{res['ok_slsqp']}", flush=True)
     summary: dict = {"command": "python bench/bench_law_solver.py " + " ".join(sys.argv[1:]),
+                     "sqp_smooth": law_sqp.SQP_SMOOTH, "sqp_coefficients": O.LAW_SQP_COEFFICIENTS,
                      "load_average": list(os.getloadavg()), "per_profile": {}}
     for label in ["adept", *PROFILES]:
         rs = [r for r in rows if r["profile"] == label]
@@ -117,13 +149,13 @@ def main() -> None:
                  "ratio_median": statistics.median(r["ratio"] for r in rs),
                  "ratio_worst": max(r["ratio"] for r in rs), "ratio_best": min(r["ratio"] for r in rs),
                  "all_ok": all(r["ok_sqp"] and r["ok_slsqp"] for r in rs)}
-        if args.reference:
+        if all("t_ref" in r for r in rs):
             for s in SOLVERS:
                 entry[f"gap_{s}_worst"] = max(r[f"gap_{s}"] for r in rs)
                 entry[f"gap_{s}_median"] = statistics.median(r[f"gap_{s}"] for r in rs)
         summary["per_profile"][label] = entry
     summary["ratio_worst"] = max(r["ratio"] for r in rows)
-    if args.reference:
+    if all("t_ref" in r for r in rows):
         summary["gap_sqp_worst"] = max(r["gap_sqp"] for r in rows)
         summary["gap_slsqp_worst"] = max(r["gap_slsqp"] for r in rows)
     summary["moves"] = rows

@@ -32,13 +32,20 @@ def candidates(seed: int, moves: int) -> list[tuple[str, str, Task]]:
 
 def measured(seed: int, moves: int, measure: Callable[[str, object, Task], dict | None]) -> Iterator[dict]:
     """``measure(label, profile, move)`` on the Adept cycle and the first ``moves`` candidates of each profile it
-    answers (None: an unplannable move, skipped)."""
-    done: dict = {}
-    for label, name, task in candidates(seed, moves):
-        if label != "adept" and done.get(label, 0) >= moves:
-            continue
-        res = measure(label, _profile(name), task)
-        if res is None:
-            continue
-        done[label] = done.get(label, 0) + 1
-        yield res
+    answers (None: an unplannable move, skipped), the profiles in turn (a run cut short has measured each about
+    equally)."""
+    work = candidates(seed, moves)
+    yield from filter(None, [measure(*work[0][:1], _profile(work[0][1]), work[0][2])])
+    queues = {name: [w for w in work[1:] if w[0] == name] for name in PROFILES}
+    done = dict.fromkeys(PROFILES, 0)
+    while any(queues.values()):
+        for name in PROFILES:
+            while queues[name] and done[name] < moves:
+                label, prof_name, task = queues[name].pop(0)
+                res = measure(label, _profile(prof_name), task)
+                if res is not None:
+                    done[name] += 1
+                    yield res
+                    break
+            else:
+                queues[name] = []
