@@ -3,7 +3,7 @@ verdicts-only batch under ``--time limits`` and ``--time auto``), one plan()'s t
 Delta, bspline and ph, and the scara-600 move of bench/bench_default.py), and whether plan()'s durations and the
 engine's summaries are the same to the bit.
 
-    python bench/bench_before_after.py [--base main] [--moves 300] [--rounds 7] [--plans 40]
+    python bench/bench_before_after.py [--base main] [--moves 300] [--rounds 7] [--plans 40] [--optimal N]
 
 The base revision's ``pickplace_cli`` is written to a temporary folder (``git archive``); every round runs one fresh
 process per side, alternating (base, this, base, this, …) so that a drift of the machine's speed hits both alike;
@@ -29,7 +29,7 @@ CASES = [("delta-su2018", "bspline", (-0.1525, 0, -0.8), (0.1525, 0, -0.8)),
          ("scara-600", "bspline", (0.3, -0.2, -0.1), (0.3, 0.2, -0.1))]
 
 
-def worker(moves: int, plans: int) -> dict:
+def worker(moves: int, plans: int, optimal: int = 0) -> dict:
     """One side's numbers, in this process (the ``pickplace_cli`` first on sys.path)."""
     import hashlib
 
@@ -76,7 +76,43 @@ def worker(moves: int, plans: int) -> dict:
             t.append(time.perf_counter() - t0)
         out[f"plan_ms_{prof_name}/{method}"] = statistics.median(t) * 1e3
     out["durations"] = durations
+    if optimal:
+        _optimal(out, optimal)
     return out
+
+
+def _optimal(out: dict, repeat: int) -> None:
+    """``plan(time="optimal")`` on the Adept cycle and the first random move of each shipped profile
+    (``bench/moves.py``, seed 500): the median CPU time [ms] of ``repeat`` plans after a warm one, one BLAS thread,
+    and each duration (to the bit)."""
+    sys.path.append(str(ROOT))  # bench.moves and the tests' profiles; pickplace_cli stays the side's own
+    from bench.moves import candidates
+
+    from pickplace_cli import planner
+    from pickplace_cli.model.errors import PickplaceError
+    from pickplace_cli.model.threads import single_blas_thread
+    from tests.property.test_limit_truth import _profile
+
+    seen: set = set()
+    for label, name, task in candidates(500, 1):
+        if label in seen:
+            continue
+        prof = _profile(name)
+        try:
+            planner.plan(task, prof, planner.PlanOptions())
+        except PickplaceError:
+            continue
+        seen.add(label)
+        opts = planner.PlanOptions(time="optimal")
+        run = single_blas_thread(lambda: planner.plan(task, prof, opts))
+        res = run()
+        t = []
+        for _ in range(repeat):
+            c0 = time.process_time()
+            run()
+            t.append(time.process_time() - c0)
+        out[f"optimal_cpu_ms_{label}"] = statistics.median(t) * 1e3
+        out.setdefault("optimal_durations", {})[label] = res.duration.seconds.hex()
 
 
 def main() -> None:
@@ -85,10 +121,13 @@ def main() -> None:
     ap.add_argument("--moves", type=int, default=300)
     ap.add_argument("--rounds", type=int, default=7)
     ap.add_argument("--plans", type=int, default=40)
+    ap.add_argument("--optimal", type=int, default=0, metavar="N",
+                    help="also time plan(time='optimal') on the Adept cycle and one random move per shipped profile, "
+                         "N plans a round (CPU, one BLAS thread)")
     ap.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     a = ap.parse_args()
     if a.worker:
-        print(json.dumps(worker(a.moves, a.plans)))
+        print(json.dumps(worker(a.moves, a.plans, a.optimal)))
         return
     with tempfile.TemporaryDirectory() as tmp:
         arch = subprocess.run(["git", "-C", str(ROOT), "archive", a.base, "pickplace_cli", "profiles", "tables"], check=True,
@@ -100,18 +139,23 @@ def main() -> None:
             for side, path in sides.items():
                 env = dict(os.environ, PYTHONPATH=path)
                 got = subprocess.run([sys.executable, __file__, "--worker", "--moves", str(a.moves), "--plans",
-                                      str(a.plans)], env=env, check=True, capture_output=True, text=True, cwd=tmp)
+                                      str(a.plans), "--optimal", str(a.optimal)], env=env, check=True,
+                                     capture_output=True, text=True, cwd=tmp)
                 runs[side].append(json.loads(got.stdout.splitlines()[-1]))
     for side in sides:
         assert all(r["where"].startswith(sides[side]) for r in runs[side]), "a side imported the other's code"
-    keys = [k for k in runs["this"][0] if k.startswith(("verdicts_per_s", "plan_ms"))]
+    keys = [k for k in runs["this"][0] if k.startswith(("verdicts_per_s", "plan_ms", "optimal_cpu_ms"))]
     print(f"{a.base} against this checkout, medians of {a.rounds} rounds ({a.moves} moves, {a.plans} plans a round)")
     for k in keys:
         b, t = (statistics.median(r[k] for r in runs[s]) for s in ("base", "this"))
         print(f"  {k:<40} base {b:9.2f}   this {t:9.2f}   this/base {t / b:6.3f}")
-    for k in ("decided_limits", "decided_auto", "summaries_sha256", "durations"):
-        same = runs["base"][0][k] == runs["this"][0][k]
+    for k in ("decided_limits", "decided_auto", "summaries_sha256", "durations", "optimal_durations"):
+        same = runs["base"][0].get(k) == runs["this"][0].get(k)
         print(f"  {k:<40} {'the same' if same else 'DIFFERENT'}")
+    if "optimal_durations" in runs["this"][0] and "optimal_durations" in runs["base"][0]:
+        b, t = runs["base"][0]["optimal_durations"], runs["this"][0]["optimal_durations"]
+        rel = max(abs(float.fromhex(t[k]) / float.fromhex(b[k]) - 1.0) for k in t if k in b)
+        print(f"  {'optimal durations: largest relative change':<40} {rel:.2e}")
 
 
 if __name__ == "__main__":
