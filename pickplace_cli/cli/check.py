@@ -67,7 +67,7 @@ def check(
     difference, and at least 0.1 % of the peak, is its accuracy (the "± %" column); a limit counts as exceeded when the peak less its accuracy is
     beyond it, so a trajectory `plan` wrote as within its limits passes, and one 1 % faster fails. Known
     exception, on the safe side: positions alone (a cam-table or positions-only file) of a `--time optimal` law
-    at 1 kHz can read a torque-rate peak high across the law's jerk steps (up to 15 % measured), and are then refused.
+    at 1 kHz can read a torque-rate peak high across the law's jerk steps (up to 21 % measured), and are then refused.
 
     A file's tool derivative columns (vx … jz [m/s, m/s², m/s³]) are used only where they agree with its
     positions (velocity within 1 %, acceleration 10 % of their peak on every interval, jerk 5 % on the median

@@ -153,7 +153,7 @@ def plan(
     law_coefficients: str = typer.Option(
         "auto", "--law-coefficients", metavar="auto|N", help="With --time optimal: coefficients of the time law's "
         "quintic B-spline b(τ) [-], on uniform knots in the path parameter, solved by sequential quadratic programming "
-        "(without the daqp package: scipy's SLSQP on a cubic law, 20 coefficients refined to 40). auto: 40. N (8 ... 80): N coefficients. "
+        "(without the daqp package: scipy's SLSQP on a cubic law, 20 coefficients refined to 40). auto: 60 (SLSQP: 20 refined to 40). N (8 ... 80): N coefficients. "
         "More: closer to the continuous optimum, slower (Adept cycle, one core: about 25 ms at 20, 45 ms at 40, "
         "90 ms at 60, 150 ms at 80 for the law's solve).",
         rich_help_panel=Panel.METHOD,
