@@ -86,23 +86,12 @@ def _optimal(out: dict, repeat: int) -> None:
     (``bench/moves.py``, seed 500): the median CPU time [ms] of ``repeat`` plans after a warm one, one BLAS thread,
     and each duration (to the bit)."""
     sys.path.append(str(ROOT))  # bench.moves and the tests' profiles; pickplace_cli stays the side's own
-    from bench.moves import candidates
+    from bench.moves import first_moves
 
     from pickplace_cli import planner
-    from pickplace_cli.model.errors import PickplaceError
     from pickplace_cli.model.threads import single_blas_thread
-    from tests.property.test_limit_truth import _profile
 
-    seen: set = set()
-    for label, name, task in candidates(500, 1):
-        if label in seen:
-            continue
-        prof = _profile(name)
-        try:
-            planner.plan(task, prof, planner.PlanOptions())
-        except PickplaceError:
-            continue
-        seen.add(label)
+    for label, prof, task in first_moves():
         opts = planner.PlanOptions(time="optimal")
         run = single_blas_thread(lambda: planner.plan(task, prof, opts))
         res = run()

@@ -28,12 +28,10 @@ from pathlib import Path
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from bench.moves import candidates  # noqa: E402
-from pickplace_cli.model.errors import PickplaceError  # noqa: E402
+from bench.moves import first_moves  # noqa: E402
 from pickplace_cli.model.threads import single_blas_thread  # noqa: E402
 from pickplace_cli.planner import PlanOptions, plan  # noqa: E402
 from pickplace_cli.timing import bound, choose, optimal  # noqa: E402
-from tests.property.test_limit_truth import _profile  # noqa: E402
 
 SPENT: dict = {}
 INSIDE: list = []
@@ -67,16 +65,7 @@ def main() -> None:
     timed(optimal, "optimal_law", "law")
     stages = ("uniform fit", "torque bound", "law", "law fit", "rest")
     print(f"{'move':13s} {'default':>8s} {'optimal':>8s}  " + "  ".join(f"{s:>12s}" for s in stages) + "   [ms CPU]")
-    seen: set = set()
-    for label, name, task in candidates(500, 1):
-        if label in seen:
-            continue
-        prof = _profile(name)
-        try:
-            plan(task, prof, PlanOptions())
-        except PickplaceError:
-            continue
-        seen.add(label)
+    for label, prof, task in first_moves():
 
         @single_blas_thread
         def once(opts):

@@ -49,3 +49,21 @@ def measured(seed: int, moves: int, measure: Callable[[str, object, Task], dict 
                     break
             else:
                 queues[name] = []
+
+
+def first_moves(seed: int = 500) -> Iterator[tuple[str, object, Task]]:
+    """(label, profile, move): the Adept cycle, then the first candidate of each profile the default plan plans."""
+    from pickplace_cli.model.errors import PickplaceError
+    from pickplace_cli.planner import PlanOptions, plan
+
+    seen: set = set()
+    for label, name, task in candidates(seed, 1):
+        if label in seen:
+            continue
+        prof = _profile(name)
+        try:
+            plan(task, prof, PlanOptions())
+        except PickplaceError:
+            continue
+        seen.add(label)
+        yield label, prof, task

@@ -4,6 +4,7 @@ still runs. Shared by the signal, fault-injection and data-safety tests and by b
 from __future__ import annotations
 
 import os
+import time
 
 
 def procs(field: int, value: int) -> list[int]:
@@ -48,3 +49,18 @@ def kill_group(proc) -> None:
     except ProcessLookupError:
         pass
     proc.wait()
+
+
+def wait_started(proc, timeout: float = 120.0) -> None:
+    """Wait until the program runs its own code: numpy mapped into the process, which the program imports only after
+    its signal handlers are in place (a signal while the interpreter itself starts, before any of the program's
+    code, is Python's to handle, and a busy machine can take seconds to get there)."""
+    end = time.monotonic() + timeout
+    while time.monotonic() < end and proc.poll() is None:
+        try:
+            with open(f"/proc/{proc.pid}/maps") as fh:
+                if "numpy" in fh.read():
+                    return
+        except OSError:
+            return
+        time.sleep(0.02)

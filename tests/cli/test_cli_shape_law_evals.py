@@ -13,7 +13,7 @@ import time
 
 import pytest
 
-from tests.procs import group, kill_group
+from tests.procs import group, kill_group, wait_started
 from tests.terminal import stderr_on_terminal
 
 ADEPT = ["--from", "-0.1525,0,-0.8", "--to", "0.1525,0,-0.8"]
@@ -22,19 +22,6 @@ SEARCH = ["--optimize", "shape", "--time", "optimal"]
 
 def _cli(*args: str) -> list[str]:
     return [sys.executable, "-m", "pickplace_cli", *args]
-
-
-def _started(proc: subprocess.Popen, timeout: float = 120.0) -> None:
-    """Wait until the program runs its own code (numpy mapped: its signal handlers are in place by then)."""
-    end = time.monotonic() + timeout
-    while time.monotonic() < end and proc.poll() is None:
-        try:
-            with open(f"/proc/{proc.pid}/maps") as fh:
-                if "numpy" in fh.read():
-                    return
-        except OSError:
-            return
-        time.sleep(0.02)
 
 
 @pytest.mark.skipif(not os.path.isdir("/proc"), reason="reads the process table from /proc")
@@ -51,7 +38,7 @@ def test_a_signal_during_the_law_search_is_one_line(tmp_path, sig, code, line):
                             stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
                             cwd=tmp_path, start_new_session=True)
     try:
-        _started(proc)
+        wait_started(proc)
         time.sleep(1.5)
         assert proc.poll() is None
         os.killpg(proc.pid, sig)

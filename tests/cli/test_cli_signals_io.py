@@ -13,7 +13,7 @@ import time
 
 import pytest
 
-from tests.procs import alive, children, group, kill_group
+from tests.procs import alive, children, group, kill_group, wait_started
 
 HEADER = "from_x,from_y,from_z,to_x,to_y,to_z\n"
 ROW = "-0.1525,0,-0.8,0.1525,0,-0.8\n"
@@ -92,24 +92,9 @@ def _start_group(args: list[str], stdin: str | None, cwd, delay: float) -> subpr
     if stdin is not None:
         proc.stdin.write(stdin)
         proc.stdin.flush()
-    _wait_started(proc)
+    wait_started(proc)
     time.sleep(delay)
     return proc
-
-
-def _wait_started(proc: subprocess.Popen, timeout: float = 120.0) -> None:
-    """Wait until the program runs its own code: numpy mapped into the process, which the program imports only after
-    its signal handlers are in place (a signal while the interpreter itself starts, before any of the program's
-    code, is Python's to handle, and a busy machine can take seconds to get there)."""
-    end = time.monotonic() + timeout
-    while time.monotonic() < end and proc.poll() is None:
-        try:
-            with open(f"/proc/{proc.pid}/maps") as fh:
-                if "numpy" in fh.read():
-                    return
-        except OSError:
-            return
-        time.sleep(0.02)
 
 
 def _signal_the_group(proc, sig, code: int, line: str, out) -> None:
