@@ -380,6 +380,10 @@ def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions(), *,
         stop()
         duration, model, path, samples, report, rounding = _cycle_stage(options.cycle, profile, model, path, factory,
                                                                         duration, report)
+    if options.time == "optimal" and report.ok:  # the law as check reads its written samples
+        stop()
+        duration, samples, report, rounding = _written_stage(model, path, duration, samples, report, rounding, rate,
+                                                             options, profile)
     # the Cartesian capacity's rows always: judged when the rule holds it, else reported as not held
     report = report.with_rows(capacity_rows(path, duration.seconds, profile.capacity, capacity_not_held(options)))
     planned = _assemble(task, profile, path, duration, model, samples, report.rated(profile.limit_use))
@@ -406,6 +410,44 @@ def _cycle_stage(cycle: float, profile: Profile, model: MotionModel, path, facto
     if rounding.note:
         report = replace(report, notes=report.notes + (rounding.note,))
     return replace(duration, seconds=rounding.seconds), model, path, samples, report, rounding
+
+
+def _written_stage(model: MotionModel, path, duration: Duration, samples, report: LimitReport, rounding, rate: float,
+                   options: PlanOptions, profile: Profile):
+    """A time-optimal law slowed until ``check`` reads its written samples within every limit
+    (:func:`pickplace_cli.timing.written.hold_as_written`): the exact check runs again at the new duration, and a
+    reading that still exceeds a limit marks that row exceeded. → (duration, samples, report, rounding)."""
+    from .limits.report import LimitRow
+    from .timing.written import hold_as_written
+
+    cycle = options.cycle
+    dwell = rounding.dwell_s if rounding is not None else profile.planning.dwell
+
+    def outputs(s: _Samples, T: float) -> tuple:
+        n, P = len(s.t), s.parts
+        return s.t, np.column_stack([P.p[:n], P.v1[:n] / T, P.a1[:n] / T**2, P.j1[:n] / T**3]), P.q[:n]
+
+    def sample(T: float):
+        s = _sample(model, path, T, rate, cycle)
+        return s, outputs(s, T)
+
+    T0 = duration.seconds
+    w = hold_as_written(T0, (samples, outputs(samples, T0)), sample, profile, capacity_not_held(options), cycle, rate)
+    if w.k == 1.0:
+        return duration, samples, report, rounding
+    samples = w.state[0]
+    report = check_limits(model, w.T, parts=samples.parts, dwell=dwell, notes=report.notes + (w.note,))
+    read = {(r.joint, r.quantity): r for r in w.past}
+    if read:  # still past a limit as read: the plan says so, with the reading's peak
+        report = replace(report, rows=tuple(
+            LimitRow(r.joint, r.quantity, r.unit, read[k].peak, r.limit, read[k].peak / r.limit, read[k].t_peak,
+                     False, r.kind, r.bound, r.target, read[k].accuracy, r.not_held)
+            if (k := (r.joint, r.quantity)) in read else r for r in report.rows))
+    if rounding is not None:
+        cycles = int(round(w.T / cycle))
+        rounding = replace(rounding, cycles=cycles, extra_cycles=rounding.extra_cycles + cycles - rounding.cycles,
+                           note="; ".join(n for n in (rounding.note, w.note) if n))
+    return replace(duration, seconds=w.T, written_stretch=w.k, written=w.note), samples, report, rounding
 
 
 class _FinalCheck:

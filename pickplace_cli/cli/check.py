@@ -131,6 +131,10 @@ def check(
             _print_limit_table(rep)
         _print_verdict(rep, quiet, with_cycle=not several)
     code = max(c.report.exit_code() for c in checks)
+    bad = [r for c in checks for r in c.report.violations]
+    if hold_capacity and bad and all(r.quantity.startswith("capacity") for r in bad):
+        sys.stderr.write("pickplace: hint: only the Cartesian capacity is exceeded; a file planned with --time fit or "
+                         "optimal holds the joint and motor limits alone: check it with --no-hold-capacity\n")
     if strict and not code and any(c.report.unresolved for c in checks):
         code = 3
     if several and not quiet:

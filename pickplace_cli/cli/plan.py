@@ -40,6 +40,7 @@ from .plan_options import (
     _columns,
     _finite_latency,
     _law_coefficients,
+    _shape_law_evals,
     _method_params,
 )
 from .render import (
@@ -146,8 +147,8 @@ def plan(
     optimize: OptimizeWhat = typer.Option(
         OptimizeWhat.none, "--optimize", help="'shape' (--method bspline): also choose the path's k1, k2 and η "
         "(η within [0.1, 0.9]; give --eta to hold it) for the smallest duration on this robot's limits, instead of "
-        "the table's values (Li 2018's Cartesian optimum); with --time fit or optimal (the fit and the law are then "
-        "those of the chosen shape). The summary compares it with the table's shape. ~0.5-1 s more.",
+        "the table's values (Li 2018's Cartesian optimum); with --time limits (the default), fit or optimal (the "
+        "duration, the fit and the law are then those of the chosen shape). The summary compares it with the table's shape. ~0.5-1 s more.",
         rich_help_panel=Panel.METHOD,
     ),
     law_coefficients: str = typer.Option(
@@ -174,9 +175,10 @@ def plan(
         rich_help_panel=Panel.METHOD,
     ),
     shape_law_evals: int = typer.Option(
-        0, "--shape-law-evals", min=0, max=1000, help="With --optimize shape --time optimal: after the screened search, "
+        0, "--shape-law-evals", metavar="N", show_default=False, help="With --optimize shape --time optimal: after the screened search, "
         "COBYQA (scipy's model-based solver) over the shape family with the optimal law's duration [s] itself as the "
-        "objective, at most this many law solves (0-1000; each ~0.1 s CPU, ~0.5-3 s with the SLSQP solver). 30 bring "
+        "objective, at most this many law solves (0-1000, out of range: exit 1; each ~0.1 s CPU, ~0.5-3 s with the SLSQP "
+        "solver) after the 1-3 that judge the screened candidates; the summary's shape line counts both. 30 bring "
         "the Adept cycle from 1.016 to 1.011 × the free-path minimum time (capacity held: 1.021 to 1.013 ×). "
         "[default: 0, the screened search alone]",
         rich_help_panel=Panel.METHOD,
@@ -345,6 +347,7 @@ def plan(
     a = SimpleNamespace(**{k: v for k, v in locals().items() if k not in ("SimpleNamespace", "load_profile",
                                                                          "PlanOptions")})
     _JSON_ERRORS[0] = json_summary  # (a batch: its rows have their lines; an error that ends it gets one more)
+    a.shape_law_evals = shape_law_evals = _shape_law_evals(shape_law_evals)
     from .guards import output_format
 
     if rosbag2:

@@ -66,7 +66,9 @@ def _rosbag2_format(ctx, fmt, output):
 
 
 def _law_coefficients(text: str) -> int | None:
-    """--law-coefficients: None for auto, else an integer in 8 ... 80 (exit 2 otherwise)."""
+    """--law-coefficients: None for auto, else an integer in 8 ... 80 (TaskError, exit 1, otherwise)."""
+    from ..model.errors import TaskError
+
     if text.strip().lower() == "auto":
         return None
     try:
@@ -74,7 +76,18 @@ def _law_coefficients(text: str) -> int | None:
     except ValueError:
         n = None
     if n is None or not 8 <= n <= 80:
-        _usage(f"--law-coefficients = {text!r}: must be auto or a whole number in 8 ... 80")
+        raise TaskError(f"law_coefficients = {text!r}: must be auto or a whole number in 8 ... 80 (coefficients of "
+                        "the time law)")
+    return n
+
+
+def _shape_law_evals(n: int) -> int:
+    """--shape-law-evals (a whole number: typer refuses others, exit 2): in 0 ... 1000 (TaskError, exit 1, otherwise)."""
+    from ..model.errors import TaskError
+
+    if not 0 <= n <= 1000:
+        raise TaskError(f"shape_law_evals = {n}: must lie in 0 ... 1000 (law solves of the shape search; 0: the "
+                        "screened search alone)")
     return n
 
 

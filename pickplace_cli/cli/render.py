@@ -357,6 +357,8 @@ def _print_summary(result) -> None:
         f"peaks |v| = {s['peak_speed_m_s']:.4g} m/s, |a| = {s['peak_acceleration_m_s2']:.4g} m/s², "
         f"|j| = {s['peak_jerk_m_s3']:.4g} m/s³\n"
     )
+    if d.written:  # a time-optimal law slowed so that check reads its written samples within every limit
+        sys.stderr.write(d.written + "\n")
     if getattr(result, "cycle", None) is not None:  # the controller's cycle: what rounding did and cost
         sys.stderr.write(result.cycle.text() + "\n")
 

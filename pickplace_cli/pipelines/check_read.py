@@ -25,33 +25,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..model.errors import TaskError
+from ..limits.samples import (AGREE, ORDER_COLUMNS, Samples, derivative_problems,  # noqa: F401
+                              describe_problems)
 
 #: fewest samples a move needs: a quintic spline has 6 coefficients
 MIN_SAMPLES = 6
 #: the tool's motion this tool's CSV writes beside the joints (m, m/s, m/s², m/s³): with all of them, and the
 #: positions FK(q) within ``TOOL_TOL``, the motion between samples is the septic Hermite through them
 TOOL_COLUMNS = ("x", "y", "z", "vx", "vy", "vz", "ax", "ay", "az", "jx", "jy", "jz")
-
-@dataclass(frozen=True)
-class Samples:
-    """One move of a trajectory file: ``move`` its number in the file's move column (None: no such column),
-    ``t`` (N,) s and ``q`` (N, n) as in the file, ``lines`` (N,) the 1-based file line of every sample,
-    ``rest`` how many trailing samples at rest were set aside (see the module docstring) and ``last_line``
-    the file line of the move's last row (with them)."""
-
-    move: int | None
-    t: np.ndarray
-    q: np.ndarray
-    lines: np.ndarray
-    rest: int
-    last_line: int
-    #: (N, 12) the tool's x, y, z [m], vx … [m/s], ax … [m/s²], jx … [m/s³] when the file has all of them (this
-    #: tool's CSV does), else None
-    tool: np.ndarray | None = None
-
-    def where(self, source: str) -> str:
-        name = f"move {self.move}" if self.move is not None else "the trajectory"
-        return f"{source}: {name} (lines {int(self.lines[0])}–{self.last_line})"
 
 
 def _number(cell: str, name: str, source: str, line: int, column: str) -> float:
@@ -218,46 +199,6 @@ def read_trajectory(text: str, source: str, joint_names: tuple[str, ...]) -> tup
     return s.t - s.t[0], s.q
 
 
-
-
-#: the largest disagreement, per derivative order (1 velocity, 2 acceleration, 3 jerk), of a derivative column with
-#: the change over an interval of the column it is the derivative of, relative to the interval times the larger peak
-#: of the two: plan's files at 100 Hz to 4 kHz, every method, stay below 2.8e-3, 5.1e-2 and (median) 9.2e-3 (one
-#: time-optimal superposition law at 100 Hz: 0.27, judged from its positions); a column set to zero, left from another
-#: timing or in other units is off by 0.3 to 1
-AGREE = {1: 1e-2, 2: 1e-1, 3: 5e-2}
-#: names of the tool's derivative columns per order
-ORDER_COLUMNS = {1: "vx, vy, vz", 2: "ax, ay, az", 3: "jx, jy, jz"}
-
-
-def _interval_misfit(lo: np.ndarray, hi: np.ndarray, hi2: np.ndarray | None, h: np.ndarray) -> np.ndarray:
-    """Per interval: |Δlo − h·(hi₀ + hi₁)/2 − h²·(hi2₀ − hi2₁)/12| over h · the larger peak of |hi| and |Δlo/h|."""
-    pred = h * (hi[1:] + hi[:-1]) / 2
-    if hi2 is not None:
-        pred = pred + h * h * (hi2[:-1] - hi2[1:]) / 12
-    d = np.diff(lo, axis=0)
-    with np.errstate(over="ignore", invalid="ignore"):
-        scale = max(float(np.abs(hi).max()), float((np.abs(d) / h).max()), 1e-300)
-        out = np.abs(d - pred).max(axis=1) / (h[:, 0] * scale)
-    return np.where(np.isfinite(out), out, np.inf)
-
-
-def derivative_problems(t: np.ndarray, tool: np.ndarray) -> list[tuple[int, float]]:
-    """(order, misfit) of each of the tool's derivative columns (``tool`` (N, 12): x … jz) that does not agree with its
-    positions (module docstring); [] when all agree."""
-    t = np.asarray(t, float)
-    h = np.diff(t)[:, None]
-    p, v, a, j = tool[:, 0:3], tool[:, 3:6], tool[:, 6:9], tool[:, 9:12]
-    fits = {1: float(np.max(_interval_misfit(p, v, a, h))), 2: float(np.max(_interval_misfit(v, a, j, h))),
-            3: float(np.median(_interval_misfit(a, j, None, h)))}
-    return [(k, m) for k, m in fits.items() if not m <= AGREE[k]]
-
-
-def describe_problems(problems: list[tuple[int, float]]) -> str:
-    """One clause naming the columns that disagree and by how much."""
-    words = {1: "every interval", 2: "every interval", 3: "the median interval"}
-    return "; ".join(f"{ORDER_COLUMNS[k]} disagree with the positions by {100 * m:.3g} % of their peak on "
-                     f"{words[k]} (allowed {100 * AGREE[k]:g} %)" for k, m in problems)
 
 
 @dataclass(frozen=True)

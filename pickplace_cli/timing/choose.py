@@ -49,7 +49,8 @@ def choose_duration(
         if t_fit is None:
             raise TaskError(
                 "time = fit: the profile sets no velocity, acceleration, jerk or motor limit that depends on the "
-                "duration; add joint limits or drives, or use --time auto / seconds"
+                "duration; add joint limits or drives, hold the Cartesian capacity (--hold-capacity), or use --time "
+                "auto / seconds"
             )
         return Duration(t_fit, "fit", tv, ta, tj, fit_binding, t_fit)  # type: ignore[arg-type]
     return Duration(float(spec), "given", tv, ta, tj, "given", t_fit)
@@ -166,7 +167,8 @@ def choose_duration_for(
     if t_fit is None:
         raise TaskError(
             "time = fit: the profile sets no velocity, acceleration, jerk or motor limit that depends on the "
-            "duration; add joint limits or drives, or use --time auto / seconds"
+            "duration; add joint limits or drives, hold the Cartesian capacity (--hold-capacity), or use --time auto / "
+            "seconds"
         )
     # tv, ta, tj: the capacity bounds of the path planned for t_auto (so Duration.t_auto is the auto time)
     return Duration(t_fit, "fit", tv, ta, tj, fit_binding, t_fit), path

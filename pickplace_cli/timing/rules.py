@@ -31,6 +31,11 @@ class Duration:
         ``optimal``: what the optimiser said.
     t_bound : float or None
         ``optimal``: the lower bound under peak motor torque and speed alone [s].
+    written_stretch : float
+        ``optimal``: how much longer [-] the law was made so that ``check`` reads its written samples within every
+        limit (:mod:`pickplace_cli.timing.written`); 1 when it was not.
+    written : str
+        ``optimal``: what that reading did, for the user ("" when nothing).
 
     ``auto`` is Eq. (26) extended by jerk: T = max(v̂/[v], √(â/[a]), ∛(ĵ/[j])) where v̂, â, ĵ are the exact
     peaks of ‖d^k p/dτ^k‖ of the path with T = 1 (for a symmetric move v̂ = b·v_max etc.). ``binding`` names
@@ -50,6 +55,10 @@ class Duration:
     #: --time optimal: the lower bound of the path, its time-optimal traversal under peak motor torque and speed
     #: alone (:mod:`pickplace_cli.timing.bound`; None otherwise)
     t_bound: float | None = None
+    #: --time optimal: how much the law was slowed so that ``check`` reads its written samples within every limit
+    #: (:mod:`pickplace_cli.timing.written`; 1 when it was not) and what was done ("" then)
+    written_stretch: float = 1.0
+    written: str = ""
 
     @property
     def t_auto(self) -> float:
@@ -66,6 +75,7 @@ class Duration:
             "optimal_s": self.t_optimal,
             "time_law": self.law or "uniform",
             "torque_bound_s": self.t_bound,
+            "written_stretch": self.written_stretch,
         }
 
 

@@ -18,7 +18,7 @@ benchmark (``bench/bench_shape.py``) compares the result with a slower search.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -337,6 +337,7 @@ def judge_by_law(task, profile, found: ShapeResult, model_of, hold_capacity: boo
             cands.append(np.array([k1, k2, eta, 0.0, k1, k2, 0.5]))
             names.append(name)
     x = min(cands, key=law_time)
+    judged = len(seen)  # the candidates' solves, before the search's own
     if evals > 0:
         lo, hi = np.array([b[0] for b in bounds]), np.array([b[1] for b in bounds])
         res = minimize(law_time, np.clip(x, lo, hi), method="COBYQA", bounds=bounds,
@@ -344,11 +345,15 @@ def judge_by_law(task, profile, found: ShapeResult, model_of, hold_capacity: boo
                                 "final_tr_radius": LAW_POLISH_RADIUS[1]})
         if law_time(res.x) < law_time(x):
             x = res.x
+    solves = f"{len(seen)} law solves: {judged} of the candidates, {len(seen) - judged} of the search"
     if x is x0:
-        return found
+        if evals <= 0:
+            return found
+        return replace(found, evaluations=found.evaluations + len(seen),
+                       note=f"{found.note}; no shape judged faster by the optimal law itself ({solves})")
     k1, k2, eta, arch, k3, k4, mid = (float(v) for v in x)
     sym = (k3, k4, mid) == (k1, k2, 0.5)
     which = next((name for c, name in zip(cands, names) if x is c), "a shape")
     return ShapeResult(k1, k2, eta, found.t_screen, found.table, found.t_table_screen, found.evaluations + len(seen),
-                       f"{found.note}; {which} judged faster by the optimal law itself ({len(seen)} law solves)",
+                       f"{found.note}; {which} judged faster by the optimal law itself ({solves})",
                        arch * task.height, None if sym else k3, None if sym else k4, None if sym else mid)

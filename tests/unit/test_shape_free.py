@@ -152,11 +152,21 @@ def test_law_polished_placement_shape_against_the_free_path_minimum():
 
 @pytest.mark.parametrize("extra", [["--shape-law-evals", "5", "--time", "fit", "--optimize", "shape"],
                                    ["--shape-law-evals", "5", "--time", "optimal"],
-                                   ["--shape-law-evals", "-1", "--time", "optimal", "--optimize", "shape"]])
+                                   ["--shape-law-evals", "2.5", "--time", "optimal", "--optimize", "shape"]])
 def test_cli_shape_law_evals_usage_exit_2(extra):
     r = CliRunner().invoke(app, ["plan", "--from", "-0.1525,0,-0.8", "--to", "0.1525,0,-0.8"] + extra)
     assert r.exit_code == 2, r.output
     assert "shape-law-evals" in r.output and "Traceback" not in r.output
+
+
+@pytest.mark.parametrize("n", ["-1", "1001", "100000"])
+def test_cli_shape_law_evals_out_of_range_exit_1(n):
+    """An out-of-range count is invalid input (exit 1), one line naming the option, the value and the range, as
+    --rate 0 or --limit-use 2 are."""
+    r = CliRunner().invoke(app, ["plan", "--from", "-0.1525,0,-0.8", "--to", "0.1525,0,-0.8", "--optimize", "shape",
+                                 "--time", "optimal", "--shape-law-evals", n])
+    assert r.exit_code == 1, r.output
+    assert f"shape_law_evals = {n}: must lie in 0 ... 1000" in r.output and "Traceback" not in r.output
 
 
 def test_law_judged_search_against_the_free_path_minimum():

@@ -1,0 +1,130 @@
+"""The time-optimal law as its file is read: a law whose peaks ``check`` would read past a limit from the written samples
+is slowed until it reads within every one.
+
+A time-optimal law (:mod:`pickplace_cli.timing.optimal`) runs its torque rate at the limit to the last sample, and its
+jerk can change faster than a sample period where the law starts and stops (on the Adept cycle: from −7 300 m/s³ to 0
+in the last 0.3 ms). The exact check is right about the motion, but a file at 1 kHz does not resolve that change: the
+septic Hermite through its samples, which ``check`` reads it with (:mod:`pickplace_cli.limits.samples`), overshoots it
+by up to a few per cent, beyond the reading's stated accuracy, and ``check`` refused files that ``plan`` called ok.
+
+So ``plan --time optimal`` reads its own samples as the file holds them (12 significant digits, as the CSV writes
+them) through ``check``'s reconstruction, with the same capacity rule, and holds every peak read, less check's finest
+accuracy (``CHECK_RESOLUTION``, 0.1 %), to its limit: ``check`` states at least that accuracy and calls a row exceeded
+only when its peak less its accuracy is beyond the limit, so it accepts the file. While a peak reads past, every time
+of the law is stretched by ``k`` (the worst read utilisation's cube root first, a torque rate falling as 1/T³ but for
+its gravity share; its square root after, as for the drive's tables), up to ``RETIMES`` times, and the exact check
+runs again at the new duration. The law's shape is unchanged: only its duration grows (on a controller's cycle: to
+whole cycles).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Callable
+
+import numpy as np
+
+#: times the law may be slowed before its file counts as not holding (each step takes the worst reading's square
+#: root; 1.2 % covered the worst file measured)
+RETIMES = 6
+
+
+def written_values(x: np.ndarray) -> np.ndarray:
+    """``x`` as the CSV holds it: every number rounded to 12 significant digits (``%.12g``, read back)."""
+    from ..export.fastfloat import _rounded
+
+    x = np.asarray(x, float)
+    with np.errstate(all="ignore"):
+        r, hard = _rounded(x + 0.0, 0)
+    if hard.any():
+        r[hard] = [float("%.12g" % v) for v in x[hard]]
+    return r
+
+
+def read_as_written(t: np.ndarray, tool: np.ndarray, q: np.ndarray, profile, not_held: str):
+    """The limit report of ``check``'s reading of the samples at ``t`` (N,) s of the tool's x … jz (N, 12) [m, m/s,
+    m/s², m/s³] and the joint positions ``q`` (N, n) [rad or m] as this tool's CSV writes them (``profile`` at its
+    limit use; ``not_held``: why the Cartesian capacity is not held, "" when it is): the reconstruction from all the
+    samples (:func:`~pickplace_cli.limits.samples.check_samples` takes the same one), every row's peak against its
+    limit without the reading's accuracy — stricter than ``check``, which calls a row exceeded only when its peak
+    less that accuracy is beyond the limit."""
+    from ..limits.samples import _motion_report, derivative_problems
+    from ..robots import build_robot
+
+    data = written_values(np.column_stack([t, tool, q]))
+    t, tool, q = data[:, 0] - data[0, 0], data[:, 1:13], data[:, 13:]
+    robot = build_robot(profile.robot)
+    pos = robot.forward_kinematics(q)
+    if derivative_problems(t, tool):  # (never for this tool's own samples) check reads the positions alone then
+        tool = None
+    if getattr(robot, "rotary", False):
+        pos = np.column_stack([pos, robot.tool_angle(q)])
+    return _motion_report(t, pos, robot, profile, 0.0, "the written samples", None, tool, not_held=not_held)[0]
+
+
+def _past(read) -> list:
+    """[(row, how far past)] of the timed rows whose peak, less ``check``'s finest accuracy (``CHECK_RESOLUTION`` of
+    the peak), is beyond the allowed value: the rows ``check`` could call exceeded (how far: that reduced peak over the
+    allowed value, > 1)."""
+    from ..limits.samples import CHECK_RESOLUTION
+
+    out = []
+    for r in read.rows:
+        if r.kind == "limit" and r.bound == "upper" and not r.not_held and r.allowed > 0:
+            u = r.peak * (1.0 - CHECK_RESOLUTION) / r.allowed
+            if u > 1.0:
+                out.append((r, u))
+    return out
+
+
+@dataclass(frozen=True)
+class Written:
+    """What reading the written samples did: ``T`` [s] the duration they hold at (the planned one when ``k`` = 1),
+    ``k`` the stretch, ``state`` (whatever ``sample`` returned at ``T``), ``read`` the reading's LimitReport there,
+    ``note`` what was done ("" when nothing), ``past`` the rows of ``read`` still past their limit (:func:`_past`;
+    none when the file holds)."""
+
+    T: float
+    k: float
+    state: Any
+    read: Any
+    note: str
+    past: tuple = ()
+
+
+def hold_as_written(T0: float, state: Any, sample: Callable[[float], tuple[Any, tuple]], profile, not_held: str,
+                    cycle: float | None = None, rate: float | None = None) -> Written:
+    """Stretch the law at duration ``T0`` [s] until ``check`` reads its samples within every limit (module
+    docstring). ``state``: what ``sample`` returned at ``T0``; ``sample(T)`` → (state, (t, tool, q)) at duration T
+    (the written samples). ``cycle`` [s]: durations in whole cycles. ``rate`` [Hz]: named in the note."""
+    T, k = T0, 1.0
+    t, tool, q = state[1]
+    read = read_as_written(t, tool, q, profile, not_held)
+    first = None
+    for attempt in range(RETIMES):
+        failing = _past(read)
+        if not failing or any(r.kind != "limit" for r in read.violations):
+            break
+        worst = max(failing, key=lambda x: x[1])
+        if not attempt:
+            first = worst
+        # a torque rate falls as 1/T³ but for its gravity share (1/T): the cube root first, the square root after
+        k *= max(worst[1], 1.0 + 1e-4) ** (0.5 if attempt else 1.0 / 3.0) * (1.0 + 1e-4)
+        T = k * T0
+        if cycle is not None:
+            T = float(np.ceil(T / cycle - 1e-9) * cycle)
+            k = T / T0
+        state = sample(T)
+        t, tool, q = state[1]
+        read = read_as_written(t, tool, q, profile, not_held)
+    note = ""
+    past = tuple(r for r, _ in _past(read))
+    if first is not None:
+        at = f" at {rate:g} Hz" if rate else ""
+        held = "so that check reads them within every limit" if not past else \
+            "and check still reads them past a limit"
+        row, u = first
+        note = (f"written samples{at}: check's reading of them put {row.joint} {row.quantity} at "
+                f"{100 * row.peak / row.limit:.2f} % (the law changes faster than a sample period); the law is slowed "
+                f"× {k:.5f}, T {T0:.6g} → {T:.6g} s, {held}")
+    return Written(T, k, state, read, note, past)

@@ -1,0 +1,119 @@
+"""A time-optimal law is slowed until ``check`` reads its written samples within every limit
+(``pickplace_cli/timing/written.py``): what ``plan --time optimal`` calls ok, ``check`` accepts from its file.
+
+The Adept cycle with the capacity held, at the default 1 kHz: the law's jerk falls from ~7 300 m/s³ to 0 in the
+last 0.3 ms, and the septic Hermite through the 1 kHz samples read q1's torque rate at 100.2 % (accuracy 0.1 %)
+while the motion itself peaks at 99.99 %. Tested: the file as plan writes it is accepted; without the reading
+(``RETIMES`` = 0) the same file is refused (the test is not vacuous); the slowed motion holds its limits on an
+independent dense finite-difference sampling of the model; the slowing is small and said."""
+
+from __future__ import annotations
+
+import io
+
+import numpy as np
+import pytest
+
+from pickplace_cli.export.csv import write_csv
+from pickplace_cli.model.profile import load_profile
+from pickplace_cli.model.task import Task
+from pickplace_cli.pipelines.check import check_file
+from pickplace_cli.planner import PlanOptions, motion_model, plan
+from pickplace_cli.timing import written
+
+ADEPT = Task([-0.1525, 0.0, -0.8], [0.1525, 0.0, -0.8], height=0.025, eta=0.5)
+
+
+def test_written_values_are_the_csv_numbers():
+    """Every number as ``%.12g`` prints it and float() reads it back, over magnitudes from 1e-9 to 1e13, signs and
+    zero (exact: the same doubles)."""
+    rng = np.random.default_rng(7)
+    x = rng.standard_normal((400, 5)) * 10.0 ** rng.integers(-9, 13, (400, 5))
+    x[0, 0], x[1, 1], x[2, 2] = 0.0, -0.0, 0.5e-4
+    want = np.vectorize(lambda v: float("%.12g" % v))(x)
+    assert np.array_equal(written.written_values(x), want)
+
+
+def _read(tmp_path, pl, prof, hold: bool):
+    buf = io.StringIO()
+    write_csv(pl, buf)
+    f = tmp_path / "move.csv"
+    f.write_text(buf.getvalue())
+    return check_file(str(f), prof, hold_capacity=hold)[0].report
+
+
+def _adept(**kw):
+    prof = load_profile("delta-su2018")
+    return prof, plan(ADEPT, prof, PlanOptions(time="optimal", hold_capacity=True, **kw))
+
+
+def test_optimal_file_is_accepted_by_check(tmp_path):
+    prof, pl = _adept()
+    assert pl.report.ok
+    rep = _read(tmp_path, pl, prof, hold=True)
+    assert rep.ok, [(r.joint, r.quantity, r.peak, r.accuracy) for r in rep.violations]
+    d = pl.duration
+    # slowed, by little (the reading was 0.2 % high: the square root of that and a margin), and said so
+    assert 1.0 < d.written_stretch < 1.005
+    assert d.seconds == pytest.approx(d.t_optimal * d.written_stretch, rel=1e-12)
+    assert "check reads them within every limit" in d.written and "q1 motor torque rate" in d.written
+    assert pl.t[-1] == pytest.approx(d.seconds, rel=1e-12)
+
+
+def test_without_the_reading_the_same_file_is_refused(tmp_path, monkeypatch):
+    """The case is real: the law written at its own duration is refused by check (so the test above can fail)."""
+    monkeypatch.setattr(written, "RETIMES", 0)
+    prof, pl = _adept()
+    assert pl.report.ok and pl.duration.written_stretch == 1.0
+    rep = _read(tmp_path, pl, prof, hold=True)
+    assert not rep.ok, ("check now accepts the unslowed law's 1 kHz file: the reading no longer needs the slowing "
+                        "on this move; pick another move for this test")
+
+
+def test_slowed_law_holds_on_a_dense_finite_difference(tmp_path):
+    """Independent of the exact check's peak search: the motor torque on 200 001 uniform points of the model at the
+    plan's duration, its rate by central differences (error ~h²·τ⁽³⁾ ≈ 1e-6 relative here), within every motor's
+    torque-rate limit to 1e-4 relative (the plan's peak sits at the limit to 1e-7)."""
+    prof, pl = _adept()
+    T = pl.duration.seconds
+    model = motion_model(pl.cartesian.path, prof)
+    tau = np.linspace(0.0, 1.0, 200_001)
+    parts = model.parts(tau)
+    tm = parts.Am / T**2 + parts.Gm  # (N, 3) N·m
+    rate = np.gradient(tm, tau * T, axis=0)
+    rows = {r.joint: r.limit * r.target for r in pl.report.rows if r.quantity == "motor torque rate"}
+    lim = np.array([rows[name] for name in pl.joint.names])
+    assert np.all(np.abs(rate).max(axis=0) <= lim * (1 + 1e-4)), (np.abs(rate).max(axis=0), lim)
+
+
+def test_on_a_cycle_the_slowed_law_is_whole_cycles(tmp_path):
+    """With --cycle the slowed duration stays a whole number of cycles, and check accepts the file."""
+    prof, pl = _adept(cycle=0.001)
+    n = pl.duration.seconds / 0.001
+    assert abs(n - round(n)) < 1e-9
+    assert _read(tmp_path, pl, prof, hold=True).ok
+
+
+def test_cli_plan_then_check_and_the_capacity_hint(tmp_path):
+    """From the shell: plan --time optimal writes the file and says it slowed the law; check accepts it with
+    --no-hold-capacity (the rule's own capacity setting); without it only the capacity is exceeded, and check says
+    which option reads the file as planned."""
+    from typer.testing import CliRunner
+
+    from pickplace_cli.cli import app
+
+    out = tmp_path / "opt.csv"
+    runner = CliRunner()
+    r = runner.invoke(app, ["plan", "--from", "-0.1525,0,-0.8", "--to", "0.1525,0,-0.8", "--time", "optimal",
+                            "--hold-capacity", "-o", str(out)])
+    assert r.exit_code == 0, r.stderr
+    assert "written samples at 1000 Hz: check's reading of them put q1 motor torque rate" in r.stderr
+    r = runner.invoke(app, ["check", str(out), "-q"])
+    assert r.exit_code == 0, r.stderr
+    r = runner.invoke(app, ["plan", "--from", "-0.1525,0,-0.8", "--to", "0.1525,0,-0.8", "--time", "optimal", "-q",
+                            "-o", str(out)])
+    assert r.exit_code == 0, r.stderr
+    r = runner.invoke(app, ["check", str(out), "-q"])
+    assert r.exit_code == 3 and "hint: only the Cartesian capacity is exceeded" in r.stderr
+    r = runner.invoke(app, ["check", str(out), "-q", "--no-hold-capacity"])
+    assert r.exit_code == 0 and "hint" not in r.stderr
