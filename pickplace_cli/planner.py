@@ -67,6 +67,10 @@ class PlanOptions:
         A rotary fourth axis: the way round to the end angle (``shortest``, ``ccw``, ``cw``, ``as-given``).
     turn_during : str
         When the tool turns: ``transfer`` (lift-off to set-down) or ``whole`` (the whole move).
+    read_written : bool
+        ``optimal``: read the samples as a CSV holds them through ``check``'s reconstruction, and slow the law until
+        ``check`` reads them within every limit (:mod:`pickplace_cli.timing.written`); False when the samples are
+        not written as a trajectory (a drive's table is judged as the drive interpolates it instead).
     """
 
     method: Method | str = Method.bspline
@@ -89,6 +93,7 @@ class PlanOptions:
     # (:func:`holds_capacity`); a caller that chose the duration itself (a conveyor rendezvous) says
     turn: str = "shortest"  # a rotary fourth axis: the way round to the task's end angle (curves.rotation.TurnRule)
     turn_during: str = "transfer"  # … and when the tool turns: between lift-off and set-down, or the whole move
+    read_written: bool = True  # optimal: the written samples read as check reads them (timing/written.py)
 
 
 def holds_capacity(options: PlanOptions) -> bool:
@@ -380,7 +385,7 @@ def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions(), *,
         stop()
         duration, model, path, samples, report, rounding = _cycle_stage(options.cycle, profile, model, path, factory,
                                                                         duration, report)
-    if options.time == "optimal" and report.ok:  # the law as check reads its written samples
+    if options.time == "optimal" and options.read_written and report.ok:  # the law as check reads its samples
         stop()
         duration, samples, report, rounding = _written_stage(model, path, duration, samples, report, rounding, rate,
                                                              options, profile)

@@ -375,7 +375,7 @@ def plan(
     check_option_units(a, prof)  # --from/--to/--height in mm refused, --time in ms warned (cli/units.py)
     params = _method_params(a)
     from ..export.drive import drive_map
-    from .controller import check_cycle_usage, resolve_cycle
+    from .controller import check_cycle_usage, resolve_cycle, table_format
 
     a.cycle_s = resolve_cycle(cycle, rate, prof)
     check_cycle_usage(a, a.cycle_s, fmt)
@@ -386,7 +386,8 @@ def plan(
                           fit=a.time == "fit" or show_fit, shape=a.optimize == OptimizeWhat.shape,
                           hold_eta=eta is not None, hold_capacity=hold_capacity, shape_law_evals=shape_law_evals,
                           law_coefficients=_law_coefficients(law_coefficients), limit_use=limit_use,
-                          cycle=a.cycle_s, turn=turn.value, turn_during=turn_during.value)
+                          cycle=a.cycle_s, turn=turn.value, turn_during=turn_during.value,
+                          read_written=not (table_format(fmt) and a.output is not None))
     if batch is not None:
         from .guards import cap_workers
 
