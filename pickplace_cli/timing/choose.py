@@ -203,10 +203,16 @@ def choose_optimal(path: CartesianPath, profile, model, dwell: float, model_of,
     fitted, why, refined = [], "", ""
     for cand in (law,) if law.first is None else (law, law.first):
         try:
-            fitted.append((*fit_duration(model_of(cand.path), dwell, start=max(cand.t_estimate, 1e-3), margin=3e-5,
-                                         check=check), cand))
+            t_cand, b_cand = fit_duration(model_of(cand.path), dwell, start=max(cand.t_estimate, 1e-3), margin=3e-5,
+                                          check=check)
         except PickplaceError as exc:  # this law's composed path cannot be fitted
             why = why or f" ({exc})"
+            continue
+        if t_cand is None and hold_capacity:  # no timed joint or motor limit: the capacity alone times the law
+            tv, ta, tj, cap = auto_duration(cand.path, profile.capacity)
+            t_cand, b_cand = max(tv, ta, tj or 0.0), f"capacity {cap}"
+        if t_cand is not None:
+            fitted.append((t_cand, b_cand, cand))
     t_opt = binding = None
     if fitted:
         t_opt, binding, best = min(fitted, key=lambda f: f[0])

@@ -127,13 +127,14 @@ REF_MOTORS, REF_CAPACITY = 0.10296385452799534, 0.12888472924248914
 
 def test_shipped_search_against_the_free_path_minimum():
     """``--optimize shape --time optimal``: every limit held, never below the free-path minimum (a plan faster than
-    it would mean a limit mis-evaluated), and within 3 % of it (measured 1.027 × motors alone, 1.028 × with the
-    capacity: the 1 % aim is not reached by the shipped search; bench/bench_shape_limit.py)."""
+    it would mean a limit mis-evaluated), and within 3 % of it (measured 1.016 × motors alone, 1.021 × with the
+    capacity: the 1 % aim is not reached by the shipped search; bench/bench_shape_limit.py). The law's own duration
+    (the written 1 kHz file's may be a little longer: timing/written.py)."""
     prof = load_profile("delta-su2018")
     for capacity, ref in ((False, REF_MOTORS), (True, REF_CAPACITY)):
         got = plan(ADEPT, prof, PlanOptions(time="optimal", shape=True, hold_capacity=capacity))
         assert got.report.ok
-        assert 0.995 * ref <= got.duration.seconds <= 1.03 * ref, (capacity, got.duration.seconds / ref)
+        assert 0.995 * ref <= got.duration.t_optimal <= 1.03 * ref, (capacity, got.duration.t_optimal / ref)
 
 
 def test_law_polished_placement_shape_against_the_free_path_minimum():
@@ -147,7 +148,7 @@ def test_law_polished_placement_shape_against_the_free_path_minimum():
               "eta_down": 0.10000000000000003, "mid_x": 0.5096538468051957}
     got = plan(task, prof, PlanOptions(time="optimal", method_params=params))
     assert got.report.ok
-    assert REF_MOTORS <= got.duration.seconds <= 1.016 * REF_MOTORS, got.duration.seconds / REF_MOTORS
+    assert REF_MOTORS <= got.duration.t_optimal <= 1.016 * REF_MOTORS, got.duration.t_optimal / REF_MOTORS
 
 
 @pytest.mark.parametrize("extra", [["--shape-law-evals", "5", "--time", "fit", "--optimize", "shape"],
@@ -178,7 +179,11 @@ def test_law_judged_search_against_the_free_path_minimum():
     base = plan(ADEPT, prof, PlanOptions(time="optimal", shape=True))
     got = plan(ADEPT, prof, PlanOptions(time="optimal", shape=True, shape_law_evals=30))
     assert got.report.ok
-    assert REF_MOTORS <= got.duration.seconds <= base.duration.seconds * (1 + 1e-9)
-    assert got.duration.seconds <= 1.015 * REF_MOTORS, got.duration.seconds / REF_MOTORS
-    print("ratio", got.duration.seconds / REF_MOTORS, got.parameters["shape"]["note"])
+    # the search ranks laws by their own duration (t_optimal); the written samples may slow the law a little more
+    # so that check reads its 1 kHz file within every limit (timing/written.py: × 1.005 here)
+    assert REF_MOTORS <= got.duration.t_optimal <= base.duration.t_optimal * (1 + 1e-9)
+    assert got.duration.t_optimal <= 1.015 * REF_MOTORS, got.duration.t_optimal / REF_MOTORS
+    assert got.duration.seconds == pytest.approx(got.duration.t_optimal * got.duration.written_stretch, rel=1e-12)
+    assert 1.0 <= got.duration.written_stretch <= 1.01
+    print("ratio", got.duration.t_optimal / REF_MOTORS, got.parameters["shape"]["note"])
     assert "law solves" in got.parameters["shape"]["note"]

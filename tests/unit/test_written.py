@@ -117,3 +117,23 @@ def test_cli_plan_then_check_and_the_capacity_hint(tmp_path):
     assert r.exit_code == 3 and "hint: only the Cartesian capacity is exceeded" in r.stderr
     r = runner.invoke(app, ["check", str(out), "-q", "--no-hold-capacity"])
     assert r.exit_code == 0 and "hint" not in r.stderr
+
+
+def test_optimal_on_the_capacity_alone():
+    """A profile without a timed joint or motor limit (the shipped gantry: no drives) under ``--time optimal
+    --hold-capacity``: the law is timed by the capacity alone (it fell back to uniform scaling before), faster than
+    Eq. 26's uniform law, and holds |v| ≤ [v], |a| ≤ [a] on 100 001 points of the composed path, its velocity and
+    acceleration taken by finite differences of its positions (independent of the path's analytic derivatives;
+    error ~h²·p⁽³⁾/6 ≈ 1e-6 relative), to 1e-3 relative."""
+    prof = load_profile("gantry")
+    pl = plan(Task([-0.3, 0.0, -0.5], [0.3, 0.2, -0.5], height=0.025, eta=0.5), prof,
+              PlanOptions(time="optimal", hold_capacity=True))
+    d = pl.duration
+    assert pl.report.ok and d.law != "uniform (fallback)" and d.seconds < 0.9 * d.t_auto
+    t = np.linspace(0.0, d.seconds, 100_001)
+    p = pl.cartesian(t)
+    v = np.gradient(p, t, axis=0)
+    a = np.gradient(v, t, axis=0)
+    cap = prof.capacity
+    assert np.linalg.norm(v, axis=1).max() <= cap.velocity * (1 + 1e-3)
+    assert np.linalg.norm(a[2:-2], axis=1).max() <= cap.acceleration * (1 + 1e-3)
