@@ -11,6 +11,8 @@ Stages (each timed where ``choose_optimal`` calls it; nested times are not count
 * ``law``: the time law's solve (``timing.optimal.optimal_law``: model terms on the grids, the SQP's rounds, the
   composition of the law with the path);
 * ``law fit``: the composed path's fitted duration and its exact check (``fit_duration`` on the composed law);
+* ``written``: the written samples read as ``check`` reads them, and the law slowed until they hold
+  (``timing.written.hold_as_written``);
 * ``rest``: the plan's other stages (path, samples, the final report).
 
 Not a test: timings depend on the machine and on what else runs on it.
@@ -31,7 +33,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from bench.moves import first_moves  # noqa: E402
 from pickplace_cli.model.threads import single_blas_thread  # noqa: E402
 from pickplace_cli.planner import PlanOptions, plan  # noqa: E402
-from pickplace_cli.timing import bound, choose, optimal  # noqa: E402
+from pickplace_cli.timing import bound, choose, optimal, written  # noqa: E402
 
 SPENT: dict = {}
 INSIDE: list = []
@@ -63,7 +65,8 @@ def main() -> None:
     timed(choose, "fit_duration", "law fit")
     timed(bound, "torque_bound", "torque bound")
     timed(optimal, "optimal_law", "law")
-    stages = ("uniform fit", "torque bound", "law", "law fit", "rest")
+    timed(written, "hold_as_written", "written")
+    stages = ("uniform fit", "torque bound", "law", "law fit", "written", "rest")
     print(f"{'move':13s} {'default':>8s} {'optimal':>8s}  " + "  ".join(f"{s:>12s}" for s in stages) + "   [ms CPU]")
     for label, prof, task in first_moves():
 

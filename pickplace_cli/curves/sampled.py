@@ -148,11 +148,11 @@ def hermite(t: np.ndarray, p: np.ndarray, v: np.ndarray, a: np.ndarray, j: np.nd
     (its jump |j(k+1) − j(k)| more than ``STEP_RATIO`` times its neighbours' and the median's: a smooth motion's
     jumps vary slowly, ~h·snap) is not interpolated across the step: its two sides are the cubics of the samples'
     own jerk, from each end, joined where their accelerations meet (the motion is C² across the step)."""
-    from scipy.interpolate import BPoly, PPoly
+    from scipy.interpolate import PPoly
 
     t = np.asarray(t, float)
     data = np.stack([p, v, a, j], axis=1)  # (N, 4, d)
-    pp = PPoly.from_bernstein_basis(BPoly.from_derivatives(t, data))
+    pp = PPoly(septic_coefficients(t, data), t)
     n = len(t)
     dj = np.linalg.norm(np.diff(np.asarray(j, float), axis=0), axis=1)  # (N − 1,)
     if n < 4:
@@ -182,6 +182,32 @@ def hermite(t: np.ndarray, p: np.ndarray, v: np.ndarray, a: np.ndarray, j: np.nd
         cuts.append(t[k] + s)
     split = PPoly(np.stack(cols, axis=1), np.array(x))
     return (lambda xx, nu=0: split(np.asarray(xx, float), nu)), np.array(sorted(cuts))
+
+
+#: the septic's coefficients d4 … d7 of u⁴ … u⁷ (u = (t − t_k)/h on one interval) from what the end conditions at u = 1
+#: leave: rows Σ d_k, Σ k·d_k, Σ k(k−1)·d_k, Σ k(k−1)(k−2)·d_k over k = 4 … 7
+_SEPTIC_END = np.linalg.inv(np.array([[1.0, 1.0, 1.0, 1.0], [4.0, 5.0, 6.0, 7.0], [12.0, 20.0, 30.0, 42.0],
+                                      [24.0, 60.0, 120.0, 210.0]]))
+#: the same sums over k = 0 … 3 (what d0 … d3, fixed by the left end, contribute)
+_SEPTIC_START = np.array([[1.0, 1.0, 1.0, 1.0], [0.0, 1.0, 2.0, 3.0], [0.0, 0.0, 2.0, 6.0], [0.0, 0.0, 0.0, 6.0]])
+
+
+def septic_coefficients(t: np.ndarray, data: np.ndarray) -> np.ndarray:
+    """The septic Hermite interpolant through positions, velocities, accelerations and jerks ``data`` (N, 4, d) at
+    ``t`` (N,), as :class:`scipy.interpolate.PPoly` coefficients (8, N − 1, d): powers of (t − t_k), highest first.
+    The same polynomial as ``BPoly.from_derivatives`` (unique: 8 conditions, degree 7), solved on every interval at
+    once: on u = (t − t_k)/h the left end fixes d0 … d3 (p, h·v, h²·a/2, h³·j/6), and the right end's four
+    conditions a constant 4 × 4 system for d4 … d7."""
+    t = np.asarray(t, float)
+    h = np.diff(t)[:, None]  # (N − 1, 1)
+    lo, hi = data[:-1], data[1:]  # (N − 1, 4, d)
+    scale = np.stack([np.ones_like(h), h, h * h, h**3], axis=1)  # (N − 1, 4, 1): h^order
+    d03 = lo * scale / np.array([1.0, 1.0, 2.0, 6.0])[None, :, None]
+    rhs = hi * scale - np.einsum("rk,nkd->nrd", _SEPTIC_START, d03)
+    d47 = np.einsum("kr,nrd->nkd", _SEPTIC_END, rhs)
+    d = np.concatenate([d03, d47], axis=1)  # (N − 1, 8, d): powers u⁰ … u⁷
+    c = d / h[:, :, None] ** np.arange(8)[None, :, None]
+    return np.ascontiguousarray(c[:, ::-1].transpose(1, 0, 2))
 
 
 def _overshooting(pp, t: np.ndarray, j: np.ndarray) -> np.ndarray:
