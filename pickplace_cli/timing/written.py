@@ -126,5 +126,6 @@ def hold_as_written(T0: float, state: Any, sample: Callable[[float], tuple[Any, 
         row, u = first
         note = (f"written samples{at}: check's reading of them put {row.joint} {row.quantity} at "
                 f"{100 * row.peak / row.limit:.2f} % (the law changes faster than a sample period); the law is slowed "
-                f"× {k:.5f}, T {T0:.6g} → {T:.6g} s, {held}")
+                f"× {k:.5f}, T {T0:.6g} → {T:.6g} s, {held}"
+                + ("; a faster --rate, or a drive's table (-f pvt, cam), needs less" if k > 1.01 else ""))
     return Written(T, k, state, read, note, past)
