@@ -450,8 +450,10 @@ def _written_stage(model: MotionModel, path, duration: Duration, samples, report
             if (k := (r.joint, r.quantity)) in read else r for r in report.rows))
     if rounding is not None:
         cycles = int(round(w.T / cycle))
-        rounding = replace(rounding, cycles=cycles, extra_cycles=rounding.extra_cycles + cycles - rounding.cycles,
-                           note="; ".join(n for n in (rounding.note, w.note) if n))
+        added = cycles - rounding.cycles
+        said = f"{added} more cycle(s) so that check reads the written samples within every limit"
+        rounding = replace(rounding, cycles=cycles, extra_cycles=rounding.extra_cycles + added,
+                           note="; ".join(n for n in (rounding.note, said) if n))
     return replace(duration, seconds=w.T, written_stretch=w.k, written=w.note), samples, report, rounding
 
 

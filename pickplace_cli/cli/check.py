@@ -65,7 +65,8 @@ def check(
     same dynamics and limit check as `plan`. Joint positions are checked as given (q1 = 5 rad is 5 rad, not
     wrapped). Every duration-dependent peak is estimated twice, from all samples and from every other one: the
     difference, and at least 0.1 % of the peak, is its accuracy (the "± %" column); a limit counts as exceeded when the peak less its accuracy is
-    beyond it, so a trajectory `plan` wrote as within its limits passes, and one 1 % faster fails. Known
+    beyond it, so a trajectory `plan` wrote as within its limits passes (`plan --time optimal` reads its own samples
+    this way and slows the law until they pass), and one 1 % faster fails. Known
     exception, on the safe side: positions alone (a cam-table or positions-only file) of a `--time optimal` law
     at 1 kHz can read a torque-rate peak high across the law's jerk steps (up to 21 % measured), and are then refused.
 

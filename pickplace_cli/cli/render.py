@@ -224,9 +224,15 @@ def _print_limit_table(report) -> None:
             if r.ok and not r.resolved:
                 mark = "[yellow]unresolved[/]"
         table.add_row(*cells, "" if r.t_peak is None else f"{r.t_peak:.4f}", mark)
-    # a terminal wraps at its width; a pipe or log file gets whole rows (rich would assume 80 columns)
-    width = None if sys.stderr.isatty() else 200
-    console(stderr=True, highlight=False, soft_wrap=True, width=width).print(table)
+    # a terminal wraps at its width; a pipe or log file gets whole rows (rich would assume 80 columns), without the
+    # padding rich leaves after the last cell
+    if sys.stderr.isatty():
+        console(stderr=True, highlight=False, soft_wrap=True).print(table)
+        return
+    out = console(stderr=True, highlight=False, soft_wrap=True, width=200)
+    with out.capture() as captured:
+        out.print(table)
+    sys.stderr.write("".join(line.rstrip() + "\n" for line in captured.get().splitlines()))
 
 
 def _print_verdict(report, quiet: bool, with_cycle: bool = True) -> None:

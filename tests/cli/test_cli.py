@@ -296,3 +296,16 @@ def test_a_verdict_says_when_nothing_timed_was_checked():
     assert r.exit_code == 0 and "binding: capacity acceleration" in r.stderr
     r = run("plan", *ADEPT, "-o", "-")
     assert "verdict: all limits hold; cycle" in r.stderr
+
+
+def test_piped_limit_table_has_no_trailing_spaces(tmp_path):
+    """A pipe or log gets whole rows (no wrap at 80 columns) and no padding after the last cell, from plan and from
+    check, also when a row's verdict column is wide (a capacity not held)."""
+    out = tmp_path / "t.csv"
+    r = run("plan", *ADEPT, "--time", "fit", "-o", str(out))
+    assert r.exit_code == 0
+    rows = [ln for ln in r.stderr.splitlines() if ln.startswith(("q1 ", "tool "))]
+    assert len(rows) >= 5 and all(ln == ln.rstrip() for ln in r.stderr.splitlines())
+    assert any(ln.endswith("(not held: --time fit)") for ln in rows)
+    r = run("check", str(out), "--no-hold-capacity")
+    assert r.exit_code == 0 and all(ln == ln.rstrip() for ln in r.stderr.splitlines())
