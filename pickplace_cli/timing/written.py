@@ -24,8 +24,8 @@ from typing import Any, Callable
 
 import numpy as np
 
-#: times the law may be slowed before its file counts as not holding (each step takes the worst reading's square
-#: root; 1.2 % covered the worst file measured)
+#: times the law may be slowed before its file counts as not holding (the first step the worst reading's cube root,
+#: the others its square root; two readings covered every file measured, 100 Hz to 10 kHz)
 RETIMES = 6
 
 
@@ -45,9 +45,9 @@ def read_as_written(t: np.ndarray, tool: np.ndarray, q: np.ndarray, profile, not
     """The limit report of ``check``'s reading of the samples at ``t`` (N,) s of the tool's x … jz (N, 12) [m, m/s,
     m/s², m/s³] and the joint positions ``q`` (N, n) [rad or m] as this tool's CSV writes them (``profile`` at its
     limit use; ``not_held``: why the Cartesian capacity is not held, "" when it is): the reconstruction from all the
-    samples (:func:`~pickplace_cli.limits.samples.check_samples` takes the same one), every row's peak against its
-    limit without the reading's accuracy — stricter than ``check``, which calls a row exceeded only when its peak
-    less that accuracy is beyond the limit."""
+    samples, the one :func:`~pickplace_cli.limits.samples.check_samples` takes (which then also reads every other
+    sample for the peaks' accuracy): its rows' peaks as read, their ``ok`` without any accuracy
+    (:func:`hold_as_written` allows check's finest, ``CHECK_RESOLUTION``)."""
     from ..limits.samples import _motion_report, derivative_problems
     from ..robots import build_robot
 
