@@ -376,7 +376,7 @@ def plan(
     check_option_units(a, prof)  # --from/--to/--height in mm refused, --time in ms warned (cli/units.py)
     params = _method_params(a)
     from ..export.drive import drive_map
-    from .controller import check_cycle_usage, resolve_cycle, table_format
+    from .controller import check_cycle_usage, resolve_cycle
 
     a.cycle_s = resolve_cycle(cycle, rate, prof)
     check_cycle_usage(a, a.cycle_s, fmt)
@@ -388,7 +388,7 @@ def plan(
                           hold_eta=eta is not None, hold_capacity=hold_capacity, shape_law_evals=shape_law_evals,
                           law_coefficients=_law_coefficients(law_coefficients), limit_use=limit_use,
                           cycle=a.cycle_s, turn=turn.value, turn_during=turn_during.value,
-                          read_written=not (table_format(fmt) and a.output is not None))
+                          read_written=_read_written(a, fmt, columns, prof))
     if batch is not None:
         from .guards import cap_workers
 
@@ -565,6 +565,24 @@ def _write_plan_outputs(a, prof, writer, legs: list, track, code: int) -> int:
         samples = legs[0]
     writer(samples, a.output)
     return code
+
+
+def _read_written(a, fmt, columns, prof) -> str:
+    """PlanOptions.read_written: how check will read the file: "" for a drive's table (judged as the drive
+    interpolates it), "positions" when the written columns lack the tool's x … jz (``--columns``), else "tool"."""
+    from .controller import table_format
+
+    if table_format(fmt) and a.output is not None:
+        return ""
+    if columns is None:
+        return "tool"
+    from ..export.drive import expand_columns
+    from ..pipelines.check_read import TOOL_COLUMNS
+    from ..planner import motion_model_static
+
+    robot = motion_model_static(prof)[0]
+    named = expand_columns(_columns(columns, prof, a.drive), a.drive, len(robot.joint_units))
+    return "tool" if set(TOOL_COLUMNS) <= {c.split("[")[0] for c in named} else "positions"
 
 
 def _written_times(a, prof, legs: list, track):

@@ -41,13 +41,15 @@ def written_values(x: np.ndarray) -> np.ndarray:
     return r
 
 
-def read_as_written(t: np.ndarray, tool: np.ndarray, q: np.ndarray, profile, not_held: str):
+def read_as_written(t: np.ndarray, tool: np.ndarray, q: np.ndarray, profile, not_held: str,
+                    positions_only: bool = False):
     """The limit report of ``check``'s reading of the samples at ``t`` (N,) s of the tool's x … jz (N, 12) [m, m/s,
     m/s², m/s³] and the joint positions ``q`` (N, n) [rad or m] as this tool's CSV writes them (``profile`` at its
     limit use; ``not_held``: why the Cartesian capacity is not held, "" when it is): the reconstruction from all the
     samples, the one :func:`~pickplace_cli.limits.samples.check_samples` takes (which then also reads every other
     sample for the peaks' accuracy): its rows' peaks as read, their ``ok`` without any accuracy
-    (:func:`hold_as_written` allows check's finest, ``CHECK_RESOLUTION``)."""
+    (:func:`hold_as_written` allows check's finest, ``CHECK_RESOLUTION``). ``positions_only``: the file holds the
+    joint positions alone, which ``check`` reads through the quintic spline of their tool positions."""
     from ..limits.samples import _motion_report, derivative_problems
     from ..robots import build_robot
 
@@ -55,7 +57,7 @@ def read_as_written(t: np.ndarray, tool: np.ndarray, q: np.ndarray, profile, not
     t, tool, q = data[:, 0] - data[0, 0], data[:, 1:13], data[:, 13:]
     robot = build_robot(profile.robot)
     pos = robot.forward_kinematics(q)
-    if derivative_problems(t, tool):  # (never for this tool's own samples) check reads the positions alone then
+    if positions_only or derivative_problems(t, tool):  # (never for this tool's own columns) positions alone
         tool = None
     if getattr(robot, "rotary", False):
         pos = np.column_stack([pos, robot.tool_angle(q)])
@@ -93,13 +95,14 @@ class Written:
 
 
 def hold_as_written(T0: float, state: Any, sample: Callable[[float], tuple[Any, tuple]], profile, not_held: str,
-                    cycle: float | None = None, rate: float | None = None) -> Written:
+                    cycle: float | None = None, rate: float | None = None, positions_only: bool = False) -> Written:
     """Stretch the law at duration ``T0`` [s] until ``check`` reads its samples within every limit (module
     docstring). ``state``: what ``sample`` returned at ``T0``; ``sample(T)`` → (state, (t, tool, q)) at duration T
-    (the written samples). ``cycle`` [s]: durations in whole cycles. ``rate`` [Hz]: named in the note."""
+    (the written samples). ``cycle`` [s]: durations in whole cycles. ``rate`` [Hz]: named in the note.
+    ``positions_only``: the file holds the joint positions alone (:func:`read_as_written`)."""
     T, k = T0, 1.0
     t, tool, q = state[1]
-    read = read_as_written(t, tool, q, profile, not_held)
+    read = read_as_written(t, tool, q, profile, not_held, positions_only)
     first = None
     for attempt in range(RETIMES):
         failing = _past(read)
@@ -116,16 +119,18 @@ def hold_as_written(T0: float, state: Any, sample: Callable[[float], tuple[Any, 
             k = T / T0
         state = sample(T)
         t, tool, q = state[1]
-        read = read_as_written(t, tool, q, profile, not_held)
+        read = read_as_written(t, tool, q, profile, not_held, positions_only)
     note = ""
     past = tuple(r for r, _ in _past(read))
     if first is not None:
-        at = f" at {rate:g} Hz" if rate else ""
+        at = (" (joint positions alone)" if positions_only else "") + (f" at {rate:g} Hz" if rate else "")
         held = "so that check reads them within every limit" if not past else \
             "and check still reads them past a limit"
         row, u = first
         note = (f"written samples{at}: check's reading of them put {row.joint} {row.quantity} at "
                 f"{100 * row.peak / row.limit:.2f} % (the law changes faster than a sample period); the law is slowed "
                 f"× {k:.5f}, T {T0:.6g} → {T:.6g} s, {held}"
-                + ("; a faster --rate, or a drive's table (-f pvt, cam), needs less" if k > 1.01 else ""))
+                + ("; the tool columns (the default CSV), a faster --rate, or a drive's table (-f pvt, cam), need "
+                   "less" if k > 1.01 and positions_only else
+                   "; a faster --rate, or a drive's table (-f pvt, cam), needs less" if k > 1.01 else ""))
     return Written(T, k, state, read, note, past)

@@ -116,8 +116,10 @@ def test_plan_writes_what_check_accepts_and_faster_fails(tmp_path, prof_name, me
 #: * superposition optimal on the Delta at 5 kHz (the SQP's 60-coefficient quintic law): 104.7 % read at a jerk step of
 #:   the method (t = 38.4 ms, found: split there) with law knots on both sides within a few samples; a larger
 #:   smoothing term on the law (SQP_SMOOTH 1e-2) still reads 102.9 %.
-#: Such a file may be refused although plan wrote it (never accepted when it breaks a limit): write the tool
-#: columns (plan's default CSV) or sample faster. Reading these lower is not safe without a bound on the
+#: Such a file may be refused although plan wrote it for its tool columns (never accepted when it breaks a limit):
+#: write the tool columns (plan's default CSV) or sample faster; a plan for positions alone
+#: (``--columns t,q1,…``: ``read_written="positions"``) reads them as check will and is accepted
+#: (test_positions_only_file_planned_as_written). Reading these lower is not safe without a bound on the
 #: reconstruction's error between samples, which positions alone do not give.
 KNOWN_HIGH = {("superposition", "optimal", 1000.0), ("superposition", "optimal", 5000.0), ("lame", "optimal", 1000.0),
               ("piecewise-poly", "optimal", 1000.0),
@@ -176,3 +178,26 @@ def test_shape_optimal_file_is_accepted(tmp_path, prof_name, a, b, hold):
     assert not rep.unresolved, [(r.joint, r.quantity, r.peak, r.accuracy) for r in rep.unresolved]
     fast = _check(tmp_path, _text(pl, 1.03), prof, rule)
     assert not fast.ok or fast.unresolved, "3 % faster accepted as within every limit"
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("prof_name,method,rule,rate", [c for c in _cases() if c.values[2] == "optimal"
+                                                        and c.values[3] == 1000.0])
+def test_positions_only_file_planned_as_written(tmp_path, prof_name, method, rule, rate):
+    """``plan --time optimal --columns t,q1,…`` (``PlanOptions.read_written = "positions"``): the plan reads its joint
+    positions alone as check will and slows the law until they pass, so check accepts the positions-only file it
+    writes, KNOWN_HIGH's moves included (refused when planned for the tool columns)."""
+    prof = load_profile(prof_name)
+    rng = np.random.default_rng(sum(map(ord, prof_name + method + rule)))
+    ranges = MOVES[prof_name]
+    a = np.array([rng.uniform(*r) for r in ranges])
+    b = np.array([rng.uniform(*r) for r in ranges])
+    try:
+        pl = plan(Task(a, b, prof.planning.height, prof.planning.eta), prof,
+                  PlanOptions(method=method, time=rule, rate=rate, read_written="positions"))
+    except PickplaceError as exc:
+        pytest.skip(f"not planned: {exc}")
+    if not pl.report.ok:
+        pytest.skip("a position limit (exit 4): not written by plan")
+    rep = _check(tmp_path, _text(pl, positions_only=True), prof, rule)
+    assert rep.ok, [(r.joint, r.quantity, r.peak, r.accuracy, r.limit) for r in rep.violations]
