@@ -371,6 +371,7 @@ def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions(), *,
         raise
     stop()
     final = _FinalCheck(rate, profile.planning.dwell)
+    uniform = (model, path)  # the path the uniform law scales (the time-optimal law composes a new one)
     duration, path, model, notes = _duration_stage(task, profile, options, path, factory, model, first, final,
                                                    samples.parts)
     done = final.at(path, duration.seconds)
@@ -387,10 +388,10 @@ def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions(), *,
         stop()
         duration, model, path, samples, report, rounding = _cycle_stage(options.cycle, profile, model, path, factory,
                                                                         duration, report)
-    if options.time == "optimal" and options.read_written and report.ok:  # the law as check reads its samples
-        stop()
-        duration, samples, report, rounding = _written_stage(model, path, duration, samples, report, rounding, rate,
-                                                             options, profile)
+    if options.time in ("optimal", "fit") and options.read_written and factory is None and report.ok:
+        stop()  # a law at its limits, as check reads its samples
+        duration, model, path, samples, report, rounding = _written_stage(model, path, duration, samples, report,
+                                                                          rounding, rate, options, profile, uniform)
     # the Cartesian capacity's rows always: judged when the rule holds it, else reported as not held
     report = report.with_rows(capacity_rows(path, duration.seconds, profile.capacity, capacity_not_held(options)))
     planned = _assemble(task, profile, path, duration, model, samples, report.rated(profile.limit_use))
@@ -420,10 +421,12 @@ def _cycle_stage(cycle: float, profile: Profile, model: MotionModel, path, facto
 
 
 def _written_stage(model: MotionModel, path, duration: Duration, samples, report: LimitReport, rounding, rate: float,
-                   options: PlanOptions, profile: Profile):
-    """A time-optimal law slowed until ``check`` reads its written samples within every limit
-    (:func:`pickplace_cli.timing.written.hold_as_written`): the exact check runs again at the new duration, and a
-    reading that still exceeds a limit marks that row exceeded. → (duration, samples, report, rounding)."""
+                   options: PlanOptions, profile: Profile, uniform: tuple):
+    """A law at its limits (``fit``, ``optimal``) slowed until ``check`` reads its written samples within every limit
+    (:func:`pickplace_cli.timing.written.hold_as_written`); a time-optimal law slowed past the uniform law's fit is
+    replaced by the uniform law (``uniform``: its model and path) when that is shorter as written. The exact check runs
+    again at the new duration, and a reading that still exceeds a limit marks that row exceeded.
+    → (duration, model, path, samples, report, rounding)."""
     from .limits.report import LimitRow
     from .timing.written import hold_as_written
 
@@ -434,15 +437,29 @@ def _written_stage(model: MotionModel, path, duration: Duration, samples, report
         n, P = len(s.t), s.parts
         return s.t, np.column_stack([P.p[:n], P.v1[:n] / T, P.a1[:n] / T**2, P.j1[:n] / T**3]), P.q[:n]
 
-    def sample(T: float):
-        s = _sample(model, path, T, rate, cycle)
-        return s, outputs(s, T)
+    def held(m, p, T0: float, s0):
+        def sample(T: float):
+            s = _sample(m, p, T, rate, cycle)
+            return s, outputs(s, T)
+
+        return hold_as_written(T0, (s0, outputs(s0, T0)) if s0 is not None else sample(T0), sample, profile,
+                               capacity_not_held(options), cycle, rate,
+                               positions_only=options.read_written == "positions")
 
     T0 = duration.seconds
-    w = hold_as_written(T0, (samples, outputs(samples, T0)), sample, profile, capacity_not_held(options), cycle, rate,
-                        positions_only=options.read_written == "positions")
-    if w.k == 1.0:
-        return duration, samples, report, rounding
+    w = held(model, path, T0, samples)
+    t_fit, switched = duration.t_fit, False
+    if options.time == "optimal" and w.k > 1.0 and t_fit is not None and w.T > t_fit and uniform[1] is not path:
+        t_uni = float(np.ceil(t_fit / cycle - 1e-9) * cycle) if cycle is not None else t_fit
+        u = held(*uniform, t_uni, None)
+        if u.T < w.T and not u.past:  # the uniform law of --time fit, as written, is the shorter move
+            model, path = uniform
+            switched = True
+            w = replace(u, note=f"{w.note}; longer than the uniform law of --time fit as written: that law is "
+                                f"written instead, T {u.T:.6g} s" + (f" ({u.note})" if u.note else ""))
+            duration = replace(duration, law="uniform (its written samples hold sooner than the optimal law's)")
+    if w.k == 1.0 and not switched:  # read within every limit as planned (or not read: too few samples)
+        return replace(duration, written=w.note), model, path, samples, report, rounding
     samples = w.state[0]
     report = check_limits(model, w.T, parts=samples.parts, dwell=dwell, notes=report.notes + (w.note,))
     read = {(r.joint, r.quantity): r for r in w.past}
@@ -454,10 +471,11 @@ def _written_stage(model: MotionModel, path, duration: Duration, samples, report
     if rounding is not None:
         cycles = int(round(w.T / cycle))
         added = cycles - rounding.cycles
-        said = f"{added} more cycle(s) so that check reads the written samples within every limit"
+        said = f"{added:+d} cycle(s) so that check reads the written samples within every limit"
         rounding = replace(rounding, cycles=cycles, extra_cycles=rounding.extra_cycles + added,
                            note="; ".join(n for n in (rounding.note, said) if n))
-    return replace(duration, seconds=w.T, written_stretch=w.k, written=w.note), samples, report, rounding
+    return (replace(duration, seconds=w.T, written_stretch=w.T / T0, written=w.note), model, path, samples, report,
+            rounding)
 
 
 class _FinalCheck:

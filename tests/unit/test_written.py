@@ -56,7 +56,7 @@ def test_optimal_file_is_accepted_by_check(tmp_path):
     # slowed, by little (the reading was 0.2 % high: the square root of that and a margin), and said so
     assert 1.0 < d.written_stretch < 1.005
     assert d.seconds == pytest.approx(d.t_optimal * d.written_stretch, rel=1e-12)
-    assert "check reads them within every limit" in d.written and "q1 motor torque rate" in d.written
+    assert "where check reads every limit within it" in d.written and "q1 motor torque rate" in d.written
     assert pl.t[-1] == pytest.approx(d.seconds, rel=1e-12)
 
 
@@ -137,3 +137,51 @@ def test_optimal_on_the_capacity_alone():
     cap = prof.capacity
     assert np.linalg.norm(v, axis=1).max() <= cap.velocity * (1 + 1e-3)
     assert np.linalg.norm(a[2:-2], axis=1).max() <= cap.acceleration * (1 + 1e-3)
+
+
+def _file_ok(tmp_path, pl, prof, hold):
+    return _read(tmp_path, pl, prof, hold).ok
+
+
+def test_too_few_samples_are_not_read_back():
+    """At 25 Hz the move has 5 samples, fewer than check reads a move from: no reading (it crashed), the plan as
+    planned, a note that says why."""
+    prof = load_profile("delta-su2018")
+    pl = plan(ADEPT, prof, PlanOptions(time="optimal", rate=25.0))
+    assert pl.report.ok and len(pl.t) == 5 and pl.duration.written_stretch == 1.0
+    assert "fewer than the 6 check reads" in pl.duration.written
+
+
+@pytest.mark.parametrize("rate", [50.0, 100.0])
+def test_fit_at_a_low_rate_is_read_back(tmp_path, rate):
+    """--time fit rides a motor limit too: at 50 Hz check read its file at 170 % of the torque rate and refused it
+    (plan said ok); the uniform law is slowed until check accepts."""
+    prof = load_profile("delta-su2018")
+    pl = plan(ADEPT, prof, PlanOptions(time="fit", rate=rate))
+    assert pl.report.ok
+    assert _file_ok(tmp_path, pl, prof, hold=False)
+    d = pl.duration
+    assert d.written_stretch >= 1.0 and d.seconds == pytest.approx(d.t_fit * d.written_stretch, rel=1e-12)
+
+
+def test_slowed_past_the_fit_the_uniform_law_is_written(tmp_path):
+    """On a 8 ms controller cycle (125 samples/s) check reads the time-optimal law's samples ~2 × past the torque
+    rate; slowing it to pass makes it longer than the uniform law of --time fit as written, so that law is written
+    (the move never gets slower than --time fit because of the reading), and check accepts it."""
+    prof = load_profile("delta-su2018")
+    pl = plan(ADEPT, prof, PlanOptions(time="optimal", cycle=0.008))
+    fit = plan(ADEPT, prof, PlanOptions(time="fit", cycle=0.008))
+    assert pl.report.ok and fit.report.ok
+    assert pl.duration.seconds <= fit.duration.seconds + 1e-12
+    assert pl.duration.law.startswith("uniform") and "that law is written instead" in pl.duration.written
+    assert _file_ok(tmp_path, pl, prof, hold=False)
+
+
+def test_a_reading_that_swings_with_the_sample_phase_still_passes(tmp_path):
+    """A shape the law-judged search finds (4 law solves): its 1 kHz reading rose while the law was slowed in small
+    steps (100.11 → 100.22 %) and the plan gave up with exit 3; the growing margin and the bisection find a stretch
+    that reads within every limit, under 1 %."""
+    prof = load_profile("delta-su2018")
+    pl = plan(ADEPT, prof, PlanOptions(time="optimal", shape=True, shape_law_evals=4))
+    assert pl.report.ok and 1.0 < pl.duration.written_stretch < 1.01
+    assert _file_ok(tmp_path, pl, prof, hold=False)
