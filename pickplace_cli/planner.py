@@ -68,7 +68,7 @@ class PlanOptions:
     turn_during : str
         When the tool turns: ``transfer`` (lift-off to set-down) or ``whole`` (the whole move).
     read_written : str
-        ``optimal``: read the samples as a CSV holds them through ``check``'s reconstruction, and slow the law until
+        ``fit`` and ``optimal``: read the samples as a CSV holds them through ``check``'s reconstruction, and slow the law until
         ``check`` reads them within every limit (:mod:`pickplace_cli.timing.written`): ``"tool"`` (the file has the
         tool's x … jz, as this tool writes it by default), ``"positions"`` (the joint positions alone, e.g. ``plan
         --columns t,q1,q2,q3`` or a drive's positions), ``""`` (not read: a drive's table, judged as the drive
@@ -95,7 +95,7 @@ class PlanOptions:
     # (:func:`holds_capacity`); a caller that chose the duration itself (a conveyor rendezvous) says
     turn: str = "shortest"  # a rotary fourth axis: the way round to the task's end angle (curves.rotation.TurnRule)
     turn_during: str = "transfer"  # … and when the tool turns: between lift-off and set-down, or the whole move
-    read_written: str = "tool"  # optimal: the written samples read as check reads them (timing/written.py)
+    read_written: str = "tool"  # fit, optimal: the written samples read as check reads them (timing/written.py)
 
 
 def holds_capacity(options: PlanOptions) -> bool:

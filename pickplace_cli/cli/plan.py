@@ -132,8 +132,9 @@ def plan(
         "profile holds: joint and motor limits, RMS torque and the Cartesian capacity), 'auto' (the Cartesian "
         "capacity alone, Li 2018 Eq. 26), 'fit' (the joint and motor limits alone, path scaled uniformly in time), "
         "or 'optimal' (the same path with a non-uniform, jerk-bounded time law that minimises the duration under the "
-        "same joint and motor limits, RMS included; its written samples are read as check reads them and the law is "
-        "slowed until they pass; ~0.05-1 s more; not for bspline-vel). Names in any case. fit "
+        "same joint and motor limits, RMS included; ~0.05-1 s more; not for bspline-vel). Names in any case. fit and "
+        "optimal ride a motor limit: their written samples are read as check reads them and the law is slowed until "
+        "they pass (the summary says by how much). fit "
         "and optimal do not hold the Cartesian capacity: its rows are reported as not held and a move beyond it "
         "exits 0 with the verdict saying so (--hold-capacity holds it).",
         rich_help_panel=Panel.METHOD,

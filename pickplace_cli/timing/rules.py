@@ -32,10 +32,10 @@ class Duration:
     t_bound : float or None
         ``optimal``: the lower bound under peak motor torque and speed alone [s].
     written_stretch : float
-        ``optimal``: how much longer [-] the law was made so that ``check`` reads its written samples within every
+        ``fit`` and ``optimal``: how much longer [-] the law was made so that ``check`` reads its written samples within every
         limit (:mod:`pickplace_cli.timing.written`); 1 when it was not.
     written : str
-        ``optimal``: what that reading did, for the user ("" when nothing).
+        ``fit`` and ``optimal``: what that reading did, for the user ("" when nothing).
 
     ``auto`` is Eq. (26) extended by jerk: T = max(v̂/[v], √(â/[a]), ∛(ĵ/[j])) where v̂, â, ĵ are the exact
     peaks of ‖d^k p/dτ^k‖ of the path with T = 1 (for a symmetric move v̂ = b·v_max etc.). ``binding`` names
@@ -55,7 +55,7 @@ class Duration:
     #: --time optimal: the lower bound of the path, its time-optimal traversal under peak motor torque and speed
     #: alone (:mod:`pickplace_cli.timing.bound`; None otherwise)
     t_bound: float | None = None
-    #: --time optimal: how much the law was slowed so that ``check`` reads its written samples within every limit
+    #: --time fit and optimal: how much the law was slowed so that ``check`` reads its written samples within every limit
     #: (:mod:`pickplace_cli.timing.written`; 1 when it was not) and what was done ("" then)
     written_stretch: float = 1.0
     written: str = ""

@@ -14,7 +14,10 @@ only when its peak less its accuracy is beyond the limit, so it accepts the file
 of the law is stretched by ``k`` (the worst read utilisation's cube root first, a torque rate falling as 1/T³ but for
 its gravity share; its square root after, as for the drive's tables), up to ``RETIMES`` times, and the exact check
 runs again at the new duration. The law's shape is unchanged: only its duration grows (on a controller's cycle: to
-whole cycles).
+whole cycles). A time-optimal law slowed past the uniform law of ``--time fit`` is replaced by that law when it is the
+shorter as written (``planner._written_stage``). ``--time fit``, whose uniform law rides a motor limit too, is read
+the same way (at 50 Hz ``check`` read the Adept cycle's file 70 % past the torque rate); so are the joint positions
+alone when the file has no tool columns (``positions_only``).
 """
 
 from __future__ import annotations

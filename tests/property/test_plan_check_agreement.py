@@ -72,7 +72,9 @@ def _check(tmp_path, text: str, prof, rule: str = "limits"):
     return check_file(str(f), prof, hold_capacity=rule not in ("fit", "optimal"))[0].report
 
 
-def _planned(prof_name, method, rule, rate):
+def _planned(prof_name, method, rule, rate, **options):
+    """(profile, the plan of the combination's random move, whether a timed row is at its limit); ``options``: more
+    PlanOptions fields."""
     prof = load_profile(prof_name)
     rng = np.random.default_rng(sum(map(ord, prof_name + method + rule)))
     ranges = MOVES[prof_name]
@@ -80,7 +82,7 @@ def _planned(prof_name, method, rule, rate):
     b = np.array([rng.uniform(*r) for r in ranges])
     try:
         pl = plan(Task(a, b, prof.planning.height, prof.planning.eta), prof, PlanOptions(method=method, time=rule,
-                                                                                       rate=rate))
+                                                                                       rate=rate, **options))
     except PickplaceError as exc:  # a move this method cannot plan (too flat, out of reach): not this test's subject
         pytest.skip(f"not planned: {exc}")
     if not pl.report.ok:
@@ -187,17 +189,6 @@ def test_positions_only_file_planned_as_written(tmp_path, prof_name, method, rul
     """``plan --time optimal --columns t,q1,…`` (``PlanOptions.read_written = "positions"``): the plan reads its joint
     positions alone as check will and slows the law until they pass, so check accepts the positions-only file it
     writes, KNOWN_HIGH's moves included (refused when planned for the tool columns)."""
-    prof = load_profile(prof_name)
-    rng = np.random.default_rng(sum(map(ord, prof_name + method + rule)))
-    ranges = MOVES[prof_name]
-    a = np.array([rng.uniform(*r) for r in ranges])
-    b = np.array([rng.uniform(*r) for r in ranges])
-    try:
-        pl = plan(Task(a, b, prof.planning.height, prof.planning.eta), prof,
-                  PlanOptions(method=method, time=rule, rate=rate, read_written="positions"))
-    except PickplaceError as exc:
-        pytest.skip(f"not planned: {exc}")
-    if not pl.report.ok:
-        pytest.skip("a position limit (exit 4): not written by plan")
+    prof, pl, _ = _planned(prof_name, method, rule, rate, read_written="positions")
     rep = _check(tmp_path, _text(pl, positions_only=True), prof, rule)
     assert rep.ok, [(r.joint, r.quantity, r.peak, r.accuracy, r.limit) for r in rep.violations]
