@@ -9,7 +9,7 @@ from typing import Optional
 import typer
 
 from .app import _usage, note_exit
-from .render import _batch_line, _cycle_not_held, _emit_json, _emit_row_json, _row_not_held, _write_report
+from .render import SlowedRows, _batch_line, _cycle_not_held, _emit_json, _emit_row_json, _row_not_held, _write_report
 
 
 def _plan_batch(source, prof, options, height, eta, fail_fast, writer, output, report, report_only, json_summary,
@@ -112,6 +112,7 @@ class _RowSink:
         self.written = 0
         self.kept: list = []  # MCAP / JSON trajectories: (row, PlanRecord)
         self.reports: list = []  # --report: (row, ReportRecord)
+        self.slowed = SlowedRows()
         self._stack = contextlib.ExitStack()
         self._out = None
 
@@ -137,6 +138,7 @@ class _RowSink:
         if res.error is not None:  # one line per problem (a limit row: one per exceeded limit)
             sys.stderr.write("".join(f"pickplace: {ln}\n" for ln in res.error.splitlines()))
         _row_not_held(res)
+        self.slowed.add(res)
         if self.json_summary:
             _emit_row_json(res)
         if res.plan is not None and self.report is not None:
@@ -164,7 +166,7 @@ class _RowSink:
             _write_report([r for _, r in self.reports], self.report, rows=[n for n, _ in self.reports])
         if not quiet:
             _batch_line([c for c, _ in self.outcomes], self.first_failed,
-                        self.written if self.output is not None else None)
+                        self.written if self.output is not None else None, self.slowed)
         if self.kept:
             from ..pipelines.timeline import concatenate
 
@@ -434,6 +436,7 @@ def _stream_batch(items, name, prof, options, height, eta, fail_fast, writer, ou
     planned_rows: list[bool] = []
     first_failed = None
     n_written = 0
+    slowed = SlowedRows()
     try:
         with ExitStack() as stack:
             out = None
@@ -456,6 +459,7 @@ def _stream_batch(items, name, prof, options, height, eta, fail_fast, writer, ou
                     sys.stderr.write("".join(f"pickplace: {ln}\n" for ln in res.error.splitlines()))
                     sys.stderr.flush()
                 _row_not_held(res)
+                slowed.add(res)
                 if json_summary:
                     _emit_row_json(res)
                 if warmer is not None:
@@ -490,7 +494,7 @@ def _stream_batch(items, name, prof, options, height, eta, fail_fast, writer, ou
     if report is not None:
         _write_report([r for _, r in reports], report, rows=[n for n, _ in reports])
     if not quiet:
-        _batch_line(codes, first_failed, n_written if output is not None else None)
+        _batch_line(codes, first_failed, n_written if output is not None else None, slowed)
     if output is not None and n_written == 0:
         sys.stderr.write("pickplace: no row could be written\n")
     code = _batch_exit(list(zip(codes, planned_rows)), report_only, fail_fast)

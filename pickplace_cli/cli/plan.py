@@ -36,6 +36,7 @@ from .plan_options import (
     _rosbag2_format,
     _check_plan_usage,
     _check_plan_values,
+    option_errors,
     _check_shape_usage,
     _columns,
     _finite_latency,
@@ -58,6 +59,7 @@ from .render import (
 
 @app.command()
 @_handle_errors
+@option_errors
 def plan(
     ctx: typer.Context,
     from_: Optional[str] = typer.Option(None, "--from", help="Pick point X,Y,Z in m (base frame), e.g. -0.1525,0,-0.8; "
@@ -349,7 +351,6 @@ def plan(
     a = SimpleNamespace(**{k: v for k, v in locals().items() if k not in ("SimpleNamespace", "load_profile",
                                                                          "PlanOptions")})
     _JSON_ERRORS[0] = json_summary  # (a batch: its rows have their lines; an error that ends it gets one more)
-    a.shape_law_evals = shape_law_evals = _shape_law_evals(shape_law_evals)
     from .guards import output_format
 
     if rosbag2:
@@ -384,10 +385,13 @@ def plan(
     a.drive = drive_map(prof)
     writer = _writer(fmt, csv_dialect, mcap_flavor, compression, _columns(columns, prof, a.drive), a.drive, rosbag2)
     _check_shape_usage(a)
+    # (values after their usage: an option that does not apply is said first)
+    a.shape_law_evals = shape_law_evals = _shape_law_evals(shape_law_evals)
+    law_coefficients = _law_coefficients(law_coefficients)
     options = PlanOptions(method=a.method.value, method_params=params, time=a.time, rate=rate,
                           fit=a.time == "fit" or show_fit, shape=a.optimize == OptimizeWhat.shape,
                           hold_eta=eta is not None, hold_capacity=hold_capacity, shape_law_evals=shape_law_evals,
-                          law_coefficients=_law_coefficients(law_coefficients), limit_use=limit_use,
+                          law_coefficients=law_coefficients, limit_use=limit_use,
                           cycle=a.cycle_s, turn=turn.value, turn_during=turn_during.value,
                           read_written=_read_written(a, fmt, columns, prof))
     if batch is not None:

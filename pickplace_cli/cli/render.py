@@ -136,13 +136,41 @@ def _cycle_not_held(res) -> None:
                              for name, leg in zip(names, c.legs) for r in leg.report.exceeded_not_held))
 
 
-def _batch_line(codes: list, first_failed, written) -> None:
-    """The batch's closing line on stderr (``written``: rows written to -o, None without -o)."""
+class SlowedRows:
+    """The batch rows whose time law was slowed so that ``check`` reads their written samples within every limit
+    (``--time optimal``/``fit``: ``Duration.written_stretch`` > 1), for the closing line: how many, and the largest
+    stretch with its row."""
+
+    def __init__(self) -> None:
+        self.count, self.worst, self.row = 0, 1.0, None
+
+    def add(self, res) -> None:
+        plan = res.plan
+        if plan is None:
+            return
+        duration = getattr(plan, "duration", None)
+        k = duration.written_stretch if duration is not None else plan.summary().get("written_stretch", 1.0)
+        if k is not None and k > 1.0:
+            self.count += 1
+            if k > self.worst:
+                self.worst, self.row = k, res.row
+
+    def text(self) -> str:
+        if not self.count:
+            return ""
+        return (f"; {self.count} slowed so that check reads their written samples within every limit (up to "
+                f"× {self.worst:.5g}, row {self.row}; each row's written_stretch is in --json)")
+
+
+def _batch_line(codes: list, first_failed, written, slowed: SlowedRows | None = None) -> None:
+    """The batch's closing line on stderr (``written``: rows written to -o, None without -o; ``slowed``: the rows
+    whose law was slowed for their written samples)."""
     n_ok = sum(1 for c in codes if c == 0)
     sys.stderr.write(
         f"batch: {len(codes)} rows, {n_ok} ok, {len(codes) - n_ok} failed"
         + (f" (first failing row {first_failed})" if first_failed is not None else "")
-        + (f"; {written} written" if written is not None else "") + "\n"
+        + (f"; {written} written" if written is not None else "")
+        + (slowed.text() if slowed is not None else "") + "\n"
     )
 
 
@@ -194,24 +222,31 @@ def _fmt(x: float) -> str:
     return f"{x:.4g}"
 
 
-def _print_limit_table(report) -> None:
+def _limit_table(report, narrow: bool = False):
+    """The limit rows as a rich Table. ``narrow`` (a terminal narrower than the table, e.g. 80 columns): one space
+    between columns, a short time header, no target column when every limit has the same target (the duration line
+    says it), "(not held)" without the rule (the lines below the table name it), and every column but the verdict at
+    its full width, so that a quantity and its unit stay on one line."""
     from rich.markup import escape
     from rich.table import Table
+    from rich.text import Text
 
     from ..limits.report import percent
 
-    table = Table(title=None, box=None, pad_edge=False, show_header=True, header_style="bold")
+    table = Table(title=None, box=None, pad_edge=False, show_header=True, header_style="bold", collapse_padding=narrow)
     headroom = any(r.target < 1.0 for r in report.rows)  # a limit-use fraction: its target column
+    if narrow and len({r.target for r in report.rows if r.kind == "limit"}) == 1:
+        headroom = False
     cols = [("joint", "left"), ("quantity", "left"), ("peak", "right"), ("limit", "right"), ("use %", "right")]
     cols += [("target %", "right")] if headroom else []
     estimated = any(r.accuracy is not None for r in report.rows)  # peaks estimated from samples (check)
     cols += [("± %", "right")] if estimated else []
-    for col, just in cols + [("t peak [s]", "right"), ("", "left")]:
+    for col, just in cols + [("t [s]" if narrow else "t peak [s]", "right"), ("", "left")]:
         table.add_column(escape(col), justify=just)  # type: ignore[arg-type]  ("[s]" is not rich markup)
     for r in report.rows:
         mark = "ok" if r.ok else "[bold red]EXCEEDED[/]"
         if r.not_held:  # reported, not judged: the duration rule leaves this limit out (the capacity under fit)
-            mark = escape(f"{'ok' if r.ok else 'EXCEEDED'} (not held: {r.not_held})")
+            mark = escape(f"{'ok' if r.ok else 'EXCEEDED'} (not held{'' if narrow else ': ' + r.not_held})")
             mark = mark if r.ok else f"[bold yellow]{mark}[/]"
         quantity = r.quantity
         if quantity.startswith(("position", "workcell")):  # a [min, max] range: say which side the row is
@@ -224,10 +259,25 @@ def _print_limit_table(report) -> None:
             if r.ok and not r.resolved:
                 mark = "[yellow]unresolved[/]"
         table.add_row(*cells, "" if r.t_peak is None else f"{r.t_peak:.4f}", mark)
+    if narrow:
+        for column in table.columns[:-1]:  # only the verdict column may wrap (folded if a word does not fit)
+            column.min_width = max(Text.from_markup(str(c)).cell_len for c in [column.header, *column.cells])
+            column.no_wrap = True
+        table.columns[-1].overflow = "fold"
+    return table
+
+
+def _print_limit_table(report) -> None:
+    table = _limit_table(report)
     # a terminal wraps at its width; a pipe or log file gets whole rows (rich would assume 80 columns), without the
     # padding rich leaves after the last cell
     if sys.stderr.isatty():
-        console(stderr=True, highlight=False, soft_wrap=True).print(table)
+        from rich.measure import Measurement
+
+        con = console(stderr=True, highlight=False, soft_wrap=True)
+        if Measurement.get(con, con.options.update_width(10_000), table).maximum > con.width:
+            table = _limit_table(report, narrow=True)
+        con.print(table)
         return
     out = console(stderr=True, highlight=False, soft_wrap=True, width=200)
     with out.capture() as captured:

@@ -269,9 +269,9 @@ def test_keep_warm_answers_the_same_bytes_row_by_row(tmp_path):
     (["--from", "0,0,-0.8", "--to", "0.1,0,-0.8", "--keep-warm", "0.005"], 2, "only applies to a streamed --batch"),
     (["--batch", "FILE", "--keep-warm", "0.005"], 2, "is not a pipe: it is read whole"),
     (["--batch", "-", "--keep-warm", "0.005", "-j", "2"], 2, "give -j 1 (not -j 2)"),
-    (["--batch", "-", "--keep-warm", "0.0001"], 1, "keep_warm = 0.0001 s: must be 0 (off) or in 0.001 ... 10 s"),
-    (["--batch", "-", "--keep-warm", "nan"], 1, "keep_warm = nan s"),
-    (["--batch", "-", "--keep-warm", "-1"], 1, "keep_warm = -1.0 s"),
+    (["--batch", "-", "--keep-warm", "0.0001"], 1, "--keep-warm 0.0001 s: must be 0 (off) or in 0.001 ... 10 s"),
+    (["--batch", "-", "--keep-warm", "nan"], 1, "--keep-warm nan s"),
+    (["--batch", "-", "--keep-warm", "-1"], 1, "--keep-warm -1.0 s"),
 ])
 def test_keep_warm_usage(tmp_path, args, code, words):
     batch = tmp_path / "moves.csv"

@@ -92,7 +92,7 @@ def test_negative_latency_option(tmp_path):
     src = tmp_path / "p.csv"
     src.write_text(GOOD)
     r = run("plan", "--batch", str(src), "--latency", "-1", "-o", str(tmp_path / "o.csv"))
-    assert r.exit_code == 1 and r.stderr == "pickplace: error: latency = -1.0: must be a finite number of seconds >= 0 (detection to move start)\n"
+    assert r.exit_code == 1 and r.stderr == "pickplace: error: --latency -1.0: must be a finite number of seconds >= 0 (detection to move start)\n"
     assert not (tmp_path / "o.csv").exists()
 
 

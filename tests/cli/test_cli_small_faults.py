@@ -81,8 +81,8 @@ BIG = "1" * 5000
 
 
 @pytest.mark.parametrize("args, says", [
-    (["plan", *ADEPT, "--time", BIG], "time = '" + "1" * 60 + "' … (5,000 characters)"),
-    (["plan", "--from", BIG + ",0,-0.8", "--to", "0.1525,0,-0.8"], "from = '" + "1" * 60 + "' … (5,007 characters)"),
+    (["plan", *ADEPT, "--time", BIG], "--time '" + "1" * 60 + "' … (5,000 characters)"),
+    (["plan", "--from", BIG + ",0,-0.8", "--to", "0.1525,0,-0.8"], "--from '" + "1" * 60 + "' … (5,007 characters)"),
     (["plan", *ADEPT, "-m", BIG], "'" + "1" * 60 + "' … (5,000 characters)"),
     (["build-table", "--weights", BIG], "weights = '" + "1" * 60 + "' … (5,000 characters)"),
 ])

@@ -216,7 +216,7 @@ def test_the_error_names_the_rule_asked_for():
     r = run("plan", "-p", "gantry", "-t", "optimal", "--from", "-0.3,0,-0.5", "--to", "0.3,0.2,-0.5", "-q")
     assert r.exit_code == 1
     line = _one_error_line(r.stderr)
-    assert "time = optimal:" in line and "time = fit" not in line
+    assert "--time optimal:" in line and "--time fit" not in line
     assert "sets no velocity, acceleration, jerk or motor limit" in line
 
 

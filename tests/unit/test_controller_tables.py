@@ -200,7 +200,7 @@ def test_tolerance_too_small_for_the_data_is_exit_1_and_nothing_written(tmp_path
     res = run("plan", *ADEPT, "-q", "-f", "pvt", "--tolerance", "1e-15", "-o", str(out))
     assert res.exit_code == 1
     lines = res.stderr.strip().splitlines()
-    assert len(lines) == 1 and "tolerance = 1e-15" in lines[0] and "too small" in lines[0]
+    assert len(lines) == 1 and "--tolerance 1e-15" in lines[0] and "too small" in lines[0]
     assert out.read_text() == "old\n"
     for bad in ("0", "-1e-6", "nan"):
         res = run("plan", *ADEPT, "-q", "-f", "cam", "--tolerance", bad, "-o", str(out))

@@ -167,7 +167,10 @@ def test_cli_shape_law_evals_out_of_range_exit_1(n):
     r = CliRunner().invoke(app, ["plan", "--from", "-0.1525,0,-0.8", "--to", "0.1525,0,-0.8", "--optimize", "shape",
                                  "--time", "optimal", "--shape-law-evals", n])
     assert r.exit_code == 1, r.output
-    assert f"shape_law_evals = {n}: must lie in 0 ... 1000" in r.output and "Traceback" not in r.output
+    assert f"--shape-law-evals {n}: must lie in 0 ... 1000" in r.output and "Traceback" not in r.output
+    # without --optimize shape the option does not apply: that usage error (exit 2) comes first
+    r = CliRunner().invoke(app, ["plan", "--from", "-0.1525,0,-0.8", "--to", "0.1525,0,-0.8", "--shape-law-evals", n])
+    assert r.exit_code == 2 and "--shape-law-evals judges shapes by the optimal law" in r.output, r.output
 
 
 def test_law_judged_search_against_the_free_path_minimum():

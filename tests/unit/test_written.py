@@ -185,3 +185,30 @@ def test_a_reading_that_swings_with_the_sample_phase_still_passes(tmp_path):
     pl = plan(ADEPT, prof, PlanOptions(time="optimal", shape=True, shape_law_evals=4))
     assert pl.report.ok and 1.0 < pl.duration.written_stretch < 1.01
     assert _file_ok(tmp_path, pl, prof, hold=False)
+
+
+@pytest.mark.parametrize("streamed", [False, True])
+def test_a_batch_says_which_rows_were_slowed(tmp_path, streamed):
+    """In a batch (a file, or a stream on stdin) the closing line says how many rows' laws were slowed for their
+    written samples and the largest stretch with its row; each row's JSON line carries its written_stretch, the
+    same as a single plan of that move (the library's ``Duration.written_stretch``)."""
+    import json
+
+    from typer.testing import CliRunner
+
+    from pickplace_cli.cli import app
+
+    src = tmp_path / "moves.csv"
+    src.write_text("from_x,from_y,from_z,to_x,to_y,to_z\n-0.1525,0,-0.8,0.1525,0,-0.8\n0.1525,0,-0.8,-0.1525,0,-0.8\n")
+    want = [plan(Task(a, b, height=0.025, eta=0.5), load_profile("delta-su2018"),
+                 PlanOptions(time="optimal", hold_capacity=True)).duration.written_stretch
+            for a, b in (([-0.1525, 0, -0.8], [0.1525, 0, -0.8]), ([0.1525, 0, -0.8], [-0.1525, 0, -0.8]))]
+    assert want[0] > 1.0 and want[1] == 1.0  # the Adept cycle's way out is slowed, its way back is not
+    args = ["plan", "--batch", "-" if streamed else str(src), "--time", "optimal", "--hold-capacity", "--json",
+            "-o", str(tmp_path / "out.csv")]
+    r = CliRunner().invoke(app, args, input=src.read_text() if streamed else None)
+    assert r.exit_code == 0, r.stderr
+    got = [json.loads(line)["written_stretch"] for line in r.stdout.splitlines()]
+    assert got == pytest.approx(want, rel=1e-12)
+    assert (f"batch: 2 rows, 2 ok, 0 failed; 2 written; 1 slowed so that check reads their written samples within "
+            f"every limit (up to × {want[0]:.5g}, row 1;") in r.stderr
