@@ -73,6 +73,10 @@ class PlanOptions:
         tool's x … jz, as this tool writes it by default), ``"positions"`` (the joint positions alone, e.g. ``plan
         --columns t,q1,q2,q3`` or a drive's positions), ``""`` (not read: a drive's table, judged as the drive
         interpolates it instead).
+    strict : bool
+        Read the written samples (``read_written``) as ``check --strict`` does, under the rules ``limits`` and ``auto``
+        too: the law is slowed until every peak is resolved by them (within its limit at the reading's stated accuracy,
+        or known to 1 %); a peak still not resolved fails the plan (exit 3).
     """
 
     method: Method | str = Method.bspline
@@ -96,6 +100,7 @@ class PlanOptions:
     turn: str = "shortest"  # a rotary fourth axis: the way round to the task's end angle (curves.rotation.TurnRule)
     turn_during: str = "transfer"  # … and when the tool turns: between lift-off and set-down, or the whole move
     read_written: str = "tool"  # fit, optimal: the written samples read as check reads them (timing/written.py)
+    strict: bool = False  # … as check --strict reads them: every peak resolved (also under limits and auto)
 
 
 def holds_capacity(options: PlanOptions) -> bool:
@@ -388,12 +393,15 @@ def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions(), *,
         stop()
         duration, model, path, samples, report, rounding = _cycle_stage(options.cycle, profile, model, path, factory,
                                                                         duration, report)
-    if options.time in ("optimal", "fit") and options.read_written and factory is None and report.ok:
+    rules = ("optimal", "fit", "limits", "auto") if options.strict else ("optimal", "fit")
+    if options.time in rules and options.read_written and factory is None and report.ok:
         stop()  # a law at its limits, as check reads its samples
         duration, model, path, samples, report, rounding = _written_stage(model, path, duration, samples, report,
                                                                           rounding, rate, options, profile, uniform)
     # the Cartesian capacity's rows always: judged when the rule holds it, else reported as not held
     report = report.with_rows(capacity_rows(path, duration.seconds, profile.capacity, capacity_not_held(options)))
+    if options.strict:
+        report = replace(report, strict=True)
     planned = _assemble(task, profile, path, duration, model, samples, report.rated(profile.limit_use))
     return planned if rounding is None else replace(planned, cycle=rounding)
 
@@ -444,7 +452,7 @@ def _written_stage(model: MotionModel, path, duration: Duration, samples, report
 
         return hold_as_written(T0, (s0, outputs(s0, T0)) if s0 is not None else sample(T0), sample, profile,
                                capacity_not_held(options), cycle, rate,
-                               positions_only=options.read_written == "positions")
+                               positions_only=options.read_written == "positions", strict=options.strict)
 
     T0 = duration.seconds
     w = held(model, path, T0, samples)
@@ -458,15 +466,18 @@ def _written_stage(model: MotionModel, path, duration: Duration, samples, report
             w = replace(u, note=f"{w.note}; longer than the uniform law of --time fit as written: that law is "
                                 f"written instead, T {u.T:.6g} s" + (f" ({u.note})" if u.note else ""))
             duration = replace(duration, law="uniform (its written samples hold sooner than the optimal law's)")
-    if w.k == 1.0 and not switched:  # read within every limit as planned (or not read: too few samples)
+    if w.k == 1.0 and not switched and not w.past:  # read within every limit as planned (or not read: too few samples)
         return replace(duration, written=w.note), model, path, samples, report, rounding
     samples = w.state[0]
-    report = check_limits(model, w.T, parts=samples.parts, dwell=dwell, notes=report.notes + (w.note,))
+    report = check_limits(model, w.T, parts=samples.parts, dwell=dwell, notes=report.notes + ((w.note,) if w.note else ()))
     read = {(r.joint, r.quantity): r for r in w.past}
-    if read:  # still past a limit as read: the plan says so, with the reading's peak
+    if read:  # still past a limit as read (or, strict, not resolved): the plan says so, with the reading's peak
+        from .limits.samples import CHECK_RESOLUTION
+
         report = replace(report, rows=tuple(
             LimitRow(r.joint, r.quantity, r.unit, read[k].peak, r.limit, read[k].peak / r.limit, read[k].t_peak,
-                     False, r.kind, r.bound, r.target, read[k].accuracy, r.not_held)
+                     read[k].peak * (1.0 - CHECK_RESOLUTION) <= r.allowed, r.kind, r.bound, r.target,
+                     read[k].accuracy, r.not_held)
             if (k := (r.joint, r.quantity)) in read else r for r in report.rows))
     if rounding is not None:
         cycles = int(round(w.T / cycle))

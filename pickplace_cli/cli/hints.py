@@ -33,6 +33,9 @@ def not_written(plans: list, profile, options, code: int) -> str:
         return ("trajectory not written: a position is past a joint's range, the singularity margin or the workcell box "
                 "(exit 4), which no duration fixes: lower --height, move the pick or place point, or --fit-workspace "
                 "(lowers the height until the path fits)")
+    if not bad and any(p.report.unresolved for p in plans):  # plan --strict: a peak the samples do not resolve
+        return ("trajectory not written (--strict: a peak is not resolved by the written samples): a higher --rate "
+                "resolves it; --write-anyway writes it as it is")
     headroom = any(r.target < 1.0 and r.utilisation <= 1.0 for r in bad)
     extra = "; or a larger --limit-use (the ratings allow it)" if headroom else ""
     if options.time in ("fit", "optimal", "limits"):

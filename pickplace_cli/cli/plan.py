@@ -172,6 +172,15 @@ def plan(
         "verdict (exit 0).",
         rich_help_panel=Panel.LIMITS,
     ),
+    strict: bool = typer.Option(
+        False, "--strict", help="Write samples that check --strict accepts: the plan reads its written samples as "
+        "check does, also every other one for each peak's stated accuracy, and slows the time law until every peak is "
+        "resolved by them (within its limit at that accuracy, or known to 1 % of the limit); a peak still not resolved "
+        "is exit 3. For --time limits, auto, fit and optimal and a sampled file (CSV, MCAP, JSON), not a drive's table "
+        "(judged as the drive interpolates it) nor a duration given in seconds. Costs a second reading (~10-30 ms); "
+        "without it, check accepts the file and --strict may find a peak of a time-optimal law at 1 kHz not resolved.",
+        rich_help_panel=Panel.LIMITS,
+    ),
     show_fit: bool = typer.Option(
         False, "--show-fit", help="With --time auto or seconds: also compute the fitted duration (the smallest at "
         "which every joint and motor limit holds) and report it next to the chosen one (fit_s in --json). Costs "
@@ -393,7 +402,7 @@ def plan(
                           hold_eta=eta is not None, hold_capacity=hold_capacity, shape_law_evals=shape_law_evals,
                           law_coefficients=law_coefficients, limit_use=limit_use,
                           cycle=a.cycle_s, turn=turn.value, turn_during=turn_during.value,
-                          read_written=_read_written(a, fmt, columns, prof))
+                          read_written=_read_written(a, fmt, columns, prof), strict=strict)
     if batch is not None:
         from .guards import cap_workers
 

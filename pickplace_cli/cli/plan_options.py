@@ -224,7 +224,9 @@ def _method_params(a) -> dict:
 
 
 def _check_shape_usage(a) -> None:
-    """Usage (exit 2) of --fit-workspace with --batch, --optimize shape and --hold-capacity."""
+    """Usage (exit 2) of --fit-workspace with --batch, --optimize shape, --hold-capacity and --strict."""
+    from .controller import table_format
+
     if a.batch is not None and a.fit_ws:
         _usage("--fit-workspace is not available with --batch")
     shape = a.optimize == OptimizeWhat.shape
@@ -238,6 +240,12 @@ def _check_shape_usage(a) -> None:
                f"(not {'--time ' + str(a.time) if shape else 'without --optimize shape'})")
     if str(a.law_coefficients).strip().lower() != "auto" and a.time != "optimal":  # (given: its value is checked after)
         _usage(f"--law-coefficients shapes the time law of --time optimal (--time {a.time} scales the path uniformly)")
+    if a.strict and a.time not in ("limits", "auto", "fit", "optimal"):
+        _usage(f"--strict slows the law of a duration rule until check --strict accepts the written samples: use it "
+               f"with --time limits (the default), auto, fit or optimal (a duration of {a.time} s is given)")
+    if a.strict and table_format(a.fmt) and a.output is not None:
+        _usage(f"--strict reads sampled files as check --strict does: a drive's table (-f {a.fmt.value}) is judged as "
+               "the drive interpolates it")
     if a.hold_capacity and a.time not in ("fit", "optimal"):
         _usage(f"--hold-capacity applies to --time fit or optimal (--time {a.time} "
                f"{'holds the capacity already' if a.time in ('auto', 'limits') else 'is given'})")

@@ -304,11 +304,11 @@ def _print_verdict(report, quiet: bool, with_cycle: bool = True) -> None:
             sys.stderr.write(f"pickplace: {_violation_text(r)}\n")
         vague = report.unresolved
         for r in vague:  # a peak the samples cannot pin down: said even with -q (the verdict depends on it)
+            from ..pipelines.batch import unresolved_text
+
             sys.stderr.write(
-                f"pickplace: not resolved: {r.joint} {r.quantity} = {r.peak:.4g} ± {r.accuracy:.2g} {r.unit} "
-                f"({percent(r.utilisation)} % ± {percent(r.accuracy / abs(r.limit))} % of {r.limit:.4g} {r.unit}): the "
-                "samples are too sparse (or too noisy) for this peak; it is not shown exceeded, but not shown within "
-                "the limit either: check a trajectory sampled at a higher rate\n")
+                f"pickplace: {unresolved_text(r)}: the samples are too sparse (or too noisy) for this peak; it is not "
+                "shown exceeded, but not shown within the limit either: check a trajectory sampled at a higher rate\n")
         if not quiet:
             # a profile whose limits are all positions and the workcell (no joint speed, torque …): nothing that
             # the duration changes was checked, however short it is; say so instead of a bare "all limits hold"

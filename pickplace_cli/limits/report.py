@@ -4,7 +4,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -126,6 +126,8 @@ class LimitReport:
         The dwell at each end of the duty cycle [s] (move, dwell, move back, dwell).
     notes : tuple of str
         What the check wants said (how a peak was found, what was left out).
+    strict : bool
+        A peak the samples do not resolve (``unresolved``) fails too: ``exit_code`` 3 (``plan --strict``).
     ok : bool
         Whether every limit the duration rule holds is within its limit; ``violations`` lists the rows that are
         not. Rows the rule does not hold (``LimitRow.not_held``, the Cartesian capacity under ``fit`` or
@@ -138,6 +140,7 @@ class LimitReport:
     duration: float
     dwell: float
     notes: tuple[str, ...] = ()
+    strict: bool = False  # a peak the samples do not resolve (``unresolved``) fails too (exit 3): ``plan --strict``
 
     @property
     def ok(self) -> bool:
@@ -172,10 +175,11 @@ class LimitReport:
         return 60.0 / self.round_trip
 
     def exit_code(self) -> int:
-        """0 ok · 3 a limit is exceeded · 4 a reach row (singularity, workcell) fails."""
+        """0 ok · 3 a limit is exceeded (or, ``strict``, a peak is not resolved by the samples) · 4 a reach row
+        (singularity, workcell) fails."""
         bad = self.violations
         if not bad:
-            return 0
+            return 3 if self.strict and self.unresolved else 0
         return 4 if any(r.kind == "reach" for r in bad) else 3
 
     def rated(self, use: float) -> "LimitReport":
@@ -191,11 +195,11 @@ class LimitReport:
                 r = LimitRow(r.joint, r.quantity, r.unit, r.peak, rating, r.peak / rating, r.t_peak, r.ok, r.kind,
                              r.bound, use, r.accuracy, r.not_held)
             rows.append(r)
-        return LimitReport(tuple(rows), self.duration, self.dwell, self.notes)
+        return replace(self, rows=tuple(rows))
 
     def with_rows(self, rows: tuple[LimitRow, ...]) -> "LimitReport":
         """This report with ``rows`` added after its own."""
-        return LimitReport(self.rows + tuple(rows), self.duration, self.dwell, self.notes)
+        return replace(self, rows=self.rows + tuple(rows))
 
     def as_dict(self) -> dict[str, Any]:
         return {

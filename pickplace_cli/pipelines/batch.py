@@ -77,6 +77,15 @@ def sniff_delimiter(header: str) -> str:
     return DELIMITERS[counts.index(best)] if best else ","
 
 
+def unresolved_text(r) -> str:
+    """The one line that says a peak is not resolved by the samples (a LimitRow within its limit whose accuracy is
+    worse than 1 % of it: ``check --strict``, ``plan --strict``)."""
+    from ..limits.report import percent
+
+    return (f"not resolved: {r.joint} {r.quantity} = {r.peak:.4g} ± {r.accuracy:.2g} {r.unit} "
+            f"({percent(r.utilisation)} % ± {percent(r.accuracy / abs(r.limit))} % of {r.limit:.4g} {r.unit})")
+
+
 def violation_text(r) -> str:
     """The one line that says a limit is exceeded (a :class:`~pickplace_cli.limits.report.LimitRow` that is not
     ok), as a single plan and every batch row print it: joint, quantity, peak [unit], when (t [s] or the
@@ -361,8 +370,9 @@ def plan_rows(
             code = result.report.exit_code()
             err = None
             if code:  # every exceeded limit, one line each, in the single plan's words
-                err = "\n".join(f"row {r.row} ({source}:{r.line}): {violation_text(x)}"
-                                 for x in result.report.violations)
+                said = ([violation_text(x) for x in result.report.violations]  # (strict: a peak not resolved)
+                        or [unresolved_text(x) for x in result.report.unresolved])
+                err = "\n".join(f"row {r.row} ({source}:{r.line}): {line}" for line in said)
             yield RowResult(r.row, result, err, code)
         except PickplaceError as exc:
             yield RowResult(r.row, None, f"row {r.row} ({source}:{r.line}): {exc}", exc.exit_code)

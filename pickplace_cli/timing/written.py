@@ -54,14 +54,16 @@ def written_values(x: np.ndarray) -> np.ndarray:
 
 
 def read_as_written(t: np.ndarray, tool: np.ndarray, q: np.ndarray, profile, not_held: str,
-                    positions_only: bool = False):
+                    positions_only: bool = False, strict: bool = False):
     """The limit report of ``check``'s reading of the samples at ``t`` (N,) s of the tool's x … jz (N, 12) [m, m/s,
     m/s², m/s³] and the joint positions ``q`` (N, n) [rad or m] as this tool's CSV writes them (``profile`` at its
     limit use; ``not_held``: why the Cartesian capacity is not held, "" when it is): the reconstruction from all the
     samples, the one :func:`~pickplace_cli.limits.samples.check_samples` takes (which then also reads every other
     sample for the peaks' accuracy): its rows' peaks as read, their ``ok`` without any accuracy
     (:func:`hold_as_written` allows check's finest, ``CHECK_RESOLUTION``). ``positions_only``: the file holds the
-    joint positions alone, which ``check`` reads through the quintic spline of their tool positions."""
+    joint positions alone, which ``check`` reads through the quintic spline of their tool positions. ``strict``: also
+    every other sample, as ``check`` reads them for the peaks' stated accuracy (``LimitRow.accuracy``: what
+    ``check --strict`` judges a peak's resolution by)."""
     from ..limits.samples import _motion_report, derivative_problems
     from ..robots import build_robot
 
@@ -73,19 +75,32 @@ def read_as_written(t: np.ndarray, tool: np.ndarray, q: np.ndarray, profile, not
         tool = None
     if getattr(robot, "rotary", False):
         pos = np.column_stack([pos, robot.tool_angle(q)])
-    return _motion_report(t, pos, robot, profile, 0.0, "the written samples", None, tool, not_held=not_held)[0]
+    report = _motion_report(t, pos, robot, profile, 0.0, "the written samples", None, tool, not_held=not_held)[0]
+    if strict:  # the peaks' accuracy, as check_samples states it
+        from ..limits.samples import HERMITE_DIVISOR, _half, _with_accuracy
+
+        half = _half(len(t))
+        if len(half) >= MIN_SAMPLES:
+            share = 1.0 / HERMITE_DIVISOR if tool is not None else 1.0
+            other = _motion_report(t[half], pos[half], robot, profile, 0.0, "the written samples", None,
+                                   None if tool is None else tool[half], not_held=not_held)[0]
+            report = _with_accuracy(report, [(other, share)])
+    return report
 
 
 def _past(read) -> list:
     """[(row, how far past)] of the timed rows whose peak, less ``check``'s finest accuracy (``CHECK_RESOLUTION`` of
     the peak), is beyond the allowed value: the rows ``check`` could call exceeded (how far: that reduced peak over the
-    allowed value, > 1)."""
+    allowed value, > 1); and of a strict reading (rows with an accuracy: :func:`read_as_written`), the rows
+    ``check --strict`` calls not resolved (how far: the peak plus its accuracy over the allowed value)."""
     from ..limits.samples import CHECK_RESOLUTION
 
     out = []
     for r in read.rows:
         if r.kind == "limit" and r.bound == "upper" and not r.not_held and r.allowed > 0:
             u = r.peak * (1.0 - CHECK_RESOLUTION) / r.allowed
+            if r.accuracy is not None and not r.resolved:
+                u = max(u, (r.peak + r.accuracy) / r.allowed)
             if u > 1.0:
                 out.append((r, u))
     return out
@@ -107,24 +122,27 @@ class Written:
 
 
 def hold_as_written(T0: float, state: Any, sample: Callable[[float], tuple[Any, tuple]], profile, not_held: str,
-                    cycle: float | None = None, rate: float | None = None, positions_only: bool = False) -> Written:
+                    cycle: float | None = None, rate: float | None = None, positions_only: bool = False,
+                    strict: bool = False) -> Written:
     """Stretch the law at duration ``T0`` [s] until ``check`` reads its samples within every limit (module
     docstring). ``state``: what ``sample`` returned at ``T0``; ``sample(T)`` → (state, (t, tool, q)) at duration T
     (the written samples). ``cycle`` [s]: durations in whole cycles. ``rate`` [Hz]: named in the note.
-    ``positions_only``: the file holds the joint positions alone (:func:`read_as_written`)."""
+    ``positions_only``: the file holds the joint positions alone (:func:`read_as_written`). ``strict``: until
+    ``check --strict`` accepts them too: every peak resolved by the samples (within its limit at its stated
+    accuracy, or known to 1 %)."""
     T, k = T0, 1.0
     t, tool, q = state[1]
     if len(t) < MIN_SAMPLES:  # check refuses such a file whatever it holds (a move needs 6 samples)
         return Written(T0, 1.0, state, None, f"written samples: {len(t)}, fewer than the {MIN_SAMPLES} check reads "
                        "a move from: not read back (write at a higher --rate)")
-    read = read_as_written(t, tool, q, profile, not_held, positions_only)
-    first = worst = None
+    read = read_as_written(t, tool, q, profile, not_held, positions_only, strict)
+    first = None
     def at_k(kk: float):
         TT = kk * T0
         if cycle is not None:
             TT = float(np.ceil(TT / cycle - 1e-9) * cycle)
         st = sample(TT)
-        return TT / T0, TT, st, read_as_written(*st[1], profile, not_held, positions_only)
+        return TT / T0, TT, st, read_as_written(*st[1], profile, not_held, positions_only, strict)
 
     k_lo = 1.0  # the largest stretch read past a limit
     for attempt in range(RETIMES):
@@ -151,20 +169,32 @@ def hold_as_written(T0: float, state: Any, sample: Callable[[float], tuple[Any, 
     note = ""
     now = _past(read)
     past = tuple(r for r, _ in now)
+    if first is None and now:  # past as read, and not slowed (the reading also put a position past its range)
+        at = (" (joint positions alone)" if positions_only else "") + (f" at {rate:g} Hz" if rate else "")
+        row = max(now, key=lambda x: x[1])[0]
+        pm = f" ± {100 * row.accuracy / row.limit:.2f} %" if strict and row.accuracy is not None else ""
+        note = (f"written samples{at}: {'check --strict' if strict else 'check'}'s reading of them puts {row.joint} "
+                f"{row.quantity} at {100 * row.peak / row.limit:.2f} %{pm}: the file is not written as within its "
+                "limits (write at a higher --rate)")
     if first is not None:
         at = (" (joint positions alone)" if positions_only else "") + (f" at {rate:g} Hz" if rate else "")
         row, u = first
+        who = "check --strict" if strict else "check"
+
+        def reading(r) -> str:
+            pm = f" ± {100 * r.accuracy / r.limit:.2f} %" if strict and r.accuracy is not None else ""
+            return f"{r.joint} {r.quantity} at {100 * r.peak / r.limit:.2f} %{pm}"
+
         if not now:
             top = max((r for r in read.rows if r.kind == "limit" and not r.not_held and r.allowed > 0),
                       key=lambda r: r.peak / r.allowed)
-            held = (f"where check reads every limit within it ({top.joint} {top.quantity} "
-                    f"{100 * top.peak / top.limit:.2f} %)")
+            held = f"where {who} reads every limit within it ({reading(top)})"
         else:
             last = max(now, key=lambda x: x[1])[0]
-            held = (f"and check still reads {last.joint} {last.quantity} at {100 * last.peak / last.limit:.2f} %: the "
-                    "file is not written as within its limits (write at a higher --rate)")
-        note = (f"written samples{at}: check's reading of them put {row.joint} {row.quantity} at "
-                f"{100 * row.peak / row.limit:.2f} % (the samples are too far apart for the law's fastest changes); "
+            held = (f"and {who} still reads {reading(last)}: the file is not written as within its limits (write at "
+                    "a higher --rate)")
+        note = (f"written samples{at}: {who}'s reading of them put {reading(row)} (the samples are too far apart for "
+                f"the law's fastest changes); "
                 f"the law is slowed × {k:.5f}, T {T0:.6g} → {T:.6g} s, {held}"
                 + ("; the tool columns (the default CSV), a faster --rate, or a drive's table (-f pvt, cam), need "
                    "less" if k > 1.01 and positions_only else

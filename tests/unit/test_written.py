@@ -4,7 +4,7 @@
 The Adept cycle with the capacity held, at the default 1 kHz: the law's jerk falls from ~7 300 m/s³ to 0 in the
 last 0.3 ms, and the septic Hermite through the 1 kHz samples read q1's torque rate at 100.2 % (accuracy 0.1 %)
 while the motion itself peaks at 99.99 %. Tested: the file as plan writes it is accepted; without the reading
-(``RETIMES`` = 0) the same file is refused (the test is not vacuous); the slowed motion holds its limits on an
+(``read_written=""``) the same file is refused (the test is not vacuous); the slowed motion holds its limits on an
 independent dense finite-difference sampling of the model; the slowing is small and said."""
 
 from __future__ import annotations
@@ -61,13 +61,19 @@ def test_optimal_file_is_accepted_by_check(tmp_path):
 
 
 def test_without_the_reading_the_same_file_is_refused(tmp_path, monkeypatch):
-    """The case is real: the law written at its own duration is refused by check (so the test above can fail)."""
-    monkeypatch.setattr(written, "RETIMES", 0)
-    prof, pl = _adept()
+    """The case is real: the law written at its own duration (the reading switched off: ``read_written=""``) is
+    refused by check (so the test above can fail); read but not slowed (``RETIMES`` = 0), the plan itself says the
+    reading exceeds the limit (exit 3, not written as ok)."""
+    prof = load_profile("delta-su2018")
+    pl = plan(ADEPT, prof, PlanOptions(time="optimal", hold_capacity=True, read_written=""))
     assert pl.report.ok and pl.duration.written_stretch == 1.0
     rep = _read(tmp_path, pl, prof, hold=True)
     assert not rep.ok, ("check now accepts the unslowed law's 1 kHz file: the reading no longer needs the slowing "
                         "on this move; pick another move for this test")
+    monkeypatch.setattr(written, "RETIMES", 0)
+    unslowed = plan(ADEPT, prof, PlanOptions(time="optimal", hold_capacity=True))
+    assert unslowed.report.exit_code() == 3 and unslowed.duration.seconds == pl.duration.seconds
+    assert "the file is not written as within its limits" in unslowed.duration.written
 
 
 def test_slowed_law_holds_on_a_dense_finite_difference(tmp_path):
@@ -212,3 +218,97 @@ def test_a_batch_says_which_rows_were_slowed(tmp_path, streamed):
     assert got == pytest.approx(want, rel=1e-12)
     assert (f"batch: 2 rows, 2 ok, 0 failed; 2 written; 1 slowed so that check reads their written samples within "
             f"every limit (up to × {want[0]:.5g}, row 1;") in r.stderr
+
+
+SCARA_HC = ("scara-600", Task([0.3, -0.15, -0.1], [0.4, 0.15, -0.1], height=0.025, eta=0.5))
+
+
+def _strict_read(tmp_path, pl, prof):
+    buf = io.StringIO()
+    write_csv(pl, buf)
+    f = tmp_path / "strict.csv"
+    f.write_text(buf.getvalue())
+    return check_file(str(f), prof, hold_capacity=False, strict=True)[0].report
+
+
+def test_strict_plan_is_resolved_for_check_strict(tmp_path):
+    """``PlanOptions(strict=True)`` (``plan --strict``): a time-optimal law whose 1 kHz file check reads within its
+    limits but with q1's torque rate not resolved (100.1 % ± 1.5 %: ``check --strict`` exit 3) is slowed until
+    every peak is resolved; check then finds none unresolved. The slowing is small (< 1 %: a torque rate falls as
+    1/T³), said in the note, and the law is the same one (the plan without --strict, scaled in time)."""
+    name, task = SCARA_HC
+    prof = load_profile(name)
+    loose = plan(task, prof, PlanOptions(time="optimal", hold_capacity=True))
+    rep = _strict_read(tmp_path, loose, prof)
+    assert rep.ok and rep.unresolved, "the file without --strict is resolved: pick another move for this test"
+    pl = plan(task, prof, PlanOptions(time="optimal", hold_capacity=True, strict=True))
+    assert pl.report.ok and pl.report.exit_code() == 0 and pl.report.strict
+    assert 1.0 < pl.duration.written_stretch < 1.01
+    assert pl.duration.seconds == pytest.approx(loose.duration.t_optimal * pl.duration.written_stretch, rel=1e-12)
+    assert "check --strict's reading of them put q1 motor torque rate at" in pl.duration.written
+    rep = _strict_read(tmp_path, pl, prof)
+    assert rep.ok and not rep.unresolved, [(r.joint, r.quantity, r.peak, r.accuracy) for r in rep.unresolved]
+
+
+def test_strict_not_resolved_after_the_slowing_is_exit_3(tmp_path, monkeypatch):
+    """A peak still not resolved when the slowing gives up fails the plan under --strict: exit 3, the row within its
+    limit but not resolved (check's reading: peak and accuracy), and the CLI says why it wrote nothing; the same plan
+    without --strict is written (exit 0). The slowing that gives up is simulated: the law slowed as without --strict
+    (q1's torque rate then reads within its limit, ± 1.5 %), the strict reading's unresolved rows left over."""
+    from dataclasses import replace as with_fields
+
+    from typer.testing import CliRunner
+
+    from pickplace_cli.cli import app
+
+    real = written.hold_as_written
+
+    def gave_up(*args, strict=False, **kwargs):
+        w = real(*args, **kwargs)
+        if not strict:
+            return w
+        read = written.read_as_written(*w.state[1], args[3], args[4], kwargs.get("positions_only", False), True)
+        return with_fields(w, read=read, past=tuple(r for r, _ in written._past(read)))
+
+    monkeypatch.setattr(written, "hold_as_written", gave_up)
+    name, task = SCARA_HC
+    pl = plan(task, load_profile(name), PlanOptions(time="optimal", hold_capacity=True, strict=True))
+    assert pl.report.ok and pl.report.exit_code() == 3
+    (row,) = pl.report.unresolved
+    assert (row.joint, row.quantity) == ("q1", "motor torque rate") and row.accuracy > 0.01 * row.limit
+    args = ["plan", "-p", name, "--from", "0.3,-0.15,-0.1", "--to", "0.4,0.15,-0.1", "--time", "optimal",
+            "--hold-capacity", "-q", "-o", str(tmp_path / "s.csv")]
+    r = CliRunner().invoke(app, [*args, "--strict"])
+    assert r.exit_code == 3 and not (tmp_path / "s.csv").exists()
+    assert "pickplace: not resolved: q1 motor torque rate = " in r.stderr
+    assert "trajectory not written (--strict: a peak is not resolved by the written samples)" in r.stderr
+    r = CliRunner().invoke(app, args)
+    assert r.exit_code == 0 and (tmp_path / "s.csv").exists()
+
+
+def test_strict_under_the_default_rule_and_its_usage(tmp_path):
+    """--strict under the default rule (limits) reads the file too: the Adept cycle's is resolved as planned (no
+    slowing); --strict with a duration in seconds or a drive's table is a usage error (exit 2); a batch row that
+    stays unresolved is said on its own line (``unresolved_text``)."""
+    from typer.testing import CliRunner
+
+    from pickplace_cli.cli import app
+    from pickplace_cli.pipelines.batch import unresolved_text
+
+    prof = load_profile("delta-su2018")
+    pl = plan(ADEPT, prof, PlanOptions(strict=True))
+    assert pl.report.exit_code() == 0 and pl.duration.written_stretch == 1.0
+    rep = _strict_read(tmp_path, pl, prof)
+    assert not rep.unresolved
+    base = ["plan", "--from", "-0.1525,0,-0.8", "--to", "0.1525,0,-0.8", "--strict", "-q"]
+    r = CliRunner().invoke(app, [*base, "--time", "0.3", "-o", str(tmp_path / "a.csv")])
+    assert r.exit_code == 2 and "--strict slows the law of a duration rule" in r.stderr
+    r = CliRunner().invoke(app, [*base, "-f", "pvt", "-o", str(tmp_path / "a.csv")])
+    assert r.exit_code == 2 and "a drive's table (-f pvt) is judged as the drive interpolates it" in r.stderr
+    r = CliRunner().invoke(app, [*base, "-o", str(tmp_path / "a.csv")])
+    assert r.exit_code == 0, r.stderr
+    row = rep.rows[0]
+    from dataclasses import replace as rep_row
+
+    text = unresolved_text(rep_row(row, peak=99.5, limit=100.0, utilisation=0.995, accuracy=1.5))
+    assert text.startswith(f"not resolved: {row.joint} {row.quantity} = 99.5 ± 1.5 ") and "(99.5 % ± 1.5 % of 100" in text
