@@ -72,10 +72,31 @@ def worker_init(parent: int) -> None:  # pragma: no cover - runs in the worker p
 
 def local_pool(workers: int):
     """A ``ProcessPoolExecutor`` of ``workers`` processes whose workers leave Ctrl-C to this process and die with
-    it (:func:`worker_init`)."""
+    it (:func:`worker_init`), and whose exit after a Ctrl-C prints nothing (:func:`_quiet_wakeup`)."""
     from concurrent.futures import ProcessPoolExecutor
 
-    return ProcessPoolExecutor(max_workers=workers, initializer=worker_init, initargs=(os.getpid(),))
+    pool = ProcessPoolExecutor(max_workers=workers, initializer=worker_init, initargs=(os.getpid(),))
+    _quiet_wakeup(pool)
+    return pool
+
+
+def _quiet_wakeup(pool) -> None:
+    """Python before 3.12: the interpreter's exit wakes every pool's manager thread through a pipe that thread may be
+    closing at that moment (no lock between them), and the write's ``OSError: [Errno 9] Bad file descriptor`` was
+    printed as a traceback after the one line of a Ctrl-C (a streamed ``plan --batch - -j 2`` on a loaded machine).
+    The pool's wake-up ignores a pipe already closed: there is nothing left to wake."""
+    wake = getattr(pool, "_executor_manager_thread_wakeup", None)
+    send = getattr(wake, "wakeup", None)
+    if send is None:
+        return
+
+    def wakeup() -> None:
+        try:
+            send()
+        except OSError:
+            pass
+
+    wake.wakeup = wakeup
 
 
 @contextmanager

@@ -96,7 +96,8 @@ def plan_stream(
     finally:
         if pool is not None:
             # waited for (the rows in flight; the rest cancelled) unless Ctrl-C: a pool left to the interpreter's
-            # exit races its manager thread closing the wake-up pipe (Python < 3.12: an OSError traceback at exit)
+            # exit races its manager thread closing the wake-up pipe (Python < 3.12: an OSError traceback at exit,
+            # which local_pool's wake-up now ignores when the race is lost anyway)
             pool.shutdown(wait=not interrupted, cancel_futures=True)
 
 
