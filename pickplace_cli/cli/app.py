@@ -282,6 +282,28 @@ _MAIN_PID = [0]
 _TERM_NOTES: list[str] = []
 
 
+def named_by_option(message: str, command: Callable) -> str:
+    """An error ``FIELD = VALUE: RULE`` about a value that ``command`` (a typer command function) takes as an option
+    ``--FIELD`` (``_`` read as ``-``) names the option instead: ``--FIELD VALUE: RULE`` (``-j/--workers 3: …``).
+    Other messages (a file's line, a batch row, a profile's field, a derived value such as λ) are returned as they
+    are."""
+    name, sep, rest = message.partition(" = ")
+    if not sep or not name.replace("_", "").replace("-", "").isalnum():
+        return message
+    import inspect
+
+    want = "--" + name.replace("_", "-")
+    for param in inspect.signature(command).parameters.values():
+        decls = getattr(param.default, "param_decls", None)
+        if decls is None:  # (an argument, or not a typer parameter)
+            continue
+        names = [n for d in decls for n in d.split("/") if not n.startswith("--no-")] or ["--" + param.name.replace("_", "-")]
+        if want in names:  # its short form and its first long one (``-j/--workers``, ``--v-from``)
+            shown = [n for n in names if not n.startswith("--")] + [next(n for n in names if n.startswith("--"))]
+            return f"{'/'.join(shown)} {rest}"
+    return message
+
+
 def _handle_errors(fn: Callable) -> Callable:
     """Turn the library's typed errors into one line on stderr and the documented exit code; SIGTERM stops the
     command with exit 143 (:func:`_on_sigterm`)."""
@@ -311,7 +333,7 @@ def _handle_errors(fn: Callable) -> Callable:
         try:
             return fn(*args, **kwargs)
         except PickplaceError as exc:  # (`plan --json`: stdout still carries one JSON document, like a batch row's)
-            _fail_json(exc.exit_code, str(exc))
+            _fail_json(exc.exit_code, named_by_option(str(exc), fn))
         except KeyboardInterrupt:
             _err("interrupted; no output file was changed")
             raise typer.Exit(130) from None

@@ -36,7 +36,6 @@ from .plan_options import (
     _rosbag2_format,
     _check_plan_usage,
     _check_plan_values,
-    option_errors,
     _check_shape_usage,
     _columns,
     _finite_latency,
@@ -59,7 +58,6 @@ from .render import (
 
 @app.command()
 @_handle_errors
-@option_errors
 def plan(
     ctx: typer.Context,
     from_: Optional[str] = typer.Option(None, "--from", help="Pick point X,Y,Z in m (base frame), e.g. -0.1525,0,-0.8; "

@@ -3,8 +3,6 @@ method's parameters, the columns and the time law's coefficients."""
 
 from __future__ import annotations
 
-from contextlib import contextmanager
-
 from .app import (
     MAX_SHIFT,
     Compression,
@@ -23,43 +21,6 @@ from .app import (
 #: the largest --tolerance of a table [rad or m]: 1 mrad or 1 mm (a larger one let a table of two points stand for
 #: the move, 0.13 rad off it)
 MAX_TOLERANCE = 1e-3
-
-
-#: the option each checked value comes from: its range error names the option (``--keep-warm 0.0001 s: …``), not
-#: the library's field (``keep_warm = 0.0001 s: …``, what ``PlanOptions`` and a batch row's columns say)
-OPTION_OF = {"from": "--from", "to": "--to", "v_from": "--v-from", "v_to": "--v-to", "time": "--time",
-             "height": "--height", "rate": "--rate", "k1": "--k1", "k2": "--k2", "eta": "--eta", "param": "--param",
-             "keep_warm": "--keep-warm", "tolerance": "--tolerance", "limit-use": "--limit-use", "latency": "--latency",
-             "workers": "-j/--workers", "law_coefficients": "--law-coefficients",
-             "shape_law_evals": "--shape-law-evals"}
-
-
-@contextmanager
-def named_options():
-    """Errors of the values checked inside name the option that gave them: a message ``field = value: rule`` of a
-    field in :data:`OPTION_OF` becomes ``--option value: rule`` (same error class, same exit code)."""
-    from ..model.errors import PickplaceError
-
-    try:
-        yield
-    except PickplaceError as exc:
-        name, sep, rest = str(exc).partition(" = ")
-        if sep and name in OPTION_OF:
-            raise type(exc)(f"{OPTION_OF[name]} {rest}") from None
-        raise
-
-
-def option_errors(fn):
-    """``fn`` (a command) with :func:`named_options` around it: its value errors name the option (a batch row's
-    errors start with their row, and keep their column's name)."""
-    import functools
-
-    @functools.wraps(fn)
-    def wrapper(*args, **kwargs):
-        with named_options():
-            return fn(*args, **kwargs)
-
-    return wrapper
 
 
 def _check_plan_values(a) -> None:

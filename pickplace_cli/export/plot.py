@@ -52,7 +52,8 @@ def plot_format(path: str | None, fmt: str | None) -> str:
     else:
         raise ExportError(f"output {path or '-'}: cannot tell the figure format; give --format png|svg or a .png/.svg file")
     if f not in FORMATS:
-        raise ExportError(f"format = {f!r}: a figure is written as {' or '.join(FORMATS)}")
+        given = f"format = {f!r}" if fmt else f"output {path}: its suffix {f!r}"
+        raise ExportError(f"{given}: a figure is written as {' or '.join(FORMATS)}")
     return f
 
 

@@ -331,7 +331,7 @@ def test_closed_stdin_is_one_line():
                        stdin=subprocess.DEVNULL, capture_output=True, text=True, timeout=TIMEOUT,
                        preexec_fn=lambda: os.close(0))
     assert r.returncode == 1 and "Traceback" not in r.stderr
-    assert r.stderr.strip() == "pickplace: error: batch = -: standard input is closed; give the rows on stdin or a file"
+    assert r.stderr.strip() == "pickplace: error: --batch -: standard input is closed; give the rows on stdin or a file"
 
 
 def test_keep_warm_with_a_missing_batch_file_says_it_is_missing(tmp_path):

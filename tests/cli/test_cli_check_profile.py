@@ -31,7 +31,7 @@ def test_profile_show_scara_workspace_sentence():
 def test_profile_show_refuses_non_finite_z(z):
     r = run("profile", "show", "--z", z)
     assert r.exit_code == 1 and r.stdout == ""
-    assert r.stderr.strip() == f"pickplace: error: z = {float(z)!r}: must be a finite number in m (no NaN or inf)"
+    assert r.stderr.strip() == f"pickplace: error: --z {float(z)!r}: must be a finite number in m (no NaN or inf)"
 
 
 def test_profile_validate_names_a_short_range(tmp_path):

@@ -117,10 +117,10 @@ def test_a_failed_run_leaves_the_old_file_and_an_input_is_never_overwritten(line
 
 
 @pytest.mark.parametrize("args, text", [
-    (["--strategy", "fastest"], "strategy = 'fastest': choose from upstream_first, quota, bands, skip"),
-    (["--robots", "3"], "robots = 3: the line file has 2 robots"),
-    (["--max-miss-rate", "2"], "max-miss-rate = 2.0: must be a share between 0 and 1"),
-    (["--speeds", "0.2,x"], "speeds = '0.2,x': give numbers separated by commas"),
+    (["--strategy", "fastest"], "--strategy 'fastest': choose from upstream_first, quota, bands, skip"),
+    (["--robots", "3"], "--robots 3: the line file has 2 robots"),
+    (["--max-miss-rate", "2"], "--max-miss-rate 2.0: must be a share between 0 and 1"),
+    (["--speeds", "0.2,x"], "--speeds '0.2,x': give numbers separated by commas"),
 ])
 def test_bad_options_are_one_line(line_file, args, text):
     _one_line(run("line", line_file, *args), 1, text)

@@ -246,10 +246,10 @@ def test_a_named_pipe_without_a_writer_says_what_it_waits_for(line_file, tmp_pat
 
 
 @pytest.mark.parametrize("args,text", [
-    (("--seed", "-5"), "seed = '-5': a seed is a whole number from 0"),
-    (("--seeds", "1," + "9" * 5000), "seeds = '1,999"),
+    (("--seed", "-5"), "--seed '-5': a seed is a whole number from 0"),
+    (("--seeds", "1," + "9" * 5000), "--seeds '1,999"),
     (("--seeds", "18446744073709551616"), "seeds are whole numbers from 0 to 2^64"),
-    (("--belt-speed", "1e-300"), "belt-speed = 1e-300: must be at least 0.001"),
+    (("--belt-speed", "1e-300"), "--belt-speed 1e-300: must be at least 0.001"),
     (("--speeds", "1e-300,0.5"), "every belt speed must be at least 0.001"),
 ])
 def test_values_out_of_range_are_one_short_line(line_file, args, text):

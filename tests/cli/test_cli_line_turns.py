@@ -72,9 +72,9 @@ def test_bad_turn_fields_are_one_line(line_file, old, new, text):
 
 
 @pytest.mark.parametrize("args,code,text", [
-    (("--until", "0"), 1, "until = 0.0: the half-width of the miss rate's interval is a share from 0.001 to 0.5"),
-    (("--until", "0.7"), 1, "until = 0.7"),
-    (("--until", "0.05", "--until-max", "0.5"), 1, "until-max = 0.5 s: the longest run is from 1 to 1e5 s"),
+    (("--until", "0"), 1, "--until 0.0: the half-width of the miss rate's interval is a share from 0.001 to 0.5"),
+    (("--until", "0.7"), 1, "--until 0.7"),
+    (("--until", "0.05", "--until-max", "0.5"), 1, "--until-max 0.5 s: the longest run is from 1 to 1e5 s"),
     (("--until", "0.05", "--seeds", "1,2"), 2, "--until runs the line file's generator longer"),
 ])
 def test_bad_until_is_one_line(line_file, args, code, text):

@@ -59,9 +59,9 @@ def test_from_belt_is_v_from():
 @pytest.mark.parametrize(
     "extra, code, message",
     [
-        (["--to-belt", "0,nan,0"], 1, "to-belt = '0,nan,0': every coordinate must be a finite number"),
-        (["--to-belt", "0,inf,0"], 1, "to-belt = '0,inf,0'"),
-        (["--to-belt", "0,0.5"], 1, "to-belt = '0,0.5': give three components"),
+        (["--to-belt", "0,nan,0"], 1, "--to-belt '0,nan,0': every coordinate must be a finite number"),
+        (["--to-belt", "0,inf,0"], 1, "--to-belt '0,inf,0'"),
+        (["--to-belt", "0,0.5"], 1, "--to-belt '0,0.5': give three components"),
         (["--to-belt", "0,0.5,0", "--latency", "-0.1"], 1, "--latency -0.1: must be a finite number of seconds >= 0"),
         (["--to-belt", "0,0.5,0", "--latency", "nan"], 1, "--latency nan"),
         (["--to-belt", "0,0.5,0", "-m", "ph"], 1, "to-belt: method ph plans moves from rest to rest"),

@@ -84,7 +84,7 @@ BIG = "1" * 5000
     (["plan", *ADEPT, "--time", BIG], "--time '" + "1" * 60 + "' … (5,000 characters)"),
     (["plan", "--from", BIG + ",0,-0.8", "--to", "0.1525,0,-0.8"], "--from '" + "1" * 60 + "' … (5,007 characters)"),
     (["plan", *ADEPT, "-m", BIG], "'" + "1" * 60 + "' … (5,000 characters)"),
-    (["build-table", "--weights", BIG], "weights = '" + "1" * 60 + "' … (5,000 characters)"),
+    (["build-table", "--weights", BIG], "--weights '" + "1" * 60 + "' … (5,000 characters)"),
 ])
 def test_a_5000_digit_value_is_one_short_error_line(args, says):
     """A 5,000-digit number pasted into an option: one line that shows the value cut to 60 characters with its

@@ -48,11 +48,11 @@ def test_one_row_grid_builds_and_plans(tmp_path):
 
 
 @pytest.mark.parametrize("args,msg", [
-    (["--eta-min", "0.9", "--eta-max", "0.1"], "eta-max = 0.1: must not be less than eta-min = 0.9"),
-    (["--eta-min", "0", "--eta-max", "0.5"], "eta-min = 0.0: must lie in [0.01, 0.99]"),
-    (["--eta-list", "0.2,x"], "eta-list = '0.2,x': give numbers separated by commas"),
-    (["--eta-min", "0.2", "-f", "json"], "format = json: a 2-D (λ, η) table is written as csv or st"),
-    (["--lambda-points", "1"], "lambda-points = 1: need 1 for lambda-min = lambda-max, else at least 2"),
+    (["--eta-min", "0.9", "--eta-max", "0.1"], "--eta-max 0.1: must not be less than eta-min = 0.9"),
+    (["--eta-min", "0", "--eta-max", "0.5"], "--eta-min 0.0: must lie in [0.01, 0.99]"),
+    (["--eta-list", "0.2,x"], "--eta-list '0.2,x': give numbers separated by commas"),
+    (["--eta-min", "0.2", "-f", "json"], "-f/--format json: a 2-D (λ, η) table is written as csv or st"),
+    (["--lambda-points", "1"], "--lambda-points 1: need 1 for lambda-min = lambda-max, else at least 2"),
 ])
 def test_build_table_2d_bad_input(tmp_path, args, msg):
     out = tmp_path / "t.out"  # (a suffix that names no format: -f decides)

@@ -73,10 +73,10 @@ def test_compare_csv_stdout_and_json_file(tmp_path):
 @pytest.mark.parametrize(
     "args, code, text",
     [
-        (["-m", "bspline,nope"], 1, "methods = 'nope': unknown method"),
-        (["-m", ""], 1, "methods = '': empty"),
-        (["-m", "bspline", "--eta", "1.5"], 1, "eta = 1.5"),
-        (["-m", "bspline", "--time", "soon"], 1, "time = 'soon'"),
+        (["-m", "bspline,nope"], 1, "-m/--methods 'nope': unknown method"),
+        (["-m", ""], 1, "-m/--methods '': empty"),
+        (["-m", "bspline", "--eta", "1.5"], 1, "--eta 1.5"),
+        (["-m", "bspline", "--time", "soon"], 1, "--time 'soon'"),
         (["-m", "bspline", "-o", "x.out"], 1, "--format table prints to stderr"),
         (["-m", "bspline", "-f", "csv", "-o", "/no/such/dir/x.csv"], 1, "does not exist"),
         (["-m", "bspline", "-p", "nope"], 1, "profile 'nope'"),
@@ -87,7 +87,7 @@ def test_compare_bad_input(args, code, text):
 
 
 def test_compare_bad_point():
-    _one_line_error(run("compare", "--from", "1,2", "--to", "0,0,-0.8"), 1, "from = '1,2'")
+    _one_line_error(run("compare", "--from", "1,2", "--to", "0,0,-0.8"), 1, "--from '1,2'")
 
 
 def test_compare_every_method_unreachable_exits_4(tmp_path):
@@ -132,8 +132,8 @@ def test_plot_format_flag_and_stdout(tmp_path):
     "args, text",
     [
         (["-o", "figure"], "cannot tell the figure format"),
-        (["-o", "f.pdf"], "format = 'pdf'"),
-        (["-o", "f.png", "-f", "jpeg"], "format = 'jpeg'"),
+        (["-o", "f.pdf"], "output f.pdf: its suffix 'pdf'"),
+        (["-o", "f.png", "-f", "jpeg"], "-f/--format 'jpeg'"),
         (["-o", "/no/such/dir/f.png"], "does not exist"),
         (["-o", "f.png", "-m", "nope"], "unknown method"),
     ],
