@@ -66,7 +66,7 @@ def _rosbag2_format(ctx, fmt, output):
 
 
 def _law_coefficients(text: str) -> int | None:
-    """--law-coefficients: None for auto, else an integer in 8 ... 80 (TaskError, exit 1, otherwise)."""
+    """--law-coefficients: None for auto, else an integer in 8 ... 120 (TaskError, exit 1, otherwise)."""
     from ..model.errors import TaskError
 
     if text.strip().lower() == "auto":
@@ -75,8 +75,8 @@ def _law_coefficients(text: str) -> int | None:
         n = int(text)
     except ValueError:
         n = None
-    if n is None or not 8 <= n <= 80:
-        raise TaskError(f"law_coefficients = {text!r}: must be auto or a whole number in 8 ... 80 (coefficients of "
+    if n is None or not 8 <= n <= 120:
+        raise TaskError(f"law_coefficients = {text!r}: must be auto or a whole number in 8 ... 120 (coefficients of "
                         "the time law)")
     return n
 

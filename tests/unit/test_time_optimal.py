@@ -210,14 +210,17 @@ def test_law_holds_its_rows_between_the_grid_points(adept, solver):
 
 
 def test_law_coefficients_finer_law_is_not_slower(adept):
-    """--law-coefficients 80 solves a finer law than the default's 60 (the SQP's ``LAW_SQP_COEFFICIENTS``): not
+    """--law-coefficients 80 (and 120, not slower than 80) solves a finer law than the default's 60 (the SQP's ``LAW_SQP_COEFFICIENTS``): not
     slower than it (Adept: 0.12122 against 0.12134 s), and 40 not faster; every limit holding; the option is refused
-    without --time optimal and outside 8 … 80."""
+    without --time optimal and outside 8 … 120."""
     from pickplace_cli.timing.optimal import LAW_SQP_COEFFICIENTS
 
     prof, fit, opt = adept
     assert opt.parameters["law_coefficients"] == LAW_SQP_COEFFICIENTS == 60
+    finest = plan(ADEPT, prof, PlanOptions(time="optimal", law_coefficients=120))
+    assert finest.report.ok and finest.parameters["law_coefficients"] == 120
     fine = plan(ADEPT, prof, PlanOptions(time="optimal", law_coefficients=80))
+    assert finest.duration.seconds <= fine.duration.seconds * (1 + 1e-4)
     coarse = plan(ADEPT, prof, PlanOptions(time="optimal", law_coefficients=40))
     assert fine.report.ok and fine.parameters["law_coefficients"] == 80
     assert coarse.report.ok and coarse.parameters["law_coefficients"] == 40
@@ -226,10 +229,10 @@ def test_law_coefficients_finer_law_is_not_slower(adept):
     base = ["plan", "--from", "-0.1525,0,-0.8", "--to", "0.1525,0,-0.8", "-q", "-o", "-"]
     r = runner.invoke(app, [*base, "--time", "fit", "--law-coefficients", "30"])
     assert r.exit_code == 2 and "--law-coefficients shapes the time law of --time optimal" in r.stderr
-    for bad in ("100", "7", "many", "2.5"):
+    for bad in ("121", "7", "many", "2.5"):
         r = runner.invoke(app, [*base, "--time", "optimal", "--law-coefficients", bad])
         assert r.exit_code == 1 and r.stderr == (f"pickplace: error: --law-coefficients {bad!r}: must be auto or a whole "
-                                                 "number in 8 ... 80 (coefficients of the time law)\n")
+                                                 "number in 8 ... 120 (coefficients of the time law)\n")
         # a value out of range where the option does not apply: the usage error (exit 2) is said first
         r = runner.invoke(app, [*base, "--time", "fit", "--law-coefficients", bad])
         assert r.exit_code == 2 and "--law-coefficients shapes the time law of --time optimal" in r.stderr
