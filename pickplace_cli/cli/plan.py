@@ -176,7 +176,7 @@ def plan(
         "check does, also every other one for each peak's stated accuracy, and slows the time law until every peak is "
         "resolved by them (within its limit at that accuracy, or known to 1 % of the limit); a peak still not resolved "
         "is exit 3. For --time limits, auto, fit and optimal and a sampled file (CSV, MCAP, JSON), not a drive's table "
-        "(judged as the drive interpolates it) nor a duration given in seconds. Costs a second reading (~10-30 ms); "
+        "(judged as the drive interpolates it) nor a duration given in seconds. Costs two readings (+5 to +25 ms); "
         "without it, check accepts the file and --strict may find a peak of a time-optimal law at 1 kHz not resolved.",
         rich_help_panel=Panel.LIMITS,
     ),
