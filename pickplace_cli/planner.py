@@ -460,12 +460,17 @@ def _written_stage(model: MotionModel, path, duration: Duration, samples, report
     if options.time == "optimal" and w.k > 1.0 and t_fit is not None and w.T > t_fit and uniform[1] is not path:
         t_uni = float(np.ceil(t_fit / cycle - 1e-9) * cycle) if cycle is not None else t_fit
         u = held(*uniform, t_uni, None)
-        if u.T < w.T and not u.past:  # the uniform law of --time fit, as written, is the shorter move
+        if u.T < w.T and not u.past and not u.refused:  # the uniform law of --time fit, as written, is the shorter
             model, path = uniform
             switched = True
             w = replace(u, note=f"{w.note}; longer than the uniform law of --time fit as written: that law is "
                                 f"written instead, T {u.T:.6g} s" + (f" ({u.note})" if u.note else ""))
             duration = replace(duration, law="uniform (its written samples hold sooner than the optimal law's)")
+    if w.refused:  # (strict) check --strict refuses the file whatever its peaks
+        from .model.errors import TaskError
+
+        raise TaskError(f"--strict: {w.refused} at T = {w.T:.6g} s (the law slowed × {w.k:.4g}): check --strict "
+                        "refuses such a file; write at a higher --rate, or leave the tool's columns out (--columns)")
     if w.k == 1.0 and not switched and not w.past:  # read within every limit as planned (or not read: too few samples)
         return replace(duration, written=w.note), model, path, samples, report, rounding
     samples = w.state[0]
@@ -485,8 +490,9 @@ def _written_stage(model: MotionModel, path, duration: Duration, samples, report
         said = f"{added:+d} cycle(s) so that check reads the written samples within every limit"
         rounding = replace(rounding, cycles=cycles, extra_cycles=rounding.extra_cycles + added,
                            note="; ".join(n for n in (rounding.note, said) if n))
-    return (replace(duration, seconds=w.T, written_stretch=w.T / T0, written=w.note), model, path, samples, report,
-            rounding)
+    binding = duration.binding if w.k == 1.0 else f"the written samples as {'check --strict' if options.strict else 'check'} reads them"
+    return (replace(duration, seconds=w.T, written_stretch=w.T / T0, written=w.note, binding=binding), model, path,
+            samples, report, rounding)
 
 
 class _FinalCheck:

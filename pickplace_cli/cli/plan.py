@@ -175,7 +175,7 @@ def plan(
         False, "--strict", help="Write samples that check --strict accepts: the plan reads its written samples as "
         "check does, also every other one for each peak's stated accuracy, and slows the time law until every peak is "
         "resolved by them (within its limit at that accuracy, or known to 1 % of the limit); a peak still not resolved "
-        "is exit 3. For --time limits, auto, fit and optimal and a sampled file (CSV, MCAP, JSON), not a drive's table "
+        "is exit 3. For --time limits, auto, fit and optimal and a file check reads (CSV, JSON), not MCAP nor a drive's table "
         "(judged as the drive interpolates it) nor a duration given in seconds. Costs two readings (+5 to +25 ms); "
         "without it, check accepts the file and --strict may find a peak of a time-optimal law at 1 kHz not resolved.",
         rich_help_panel=Panel.LIMITS,
@@ -595,7 +595,15 @@ def _read_written(a, fmt, columns, prof) -> str:
 
     robot = motion_model_static(prof)[0]
     named = expand_columns(_columns(columns, prof, a.drive), a.drive, len(robot.joint_units))
-    return "tool" if set(TOOL_COLUMNS) <= {c.split("[")[0] for c in named} else "positions"
+    bare = {c.split("[")[0] for c in named}
+    if not ("t" in bare and (set(robot.joint_names) <= bare or (a.drive is not None and set(a.drive.names) <= bare))):
+        need = f"t and {', '.join(robot.joint_names)}" + (f" (or t and {', '.join(a.drive.names)})" if a.drive else "")
+        if a.strict:
+            _usage(f"--strict writes what check --strict accepts, and check reads a move from {need}: --columns "
+                   f"{columns} leaves some out")
+        sys.stderr.write(f"pickplace: warning: --columns {columns}: check cannot read the file (it reads a move from "
+                         f"{need})\n")
+    return "tool" if set(TOOL_COLUMNS) <= bare else "positions"
 
 
 def _written_times(a, prof, legs: list, track):

@@ -204,6 +204,9 @@ def _check_shape_usage(a) -> None:
     if a.strict and a.time not in ("limits", "auto", "fit", "optimal"):
         _usage(f"--strict slows the law of a duration rule until check --strict accepts the written samples: use it "
                f"with --time limits (the default), auto, fit or optimal (a duration of {a.time} s is given)")
+    if a.strict and a.fmt == OutputFormat.mcap:
+        _usage("--strict writes what check --strict accepts, and check reads CSV and JSON trajectories, not MCAP: "
+               "write -f csv or -f json")
     if a.strict and table_format(a.fmt) and a.output is not None:
         _usage(f"--strict reads sampled files as check --strict does: a drive's table (-f {a.fmt.value}) is judged as "
                "the drive interpolates it")

@@ -222,11 +222,16 @@ def _fmt(x: float) -> str:
     return f"{x:.4g}"
 
 
-def _limit_table(report, narrow: bool = False):
+#: the columns a narrow terminal leaves out, in turn, until the table fits (the time of the peak, the target of a
+#: limit use, the stated accuracy): the verdict column is never dropped or wrapped
+NARROW_DROPS = ((), ("t",), ("t", "target"), ("t", "target", "acc"))
+
+
+def _limit_table(report, narrow: bool = False, drop: tuple = (), wrap: bool = False):
     """The limit rows as a rich Table. ``narrow`` (a terminal narrower than the table, e.g. 80 columns): one space
-    between columns, a short time header, no target column when every limit has the same target (the duration line
-    says it), "(not held)" without the rule (the lines below the table name it), and every column but the verdict at
-    its full width, so that a quantity and its unit stay on one line."""
+    between columns, a short time header, "(not held)" without the rule (the lines below the table name it), and
+    every column at its full width, so that a quantity and its unit stay on one line and the verdict is never cut;
+    ``drop``: columns left out ("t", "target", "acc"); ``wrap``: the quantity may wrap (the last resort)."""
     from rich.markup import escape
     from rich.table import Table
     from rich.text import Text
@@ -234,14 +239,14 @@ def _limit_table(report, narrow: bool = False):
     from ..limits.report import percent
 
     table = Table(title=None, box=None, pad_edge=False, show_header=True, header_style="bold", collapse_padding=narrow)
-    headroom = any(r.target < 1.0 for r in report.rows)  # a limit-use fraction: its target column
-    if narrow and len({r.target for r in report.rows if r.kind == "limit"}) == 1:
-        headroom = False
+    headroom = any(r.target < 1.0 for r in report.rows) and "target" not in drop  # a limit-use fraction's targets
     cols = [("joint", "left"), ("quantity", "left"), ("peak", "right"), ("limit", "right"), ("use %", "right")]
     cols += [("target %", "right")] if headroom else []
-    estimated = any(r.accuracy is not None for r in report.rows)  # peaks estimated from samples (check)
+    estimated = any(r.accuracy is not None for r in report.rows) and "acc" not in drop  # peaks from samples (check)
     cols += [("± %", "right")] if estimated else []
-    for col, just in cols + [("t [s]" if narrow else "t peak [s]", "right"), ("", "left")]:
+    timed = "t" not in drop
+    cols += [("t [s]" if narrow else "t peak [s]", "right")] if timed else []
+    for col, just in cols + [("", "left")]:
         table.add_column(escape(col), justify=just)  # type: ignore[arg-type]  ("[s]" is not rich markup)
     for r in report.rows:
         mark = "ok" if r.ok else "[bold red]EXCEEDED[/]"
@@ -254,16 +259,18 @@ def _limit_table(report, narrow: bool = False):
         cells = [r.joint, escape(f"{quantity} [{r.unit}]"), _fmt(r.peak),
                  ("≥ " if r.bound == "lower" else "≤ ") + _fmt(r.limit), percent(r.utilisation)]
         cells += [percent(r.target) if r.kind == "limit" else ""] if headroom else []
+        if r.ok and r.accuracy is not None and not r.resolved:
+            mark = "[yellow]unresolved[/]"
         if estimated:
             cells.append("" if r.accuracy is None else percent(r.accuracy / abs(r.limit)))
-            if r.ok and not r.resolved:
-                mark = "[yellow]unresolved[/]"
-        table.add_row(*cells, "" if r.t_peak is None else f"{r.t_peak:.4f}", mark)
+        cells += ["" if r.t_peak is None else f"{r.t_peak:.4f}"] if timed else []
+        table.add_row(*cells, mark)
     if narrow:
-        for column in table.columns[:-1]:  # only the verdict column may wrap (folded if a word does not fit)
+        for i, column in enumerate(table.columns):
+            if wrap and i == 1:  # the quantity, as the last resort
+                continue
             column.min_width = max(Text.from_markup(str(c)).cell_len for c in [column.header, *column.cells])
             column.no_wrap = True
-        table.columns[-1].overflow = "fold"
     return table
 
 
@@ -275,8 +282,17 @@ def _print_limit_table(report) -> None:
         from rich.measure import Measurement
 
         con = console(stderr=True, highlight=False, soft_wrap=True)
-        if Measurement.get(con, con.options.update_width(10_000), table).maximum > con.width:
-            table = _limit_table(report, narrow=True)
+
+        def width(t) -> int:
+            return Measurement.get(con, con.options.update_width(10_000), t).maximum
+
+        if width(table) > con.width:
+            for drop in NARROW_DROPS:
+                table = _limit_table(report, narrow=True, drop=drop)
+                if width(table) <= con.width:
+                    break
+            else:
+                table = _limit_table(report, narrow=True, drop=NARROW_DROPS[-1], wrap=True)
         con.print(table)
         return
     out = console(stderr=True, highlight=False, soft_wrap=True, width=200)
@@ -308,7 +324,7 @@ def _print_verdict(report, quiet: bool, with_cycle: bool = True) -> None:
 
             sys.stderr.write(
                 f"pickplace: {unresolved_text(r)}: the samples are too sparse (or too noisy) for this peak; it is not "
-                "shown exceeded, but not shown within the limit either: check a trajectory sampled at a higher rate\n")
+                "shown exceeded, but not shown within the limit either: check a trajectory sampled at a higher rate (plan --strict writes one with every peak resolved)\n")
         if not quiet:
             # a profile whose limits are all positions and the workcell (no joint speed, torque …): nothing that
             # the duration changes was checked, however short it is; say so instead of a bare "all limits hold"

@@ -119,6 +119,31 @@ class Written:
     read: Any
     note: str
     past: tuple = ()
+    refused: str = ""  # strict: why check --strict refuses the file whatever its peaks ("" when it does not)
+
+
+class _Columns:
+    """The failing "row" of a strict reading whose tool derivative columns (vx … jz) disagree with the positions by
+    more than ``check --strict`` allows (:func:`~pickplace_cli.limits.samples.derivative_problems`): it refuses such
+    a file, whatever its peaks."""
+
+    def __init__(self, problems) -> None:
+        from ..limits.samples import describe_problems
+
+        self.text = describe_problems(problems)
+
+
+def _columns_off(out, positions_only: bool) -> list:
+    """[(_Columns, how far: the worst misfit over its allowance)] when the written tool columns of ``out`` (t, tool,
+    q) disagree with their positions as ``check --strict`` tests them; [] when they agree (or are not written)."""
+    from ..limits.samples import AGREE, derivative_problems
+
+    if positions_only:
+        return []
+    t, tool = out[0], out[1]
+    data = written_values(np.column_stack([t, tool]))
+    problems = derivative_problems(data[:, 0] - data[0, 0], data[:, 1:13])
+    return [(_Columns(problems), max(m / AGREE[k] for k, m in problems))] if problems else []
 
 
 def hold_as_written(T0: float, state: Any, sample: Callable[[float], tuple[Any, tuple]], profile, not_held: str,
@@ -129,7 +154,8 @@ def hold_as_written(T0: float, state: Any, sample: Callable[[float], tuple[Any, 
     (the written samples). ``cycle`` [s]: durations in whole cycles. ``rate`` [Hz]: named in the note.
     ``positions_only``: the file holds the joint positions alone (:func:`read_as_written`). ``strict``: until
     ``check --strict`` accepts them too: every peak resolved by the samples (within its limit at its stated
-    accuracy, or known to 1 %)."""
+    accuracy, or known to 1 %), and the tool's derivative columns agreeing with its positions (``Written.refused``
+    says why not when the slowing gives up)."""
     T, k = T0, 1.0
     t, tool, q = state[1]
     if len(t) < MIN_SAMPLES:  # check refuses such a file whatever it holds (a move needs 6 samples)
@@ -137,6 +163,10 @@ def hold_as_written(T0: float, state: Any, sample: Callable[[float], tuple[Any, 
                        "a move from: not read back (write at a higher --rate)")
     read = read_as_written(t, tool, q, profile, not_held, positions_only, strict)
     first = None
+
+    def fails(rd, st) -> list:
+        return _past(rd) + (_columns_off(st[1], positions_only) if strict else [])
+
     def at_k(kk: float):
         TT = kk * T0
         if cycle is not None:
@@ -146,7 +176,7 @@ def hold_as_written(T0: float, state: Any, sample: Callable[[float], tuple[Any, 
 
     k_lo = 1.0  # the largest stretch read past a limit
     for attempt in range(RETIMES):
-        failing = _past(read)
+        failing = fails(read, state)
         if not failing or any(r.kind != "limit" for r in read.violations):
             break
         k_lo = k
@@ -157,38 +187,40 @@ def hold_as_written(T0: float, state: Any, sample: Callable[[float], tuple[Any, 
         # with a growing margin (RETIMES)
         k, T, state, read = at_k(k * max(worst[1], 1.0 + 1e-4) ** (0.5 if attempt else 1.0 / 3.0)
                                  * (1.0 + (1e-3 * 2.0 ** (attempt - 1) if attempt else 1e-4)))
-    if first is not None and not _past(read) and k / k_lo > 1.0 + BISECT_TOL:
+    if first is not None and not fails(read, state) and k / k_lo > 1.0 + BISECT_TOL:
         for _ in range(BISECT):  # the reading need not fall as fast as the cube root says: a shorter stretch
             got = at_k((k_lo * k) ** 0.5)
-            if _past(got[3]) or any(r.kind != "limit" for r in got[3].violations):
+            if fails(got[3], got[2]) or any(r.kind != "limit" for r in got[3].violations):
                 k_lo = got[0]
             else:
                 k, T, state, read = got
             if k / k_lo <= 1.0 + BISECT_TOL:
                 break
+    now = fails(read, state)
+    past = tuple(r for r, _ in now if not isinstance(r, _Columns))
+    columns = next((r for r, _ in now if isinstance(r, _Columns)), None)
+    refused = f"the written tool columns: {columns.text}" if columns is not None else ""
+    at = (" (joint positions alone)" if positions_only else "") + (f" at {rate:g} Hz" if rate else "")
+    who = "check --strict" if strict else "check"
+
+    def reading(r) -> str:
+        if isinstance(r, _Columns):
+            return f"the tool columns off their positions ({r.text})"
+        pm = f" ± {100 * r.accuracy / r.limit:.2f} %" if strict and r.accuracy is not None else ""
+        return f"{r.joint} {r.quantity} at {100 * r.peak / r.limit:.2f} %{pm}"
+
+    top = max((r for r in read.rows if r.kind == "limit" and not r.not_held and r.allowed > 0),
+              key=lambda r: r.peak / r.allowed, default=None)
     note = ""
-    now = _past(read)
-    past = tuple(r for r, _ in now)
     if first is None and now:  # past as read, and not slowed (the reading also put a position past its range)
-        at = (" (joint positions alone)" if positions_only else "") + (f" at {rate:g} Hz" if rate else "")
-        row = max(now, key=lambda x: x[1])[0]
-        pm = f" ± {100 * row.accuracy / row.limit:.2f} %" if strict and row.accuracy is not None else ""
-        note = (f"written samples{at}: {'check --strict' if strict else 'check'}'s reading of them puts {row.joint} "
-                f"{row.quantity} at {100 * row.peak / row.limit:.2f} %{pm}: the file is not written as within its "
-                "limits (write at a higher --rate)")
+        note = (f"written samples{at}: {who}'s reading of them puts {reading(max(now, key=lambda x: x[1])[0])}: the "
+                "file is not written as within its limits (write at a higher --rate)")
+    elif first is None and strict and top is not None:  # read as check --strict reads it: nothing to slow
+        note = f"written samples{at}: check --strict reads every peak resolved and within its limit ({reading(top)})"
     if first is not None:
-        at = (" (joint positions alone)" if positions_only else "") + (f" at {rate:g} Hz" if rate else "")
         row, u = first
-        who = "check --strict" if strict else "check"
-
-        def reading(r) -> str:
-            pm = f" ± {100 * r.accuracy / r.limit:.2f} %" if strict and r.accuracy is not None else ""
-            return f"{r.joint} {r.quantity} at {100 * r.peak / r.limit:.2f} %{pm}"
-
         if not now:
-            top = max((r for r in read.rows if r.kind == "limit" and not r.not_held and r.allowed > 0),
-                      key=lambda r: r.peak / r.allowed)
-            held = f"where {who} reads every limit within it ({reading(top)})"
+            held = f"where {who} reads every limit within it" + (f" ({reading(top)})" if top is not None else "")
         else:
             last = max(now, key=lambda x: x[1])[0]
             held = (f"and {who} still reads {reading(last)}: the file is not written as within its limits (write at "
@@ -199,4 +231,4 @@ def hold_as_written(T0: float, state: Any, sample: Callable[[float], tuple[Any, 
                 + ("; the tool columns (the default CSV), a faster --rate, or a drive's table (-f pvt, cam), need "
                    "less" if k > 1.01 and positions_only else
                    "; a faster --rate, or a drive's table (-f pvt, cam), needs less" if k > 1.01 else ""))
-    return Written(T, k, state, read, note, past)
+    return Written(T, k, state, read, note, past, refused)

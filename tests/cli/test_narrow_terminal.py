@@ -1,6 +1,7 @@
-"""The limit table on a terminal 80 columns wide (a real pseudo-terminal of that window size): no line is wider than
-the terminal and every row keeps its quantity and unit on one line (only the verdict column may wrap); a wide
-terminal keeps the full layout (the "t peak [s]" header, the target column). Piped output is not affected."""
+"""The limit table on a narrow terminal (a real pseudo-terminal of that window size): no line is wider than the
+terminal, every row keeps its verdict (ok, EXCEEDED, unresolved, "(not held)"), and at 80 columns every row keeps
+its quantity and unit on one line: the narrow layout leaves out the time of the peak, then the target, then the
+stated accuracy, before anything else gives; a wide terminal keeps the full layout. Piped output is not affected."""
 
 from __future__ import annotations
 
@@ -15,6 +16,7 @@ from tests.terminal import stderr_on_terminal
 
 ANSI = re.compile(r"\x1b\[[0-9;?]*[A-Za-z]")
 ROW = re.compile(r"^(q\d|tool)\s")
+VERDICT = re.compile(r"(ok|EXCEEDED|unresolved|\(not held\))\s*$")
 
 
 def _cli(*args: str) -> list[str]:
@@ -28,7 +30,7 @@ def _lines(out: bytes) -> list[str]:
 def _table(lines: list[str]) -> list[str]:
     first = next(i for i, ln in enumerate(lines) if ln.startswith("joint "))
     last = max(i for i, ln in enumerate(lines) if ROW.match(ln))
-    while last + 1 < len(lines) and lines[last + 1].startswith(" "):  # the last row's wrapped verdict
+    while last + 1 < len(lines) and lines[last + 1].startswith(" "):  # the last row's wrapped quantity
         last += 1
     return lines[first:last + 1]
 
@@ -47,29 +49,33 @@ def unresolved_file(tmp_path_factory):
     return path
 
 
-@pytest.mark.parametrize("what", ["check", "plan-not-held"])
-def test_80_columns_rows_on_one_line(what, unresolved_file):
+def _command(what: str, path) -> list[str]:
     if what == "check":
-        cmd = _cli("check", str(unresolved_file), "-p", "scara-600")
-    else:  # the target % column and long "ok (not held: --time fit)" verdicts
-        cmd = _cli("plan", "-p", "delta-4axis", "--from", "-0.1,0.1,-0.8,0", "--to", "0.15,-0.05,-0.85,1.5",
-                   "--time", "fit", "--limit-use", "0.9", "-o", os.devnull)
-    table = _table(_lines(stderr_on_terminal(cmd, None, 120.0, columns=80)))
-    assert table[0].split()[-2:] == ["t", "[s]"], table[0]
-    assert all(cell_len(ln) <= 80 for ln in table), max(table, key=cell_len)
+        return _cli("check", str(path), "-p", "scara-600")
+    if what == "check-limit-use":  # the target column too, and rows exceeded at the limit use
+        return _cli("check", str(path), "-p", "scara-600", "--limit-use", "0.9")
+    # the target % column and long "ok (not held: --time fit)" verdicts
+    return _cli("plan", "-p", "delta-4axis", "--from", "-0.1,0.1,-0.8,0", "--to", "0.15,-0.05,-0.85,1.5",
+                "--time", "fit", "--limit-use", "0.9", "-o", os.devnull)
+
+
+@pytest.mark.parametrize("what", ["check", "check-limit-use", "plan-not-held"])
+@pytest.mark.parametrize("columns", [80, 60])
+def test_narrow_rows_keep_their_verdict(what, columns, unresolved_file):
+    table = _table(_lines(stderr_on_terminal(_command(what, unresolved_file), None, 120.0, columns=columns)))
+    assert all(cell_len(ln) <= columns for ln in table), max(table, key=cell_len)
     rows = [ln for ln in table if ROW.match(ln)]
     assert len(rows) >= 15
-    assert all(re.search(r"\[[^\]]+\]\s", ln) for ln in rows), [ln for ln in rows if "]" not in ln]
-    wrapped = [ln for ln in table[1:] if not ROW.match(ln) and ln.strip()]  # continuation lines: the verdict only
-    assert all(ln.startswith(" " * 60) for ln in wrapped), wrapped
+    assert all(VERDICT.search(ln) for ln in rows), [ln for ln in rows if not VERDICT.search(ln)]
+    if columns == 80:  # each row on one line, its unit with it
+        assert all(re.search(r"\[[^\]]+\]\s", ln) for ln in rows) and len(rows) == len(table) - 1, table
     if what == "check":
         assert any(ln.rstrip().endswith("unresolved") for ln in rows)
-    else:  # every target is 90 %, which the duration line says: no target column; the verdict names no rule
-        assert "target" not in table[0] and any(ln.rstrip().endswith("ok (not held)") for ln in rows)
+    if what == "plan-not-held":
+        assert any(ln.rstrip().endswith("EXCEEDED (not held)") for ln in rows)
 
 
 def test_a_wide_terminal_keeps_the_full_layout(unresolved_file):
-    table = _table(_lines(stderr_on_terminal(_cli("check", str(unresolved_file), "-p", "scara-600"), None, 120.0,
-                                             columns=160)))
-    assert table[0].split()[-3:] == ["t", "peak", "[s]"], table[0]
-    assert all(ROW.match(ln) for ln in table[1:-1] if ln.strip())
+    table = _table(_lines(stderr_on_terminal(_command("check-limit-use", unresolved_file), None, 120.0, columns=160)))
+    assert "target" in table[0] and "±" in table[0] and table[0].split()[-3:] == ["t", "peak", "[s]"], table[0]
+    assert all(ROW.match(ln) for ln in table[1:])

@@ -312,3 +312,45 @@ def test_strict_under_the_default_rule_and_its_usage(tmp_path):
 
     text = unresolved_text(rep_row(row, peak=99.5, limit=100.0, utilisation=0.995, accuracy=1.5))
     assert text.startswith(f"not resolved: {row.joint} {row.quantity} = 99.5 ± 1.5 ") and "(99.5 % ± 1.5 % of 100" in text
+
+
+def test_strict_at_a_low_rate_the_tool_columns_agree_with_the_positions(tmp_path):
+    """At 100 Hz the tool's jerk columns of a time-optimal lamé move disagree with its positions by more than the 5 %
+    ``check --strict`` allows (it refuses the file, exit 1); ``plan --strict`` slows the law until they agree and the
+    file is accepted by check --strict with every peak resolved. The duration says what binds it now."""
+    from pickplace_cli.model.errors import TaskError
+
+    prof = load_profile("delta-su2018")
+    options = dict(method="lame", time="optimal", rate=100.0)
+    loose = plan(ADEPT, prof, PlanOptions(**options))
+    with pytest.raises(TaskError, match="disagree with the positions"):
+        _strict_read(tmp_path, loose, prof)
+    pl = plan(ADEPT, prof, PlanOptions(**options, strict=True))
+    assert pl.report.exit_code() == 0 and pl.duration.written_stretch > 1.0
+    assert pl.duration.binding == "the written samples as check --strict reads them"
+    rep = _strict_read(tmp_path, pl, prof)
+    assert rep.ok and not rep.unresolved
+
+
+def test_strict_says_what_it_read_and_refuses_what_check_cannot_read(tmp_path):
+    """Not slowed, --strict still says what check --strict reads; it is refused (exit 2) for MCAP, which check does
+    not read, and for --columns without every joint (without --strict: a warning that check cannot read the file)."""
+    from typer.testing import CliRunner
+
+    from pickplace_cli.cli import app
+
+    pl = plan(ADEPT, load_profile("delta-su2018"), PlanOptions(strict=True))
+    assert pl.duration.written_stretch == 1.0
+    assert pl.duration.written.startswith("written samples at 1000 Hz: check --strict reads every peak resolved")
+    scara = ["plan", "-p", "scara-600", "--from", "0.3,-0.15,-0.1", "--to", "0.4,0.15,-0.1", "-q"]
+    out = str(tmp_path / "s.csv")
+    r = CliRunner().invoke(app, [*scara, "--strict", "-f", "mcap", "-o", str(tmp_path / "s.mcap")])
+    assert r.exit_code == 2 and "check reads CSV and JSON trajectories, not MCAP" in r.stderr
+    r = CliRunner().invoke(app, [*scara, "--strict", "--columns", "t,q1,q2,q3", "-o", out])
+    assert r.exit_code == 2 and "--columns t,q1,q2,q3 leaves some out" in r.stderr
+    r = CliRunner().invoke(app, [*scara, "--columns", "t,q1,q2,q3", "-o", out])
+    assert r.exit_code == 0 and "warning: --columns t,q1,q2,q3: check cannot read the file" in r.stderr
+    r = CliRunner().invoke(app, [*scara, "--strict", "--columns", "plc", "-o", out])  # t and the drives: readable
+    assert r.exit_code == 0, r.stderr
+    r = CliRunner().invoke(app, ["check", out, "-p", "scara-600", "--strict", "-q"])
+    assert r.exit_code == 0, r.stderr
