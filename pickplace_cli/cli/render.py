@@ -324,7 +324,8 @@ def _print_verdict(report, quiet: bool, with_cycle: bool = True) -> None:
 
             sys.stderr.write(
                 f"pickplace: {unresolved_text(r)}: the samples are too sparse (or too noisy) for this peak; it is not "
-                "shown exceeded, but not shown within the limit either: check a trajectory sampled at a higher rate (plan --strict writes one with every peak resolved)\n")
+                "shown exceeded, but not shown within the limit either: check a trajectory sampled at a higher rate "
+                "(plan --strict writes one with every peak resolved)\n")
         if not quiet:
             # a profile whose limits are all positions and the workcell (no joint speed, torque …): nothing that
             # the duration changes was checked, however short it is; say so instead of a bare "all limits hold"
