@@ -40,6 +40,7 @@ from .plan_options import (
     _columns,
     _finite_latency,
     _law_coefficients,
+    _read_written,
     _shape_law_evals,
     _method_params,
 )
@@ -578,32 +579,6 @@ def _write_plan_outputs(a, prof, writer, legs: list, track, code: int) -> int:
         samples = legs[0]
     writer(samples, a.output)
     return code
-
-
-def _read_written(a, fmt, columns, prof) -> str:
-    """PlanOptions.read_written: how check will read the file: "" for a drive's table (judged as the drive
-    interpolates it), "positions" when the written columns lack the tool's x … jz (``--columns``), else "tool"."""
-    from .controller import table_format
-
-    if table_format(fmt) and a.output is not None:
-        return ""
-    if columns is None:
-        return "tool"
-    from ..export.drive import expand_columns
-    from ..pipelines.check_read import TOOL_COLUMNS
-    from ..planner import motion_model_static
-
-    robot = motion_model_static(prof)[0]
-    named = expand_columns(_columns(columns, prof, a.drive), a.drive, len(robot.joint_units))
-    bare = {c.split("[")[0] for c in named}
-    if not ("t" in bare and (set(robot.joint_names) <= bare or (a.drive is not None and set(a.drive.names) <= bare))):
-        need = f"t and {', '.join(robot.joint_names)}" + (f" (or t and {', '.join(a.drive.names)})" if a.drive else "")
-        if a.strict:
-            _usage(f"--strict writes what check --strict accepts, and check reads a move from {need}: --columns "
-                   f"{columns} leaves some out")
-        sys.stderr.write(f"pickplace: warning: --columns {columns}: check cannot read the file (it reads a move from "
-                         f"{need})\n")
-    return "tool" if set(TOOL_COLUMNS) <= bare else "positions"
 
 
 def _written_times(a, prof, legs: list, track):

@@ -91,29 +91,71 @@ def _shape_law_evals(n: int) -> int:
     return n
 
 
-def _columns(text: str | None, prof, drive=None) -> tuple[str, ...] | None:
-    """``--columns`` as names, checked against the profile's CSV columns (usage error, exit 2: no such column,
-    a column twice, none given)."""
-    if text is None:
-        return None
-    from ..export import column_names
-    from ..export.csv import parse_columns, select_columns
-    from ..model.errors import ExportError
+def _read_written(a, fmt, columns, prof) -> str:
+    """PlanOptions.read_written: how check will read the file: "" for a drive's table (judged as the drive
+    interpolates it), "positions" when the written columns lack the tool's x … jz (``--columns``), else "tool".
+    Columns check cannot read a move from (no t, or not every joint nor every drive): a usage error with --strict,
+    else a warning."""
+    import sys
+
+    from .controller import table_format
+
+    if table_format(fmt) and a.output is not None:
+        return ""
+    if columns is None:
+        return "tool"
+    from ..pipelines.check_read import TOOL_COLUMNS
     from ..planner import motion_model_static
 
-    from ..export.drive import expand_columns
+    robot = motion_model_static(prof)[0]
+    bare = {c.split("[")[0] for c in _selected(columns, prof, a.drive)}
+    if not ("t" in bare and (set(robot.joint_names) <= bare or (a.drive is not None and set(a.drive.names) <= bare))):
+        need = f"t and {', '.join(robot.joint_names)}" + (f" (or t and {', '.join(a.drive.names)})" if a.drive else "")
+        if a.strict:
+            _usage(f"--strict writes what check --strict accepts, and check reads a move from {need}: --columns "
+                   f"{columns} leaves some out")
+        sys.stderr.write(f"pickplace: warning: --columns {columns}: check cannot read the file (it reads a move from "
+                         f"{need})\n")
+    return "tool" if set(TOOL_COLUMNS) <= bare else "positions"
+
+
+def _header_names(prof, drive) -> tuple[str, ...]:
+    """The profile's CSV column names with their units (the drive's positions and velocities when it has drives)."""
+    from ..export import column_names
+    from ..planner import motion_model_static
 
     robot, specs = motion_model_static(prof)[:2]
     drives = all(s.drive is not None for s in specs)  # the motor columns: as the planner's MotionModel.has_drives
     names = column_names(robot.joint_units, motor_speed=drives, motor_torque=drives)
     if drive is not None:
         names += drive.position_names + drive.velocity_names
+    return tuple(names)
+
+
+def _selected(text: str, prof, drive) -> tuple[str, ...]:
+    """The header names ``--columns`` selects (sets expanded, globs such as ``q?`` matched)."""
+    from ..export.csv import parse_columns, select_columns
+    from ..export.drive import expand_columns
+    from ..planner import motion_model_static
+
+    names = _header_names(prof, drive)
+    n = len(motion_model_static(prof)[0].joint_units)
+    return tuple(names[i] for i in select_columns(names, expand_columns(parse_columns(text), drive, n)))
+
+
+def _columns(text: str | None, prof, drive=None) -> tuple[str, ...] | None:
+    """``--columns`` as names, checked against the profile's CSV columns (usage error, exit 2: no such column,
+    a column twice, none given)."""
+    if text is None:
+        return None
+    from ..export.csv import parse_columns
+    from ..model.errors import ExportError
+
     try:
-        cols = parse_columns(text)
-        select_columns(tuple(names), expand_columns(cols, drive, len(robot.joint_units)))
+        _selected(text, prof, drive)
     except ExportError as exc:
         _usage(f"--{exc}")
-    return cols
+    return parse_columns(text)
 
 
 def _check_plan_usage(a) -> None:
