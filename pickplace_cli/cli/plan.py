@@ -436,6 +436,9 @@ def plan(
     code = _write_plan_outputs(a, prof, writer, legs, track, code)  # a table's own verdict may raise it
     forgiven = write_anyway and code == 3
     note_exit(0 if forgiven else code)
+    if forgiven and strict and a.output is not None:  # written as asked, but not what --strict promises
+        sys.stderr.write("pickplace: warning: --strict: the file is written (--write-anyway) although check --strict "
+                         "refuses it (exit 3)\n")
     if json_summary:
         _emit_json(_single_json(a, legs, cycle, code, forgiven, workspace_fit, rendezvous, track))
     if code and not forgiven:

@@ -307,6 +307,11 @@ def test_strict_under_the_default_rule_and_its_usage(tmp_path):
     assert r.exit_code == 2 and "a drive's table (-f pvt) is judged as the drive interpolates it" in r.stderr
     r = CliRunner().invoke(app, [*base, "-o", str(tmp_path / "a.csv")])
     assert r.exit_code == 0, r.stderr
+    # --write-anyway writes a move past a limit (auto does not hold the motors' torque rate): said, under --strict
+    r = CliRunner().invoke(app, [*base, "-m", "superposition", "--time", "auto", "--write-anyway", "-o",
+                                 str(tmp_path / "w.csv")])
+    assert r.exit_code == 0 and "warning: --strict: the file is written (--write-anyway) although check --strict" \
+        in r.stderr
     row = rep.rows[0]
     from dataclasses import replace as rep_row
 
