@@ -14,13 +14,63 @@ from ..model.methods import Method
 
 
 def _usage_error_line(self, file=None) -> None:  # noqa: ARG001 - click's signature
-    """click's usage errors (an unknown option, a bad value of a typed option, a missing one: exit 2) as one line,
-    like every other error: ``pickplace: error: MESSAGE (see COMMAND --help)``, instead of click's four."""
+    """click's usage errors (an unknown option, a missing one or its argument: exit 2) as one line, like every other
+    error: ``pickplace: error: MESSAGE (see COMMAND --help)``, instead of click's four. A value that a typed option
+    cannot take (``--rate abc``, ``-m foo``) is invalid input like a value out of range: exit 1, in the form
+    ``--OPTION 'VALUE': RULE`` (:func:`_bad_value_line`)."""
     ctx = getattr(self, "ctx", None)
     hint = f" (see {ctx.command_path if ctx is not None else 'pickplace'} --help)"
     from ..model.text import shorten_quoted
 
+    line = _bad_value_line(self)
+    if line is not None:
+        self.exit_code = 1
+        typer.echo(f"pickplace: error: {shorten_quoted(line)}{hint}", err=True)
+        return
     typer.echo(f"pickplace: error: {shorten_quoted(self.format_message())}{hint}", err=True)
+
+
+def _bad_value_line(exc) -> str | None:
+    """``--OPTION 'VALUE': RULE`` for click's error about a value given to a typed option or argument (not a missing
+    one, not the tool's own usage errors, which name no parameter); None for any other usage error. The value is
+    read from the command line as given (``--rate abc``, ``--rate=abc``, ``-rabc`` is not used by the tool)."""
+    param = getattr(exc, "param", None)
+    if param is None or type(exc).__name__ != "BadParameter":  # (MissingParameter is a subclass: kept exit 2)
+        return None
+    from ..model.text import quoted
+
+    opts = list(getattr(param, "opts", ()) or ())
+    shown = [n for n in opts if not n.startswith("--")] + [n for n in opts if n.startswith("--")][:1]
+    name = "/".join(shown) if param.param_type_name == "option" else (param.name or "argument").upper()
+    rule = str(getattr(exc, "message", "") or exc).strip()
+    rule = rule[len("Value error, "):] if rule.startswith("Value error, ") else rule
+    import re
+
+    rule = re.sub(r"^Input should be a valid (number|integer), unable to parse string as an? \w+$",
+                  lambda m: f"must be {'a' if m[1] == 'number' else 'an'} {m[1]}", rule)
+    value = _given_value(opts)
+    if value is None:  # (the rule names a choice's value itself)
+        return f"{name}: {rule}"
+    return f"{name} {quoted(value)}: {re.sub(r'^.* is not one of ', 'must be one of ', rule)}"
+
+
+def _given_value(opts: list[str]) -> str | None:
+    """The last value given on the command line (``sys.argv``) to the option spelled ``opts``, or None."""
+    from pathlib import Path
+
+    program = Path(sys.argv[0] if sys.argv else "")
+    if program.name != "pickplace" and program.parent.name != "pickplace_cli":  # (called from another program)
+        return None
+    argv, found = sys.argv[1:], None
+    for i, arg in enumerate(argv):
+        if arg == "--":
+            break
+        if arg in opts and i + 1 < len(argv):
+            found = argv[i + 1]
+        for o in opts:
+            if o.startswith("--") and arg.startswith(o + "="):
+                found = arg[len(o) + 1:]
+    return found
 
 
 def _one_line_usage_errors() -> None:

@@ -267,7 +267,6 @@ def test_json_exit_code_is_the_process_exit_code():
 
 @pytest.mark.parametrize("args, words", [
     (["plan", "--bogus"], "No such option: --bogus"),
-    (["plan", *ADEPT, "--height", "abc"], "Invalid value for '--height'"),
     (["bogus"], "No such command 'bogus'"),
     (["plan", "--from"], "Option '--from' requires an argument. (see pickplace --help)"),
 ])
@@ -284,6 +283,28 @@ def test_usage_errors_are_one_line_exit_2(args, words):
     assert p.returncode == 2 and p.stdout == ""
     (line,) = p.stderr.splitlines()
     assert line.startswith("pickplace: error: ") and words in line
+
+
+@pytest.mark.parametrize("args, line", [
+    (["plan", *ADEPT, "--height", "abc"], "--height 'abc': must be a number (see pickplace plan --help)"),
+    (["plan", *ADEPT, "--rate=1e3x"], "--rate '1e3x': must be a number (see pickplace plan --help)"),
+    (["plan", *ADEPT, "-m", "cubic"], "-m/--method 'cubic': must be one of 'bspline', 'ph', "),
+    (["plan", *ADEPT, "-j", "1.5", "--batch", "-"], "-j/--workers '1.5': must be an integer"),
+    (["check", "-", "--limit-use", "x"], "--limit-use 'x': must be a number (see pickplace check --help)"),
+    (["line", "--seed", "x"], "--seed 'x': must be an integer (see pickplace line --help)"),
+])
+def test_a_value_a_typed_option_cannot_take_is_invalid_input(args, line):
+    """A value that does not parse (a number, an integer, a choice) is invalid input like one out of range (exit 1),
+    one line naming the option, the value as given and the rule, in a real process (the value is read from its
+    command line), nothing on stdout."""
+    import subprocess
+    import sys
+
+    p = subprocess.run([sys.executable, "-m", "pickplace_cli", *args], capture_output=True, text=True, timeout=60,
+                       stdin=subprocess.DEVNULL)
+    assert p.returncode == 1 and p.stdout == ""
+    (got,) = p.stderr.splitlines()
+    assert got.startswith("pickplace: error: " + line.split(" (see")[0]) and got.endswith(" --help)"), got
 
 
 def test_a_verdict_says_when_nothing_timed_was_checked():

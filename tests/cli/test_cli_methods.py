@@ -38,6 +38,9 @@ def test_plan_ph_stderr_summary_names_method():
     assert "delta-su2018 / ph" in r.stderr and "|a| = 100 m/s²" in r.stderr
 
 
-def test_unknown_method_is_usage_error():
+def test_unknown_method_is_invalid_input():
+    """A value the option cannot take is invalid input (exit 1), like a value out of range; the line names the option
+    and the choices."""
     r = runner.invoke(app, ["plan", *ADEPT, "--method", "cubic"])
-    assert r.exit_code == 2
+    assert r.exit_code == 1
+    assert "-m/--method: 'cubic' is not one of 'bspline'" in r.output
