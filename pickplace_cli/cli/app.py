@@ -332,15 +332,27 @@ _MAIN_PID = [0]
 _TERM_NOTES: list[str] = []
 
 
+#: the method parameters given with ``--param NAME=VALUE`` (an error about one names ``--param``)
+GIVEN_PARAMS: set[str] = set()
+
+
 def named_by_option(message: str, command: Callable) -> str:
     """An error ``FIELD = VALUE: RULE`` about a value that ``command`` (a typer command function) takes as an option
     ``--FIELD`` (``_`` read as ``-``) names the option instead: ``--FIELD VALUE: RULE`` (``-j/--workers 3: …``).
     Other messages (a file's line, a batch row, a profile's field, a derived value such as λ) are returned as they
     are."""
     name, sep, rest = message.partition(" = ")
+    import inspect
+
+    takes_param = any("--param" in (getattr(p.default, "param_decls", None) or ())
+                      for p in inspect.signature(command).parameters.values())
+    bare = name[len("param "):] if name.startswith("param ") else name
+    if sep and takes_param and (bare != name or bare in GIVEN_PARAMS):
+        return f"--param {bare}={rest}"  # a method's parameter: as given, --param NAME=VALUE
+    if not sep and takes_param and bare != name:
+        return f"--param {bare}"
     if not sep or not name.replace("_", "").replace("-", "").isalnum():
         return message
-    import inspect
 
     want = "--" + name.replace("_", "-")
     for param in inspect.signature(command).parameters.values():
@@ -365,6 +377,8 @@ def _handle_errors(fn: Callable) -> Callable:
         import threading
 
         from ..model.errors import PickplaceError
+
+        GIVEN_PARAMS.clear()  # (this command's own --param, not an earlier one's in the same process)
 
         from ..export import PROMISED
 

@@ -280,4 +280,7 @@ def _parse_params(items: list[str]) -> dict:
         if name in out:
             raise TaskError(f"param {name}: given twice")
         out[name] = x
+    from .app import GIVEN_PARAMS
+
+    GIVEN_PARAMS.update(out)
     return out

@@ -44,3 +44,19 @@ def test_unknown_method_is_invalid_input():
     r = runner.invoke(app, ["plan", *ADEPT, "--method", "cubic"])
     assert r.exit_code == 1
     assert "-m/--method: 'cubic' is not one of 'bspline'" in r.output
+
+
+@pytest.mark.parametrize("args, line", [
+    (["--param", "m=abc"], "--param m='abc': not a number"),
+    (["--param", "m=2"], "--param m=2.0: method bspline has no parameter 'm'"),
+    (["-m", "lame", "--param", "m=1"], "--param m=1.0: the Lamé exponent must be ≥ 3"),
+    (["-m", "ph", "--param", "r=0.5"], "--param r=0.5: the PH corner's horizontal extent must satisfy 0 < r ≤ w/2"),
+    (["-m", "bspline-vel", "--param", "tau6=0.9"], "--param tau7: give all seven shape parameters"),
+])
+def test_a_method_parameter_error_names_param(args, line):
+    """An error about a method parameter given with --param names the option as it was given (NAME=VALUE), whether
+    the command line's parser or the method refuses it; exit 1, one line."""
+    r = runner.invoke(app, ["plan", *ADEPT, *args, "-o", "-"])
+    assert r.exit_code == 1
+    (got,) = r.output.splitlines()
+    assert got.startswith("pickplace: error: " + line), got
