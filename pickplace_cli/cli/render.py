@@ -267,7 +267,8 @@ def _limit_table(report, narrow: bool = False, drop: tuple = (), wrap: bool = Fa
         table.add_row(*cells, mark)
     if narrow:
         for i, column in enumerate(table.columns):
-            if wrap and i == 1:  # the quantity, as the last resort
+            if wrap and i == 1:  # the quantity, as the last resort: its words wrap, a longer one folds (never "…");
+                column.overflow = "fold"  # (at least 8 wide: _print_limit_table)
                 continue
             column.min_width = max(Text.from_markup(str(c)).cell_len for c in [column.header, *column.cells])
             column.no_wrap = True
@@ -293,6 +294,15 @@ def _print_limit_table(report) -> None:
                     break
             else:
                 table = _limit_table(report, narrow=True, drop=NARROW_DROPS[-1], wrap=True)
+                quantity = table.columns[1]
+                quantity.width = 8
+                least = Measurement.get(con, con.options.update_width(10_000), table).minimum
+                if least > con.width:  # its 8 columns kept (rich left it none at 40): the terminal wraps the rows
+                    con = console(stderr=True, highlight=False, soft_wrap=True, width=least)
+                else:  # what the other columns leave, at least 8
+                    quantity.width = None
+                con.print(table)
+                return
         con.print(table)
         return
     out = console(stderr=True, highlight=False, soft_wrap=True, width=200)

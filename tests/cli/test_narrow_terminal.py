@@ -79,3 +79,25 @@ def test_a_wide_terminal_keeps_the_full_layout(unresolved_file):
     table = _table(_lines(stderr_on_terminal(_command("check-limit-use", unresolved_file), None, 120.0, columns=160)))
     assert "target" in table[0] and "±" in table[0] and table[0].split()[-3:] == ["t", "peak", "[s]"], table[0]
     assert all(ROW.match(ln) for ln in table[1:])
+
+
+def test_a_very_narrow_terminal_folds_the_quantity_never_cuts_it(unresolved_file):
+    """At 40 columns the table cannot fit (the joint, the peak, the limit, the use and "unresolved" take 42): the
+    quantity keeps 8 columns (rich left it none: rows without their quantity), its words wrap and a longer one
+    folds onto the next line, and the terminal wraps the row. Nothing is cut to "…" or dropped: each row's quantity, read down its column, is the whole text of the piped
+    table's, and every row has its verdict."""
+    import subprocess
+
+    lines = _lines(stderr_on_terminal(_command("check", unresolved_file), None, 120.0, columns=40))
+    table = _table(lines)
+    assert not any("…" in ln for ln in table), [ln for ln in table if "…" in ln]
+    assert all(VERDICT.search(ln) for ln in table if ROW.match(ln))
+    head = next(ln for ln in lines[lines.index(table[0]) - 1:] if "quanti" in ln)  # (the header may fold too)
+    start = head.index("quanti")
+    stop = start + len(head[start:].split(" ")[0])
+    rows = [i for i, ln in enumerate(table) if ROW.match(ln)]
+    got = ["".join(ln[start:stop] for ln in table[i:j]).replace(" ", "")
+           for i, j in zip(rows, rows[1:] + [len(table)])]
+    piped = subprocess.run(_command("check", unresolved_file), capture_output=True, text=True, timeout=120)
+    want = [re.split(r"\s{2,}", ln)[1].replace(" ", "") for ln in piped.stderr.splitlines() if ROW.match(ln)]
+    assert got == want and len(want) >= 15, list(zip(got, want))
