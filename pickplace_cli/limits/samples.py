@@ -167,12 +167,14 @@ def _motion_report(t: np.ndarray, pos: np.ndarray, robot, profile: Profile, smoo
                "(x … jz; x, y, z agree with FK(q))")
         ev = ev3
         if rotary:  # the angle has no derivative columns: its interpolating spline, split at its own steps
-            ev_angle, angle_steps = reconstruct(t, pos[:, 3:4])
+            spline_angle, angle_steps = reconstruct(t, pos[:, 3:4])
             steps = np.union1d(steps, angle_steps)
             how += ", and a quintic interpolating spline of the tool angle"
 
             def ev(x: np.ndarray, order: int) -> np.ndarray:
-                return np.column_stack([ev3(x, order), ev_angle(x, order)])
+                return np.column_stack([ev3(x, order), spline_angle(x, order)])
+
+            ev.position, ev.angle = ev3, lambda x, order: spline_angle(x, order)[:, 0]  # (each alone, not both)
 
         if steps.size:
             shown = ", ".join(f"{x:.5g}" for x in steps[:6]) + (" …" if steps.size > 6 else "")
@@ -195,14 +197,19 @@ def _motion_report(t: np.ndarray, pos: np.ndarray, robot, profile: Profile, smoo
             how += (f", one per stretch between the jerk steps found in the data at t = {shown} s ({steps.size}; both "
                     "sides checked)")
 
+    # the positions and the angle each from their own interpolant where they have one (the septic Hermite and the
+    # angle's spline), not both evaluated for either
+    ev_position = getattr(ev, "position", lambda x, order: ev(x, order)[:, :3])
+    ev_angle = getattr(ev, "angle", lambda x, order: ev(x, order)[:, 3])
+
     def evaluate(tau: np.ndarray, order: int) -> np.ndarray:
-        return ev(np.clip(tau, 0.0, 1.0) * T, order)[:, :3] * T**order
+        return ev_position(np.clip(tau, 0.0, 1.0) * T, order) * T**order
 
     angle = None
     if rotary:
         from ..curves.rotation import SampledRotation
 
-        angle = SampledRotation(lambda tau, order: ev(np.clip(tau, 0.0, 1.0) * T, order)[:, 3] * T**order)
+        angle = SampledRotation(lambda tau, order: ev_angle(np.clip(tau, 0.0, 1.0) * T, order) * T**order)
     # the pieces join across the samples to the interpolation error: nothing jumps there, peaks are fitted across
     # them; at a jerk step found in the data the check takes both one-sided values (never across it)
     jumps = steps / T
