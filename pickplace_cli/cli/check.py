@@ -54,6 +54,14 @@ def check(
         "reported, marked not held, and an exceeded capacity does not fail the check (exit 0).",
         rich_help_panel=Panel.LIMITS,
     ),
+    cycle: Optional[str] = typer.Option(
+        None, "--cycle", metavar="SECONDS", help="The controller cycle in s a drive's table runs at (as plan "
+        "--cycle): a cam-table's straight lines are read once per cycle, each velocity step blended over one cycle, "
+        "and a PVT or cam-table's acceleration steps (the ends from and to rest too) are taken within one cycle, so "
+        "each motor torque step is held to the torque rate [N·m/s] × the cycle. Not used for other files (a "
+        "warning says so). [default: profile controller.cycle, else the period of profile planning.rate, as plan]",
+        rich_help_panel=Panel.CONTROLLER,
+    ),
     report: Optional[str] = typer.Option(None, "--report", help="Also write the limit report as JSON to this file.", rich_help_panel=Panel.OUTPUT),
     report_only: bool = typer.Option(False, "--report-only", help="Exit 0 even when a limit is exceeded.", rich_help_panel=Panel.OUTPUT),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="Only violations and errors on stderr.", rich_help_panel=Panel.OUTPUT),
@@ -67,15 +75,16 @@ def check(
     difference, and at least 0.1 % of the peak, is its accuracy (the "± %" column); a limit counts as exceeded when the peak less its accuracy is
     beyond it, so a trajectory `plan` wrote as within its limits passes (`plan --time optimal` reads its own samples
     this way and slows the law until they pass), and one 1 % faster fails. Known
-    exception, on the safe side: positions alone (a cam-table or positions-only file) of a `--time optimal` law
-    at 1 kHz can read a torque-rate peak high across the law's jerk steps (up to 21 % measured), and are then refused.
+    exception, on the safe side: positions alone (a positions-only file) of a `--time optimal` law at 1 kHz can read
+    a torque-rate peak high across the law's jerk steps (up to 21 % measured), and are then refused.
 
     A file's tool derivative columns (vx … jz [m/s, m/s², m/s³]) are used only where they agree with its
     positions (velocity within 1 %, acceleration 10 % of their peak on every interval, jerk 5 % on the median
     one); otherwise the move is judged from its positions, with a one-line warning. With the profile's
     controller.joints the drive's files are read in its names and units (d = sign·k·(q − offset) undone), and a PVT
     table is judged as the drive's cubic Hermite, a cam as the quintic through position, velocity and acceleration,
-    a cam-table as samples of the motion.
+    a cam-table as straight lines read once per controller cycle (--cycle), each velocity step blended over that
+    cycle; a PVT or cam-table's acceleration steps are held to the torque rate × the cycle, as plan holds them.
 
     The tool's Cartesian capacity (speed, acceleration, jerk of x, y, z) is checked too, as `plan` does under its
     default rule; a trajectory planned with `plan --time fit` or `optimal` (joint and motor limits alone) is
@@ -104,13 +113,19 @@ def check(
         from ..model.headroom import check_limit_use
 
         check_limit_use(limit_use)
+    seconds = None
+    if cycle is not None:
+        from ..timing.cycle import check_cycle
+
+        seconds = check_cycle(cycle)
     from .guards import refuse_overwriting_inputs
 
     refuse_overwriting_inputs([("--report", report)], [("TRAJECTORY", trajectory)], profile)
     prof = load_profile(profile)
     checks = check_file(trajectory, prof, smooth, limit_use,
                         notify=lambda text: sys.stderr.write(f"pickplace: {text}\n"), strict=strict,
-                        warn=lambda text: sys.stderr.write(f"pickplace: {text}\n"), hold_capacity=hold_capacity)
+                        warn=lambda text: sys.stderr.write(f"pickplace: {text}\n"), hold_capacity=hold_capacity,
+                        cycle=seconds)
     several = len(checks) > 1 or checks[0].move is not None
     if report is not None:
         with atomic_output(report) as stream:
@@ -136,6 +151,13 @@ def check(
     if hold_capacity and bad and all(r.quantity.startswith("capacity") for r in bad):
         sys.stderr.write("pickplace: hint: only the Cartesian capacity is exceeded; a file planned with --time fit or "
                          "optimal holds the joint and motor limits alone: check it with --no-hold-capacity\n")
+    if any(r.quantity == "motor torque step" for r in bad):
+        given = "--cycle" if seconds is not None else (
+            "the profile's controller.cycle" if getattr(prof.controller, "cycle", None) else
+            "from the profile's planning.rate, as plan without --cycle")
+        sys.stderr.write(f"pickplace: hint: each step is held to the torque rate over one controller cycle of "
+                         f"{_step_cycle(checks, prof, seconds):g} s ({given}); give the cycle the drive runs the table at "
+                         "with --cycle SECONDS, as plan --cycle\n")
     if strict and not code and any(c.report.unresolved for c in checks):
         code = 3
     if several and not quiet:
@@ -148,3 +170,17 @@ def check(
         )
     if code and not report_only:
         raise typer.Exit(code)
+
+
+def _step_cycle(checks, prof, seconds) -> float:
+    """The controller cycle [s] a checked table's steps were held over (the report's note says it)."""
+    import re
+
+    from ..pipelines.check import table_cycle
+
+    for c in checks:
+        for note in c.report.notes:
+            m = re.search(r"within one controller cycle of ([0-9.eE+-]+) s", note)
+            if m:
+                return float(m.group(1))
+    return table_cycle(prof, seconds)

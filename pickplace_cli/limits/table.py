@@ -109,13 +109,15 @@ def _steps(model, motion) -> tuple[dict[str, np.ndarray], np.ndarray, np.ndarray
     for side, k in ((left, 0), (right, len(t) - 1)):  # before the start, after the end: at rest
         side[2][k] = 0.0
         side[3][k] = 0.0
-    torque = []
+    torque, limited = [], []
     for q, qd, qdd, qddd in (left, right):
         parts = model.parts(np.zeros(len(t)), derivatives=False, singularity=False,
                             motion=tool_motion(model.robot, q, qd, qdd, qddd))
-        meta, data = model.columns(parts, 1.0)
-        torque.append({m[0]: data[:, c] for c, m in enumerate(meta) if m[1] == "motor torque"})
-    dtorque = {name: np.abs(torque[1][name] - torque[0][name]) for name in torque[0]}
+        limited = [m[0] for m in model.columns(parts, 1.0)[0] if m[1] == "motor torque"]
+        torque.append(parts.Am + parts.Gm)  # signed (the motion is in seconds: T = 1), not the limit column's |τ|
+    names = list(model.robot.joint_names)
+    # the step of the signed torque: a torque that changes sign across the step moves by the sum of its sizes
+    dtorque = {name: np.abs(torque[1][:, names.index(name)] - torque[0][:, names.index(name)]) for name in limited}
     return dtorque, np.abs(right[2] - left[2]), t - motion.start
 
 

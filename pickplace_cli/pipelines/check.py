@@ -76,17 +76,45 @@ class MoveCheck:
 
 
 _HOW = {"pvt": "the drive's cubic Hermite through each point's position and velocity (PVT)",
-        "cam": "the kernel's quintic through each point's position, velocity and acceleration (cam, XYVA)"}
+        "cam": "the kernel's quintic through each point's position, velocity and acceleration (cam, XYVA)",
+        "cam-table": "the straight lines between the points read every controller cycle of {cycle:g} s, each velocity "
+                     "step blended over that cycle (a linear cam table)"}
 
 
-def check_table(table, profile: Profile, source: str, not_held: str = "") -> LimitReport:
-    """The limit report of a PVT or cam table as the drive interpolates it (:func:`tool_motion`): the same dynamics and
-    limit check as ``plan``; every duration-dependent peak to ``CHECK_RESOLUTION`` (the rebuild is exact up to the fit
-    of the tool's motion, far finer); the position rows on the interpolated joint positions themselves."""
-    from .check_read import MAX_POINTS, SEGMENT_POINTS, joint_polynomial, tool_motion
+def table_cycle(profile: Profile, cycle: float | None, table=None) -> float:
+    """The controller cycle [s] a table is run at: ``cycle`` (``check --cycle``), else the profile's
+    ``controller.cycle``, else what ``plan`` takes without ``--cycle``: the period of the profile's ``planning.rate``,
+    for a cam-table (``table``) the nearest period that fits its span in whole periods (``plan`` reads an
+    equidistant table of an unknown cycle at whole steps of its duration)."""
+    if cycle is not None:
+        return float(cycle)
+    given = getattr(profile.controller, "cycle", None) if profile.controller is not None else None
+    if given is not None:
+        return float(given)
+    step = 1.0 / float(profile.planning.rate)
+    if table is not None and table.kind == "cam-table":
+        span = float(table.t[-1] - table.t[0])
+        return span / max(1, round(span / step)) if span > 0 else step
+    return step
 
+
+def check_table(table, profile: Profile, source: str, not_held: str = "", cycle: float | None = None) -> LimitReport:
+    """The limit report of a PVT, cam or equidistant cam table as the drive interpolates it (:func:`tool_motion`; a
+    cam-table read every controller cycle, :func:`table_cycle`): the same dynamics and limit check as ``plan``, and
+    its per-cycle step rows where the acceleration steps (PVT, cam-table: the motor torque step against the torque
+    rate × the cycle, :func:`~pickplace_cli.limits.table.step_rows`); every duration-dependent peak to
+    ``CHECK_RESOLUTION`` (the rebuild is exact up to the fit of the tool's motion, far finer); the position rows on
+    the interpolated joint positions themselves."""
+    from .check_read import MAX_POINTS, SEGMENT_POINTS, joint_polynomial, table_motion, tool_motion
+
+    cycle = table_cycle(profile, cycle, table)
+    blend = cycle if table.kind == "cam-table" else None
     if len(table.t) > MAX_POINTS:
         raise TaskError(f"{source}: {len(table.t):,} points in a {table.kind} table: check reads at most {MAX_POINTS:,}")
+    if blend is not None and (table.t[-1] - table.t[0]) / blend > MAX_POINTS / 2:
+        raise TaskError(f"{source}: a cam-table of {table.t[-1] - table.t[0]:.6g} s read every {blend:g} s is "
+                        f"{(table.t[-1] - table.t[0]) / blend:,.0f} cycles, each a blend and a line: check reads at most "
+                        f"{MAX_POINTS // 2:,} (give the controller's cycle: --cycle SECONDS)")
     robot = build_robot(profile.robot)
     rotary = getattr(robot, "rotary", False)
 
@@ -98,11 +126,17 @@ def check_table(table, profile: Profile, source: str, not_held: str = "") -> Lim
     rebased = replace(table, t=t)
     s = Samples(None, t, table.q, table.lines, 0, int(table.lines[-1]))
     _check_branch(s, robot, robot.forward_kinematics(table.q), source)
-    ev, steps = tool_motion(rebased, tool_of)
-    T = float(t[-1])
-    note = (f"{s.where(source)}: a {table.kind} table of {len(t)} points over {T:.6g} s; the motion is {_HOW[table.kind]}, "
-            "as the drive runs it (each point a step of its derivatives: both sides checked); joint positions checked "
+    ev, steps = tool_motion(rebased, tool_of, blend)
+    motion = table_motion(rebased, blend)
+    T = motion.duration
+    how = _HOW[table.kind].format(cycle=cycle)
+    note = (f"{s.where(source)}: a {table.kind} table of {len(t)} points over {float(t[-1]):.6g} s; the motion is {how}, "
+            "as the drive runs it (each break a step of its derivatives: both sides checked); joint positions checked "
             "as interpolated")
+    if table.kind in ("pvt", "cam-table"):
+        note += (f"; each acceleration step (the ends from and to rest) taken within one controller cycle of "
+                 f"{cycle:g} s: its motor torque step held to the torque rate × the cycle (check --cycle; plan "
+                 "--cycle, or the profile's controller.cycle, else its planning rate)")
     if table.kind == "pvt":  # the drive's cubic Hermite is C¹: its acceleration steps at the points
         from .check_read import pvt_acceleration_steps
 
@@ -114,12 +148,30 @@ def check_table(table, profile: Profile, source: str, not_held: str = "") -> Lim
     if closed_cycle(table.q):  # a round trip or belt cycle as one table: the duty cycle is the table itself
         dwell = 0.0
         note += f"; {CLOSED_NOTE}"
-    report, _ = _motion_report(t, tool_of(table.q), robot, profile, 0.0, source, lambda how: (note,),
-                               rebuilt=(ev, steps, _HOW[table.kind]), not_held=not_held, dwell=dwell)
+    bt = np.asarray(motion.breaks, float)
+    start = motion.start  # a cam-table's motion starts half a cycle before its first point (the first blend)
+    if blend is None:  # (breaks = the points, from 0)
+        report, _ = _motion_report(t, tool_of(table.q), robot, profile, 0.0, source, lambda how: (note,),
+                                   rebuilt=(ev, steps, how), not_held=not_held, dwell=dwell)
+    else:  # the report's times from the motion's start, shifted back to the table's below
+        report, _ = _motion_report(bt - start, tool_of(motion(bt)), robot, profile, 0.0, source, lambda how: (note,),
+                                   rebuilt=(lambda x, order: ev(np.asarray(x, float) + start, order), steps - start,
+                                            how), not_held=not_held, dwell=dwell)
+        # the duration (and the cycle, picks/min) is the table's, from its first point to its last, as plan's: the
+        # blends' half cycles before and after are the drive taking the first and last steps
+        report = replace(report, duration=float(t[-1]), rows=tuple(
+            r if r.t_peak is None else replace(r, t_peak=r.t_peak + start) for r in report.rows))
     report = _with_accuracy(report, [(report, 1.0)])
+    if table.kind in ("pvt", "cam-table"):
+        from ..limits.motion import MotionModel
+        from ..limits.table import step_rows, table_path
+
+        model = MotionModel(table_path(motion, robot), robot, limit_specs(profile),
+                            getattr(profile.robot, "singularity_margin", None), profile.workcell.box)
+        report = report.with_rows(tuple(replace(r, t_peak=r.t_peak + start) for r in step_rows(model, motion, cycle)))
     u = 0.5 - 0.5 * np.cos(np.pi * np.arange(SEGMENT_POINTS) / (SEGMENT_POINTS - 1))
-    x = np.append((t[:-1, None] + np.diff(t)[:, None] * u).ravel(), T)
-    q = joint_polynomial(rebased)(x)
+    x = np.append((bt[:-1, None] + np.diff(bt)[:, None] * u).ravel(), bt[-1])
+    q = joint_polynomial(rebased, blend)(x)
     given = {}
     for j, (name, unit, spec) in enumerate(zip(robot.joint_names, robot.joint_units, limit_specs(profile))):
         if spec.limits.position is not None:
@@ -151,7 +203,7 @@ def _read_bounded(fh, limit: int) -> bytes:
 
 def check_file(path: str | Path, profile: Profile, smoothing: float | str = 0.0,
                limit_use: float | None = None, notify=None, strict: bool = False, warn=None,
-               hold_capacity: bool = True) -> list[MoveCheck]:
+               hold_capacity: bool = True, cycle: float | None = None) -> list[MoveCheck]:
     """Check every move of a trajectory file against a profile's limits.
 
     Parameters
@@ -177,6 +229,11 @@ def check_file(path: str | Path, profile: Profile, smoothing: float | str = 0.0,
         Whether the profile's Cartesian capacity (the tool's |v| [m/s], |a| [m/s²], |j| [m/s³]) is held: True, an
         exceeded capacity fails the check (as ``plan`` under its default rule); False, its rows are reported as
         not held (``--no-hold-capacity``, as ``plan --time fit`` or ``optimal``).
+    cycle : float or None
+        The controller cycle [s] a table is run at (``check --cycle``): a cam-table's lines are read once per cycle,
+        and a PVT or cam-table's acceleration steps are taken within one (the motor torque step held to the torque
+        rate × the cycle). None: the profile's ``controller.cycle``, else the period of its ``planning.rate`` (what
+        ``plan`` takes without ``--cycle``).
 
     Returns
     -------
@@ -216,9 +273,12 @@ def check_file(path: str | Path, profile: Profile, smoothing: float | str = 0.0,
 
     not_held = "" if hold_capacity else "--no-hold-capacity"
     kind, what, source = read_checked(text, source, profile, robot)  # joints, drive units, a table (check_read)
+    if cycle is not None and warn is not None and (kind != "table" or what.kind == "cam"):
+        warn(f"--cycle {cycle:g} s: not used: {source} is not a pvt or cam-table table (its motion has no step a "
+             "controller cycle bounds)")
     if kind == "table":
         return [MoveCheck(None, int(what.lines[0]), int(what.lines[-1]),
-                          whole_cycle(check_table(what, profile, source, not_held).rated(profile.limit_use)))]
+                          whole_cycle(check_table(what, profile, source, not_held, cycle).rated(profile.limit_use)))]
     out = []
     for s in (what if kind == "samples" else [what]):
         out.append(MoveCheck(s.move, int(s.lines[0]), s.last_line,

@@ -358,25 +358,35 @@ def read_table(text: str, source: str, kind: str, joint_names: tuple[str, ...], 
 SEGMENT_POINTS = 24
 
 
-def joint_polynomial(table: Table):
+def joint_polynomial(table: Table, blend: float | None = None):
     """evaluate(x (M,) [s]) → q (M, n): the table as the drive interpolates it, cubic Hermite through (q, q̇) for PVT,
-    the quintic through (q, q̇, q̈) for a cam: :func:`pickplace_cli.export.interpolate.rebuild`, the function ``plan``
-    judges its own tables by."""
-    from ..export.interpolate import rebuild
-
-    motion = rebuild(table)
+    the quintic through (q, q̇, q̈) for a cam, the straight lines read every ``blend`` [s] (the controller cycle) with
+    each velocity step blended over that cycle for a cam-table: :func:`pickplace_cli.export.interpolate.rebuild`, the
+    function ``plan`` judges its own tables by."""
+    motion = table_motion(table, blend)
     return lambda x: motion(np.asarray(x, float))
 
 
-def tool_motion(table: Table, tool_of):
-    """(evaluate(x, order) → (M, d) the tool's motion [m, m/s, …; the angle in rad], the interior points' times [s])
-    of a PVT or cam table: per segment, the quintic interpolating spline through ``SEGMENT_POINTS`` points of
-    ``tool_of`` (joint positions (M, n) → tool coordinates (M, d)) of the drive's polynomial. The motion's derivatives
-    step at the points (a PVT's acceleration, a cam's jerk): the check takes both one-sided values there."""
+def table_motion(table: Table, blend: float | None = None):
+    """The drive's motion of ``table`` (:func:`pickplace_cli.export.interpolate.rebuild`; ``blend`` [s]: a
+    cam-table's controller cycle)."""
+    from ..export.interpolate import rebuild
+
+    return rebuild(table, blend)
+
+
+def tool_motion(table: Table, tool_of, blend: float | None = None):
+    """(evaluate(x, order) → (M, d) the tool's motion [m, m/s, …; the angle in rad], the interior breaks' times [s])
+    of a PVT, cam or cam-table table (``blend``: a cam-table's controller cycle [s]): per piece of the drive's motion
+    (between the points of a PVT or cam; between the ends of the one-cycle blends of a cam-table), the quintic
+    interpolating spline through ``SEGMENT_POINTS`` points of ``tool_of`` (joint positions (M, n) → tool coordinates
+    (M, d)) of the drive's polynomial. The motion's derivatives step at the breaks (a PVT's acceleration, a cam's
+    jerk, a cam-table's acceleration at each blend's ends): the check takes both one-sided values there."""
     from scipy.interpolate import make_interp_spline
 
-    poly = joint_polynomial(table)
-    t = table.t
+    motion = table_motion(table, blend)
+    poly = joint_polynomial(table, blend)
+    t = np.asarray(motion.breaks, float)
     u = 0.5 - 0.5 * np.cos(np.pi * np.arange(SEGMENT_POINTS) / (SEGMENT_POINTS - 1))  # denser at the ends
     x = (t[:-1, None] + np.diff(t)[:, None] * u).ravel()
     x = x.reshape(len(t) - 1, SEGMENT_POINTS)
@@ -502,8 +512,7 @@ def json_samples_text(text: str, source: str) -> str | None:
 
 def read_checked(text: str, source: str, profile, robot):
     """What ``check`` judges in a file: ("samples", [Samples …]) of a file of joint or drive positions (drive units
-    converted to the model's), ("table", Table) of a PVT or cam table, ("cam-table", Samples) of an equidistant cam
-    table, each with the name its messages give the file (a table in Structured Text says how its lines count);
+    converted to the model's), ("table", Table) of a PVT, cam or equidistant cam table, each with the name its messages give the file (a table in Structured Text says how its lines count);
     TaskError naming the file, line and rule for a file without a header or without the columns needed."""
     from dataclasses import replace
 
@@ -537,10 +546,8 @@ def read_checked(text: str, source: str, profile, robot):
         moves = read_moves(text, source, drive.names, drive.labels)
         return "samples", [replace(m, q=drive.joint_position(m.q)) for m in moves], source
     table = read_table(text, source, kind, robot.joint_names, robot.joint_units, drive)
-    if kind == "cam-table":
-        if len(table.t) < MIN_SAMPLES:
-            raise TaskError(f"{source}: {len(table.t)} points in a cam-table; check needs at least {MIN_SAMPLES}")
-        return "cam-table", Samples(None, table.t, table.q, table.lines, 0, int(table.lines[-1])), source
+    if kind == "cam-table" and len(table.t) < 2:
+        raise TaskError(f"{source}: {len(table.t)} point in a cam-table; a table needs at least 2")
     return "table", table, source
 
 

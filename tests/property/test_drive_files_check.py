@@ -69,7 +69,27 @@ def test_plans_drive_files_are_accepted(tmp_path, prof, fmt):
 
 
 @pytest.mark.parametrize("prof", ["delta-su2018", "delta-4axis"])
-@pytest.mark.parametrize("fmt", ["plc", "twincat", "plc-vel", "cam-table"])
+def test_a_faster_cam_table_is_refused_as_the_drive_runs_it(tmp_path, prof):
+    """A cam-table is judged as the drive runs it (straight lines read every cycle, each velocity step blended over
+    one cycle, each motor torque step held to the torque rate × the cycle), where plan's table at --time fit keeps a
+    few % of margin: plan's table is accepted, and a copy run faster by 1.03 / (its highest use of a timed limit) —
+    every timed peak rises at least in proportion to the speed — is refused (exit 3)."""
+    import json
+
+    path = _plan(tmp_path, prof, "cam-table", "fit")
+    rep = tmp_path / "r.json"
+    assert _check(path, prof, "--no-hold-capacity", "--report", str(rep)) == 0
+    rows = json.loads(rep.read_text())["limits"]["rows"]
+    top = max(r["utilisation"] for r in rows if r["kind"] == "limit" and "capacity" not in r["quantity"]
+              and r["quantity"] != "rms motor torque")  # (the RMS is diluted by the dwell)
+    assert 0.5 < top <= 1.0
+    fast = tmp_path / "fast.csv"
+    fast.write_text(retime(open(path, newline="").read(), 1.03 / top), newline="")
+    assert _check(str(fast), prof, "--no-hold-capacity") == 3, f"{1.03 / top:.4f}× faster accepted"
+
+
+@pytest.mark.parametrize("prof", ["delta-su2018", "delta-4axis"])
+@pytest.mark.parametrize("fmt", ["plc", "twincat", "plc-vel"])
 def test_faster_copies_are_refused(tmp_path, prof, fmt):
     """At --time fit (a motor limit at 100 %): plan's file is accepted, the 3 % faster copy shows a limit exceeded
     (exit 3), the 1 % faster copy is refused under --strict (exceeded, or a peak the samples do not resolve)."""

@@ -272,7 +272,7 @@ def test_codesys_equidistant_cam_object_spans_xstart_to_xend(tmp_path):
     x1 = float(re.search(r"xEnd : LREAL := ([^;]+);", text).group(1))
     prof = load_profile("delta-4axis")
     kind, s, _ = cr.read_checked(text, "c.st", prof, build_robot(prof.robot))
-    assert kind == "cam-table" and len(s.t) == 256
+    assert kind == "table" and s.kind == "cam-table" and len(s.t) == 256
     assert np.allclose(s.t, x0 + (x1 - x0) * np.arange(256) / 255, rtol=0, atol=1e-12)
     assert CliRunner().invoke(app, ["check", "-p", "delta-4axis", str(tmp_path / "c.st"), "-q"]).exit_code == 0
 

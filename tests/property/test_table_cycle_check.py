@@ -1,0 +1,161 @@
+"""``check`` judges a drive's table on the controller cycle it runs at, as ``plan`` does: a cam-table's straight lines
+read once per cycle, each velocity step blended over that cycle, and a PVT or cam-table's acceleration steps (the ends
+from and to rest too) taken within one cycle, each motor torque step held to the torque rate × the cycle
+(``check --cycle``, else the profile's ``controller.cycle``, else what ``plan`` takes without ``--cycle``).
+
+Before, ``check`` read a cam-table as samples of a smooth motion (the quintic spline through its points): a table
+``plan`` wrote on a 4 ms cycle as within every limit read 151-380 % of the torque rate there (exit 3), and a PVT
+table's steps were not bounded by any cycle. The step rows are held against an independent computation: the
+blends' accelerations derived here from the table's points, and the motor torque on both sides of each blend's edge
+from the independent rigid-body reference (tests/reference/delta_rigid.py, no library code)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from pickplace_cli.cli import app
+
+runner = CliRunner()
+ADEPT = ("--from", "-0.1525,0,-0.8", "--to", "0.1525,0,-0.8")
+MOVES = {"delta-su2018": ADEPT,
+         "delta-4axis": ("--from", "-0.1525,0,-0.8,0", "--to", "0.1525,0,-0.8,1.5"),
+         "scara-600": ("--from", "0.3,-0.15,-0.1", "--to", "0.4,0.15,-0.1")}
+
+
+def _plan(tmp_path, prof: str, *args: str) -> tuple[str, str]:
+    out = tmp_path / f"{prof}-{'-'.join(a.strip('-') for a in args)}.{'st' if any(a.endswith('-st') for a in args) else 'csv'}"
+    res = runner.invoke(app, ["plan", "-p", prof, *MOVES[prof], "-o", str(out), *args])
+    assert res.exit_code == 0, res.output[-2000:]
+    return str(out), res.output
+
+
+def _check(path: str, prof: str, *extra: str) -> tuple[int, dict, str]:
+    rep = path + ".json"
+    res = runner.invoke(app, ["check", path, "-p", prof, "--report", rep, *extra])
+    return res.exit_code, json.loads(open(rep).read()), res.output
+
+
+def _profile_with_cycle(tmp_path, prof: str, cycle: float) -> str:
+    """A copy of the shipped profile with ``controller.cycle`` set (the drives' names and units kept)."""
+    import yaml
+
+    from pickplace_cli.model.profile import resolve_profile_path
+
+    doc = yaml.safe_load(open(resolve_profile_path(prof)).read())
+    doc.setdefault("controller", {})["cycle"] = cycle
+    path = tmp_path / f"{prof}-cycle.yaml"
+    path.write_text(yaml.safe_dump(doc))
+    return str(path)
+
+
+@pytest.mark.parametrize("prof", list(MOVES))
+@pytest.mark.parametrize("rule", ["fit", "optimal"])
+@pytest.mark.parametrize("fmt", ["cam-table", "cam-table-st", "pvt"])
+def test_a_table_on_a_slow_cycle_is_accepted_on_that_cycle(tmp_path, prof, rule, fmt):
+    """plan's table on a 4 ms cycle, within every limit as the drive runs it, is accepted by check on the same cycle
+    (--cycle, or the profile's controller.cycle); its step rows are plan's (the same peaks to 1e-9)."""
+    path, said = _plan(tmp_path, prof, "-f", fmt, "--time", rule, "--cycle", "0.004", "--tolerance", "1e-4")
+    assert "table verdict: all limits hold" in said
+    code, doc, out = _check(path, prof, "--no-hold-capacity", "--cycle", "0.004")
+    assert code == 0, out[-3000:]
+    steps = {r["joint"]: r["peak"] for r in doc["limits"]["rows"] if r["quantity"] == "motor torque step"}
+    planned = {ln.split()[1]: float(ln.split("step: ")[1].split()[0]) for ln in said.splitlines()
+               if "motor torque step:" in ln and ln.strip().startswith("table ")}
+    assert steps and set(steps) == set(planned)
+    for joint, peak in planned.items():  # (plan prints 4 significant digits)
+        assert steps[joint] == pytest.approx(peak, rel=6e-4), joint
+    code2, _, out2 = _check(path, _profile_with_cycle(tmp_path, prof, 0.004), "--no-hold-capacity")
+    assert code2 == 0, out2[-3000:]
+
+
+@pytest.mark.parametrize("fmt, args", [("cam-table", ("--cycle", "0.004", "--tolerance", "1e-4")),
+                                       ("pvt", ("--rate", "100", "--tolerance", "1e-3"))])
+def test_a_table_on_a_slow_cycle_is_refused_on_a_faster_one(tmp_path, fmt, args):
+    """A table planned on a 4 ms cycle (cam-table) or at 100 Hz (PVT: its steps bounded over 10 ms) judged on a 1 ms
+    cycle (the profile's planning rate: check without --cycle): the drive would take each step within 1 ms, past the
+    torque rate's allowance there: exit 3, and the hint names --cycle. Given the cycle plan used, it is accepted."""
+    path, _ = _plan(tmp_path, "delta-su2018", "-f", fmt, "--time", "fit", *args)
+    cycle = "0.004" if fmt == "cam-table" else "0.01"
+    assert _check(path, "delta-su2018", "--no-hold-capacity", "--cycle", cycle)[0] == 0
+    code, doc, out = _check(path, "delta-su2018", "--no-hold-capacity")
+    assert code == 3
+    bad = [r for r in doc["limits"]["rows"] if r["quantity"] == "motor torque step" and not r["ok"]]
+    assert bad and all(r["limit"] == pytest.approx(418 * 0.001 * _use("delta-su2018"), rel=1e-9) for r in bad)
+    assert "give the cycle the drive runs the table at with --cycle SECONDS" in out
+
+
+def _use(prof: str) -> float:
+    from pickplace_cli.model.profile import load_profile
+
+    return load_profile(prof).planning.limit_use or 1.0
+
+
+def test_cam_table_steps_against_an_independent_derivation(tmp_path):
+    """The motor torque step rows of a cam-table on a 4 ms cycle, derived here: with a point every cycle the blends
+    (one cycle, centred on each point) are contiguous; blend k's acceleration is (v_k − v_{k−1}) / c with v_k the
+    slope from point k to k + 1 (at rest before the first and after the last); at the edge between blends k and
+    k + 1 (half way between the points) the position and velocity are continuous and the acceleration steps from
+    a_k to a_{k+1}, at the first blend's start from 0 and at the last one's end to 0. Motor torque from the
+    independent rigid-body reference (Lagrange, complex step) as τ/(N·η) + J_rotor·N·q̈. Max over the edges per
+    joint = check's row (1e-6 relative) and its time."""
+    from pickplace_cli.model.profile import load_profile
+    from pickplace_cli.pipelines.check_read import read_checked
+    from pickplace_cli.robots import build_robot
+    from tests.reference import delta_rigid as ref
+    from tests.unit.test_delta_rigid_reference import drives, reference_params
+
+    c = 0.004
+    path, _ = _plan(tmp_path, "delta-su2018", "-f", "cam-table", "--time", "fit", "--cycle", str(c),
+                    "--tolerance", "1e-4")
+    prof = load_profile("delta-su2018")
+    kind, table, _ = read_checked(open(path).read(), path, prof, build_robot(prof.robot))
+    assert kind == "table" and table.kind == "cam-table"
+    t, q = table.t - table.t[0], table.q
+    assert np.allclose(np.diff(t), c, rtol=0, atol=1e-9)  # a point every cycle
+    v = np.vstack([np.zeros((1, 3)), np.diff(q, axis=0) / c, np.zeros((1, 3))])  # v[k]: into point k … v[K]: out of it
+    a = np.diff(v, axis=0) / c  # blend k's acceleration (K, 3)
+    K = len(t)
+    # the edges: the first blend's start (from rest), between blends k and k + 1, the last blend's end (to rest)
+    qe = np.vstack([q[:1], (q[:-1] + q[1:]) / 2, q[-1:]])
+    ve = np.vstack([np.zeros((1, 3)), v[1:K], np.zeros((1, 3))])
+    before = np.vstack([np.zeros((1, 3)), a])
+    after = np.vstack([a, np.zeros((1, 3))])
+    te = np.append(t - c / 2, t[-1] + c / 2)
+    N, eta, J = drives(prof)[:3]
+    P = reference_params(prof)
+
+    def motor(acc):
+        return ref.reference_torques(P, qe, ve, acc) / (N * eta) + J * N * acc
+
+    step = np.abs(motor(after) - motor(before))
+    code, doc, out = _check(path, "delta-su2018", "--no-hold-capacity", "--cycle", str(c))
+    assert code == 0, out[-2000:]
+    rows = {r["joint"]: r for r in doc["limits"]["rows"] if r["quantity"] == "motor torque step"}
+    for j, name in enumerate(("q1", "q2", "q3")):
+        k = int(np.argmax(step[:, j]))
+        assert rows[name]["peak"] == pytest.approx(step[k, j], rel=1e-6), name
+        assert rows[name]["t_peak_s"] == pytest.approx(te[k], abs=1e-9), name
+        assert rows[name]["limit"] == pytest.approx(418 * c * _use("delta-su2018"), rel=1e-9)
+
+
+def test_cycle_on_a_file_of_samples_is_named_not_used(tmp_path):
+    """--cycle on a file of samples (no drive table): a one-line warning that it is not used; the verdict as
+    without it."""
+    path, _ = _plan(tmp_path, "delta-su2018", "-q")
+    code, _, out = _check(path, "delta-su2018", "--cycle", "0.004", "-q")
+    assert code == 0 and "--cycle 0.004 s: not used" in out
+
+
+@pytest.mark.parametrize("value, words", [("abc", "--cycle 'abc': must be a number of seconds"),
+                                          ("0", "--cycle '0': the controller cycle must be a finite number"),
+                                          ("4", "--cycle '4': the controller cycle must lie in")])
+def test_a_bad_cycle_is_one_line(tmp_path, value, words):
+    path, _ = _plan(tmp_path, "delta-su2018", "-f", "cam-table")
+    res = runner.invoke(app, ["check", path, "--cycle", value])
+    assert res.exit_code == 1
+    (line,) = res.output.splitlines()
+    assert line.startswith("pickplace: error: " + words), line
