@@ -152,12 +152,19 @@ def test_law_polished_placement_shape_against_the_free_path_minimum():
 
 
 @pytest.mark.parametrize("extra", [["--shape-law-evals", "5", "--time", "fit", "--optimize", "shape"],
-                                   ["--shape-law-evals", "5", "--time", "optimal"],
-                                   ["--shape-law-evals", "2.5", "--time", "optimal", "--optimize", "shape"]])
+                                   ["--shape-law-evals", "5", "--time", "optimal"]])
 def test_cli_shape_law_evals_usage_exit_2(extra):
     r = CliRunner().invoke(app, ["plan", "--from", "-0.1525,0,-0.8", "--to", "0.1525,0,-0.8"] + extra)
     assert r.exit_code == 2, r.output
     assert "shape-law-evals" in r.output and "Traceback" not in r.output
+
+
+def test_cli_shape_law_evals_not_an_integer_exit_1():
+    """A count that is not an integer is invalid input (exit 1), like one out of range."""
+    r = CliRunner().invoke(app, ["plan", "--from", "-0.1525,0,-0.8", "--to", "0.1525,0,-0.8", "--time", "optimal",
+                                 "--optimize", "shape", "--shape-law-evals", "2.5"])
+    assert r.exit_code == 1, r.output
+    assert "--shape-law-evals" in r.output and "must be an integer" in r.output and "Traceback" not in r.output
 
 
 @pytest.mark.parametrize("n", ["-1", "1001", "100000"])
