@@ -296,6 +296,39 @@ def _optimised_shape(task: Task, profile: Profile, options: PlanOptions) -> tupl
     return shaped, replace(options, method_params={**base, "k1": found.k1, "k2": found.k2, **arch}, shape=False), info
 
 
+def _library_inputs(task, profile, options) -> tuple:
+    """A library caller's arguments as the CLI gives them, or one TaskError naming the field, value and rule (never
+    a bare ValueError or AttributeError): a profile by name or file (:func:`load_profile`), a known method, a finite
+    rate in (0, 1e6] Hz."""
+    import math
+    from pathlib import Path
+
+    from .model.errors import TaskError
+
+    if not isinstance(task, Task):
+        raise TaskError(f"task = {task!r}: must be a Task (Task(p_from, p_to, height) in m)")
+    if isinstance(profile, (str, Path)):
+        from .model.profile import load_profile
+
+        profile = load_profile(profile)
+    elif not isinstance(profile, Profile):
+        raise TaskError(f"profile = {profile!r}: must be a Profile (load_profile(name or path))")
+    if not isinstance(options, PlanOptions):
+        raise TaskError(f"options = {options!r}: must be a PlanOptions")
+    try:
+        Method(options.method)
+    except ValueError:
+        raise TaskError(f"method = {options.method!r}: must be one of {', '.join(m.value for m in Method)}") from None
+    if options.rate is not None:
+        try:
+            rate = float(options.rate)
+        except (TypeError, ValueError):
+            rate = math.nan
+        if not (math.isfinite(rate) and 0 < rate <= 1e6):
+            raise TaskError(f"rate = {options.rate!r} Hz: the output rate must be a finite number in (0, 1e6] Hz")
+    return task, profile, options
+
+
 class PlanInterrupted(Exception):
     """Raised by :func:`plan` when its ``interrupt`` returned True (not an error: the caller asked to stop)."""
 
@@ -351,6 +384,7 @@ def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions(), *,
         if interrupt is not None and interrupt():
             raise PlanInterrupted
 
+    task, profile, options = _library_inputs(task, profile, options)
     if isinstance(options.time, str):  # a rule's name in any case and spacing (TaskError for a bad one)
         from .timing import parse_time
 

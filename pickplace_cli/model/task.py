@@ -46,7 +46,11 @@ def _vec3(name: str, value, limit: float = MAX_METRES, unit: str = "m") -> np.nd
         if type(x) is float and type(y) is float and type(z) is float and -limit <= x <= limit \
                 and -limit <= y <= limit and -limit <= z <= limit:
             return np.array((x, y, z), dtype=float)
-    arr = np.asarray(value, dtype=float).reshape(-1)
+    try:
+        arr = np.asarray(value, dtype=float).reshape(-1)
+    except (TypeError, ValueError):  # a string "0,0,-0.8", None, …: the library's callers get the CLI's one line
+        raise TaskError(f"{name} = {value!r}: needs three numbers X,Y,Z in {unit} (a sequence, e.g. [0.1, 0, -0.8])") \
+            from None
     if arr.shape != (3,):
         raise TaskError(f"{name} = {value!r}: needs three coordinates X,Y,Z in {unit}")
     if not np.all(np.isfinite(arr)):
@@ -110,14 +114,21 @@ class Task:
         object.__setattr__(self, "p_to", _vec3("to", self.p_to))
         object.__setattr__(self, "v_from", _vec3("v_from", self.v_from, MAX_SPEED, "m/s"))
         object.__setattr__(self, "v_to", _vec3("v_to", self.v_to, MAX_SPEED, "m/s"))
-        h = float(self.height)
+        try:
+            h = float(self.height)
+        except (TypeError, ValueError):
+            raise TaskError(f"height = {self.height!r}: must be a finite number of metres > 0 (the clearance; the "
+                            "profile's planning.height is the CLI's default)") from None
         if not (isfinite(h) and h > 0):
             raise TaskError(f"height = {self.height!r}: must be a finite number of metres > 0")
         if h > MAX_METRES:
             raise TaskError(f"height = {self.height!r} m: must be at most {MAX_METRES:g} m (SI units)")
         if h < MIN_HEIGHT:
             raise TaskError(f"height = {self.height!r} m: must be at least {MIN_HEIGHT:g} m (1 µm; SI units)")
-        e = float(self.eta)
+        try:
+            e = float(self.eta)
+        except (TypeError, ValueError):
+            raise TaskError(f"eta = {self.eta!r}: the lift-off/set-down ratio η must be a number in (0, 1)") from None
         if not (isfinite(e) and 0 < e < 1):
             raise TaskError(f"eta = {self.eta!r}: the lift-off/set-down ratio η must lie strictly between 0 and 1")
         object.__setattr__(self, "height", h)

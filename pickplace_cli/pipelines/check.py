@@ -211,8 +211,8 @@ def check_file(path: str | Path, profile: Profile, smoothing: float | str = 0.0,
     path : str or pathlib.Path
         A CSV file with a header holding ``t`` [s] and ``q1 … qn`` [rad or m] (units in the header are honoured);
         ``-`` reads standard input. A ``move`` column splits it into moves.
-    profile : Profile
-        The robot and its limits.
+    profile : Profile or str
+        The robot and its limits (a shipped profile's name or a YAML file: :func:`load_profile`).
     smoothing : float or str
         Smoothing factor per sample [m²] of the tool position (0: interpolate exactly), or ``"auto"``: the square
         of the noise level estimated from the samples.
@@ -247,6 +247,12 @@ def check_file(path: str | Path, profile: Profile, smoothing: float | str = 0.0,
     """
     from ..model.headroom import apply_limit_use
 
+    if isinstance(profile, (str, Path)):  # a library caller's profile by name or file, as the CLI's --profile
+        from ..model.profile import load_profile
+
+        profile = load_profile(profile)
+    elif not isinstance(profile, Profile):
+        raise TaskError(f"profile = {profile!r}: must be a Profile (load_profile(name or path))")
     profile = apply_limit_use(profile, limit_use)
     import sys
 

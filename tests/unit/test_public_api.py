@@ -107,3 +107,44 @@ def test_plan_docstring_example_runs():
         runner.run(test)
     result = runner.summarize(verbose=False)
     assert result.attempted >= 2 and result.failed == 0
+
+
+@pytest.mark.parametrize("call, words", [
+    (lambda api, t, p: api.plan(t, p, api.PlanOptions(rate=0)), "rate = 0 Hz: the output rate must be"),
+    (lambda api, t, p: api.plan(t, p, api.PlanOptions(rate=float("nan"))), "rate = nan Hz"),
+    (lambda api, t, p: api.plan(t, p, api.PlanOptions(rate="fast")), "rate = 'fast' Hz"),
+    (lambda api, t, p: api.plan(t, p, api.PlanOptions(method="bogus")), "method = 'bogus': must be one of bspline"),
+    (lambda api, t, p: api.plan(t, 5), "profile = 5: must be a Profile"),
+    (lambda api, t, p: api.plan("a move", p), "task = 'a move': must be a Task"),
+    (lambda api, t, p: api.Task("0,0,-0.8", [0.1, 0, -0.8], 0.025), "from = '0,0,-0.8': needs three numbers"),
+    (lambda api, t, p: api.Task([0, 0, -0.8], [0.1, 0, -0.8], None), "height = None: must be a finite number"),
+    (lambda api, t, p: api.Task([0, 0, -0.8], [0.1, 0, -0.8], 0.025, "half"), "eta = 'half'"),
+    (lambda api, t, p: api.check_file(__file__, None), "profile = None: must be a Profile"),
+])
+def test_library_errors_are_pickplace_errors(call, words):
+    """Every bad argument of the library's entry points is a PickplaceError (exit code 1) with one line naming the
+    field, the value and the rule, as docs/api.md says: never a bare ValueError, TypeError or AttributeError."""
+    import pickplace_cli as api
+
+    task = api.Task([-0.1525, 0, -0.8], [0.1525, 0, -0.8], 0.025)
+    with pytest.raises(api.PickplaceError) as info:
+        call(api, task, api.load_profile("delta-su2018"))
+    assert type(info.value).__name__ == "TaskError" and info.value.exit_code == 1
+    assert str(info.value).startswith(words) and "\n" not in str(info.value), str(info.value)
+
+
+def test_a_profile_by_name_is_loaded(tmp_path):
+    """plan() and check_file() take a profile's name (or file) as the CLI's --profile does: the same answer."""
+    import pickplace_cli as api
+
+    task = api.Task([-0.1525, 0, -0.8], [0.1525, 0, -0.8], 0.025)
+    by_name = api.plan(task, "delta-su2018")
+    assert by_name.duration.seconds == api.plan(task, api.load_profile("delta-su2018")).duration.seconds
+    out = tmp_path / "t.csv"
+    from typer.testing import CliRunner
+
+    from pickplace_cli.cli import app
+
+    assert CliRunner().invoke(app, ["plan", "--from", "-0.1525,0,-0.8", "--to", "0.1525,0,-0.8", "-q", "-o",
+                                    str(out)]).exit_code == 0
+    assert api.check_file(out, "delta-su2018")[0].report.ok
