@@ -282,6 +282,9 @@ def check_file(path: str | Path, profile: Profile, smoothing: float | str = 0.0,
     if cycle is not None and warn is not None and (kind != "table" or what.kind == "cam"):
         warn(f"--cycle {cycle:g} s: not used: {source} is not a pvt or cam-table table (its motion has no step a "
              "controller cycle bounds)")
+    if warn is not None:
+        for move, t, qd in _end_speeds(kind, what):
+            _warn_moving_ends(warn, source, move, t, qd, robot.joint_names)
     if kind == "table":
         return [MoveCheck(None, int(what.lines[0]), int(what.lines[-1]),
                           whole_cycle(check_table(what, profile, source, not_held, cycle).rated(profile.limit_use)))]
@@ -291,6 +294,43 @@ def check_file(path: str | Path, profile: Profile, smoothing: float | str = 0.0,
                              whole_cycle(check_samples(s, profile, smoothing, source, strict, warn,
                                                        not_held).rated(profile.limit_use))))
     return out
+
+
+#: a move whose joint speed at its first or last sample is above this share of its peak [-] "ends moving": a file cut
+#: short, or a conveyor move (which ends at the belt's speed); a move from and to rest stays far below (its last
+#: interval's mean speed at 100 Hz: a few %)
+MOVING_END = 0.1
+
+
+def _end_speeds(kind: str, what) -> list:
+    """[(move, times (N,) [s], joint speeds (N, n) [per s])] of each move (a table: its points' velocities, a PVT's or
+    cam's own, a cam-table's slopes; samples: the slope of each interval, at its end)."""
+    if kind == "table":
+        if what.qd is not None:
+            return [(None, what.t, what.qd)]
+        slope = np.diff(what.q, axis=0) / np.diff(what.t)[:, None]
+        return [(None, what.t[1:], slope)] if len(slope) else []
+    out = []
+    for s in what:
+        if len(s.t) >= 2:
+            out.append((s.move, s.t[1:], np.diff(s.q, axis=0) / np.diff(s.t)[:, None]))
+    return out
+
+
+def _warn_moving_ends(warn, source: str, move, t: np.ndarray, qd: np.ndarray, names) -> None:
+    """One warning when the move starts or ends moving (:data:`MOVING_END`): check judges the file as it is, and the
+    stop beyond its end (or the start before it) is not in it."""
+    peak = np.max(np.abs(qd), axis=0)
+    for at, row, when in ((0, qd[0], "starts"), (-1, qd[-1], "ends")):
+        share = np.where(peak > 0, np.abs(row) / np.where(peak > 0, peak, 1.0), 0.0)
+        j = int(np.argmax(share))
+        if share[j] > MOVING_END:
+            which = f"move {move}: " if move is not None else ""
+            warn(f"{source}: {which}the motion {when} moving ({names[j]} at {100 * share[j]:.0f} % of its peak speed "
+                 f"at t = {t[at]:.6g} s): it is judged as the file holds it, and what the drive does "
+                 f"{'before' if at == 0 else 'after'} is not checked (a file cut short? a conveyor move ends at the "
+                 "belt's speed)")
+            return
 
 
 def check_trajectory(path: str | Path, profile: Profile, smoothing: float = 0.0) -> LimitReport:

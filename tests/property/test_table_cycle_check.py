@@ -159,3 +159,23 @@ def test_a_bad_cycle_is_one_line(tmp_path, value, words):
     assert res.exit_code == 1
     (line,) = res.output.splitlines()
     assert line.startswith("pickplace: error: " + words), line
+
+
+@pytest.mark.parametrize("args, keep", [((), 90), (("-f", "pvt"), 20), (("--round-trip",), None), ((), None),
+                                        (("--rate", "100"), None), (("-f", "pvt"), None)])
+def test_a_file_cut_short_says_it_ends_moving(tmp_path, args, keep):
+    """A file cut off at speed (its first ``keep`` lines) is judged as it holds, with one warning that its motion ends
+    moving and what follows is not checked; a whole file (a move, a round trip, at 100 Hz, a PVT table) has none.
+    A cut PVT table also ends with its acceleration step to rest, held to the cycle's allowance (exit 3)."""
+    path, _ = _plan(tmp_path, "delta-su2018", "-q", *args)
+    if keep is not None:
+        lines = open(path).read().splitlines()[:keep]
+        open(path, "w").write("\n".join(lines) + "\n")
+    res = runner.invoke(app, ["check", path, "-q"])
+    warned = [ln for ln in res.output.splitlines() if "the motion ends moving" in ln]
+    assert len(warned) == (1 if keep is not None else 0), res.output
+    if keep is not None:
+        assert "% of its peak speed" in warned[0] and "a file cut short?" in warned[0]
+        assert res.exit_code == (3 if "pvt" in args else 0), res.output
+    else:
+        assert res.exit_code == 0, res.output
