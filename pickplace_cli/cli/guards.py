@@ -51,7 +51,10 @@ def output_format(ctx, fmt, output: Optional[str], option: str = "fmt"):
         said = "Structured Text" if named == "pvt-st" else named
         _usage(f"-f {fmt.value} -o {output}: the file's suffix says {said}; give -o with a .{want} suffix "
                f"or a -f that writes {said}")
-    if named is not None and not given and named != "pvt-st":
+    if named == "pvt-st" and not given:  # which table the drive runs is the user's to say, not a CSV under .st
+        _usage(f"-o {output}: the file's suffix says Structured Text; give the table it holds with -f pvt-st, cam-st "
+               "or cam-table-st, or -o with a .csv suffix for the trajectory")
+    if named is not None and not given:
         fmt = OutputFormat(named)
     if fmt == OutputFormat.mcap and output in (None, "-") and sys.stdout is not None and sys.stdout.isatty():
         _usage("-f mcap: MCAP is binary; not written to a terminal: give -o FILE.mcap or redirect standard output")

@@ -66,6 +66,16 @@ def test_a_format_that_contradicts_the_suffix_is_refused(tmp_path, fmt, out):
     assert not (tmp_path / out).exists()
 
 
+def test_a_dot_st_without_a_table_format_is_refused(tmp_path):
+    """-o x.st names Structured Text but not which table the drive runs: refused (exit 2), nothing written; the
+    trajectory's CSV under an .st name was written before. With -f pvt-st it is written."""
+    r = run("plan", *ADEPT, "-q", "-o", str(tmp_path / "x.st"))
+    assert r.exit_code == 2 and "-o " + str(tmp_path / "x.st") + ": the file's suffix says Structured Text" in r.stderr
+    assert not (tmp_path / "x.st").exists()
+    assert run("plan", *ADEPT, "-q", "-f", "pvt-st", "-o", str(tmp_path / "x.st")).exit_code == 0
+    assert (tmp_path / "x.st").read_text().lstrip().startswith("(*")
+
+
 def test_an_unknown_suffix_keeps_csv(tmp_path):
     assert run("plan", *ADEPT, "-q", "-o", str(tmp_path / "t.dat")).exit_code == 0
     assert (tmp_path / "t.dat").read_text().startswith("t[s],")
