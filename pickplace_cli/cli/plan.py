@@ -429,7 +429,7 @@ def plan(
         back = Task(task.p_to, task.p_from, task.height, task.eta, theta_from=legs[0].task.theta_to,
                     theta_to=task.theta_from)
         legs.append(_run_plan(back, prof, replace(options, turn=TurnName.as_given.value)))
-    warn_few_samples(legs, rate)
+    warn_few_samples(legs, rate, a.cycle_s, '--cycle' if cycle is not None else "the profile's controller.cycle")
     code, cycle = _render_legs(a, prof, legs, rendezvous, track)
     forgiven = write_anyway and code == 3  # a timed limit only: a position past its range is never written
     note_exit(0 if forgiven else code)  # the verdict, should stdout's reader go away before the end

@@ -52,11 +52,17 @@ def check_option_units(a, prof) -> None:
                          f"--time {seconds / 1000:g} (the duration is in s)\n")
 
 
-def warn_few_samples(legs, rate) -> None:
-    """A warning when a planned move has fewer than :data:`FEW_SAMPLES` samples (module docstring)."""
+def warn_few_samples(legs, rate, cycle: float | None = None, named: str = "--cycle") -> None:
+    """A warning when a planned move has fewer than :data:`FEW_SAMPLES` samples (module docstring); on a controller
+    ``cycle`` [s] the samples are one per cycle, and the warning names the cycle (``named``: where it was given)."""
     for leg in legs:
         n = len(leg.t)
         if n < FEW_SAMPLES:
+            if cycle is not None:
+                sys.stderr.write(f"pickplace: warning: {named} {cycle:g} s: {n} samples (one per cycle) for a "
+                                 f"{leg.report.duration:.4g} s move (a drive interpolating them follows another "
+                                 f"motion); milliseconds meant? {cycle / 1000:g} s (the cycle is in s)\n")
+                return
             if rate is None:  # the profile's rate: the move is what is short, not a rate the user gave
                 sys.stderr.write(f"pickplace: warning: a {leg.report.duration:.4g} s move: {n} samples at the "
                                  "profile's planning.rate (a drive interpolating them follows another motion); the "

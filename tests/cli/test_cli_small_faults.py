@@ -40,6 +40,9 @@ def test_a_short_move_without_rate_does_not_suggest_a_rate(tmp_path):
     assert "--rate" not in r.output and "kHz" not in r.output
     r = _run("plan", *ADEPT, "--rate", "10", "-q", "-o", str(tmp_path / "t.csv"))  # a rate given: the unit hint
     assert "--rate 10 Hz: 3 samples for a 0.18 s move" in r.output and "kHz meant? --rate 10000" in r.output
+    r = _run("plan", *ADEPT, "--cycle", "0.25", "-q", "-o", str(tmp_path / "t.csv"))  # a cycle: the cycle is named
+    assert "--cycle 0.25 s: 2 samples (one per cycle) for a 0.25 s move" in r.output, r.output
+    assert "planning.rate" not in r.output and "milliseconds meant? 0.00025 s" in r.output
 
 
 def test_profile_show_prints_the_workcell_and_the_controller():
