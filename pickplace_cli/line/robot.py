@@ -165,7 +165,12 @@ class LineRobot(LimitSearch):
         self._plan = None
         self._last_uses = self._kept = self._timed = None
         self.use_keys: list = []
-        self.home_torque = self._holding(self.home)
+        try:
+            self.home_torque = self._holding(self.home)
+        except UnreachableError as exc:  # (before check_reach: name the robot and its home, as check_reach does)
+            ln = self.frame.to_line(self.home)
+            raise UnreachableError(f"robot {self.name}: home point [{ln[0]:g}, {ln[1]:g}, {ln[2]:g}] m (line frame) is "
+                                   f"outside the workspace of profile {self.profile.name}: {exc}") from None
 
     # ------------------------------------------------------------------------------------------ geometry
     def part_at(self, along: float, across: float) -> np.ndarray:

@@ -79,6 +79,14 @@ def test_window_outside_the_workspace_is_exit_4(line_file):
     _one_line(run("line", line_file, "-q"), 4, "robot r1: window [0.4, 1.19] m across [-0.15, 0.15] m: the point along")
 
 
+def test_a_home_outside_the_workspace_names_the_robot(line_file):
+    """A base too high for its place point (the robot's home): one line naming the robot and its home, exit 4 (it was
+    the robot model's message alone, naming neither)."""
+    line_file.write_text(LINE.replace("base: [0.6, 0.0, 0.8]", "base: [0.6, 0.0, 8]"))
+    _one_line(run("line", line_file, "-q"), 4, "robot r1: home point [0.6, 0.35, 0] m (line frame) is outside the "
+              "workspace of profile delta-su2018: Delta: sample 0")
+
+
 def test_overlapping_windows_are_refused(line_file):
     line_file.write_text(LINE.replace("window: [1.2, 1.6]", "window: [0.7, 1.1]"))
     _one_line(run("line", line_file), 1, "robots r1 and r2: windows [0.4, 0.8] and [0.7, 1.1] m overlap")
