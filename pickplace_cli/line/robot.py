@@ -283,6 +283,11 @@ class LineRobot(LimitSearch):
         a = max(T_MIN, (self.window[0] - along0) / self.speed)
         b = (self.meet_end - along0) / self.speed
         busy = f"busy until t = {st.t_free:.4f} s, " if st.t_free > t_ready else ""
+        if b < a and self.window[1] - self.speed * self.dwell < self.window[0] + 1e-12:  # the tracking outruns it
+            w = self.window[1] - self.window[0]
+            return Decline(f"robot {self.name}: no meeting point in its window [{self.window[0]:g}, {self.window[1]:g}] "
+                           f"m: tracking the part for the dwell ({self.dwell:g} s at {self.speed:g} m/s = "
+                           f"{self.speed * self.dwell:.4g} m) needs more than the window's {w:.4g} m")
         if b < a:
             where = "its window's end" if self.meet_end < self.window[0] + 1e-12 or along0 > self.window[0] else "it"
             return Decline(f"robot {self.name}: {busy}the part is at along {along0:.4f} m when a move could start, past "

@@ -87,6 +87,14 @@ def test_a_home_outside_the_workspace_names_the_robot(line_file):
               "workspace of profile delta-su2018: Delta: sample 0")
 
 
+def test_a_belt_too_fast_to_track_in_the_window_says_so(line_file):
+    """At 5 m/s the dwell's tracking (0.1 s: 0.5 m) needs more than the 0.4 m window: no meeting point; the line says
+    that (it said the part, upstream, was past its window's end)."""
+    _one_line(run("line", line_file, "--belt-speed", "5", "-q"), 4,
+              "robot r1: no meeting point in its window [0.4, 0.8] m: tracking the part for the dwell (0.1 s at 5 m/s = "
+              "0.5 m) needs more than the window's 0.4 m")
+
+
 def test_overlapping_windows_are_refused(line_file):
     line_file.write_text(LINE.replace("window: [1.2, 1.6]", "window: [0.7, 1.1]"))
     _one_line(run("line", line_file), 1, "robots r1 and r2: windows [0.4, 0.8] and [0.7, 1.1] m overlap")
