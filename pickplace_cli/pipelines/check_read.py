@@ -398,8 +398,12 @@ def tool_motion(table: Table, tool_of, blend: float | None = None):
         xx = np.asarray(xx, float)
         seg = np.clip(np.searchsorted(t, xx, side="right") - 1, 0, len(t) - 2)
         out = np.empty((len(xx), pos.shape[2]))
-        for i in np.unique(seg):
-            sel = seg == i
+        # each piece's points at once, the pieces in one pass over the sorted times (a mask per piece made a long
+        # table's check quadratic: 10 s of 14 for a 4.7 s cam-table of 27,800 points)
+        order_of = np.argsort(seg, kind="stable")
+        ids, starts = np.unique(seg[order_of], return_index=True)
+        for i, lo, hi in zip(ids, starts, np.append(starts[1:], len(seg))):
+            sel = order_of[lo:hi]
             out[sel] = splines[i](xx[sel], order)
         return out
 
