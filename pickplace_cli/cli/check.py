@@ -148,16 +148,19 @@ def check(
         _print_verdict(rep, quiet, with_cycle=not several)
     code = max(c.report.exit_code() for c in checks)
     bad = [r for c in checks for r in c.report.violations]
-    if hold_capacity and bad and all(r.quantity.startswith("capacity") for r in bad):
+    on_cycle = _step_cycle(checks) if bad else None  # a table judged on a cycle: its verdict depends on the cycle
+    if on_cycle is not None and seconds is None:
+        given = ("the profile's controller.cycle" if getattr(prof.controller, "cycle", None) else
+                 "from the profile's planning.rate, as plan without --cycle or --rate")
+        sys.stderr.write(f"pickplace: hint: the table is judged on a controller cycle of {on_cycle:.9g} s ({given}): "
+                         "its verdict depends on the cycle; give the one the drive runs it at with --cycle SECONDS "
+                         "(plan's table summary names it when it differs)\n")
+    elif hold_capacity and bad and all(r.quantity.startswith("capacity") for r in bad):
         sys.stderr.write("pickplace: hint: only the Cartesian capacity is exceeded; a file planned with --time fit or "
                          "optimal holds the joint and motor limits alone: check it with --no-hold-capacity\n")
-    if any(r.quantity == "motor torque step" for r in bad):
-        given = "--cycle" if seconds is not None else (
-            "the profile's controller.cycle" if getattr(prof.controller, "cycle", None) else
-            "from the profile's planning.rate, as plan without --cycle")
+    elif on_cycle is not None and any(r.quantity == "motor torque step" for r in bad):
         sys.stderr.write(f"pickplace: hint: each step is held to the torque rate over one controller cycle of "
-                         f"{_step_cycle(checks, prof, seconds):g} s ({given}); give the cycle the drive runs the table at "
-                         "with --cycle SECONDS, as plan --cycle\n")
+                         f"{on_cycle:g} s (--cycle): the drive must take it within one cycle\n")
     if strict and not code and any(c.report.unresolved for c in checks):
         code = 3
     if several and not quiet:
@@ -172,15 +175,14 @@ def check(
         raise typer.Exit(code)
 
 
-def _step_cycle(checks, prof, seconds) -> float:
-    """The controller cycle [s] a checked table's steps were held over (the report's note says it)."""
+def _step_cycle(checks) -> float | None:
+    """The controller cycle [s] a checked table's steps were held over (the report's note says it), None for a file
+    that is not a PVT or cam-table table."""
     import re
-
-    from ..pipelines.check import table_cycle
 
     for c in checks:
         for note in c.report.notes:
             m = re.search(r"within one controller cycle of ([0-9.eE+-]+) s", note)
             if m:
                 return float(m.group(1))
-    return table_cycle(prof, seconds)
+    return None

@@ -150,7 +150,7 @@ def judge_table(a, prof, legs: list, track, grid):
                     kind, grid, motion, tolerance - rounding, prof, 0.0 if a.round_trip else dwell, a.cycle_s,
                     retime=retime, capacity=capacity, size=sized, written=written), written, tolerance)
     code = judged.report.exit_code()
-    _print_table_verdict(a, judged, legs + ([track] if track is not None else []), motion.duration, retime)
+    _print_table_verdict(a, judged, legs + ([track] if track is not None else []), motion.duration, retime, prof)
     return judged, code
 
 
@@ -177,9 +177,10 @@ def _rounded_deviation(judged, written, tolerance: float | None = None):
     return replace(judged, table=replace(table, max_error=fit + rounding, tolerance=tol), fit_error=fit)
 
 
-def _print_table_verdict(a, judged, plans: list, planned: float, retime: bool) -> None:
+def _print_table_verdict(a, judged, plans: list, planned: float, retime: bool, prof=None) -> None:
     """The table's points, its limiting rows beside the trajectory's, the re-timing and the verdict (stderr; the
-    verdict also with --quiet when the table fails)."""
+    verdict also with --quiet when the table fails), and, for a table whose steps are judged on a cycle, the
+    ``check --cycle`` that reads it on the same cycle when ``check``'s default would be another."""
     from ..limits.report import percent
 
     table, report = judged.table, judged.report
@@ -220,6 +221,14 @@ def _print_table_verdict(a, judged, plans: list, planned: float, retime: bool) -
                          "make it hold; plan a longer --time or a lower --limit-use\n")
     elif not a.quiet:
         sys.stderr.write(f"table verdict: all limits hold as the drive interpolates the table ({how})\n")
+    if table.kind in ("pvt", "cam-table") and prof is not None and not a.quiet:
+        from ..pipelines.check import table_cycle
+
+        default = table_cycle(prof, None, table)
+        if abs(default - judged.step) > 1e-9 * judged.step:  # (check's default: the profile's cycle or rate)
+            sys.stderr.write(f"  its steps are judged on a cycle of {judged.step:.9g} s, and check's default here is "
+                             f"{default:.9g} s: check it on the same cycle with pickplace check FILE --cycle "
+                             f"{judged.step:.9g}\n")
 
 
 def _points_line(a, judged) -> str:

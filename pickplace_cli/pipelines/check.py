@@ -111,6 +111,10 @@ def check_table(table, profile: Profile, source: str, not_held: str = "", cycle:
     blend = cycle if table.kind == "cam-table" else None
     if len(table.t) > MAX_POINTS:
         raise TaskError(f"{source}: {len(table.t):,} points in a {table.kind} table: check reads at most {MAX_POINTS:,}")
+    span = float(table.t[-1] - table.t[0])
+    if cycle > span:
+        raise TaskError(f"cycle = {cycle:g} s: longer than the {table.kind} table it runs ({span:.6g} s, {source}): the "
+                        "controller cycle must be shorter than the move (is it in ms? give seconds: 1 ms = 0.001)")
     if blend is not None and (table.t[-1] - table.t[0]) / blend > MAX_POINTS / 2:
         raise TaskError(f"{source}: a cam-table of {table.t[-1] - table.t[0]:.6g} s read every {blend:g} s is "
                         f"{(table.t[-1] - table.t[0]) / blend:,.0f} cycles, each a blend and a line: check reads at most "
@@ -247,6 +251,12 @@ def check_file(path: str | Path, profile: Profile, smoothing: float | str = 0.0,
     """
     from ..model.headroom import apply_limit_use
 
+    if not isinstance(path, (str, Path)):
+        raise TaskError(f"path = {path!r}: must be a file name (str or pathlib.Path), or '-' for standard input")
+    if cycle is not None:  # the CLI's rule and message for --cycle
+        from ..timing.cycle import check_cycle
+
+        cycle = check_cycle(cycle)
     if isinstance(profile, (str, Path)):  # a library caller's profile by name or file, as the CLI's --profile
         from ..model.profile import load_profile
 
@@ -328,7 +338,7 @@ def _warn_moving_ends(warn, source: str, move, t: np.ndarray, qd: np.ndarray, na
             which = f"move {move}: " if move is not None else ""
             warn(f"{source}: {which}the motion {when} moving ({names[j]} at {100 * share[j]:.0f} % of its peak speed "
                  f"at t = {t[at]:.6g} s): it is judged as the file holds it, and what the drive does "
-                 f"{'before' if at == 0 else 'after'} is not checked (a file cut short? a conveyor move ends at the "
+                 f"{'before' if at == 0 else 'after'} is not checked (a file cut short? a conveyor move {when} at the "
                  "belt's speed)")
             return
 

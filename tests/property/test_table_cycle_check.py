@@ -85,7 +85,7 @@ def test_a_table_on_a_slow_cycle_is_refused_on_a_faster_one(tmp_path, fmt, args)
     assert code == 3
     bad = [r for r in doc["limits"]["rows"] if r["quantity"] == "motor torque step" and not r["ok"]]
     assert bad and all(r["limit"] == pytest.approx(418 * 0.001 * _use("delta-su2018"), rel=1e-9) for r in bad)
-    assert "give the cycle the drive runs the table at with --cycle SECONDS" in out
+    assert "its verdict depends on the cycle; give the one the drive runs it at with --cycle SECONDS" in out
 
 
 def _use(prof: str) -> float:
@@ -179,3 +179,44 @@ def test_a_file_cut_short_says_it_ends_moving(tmp_path, args, keep):
         assert res.exit_code == (3 if "pvt" in args else 0), res.output
     else:
         assert res.exit_code == 0, res.output
+
+
+@pytest.mark.parametrize("fmt", ["cam-table", "cam-table-st", "pvt"])
+@pytest.mark.parametrize("rate", ["100", "500"])
+def test_plan_names_the_cycle_check_needs_when_it_is_not_the_default(tmp_path, fmt, rate):
+    """plan --rate R without --cycle judges a table's steps on a cycle from R, which check cannot know (the file does
+    not hold it): plan's summary names the --cycle to give, and check with it accepts the table (check's default,
+    the profile's planning rate, may not: the verdict depends on the cycle, and its hint says so)."""
+    import re
+
+    path, said = _plan(tmp_path, "delta-su2018", "-f", fmt, "--time", "optimal", "--rate", rate, "--tolerance", "1e-3")
+    assert "table verdict: all limits hold" in said
+    m = re.search(r"check it on the same cycle with pickplace check FILE --cycle ([0-9.e-]+)", said)
+    assert m, said[-1500:]
+    assert float(m.group(1)) == pytest.approx(1.0 / float(rate), rel=0.05)
+    code, _, out = _check(path, "delta-su2018", "--no-hold-capacity", "--cycle", m.group(1))
+    assert code == 0, out[-2000:]
+    code, _, out = _check(path, "delta-su2018", "--no-hold-capacity")
+    assert code == 0 or "its verdict depends on the cycle" in out
+
+
+def test_plan_on_the_default_cycle_names_no_cycle(tmp_path):
+    """plan without --rate or --cycle: check's default is plan's cycle; no --cycle line."""
+    _, said = _plan(tmp_path, "delta-su2018", "-f", "cam-table")
+    assert "table verdict: all limits hold" in said and "check it on the same cycle" not in said
+
+
+@pytest.mark.parametrize("cycle, words", [(float("inf"), "cycle = inf: the controller cycle must be a finite"),
+                                          (-1, "cycle = -1: the controller cycle must be a finite"),
+                                          (0, "cycle = 0: the controller cycle must be a finite"),
+                                          ("abc", "cycle = 'abc': must be a number of seconds"),
+                                          (0.5, "cycle = 0.5 s: longer than the pvt table it runs")])
+def test_check_file_refuses_a_bad_cycle(tmp_path, cycle, words):
+    """The library's check_file(cycle=…) refuses what check --cycle refuses (a TaskError, never inf accepted or a
+    ZeroDivisionError), and a cycle longer than the table itself."""
+    from pickplace_cli import TaskError, check_file
+
+    path, _ = _plan(tmp_path, "delta-su2018", "-f", "pvt", "-q")
+    with pytest.raises(TaskError) as info:
+        check_file(path, "delta-su2018", cycle=cycle)
+    assert str(info.value).startswith(words), str(info.value)
