@@ -36,6 +36,11 @@ def not_written(plans: list, profile, options, code: int) -> str:
     if not bad and any(p.report.unresolved for p in plans):  # plan --strict: a peak the samples do not resolve
         return ("trajectory not written (--strict: a peak is not resolved by the written samples): a higher --rate "
                 "resolves it; --write-anyway writes it as it is")
+    if not bad:  # the trajectory holds: the drive's table broke a limit (its verdict above), which no trajectory duration
+        # computed here is known to fix (a table's steps need not fall steadily as the move slows)
+        return ("table not written: the table breaks a limit as the drive interpolates it (its verdict above), while "
+                "the trajectory holds; a longer --time, a lower --limit-use, another table format or a shorter "
+                "--cycle may hold; --write-anyway writes it as it is")
     headroom = any(r.target < 1.0 and r.utilisation <= 1.0 for r in bad)
     extra = "; or a larger --limit-use (the ratings allow it)" if headroom else ""
     if options.time in ("fit", "optimal", "limits"):

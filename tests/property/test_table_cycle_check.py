@@ -220,3 +220,16 @@ def test_check_file_refuses_a_bad_cycle(tmp_path, cycle, words):
     with pytest.raises(TaskError) as info:
         check_file(path, "delta-su2018", cycle=cycle)
     assert str(info.value).startswith(words), str(info.value)
+
+
+def test_a_table_that_breaks_a_limit_suggests_no_trajectory_duration(tmp_path):
+    """A 256-point CODESYS cam table of a given duration breaks a step limit as the drive runs it while the trajectory
+    holds: the closing line says the table is not written and why, and no longer suggests the trajectory's holding
+    duration (--time 0.3333 or --time limits, which fail as tables too)."""
+    out = tmp_path / "sc.st"
+    res = runner.invoke(app, ["plan", "-p", "scara-600", *MOVES["scara-600"], "-f", "cam-table-st", "--cam-object",
+                              "codesys", "--tolerance", "1e-4", "--time", "0.5", "-o", str(out)])
+    assert res.exit_code == 3 and not out.exists()
+    last = [ln for ln in res.output.splitlines() if ln.startswith("pickplace: ")][-1]
+    assert last.startswith("pickplace: table not written: the table breaks a limit as the drive interpolates it")
+    assert "--time 0.3333" not in res.output and "--time limits holds" not in res.output
