@@ -105,7 +105,7 @@ def check_table(table, profile: Profile, source: str, not_held: str = "", cycle:
     rate × the cycle, :func:`~pickplace_cli.limits.table.step_rows`); every duration-dependent peak to
     ``CHECK_RESOLUTION`` (the rebuild is exact up to the fit of the tool's motion, far finer); the position rows on
     the interpolated joint positions themselves."""
-    from .check_read import MAX_POINTS, SEGMENT_POINTS, joint_polynomial, table_motion, tool_motion
+    from .check_read import MAX_POINTS, SEGMENT_POINTS, table_motion, tool_motion
 
     cycle = table_cycle(profile, cycle, table)
     blend = cycle if table.kind == "cam-table" else None
@@ -130,8 +130,8 @@ def check_table(table, profile: Profile, source: str, not_held: str = "", cycle:
     rebased = replace(table, t=t)
     s = Samples(None, t, table.q, table.lines, 0, int(table.lines[-1]))
     _check_branch(s, robot, robot.forward_kinematics(table.q), source)
-    ev, steps = tool_motion(rebased, tool_of, blend)
-    motion = table_motion(rebased, blend)
+    motion = table_motion(rebased, blend)  # the drive's joint motion, once
+    ev, steps = tool_motion(rebased, tool_of, blend, motion)
     T = motion.duration
     how = _HOW[table.kind].format(cycle=cycle)
     note = (f"{s.where(source)}: a {table.kind} table of {len(t)} points over {float(t[-1]):.6g} s; the motion is {how}, "
@@ -175,7 +175,7 @@ def check_table(table, profile: Profile, source: str, not_held: str = "", cycle:
         report = report.with_rows(tuple(replace(r, t_peak=r.t_peak + start) for r in step_rows(model, motion, cycle)))
     u = 0.5 - 0.5 * np.cos(np.pi * np.arange(SEGMENT_POINTS) / (SEGMENT_POINTS - 1))
     x = np.append((bt[:-1, None] + np.diff(bt)[:, None] * u).ravel(), bt[-1])
-    q = joint_polynomial(rebased, blend)(x)
+    q = motion(x)
     given = {}
     for j, (name, unit, spec) in enumerate(zip(robot.joint_names, robot.joint_units, limit_specs(profile))):
         if spec.limits.position is not None:

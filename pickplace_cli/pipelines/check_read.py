@@ -375,17 +375,21 @@ def table_motion(table: Table, blend: float | None = None):
     return rebuild(table, blend)
 
 
-def tool_motion(table: Table, tool_of, blend: float | None = None):
+def tool_motion(table: Table, tool_of, blend: float | None = None, motion=None):
     """(evaluate(x, order) → (M, d) the tool's motion [m, m/s, …; the angle in rad], the interior breaks' times [s])
     of a PVT, cam or cam-table table (``blend``: a cam-table's controller cycle [s]): per piece of the drive's motion
     (between the points of a PVT or cam; between the ends of the one-cycle blends of a cam-table), the quintic
     interpolating spline through ``SEGMENT_POINTS`` points of ``tool_of`` (joint positions (M, n) → tool coordinates
     (M, d)) of the drive's polynomial. The motion's derivatives step at the breaks (a PVT's acceleration, a cam's
-    jerk, a cam-table's acceleration at each blend's ends): the check takes both one-sided values there."""
+    jerk, a cam-table's acceleration at each blend's ends): the check takes both one-sided values there. ``motion``:
+    the table's :func:`table_motion` when the caller has it already."""
     from scipy.interpolate import make_interp_spline
 
-    motion = table_motion(table, blend)
-    poly = joint_polynomial(table, blend)
+    motion = table_motion(table, blend) if motion is None else motion
+
+    def poly(x):
+        return motion(np.asarray(x, float))
+
     t = np.asarray(motion.breaks, float)
     u = 0.5 - 0.5 * np.cos(np.pi * np.arange(SEGMENT_POINTS) / (SEGMENT_POINTS - 1))  # denser at the ends
     x = (t[:-1, None] + np.diff(t)[:, None] * u).ravel()
