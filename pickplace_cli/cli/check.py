@@ -176,13 +176,6 @@ def check(
 
 
 def _step_cycle(checks) -> float | None:
-    """The controller cycle [s] a checked table's steps were held over (the report's note says it), None for a file
-    that is not a PVT or cam-table table."""
-    import re
-
-    for c in checks:
-        for note in c.report.notes:
-            m = re.search(r"within one controller cycle of ([0-9.eE+-]+) s", note)
-            if m:
-                return float(m.group(1))
-    return None
+    """The controller cycle [s] a checked table's steps were held over, None for a file that is not a PVT or
+    cam-table table."""
+    return next((c.cycle for c in checks if c.cycle is not None), None)

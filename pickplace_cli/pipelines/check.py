@@ -66,12 +66,15 @@ class MoveCheck:
         The move's lines in the file.
     report : LimitReport
         Its limit report (durations [s], peaks in each quantity's unit).
+    cycle : float or None
+        The controller cycle [s] a PVT or cam-table table's steps were held over (None for other files).
     """
 
     move: int | None
     first_line: int
     last_line: int
     report: LimitReport
+    cycle: float | None = None
 
 
 
@@ -115,9 +118,9 @@ def check_table(table, profile: Profile, source: str, not_held: str = "", cycle:
     if cycle > span:
         raise TaskError(f"cycle = {cycle:g} s: longer than the {table.kind} table it runs ({span:.6g} s, {source}): the "
                         "controller cycle must be shorter than the move (is it in ms? give seconds: 1 ms = 0.001)")
-    if blend is not None and (table.t[-1] - table.t[0]) / blend > MAX_POINTS / 2:
-        raise TaskError(f"{source}: a cam-table of {table.t[-1] - table.t[0]:.6g} s read every {blend:g} s is "
-                        f"{(table.t[-1] - table.t[0]) / blend:,.0f} cycles, each a blend and a line: check reads at most "
+    if blend is not None and span / blend > MAX_POINTS / 2:
+        raise TaskError(f"{source}: a cam-table of {span:.6g} s read every {blend:g} s is "
+                        f"{span / blend:,.0f} cycles, each a blend and a line: check reads at most "
                         f"{MAX_POINTS // 2:,} (give the controller's cycle: --cycle SECONDS)")
     robot = build_robot(profile.robot)
     rotary = getattr(robot, "rotary", False)
@@ -296,8 +299,10 @@ def check_file(path: str | Path, profile: Profile, smoothing: float | str = 0.0,
         for move, t, qd in _end_speeds(kind, what):
             _warn_moving_ends(warn, source, move, t, qd, robot.joint_names)
     if kind == "table":
+        on = table_cycle(profile, cycle, what) if what.kind in ("pvt", "cam-table") else None
         return [MoveCheck(None, int(what.lines[0]), int(what.lines[-1]),
-                          whole_cycle(check_table(what, profile, source, not_held, cycle).rated(profile.limit_use)))]
+                          whole_cycle(check_table(what, profile, source, not_held, cycle).rated(profile.limit_use)),
+                          on)]
     out = []
     for s in (what if kind == "samples" else [what]):
         out.append(MoveCheck(s.move, int(s.lines[0]), s.last_line,
