@@ -58,7 +58,8 @@ def check(
         None, "--cycle", metavar="SECONDS", help="The controller cycle in s a drive's table runs at (as plan "
         "--cycle): a cam-table's straight lines are read once per cycle, each velocity step blended over one cycle, "
         "and a PVT or cam-table's acceleration steps (the ends from and to rest too) are taken within one cycle, so "
-        "each motor torque step is held to the torque rate [N·m/s] × the cycle. Not used for other files (a "
+        "each motor torque step plus the torque's change at its rate over that cycle is held to the torque rate "
+        "limit [N·m/s] × the cycle. Not used for other files (a "
         "warning says so). [default: profile controller.cycle, else the period of profile planning.rate, as plan]",
         rich_help_panel=Panel.CONTROLLER,
     ),
@@ -84,7 +85,8 @@ def check(
     controller.joints the drive's files are read in its names and units (d = sign·k·(q − offset) undone), and a PVT
     table is judged as the drive's cubic Hermite, a cam as the quintic through position, velocity and acceleration,
     a cam-table as straight lines read once per controller cycle (--cycle), each velocity step blended over that
-    cycle; a PVT or cam-table's acceleration steps are held to the torque rate × the cycle, as plan holds them.
+    cycle; a PVT or cam-table's acceleration steps (with the torque's change over the cycle that takes them) are held to the torque rate × the
+    cycle, as plan holds them.
 
     The tool's Cartesian capacity (speed, acceleration, jerk of x, y, z) is checked too, as `plan` does under its
     default rule; a trajectory planned with `plan --time fit` or `optimal` (joint and motor limits alone) is

@@ -4,10 +4,12 @@ velocity, acceleration and jerk solved from the joints' through the robot's own 
 :func:`tool_motion`), which runs through the same motion model and continuous check as a plan.
 
 Where the rebuilt acceleration steps (PVT at every point; a linear cam table at the ends of the one-cycle blend of
-each point) the torque rate is unbounded for an instant: the drive takes the step within one controller cycle, so
-the step is bounded by what the torque rate allows in one cycle — |Δ motor torque| ≤ torque rate · cycle (and
-|Δq̈| ≤ jerk · cycle for a joint with a jerk limit) — and reported as its own rows (``motor torque step`` and
-``acceleration step``), the ends of the motion counted as steps from and to rest.
+each point) the torque rate is unbounded for an instant: the drive takes the step within one controller cycle, in
+which the motion goes on changing, so what the torque rate allows in one cycle bounds the step and the change
+around it together — |Δ motor torque + motor torque rate · cycle| ≤ torque rate limit · cycle (and
+|Δq̈ + q⃛ · cycle| ≤ jerk · cycle for a joint with a jerk limit), with the rate of either side of the step — and is
+reported as its own rows (``motor torque step`` and ``acceleration step``), the ends of the motion counted as steps
+from and to rest.
 """
 
 from __future__ import annotations
@@ -99,33 +101,46 @@ def table_path(motion, robot) -> CartesianPath:
                          angle=_TableAngle(src) if getattr(robot, "rotary", False) else None)
 
 
-def _steps(model, motion) -> tuple[dict[str, np.ndarray], np.ndarray, np.ndarray]:
-    """The steps of the motion at every break (the ends against the same position and velocity at rest: no
-    acceleration): ({joint: |Δ motor torque| (B,)} for the joints whose motor torque is limited, |Δq̈| (B, n),
-    the breaks' times (B,) [s] from the motion's start)."""
+def _steps(model, motion, cycle: float) -> tuple[dict[str, np.ndarray], np.ndarray, np.ndarray]:
+    """The per-cycle change at every break of the motion (the ends against the same position and velocity at rest:
+    no acceleration, no jerk), ``cycle`` [s]: the drive takes the step within one cycle while the motion goes on
+    changing, so over that cycle the motor torque moves by the step plus the torque rate × the cycle, with the rate
+    of the side the cycle lies on (before or after the break: the larger of the two is taken) —
+    max over sides of |Δτ + τ̇·cycle|, and likewise |Δq̈ + q⃛·cycle| → ({joint: that change (B,) [N·m]} for the
+    joints whose motor torque is limited, the acceleration's (B, n), the breaks' times (B,) [s] from the motion's
+    start)."""
     t = np.asarray(motion.breaks, float)
     left = motion.all_orders(t, side="left")
     right = motion.all_orders(t, side="right")
     for side, k in ((left, 0), (right, len(t) - 1)):  # before the start, after the end: at rest
         side[2][k] = 0.0
         side[3][k] = 0.0
-    torque, limited = [], []
+    torque, rate, limited = [], [], []
     for q, qd, qdd, qddd in (left, right):
-        parts = model.parts(np.zeros(len(t)), derivatives=False, singularity=False,
+        parts = model.parts(np.zeros(len(t)), derivatives=True, singularity=False,
                             motion=tool_motion(model.robot, q, qd, qdd, qddd))
         limited = [m[0] for m in model.columns(parts, 1.0)[0] if m[1] == "motor torque"]
         torque.append(parts.Am + parts.Gm)  # signed (the motion is in seconds: T = 1), not the limit column's |τ|
+        rate.append(parts.dAm + parts.dGm)  # d/dt of the signed motor torque [N·m/s]
     names = list(model.robot.joint_names)
-    # the step of the signed torque: a torque that changes sign across the step moves by the sum of its sizes
-    dtorque = {name: np.abs(torque[1][:, names.index(name)] - torque[0][:, names.index(name)]) for name in limited}
-    return dtorque, np.abs(right[2] - left[2]), t - motion.start
+
+    def over_cycle(step: np.ndarray, before: np.ndarray, after: np.ndarray) -> np.ndarray:
+        # a torque that changes sign across the step moves by the sum of its sizes: the signed change
+        return np.maximum(np.abs(step + before * cycle), np.abs(step + after * cycle))
+
+    dtau = torque[1] - torque[0]
+    dtorque = {name: over_cycle(dtau[:, i], rate[0][:, i], rate[1][:, i])
+               for i, name in ((names.index(n), n) for n in limited)}
+    dacc = over_cycle(right[2] - left[2], left[3], right[3])
+    return dtorque, dacc, t - motion.start
 
 
 def step_rows(model, motion, cycle: float) -> tuple[LimitRow, ...]:
     """The per-cycle step rows (module docstring) of a rebuilt ``motion`` on ``model`` (a MotionModel whose specs
     carry the limits at the plan's limit use), ``cycle`` [s]: per joint with a torque rate (jerk) limit, the largest
-    motor torque (acceleration) step against torque rate (jerk) × cycle."""
-    dtorque, dacc, times = _steps(model, motion)
+    change of the motor torque (acceleration) over the cycle that takes a step — the step plus the rate × the
+    cycle (:func:`_steps`) — against torque rate (jerk) × cycle."""
+    dtorque, dacc, times = _steps(model, motion, cycle)
     rows = []
     for i, (name, unit, spec) in enumerate(zip(model.robot.joint_names, model.robot.joint_units, model.specs)):
         rate = None if spec.drive is None else spec.drive.torque_rate

@@ -142,7 +142,8 @@ def check_table(table, profile: Profile, source: str, not_held: str = "", cycle:
             "as interpolated")
     if table.kind in ("pvt", "cam-table"):
         note += (f"; each acceleration step (the ends from and to rest) taken within one controller cycle of "
-                 f"{cycle:g} s: its motor torque step held to the torque rate × the cycle (check --cycle; plan "
+                 f"{cycle:g} s: its motor torque step, with the torque's change at its rate over that cycle, held to the "
+                 f"torque rate × the cycle (check --cycle; plan "
                  "--cycle, or the profile's controller.cycle, else its planning rate)")
     if table.kind == "pvt":  # the drive's cubic Hermite is C¹: its acceleration steps at the points
         from .check_read import pvt_acceleration_steps
@@ -238,8 +239,8 @@ def check_file(path: str | Path, profile: Profile, smoothing: float | str = 0.0,
         not held (``--no-hold-capacity``, as ``plan --time fit`` or ``optimal``).
     cycle : float or None
         The controller cycle [s] a table is run at (``check --cycle``): a cam-table's lines are read once per cycle,
-        and a PVT or cam-table's acceleration steps are taken within one (the motor torque step held to the torque
-        rate × the cycle). None: the profile's ``controller.cycle``, else the period of its ``planning.rate`` (what
+        and a PVT or cam-table's acceleration steps are taken within one (the motor torque step plus the torque's
+        change at its rate over that cycle held to the torque rate × the cycle). None: the profile's ``controller.cycle``, else the period of its ``planning.rate`` (what
         ``plan`` takes without ``--cycle``).
 
     Returns

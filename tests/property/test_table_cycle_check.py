@@ -100,8 +100,10 @@ def test_cam_table_steps_against_an_independent_derivation(tmp_path):
     slope from point k to k + 1 (at rest before the first and after the last); at the edge between blends k and
     k + 1 (half way between the points) the position and velocity are continuous and the acceleration steps from
     a_k to a_{k+1}, at the first blend's start from 0 and at the last one's end to 0. Motor torque from the
-    independent rigid-body reference (Lagrange, complex step) as τ/(N·η) + J_rotor·N·q̈. Max over the edges per
-    joint = check's row (1e-6 relative) and its time."""
+    independent rigid-body reference (Lagrange, complex step) as τ/(N·η) + J_rotor·N·q̈, its rate on either side
+    by the reference's own difference along the blend's motion; the change over the cycle that takes a step is
+    the step plus that rate × the cycle, the larger of the two sides. Max over the edges per joint = check's row
+    (1e-6 relative) and its time."""
     from pickplace_cli.model.profile import load_profile
     from pickplace_cli.pipelines.check_read import read_checked
     from pickplace_cli.robots import build_robot
@@ -131,7 +133,13 @@ def test_cam_table_steps_against_an_independent_derivation(tmp_path):
     def motor(acc):
         return ref.reference_torques(P, qe, ve, acc) / (N * eta) + J * N * acc
 
-    step = np.abs(motor(after) - motor(before))
+    def motor_rate(acc):  # within a blend the acceleration is constant (no jerk): d/dt of the motor torque
+        return ref.reference_torque_rate(P, qe, ve, acc, np.zeros_like(acc)) / (N * eta)
+
+    # the drive takes each step within one cycle while the motion goes on: over that cycle the torque moves by the
+    # step plus the rate × the cycle, the cycle before the edge or after it (the larger)
+    jump = motor(after) - motor(before)
+    step = np.maximum(np.abs(jump + motor_rate(before) * c), np.abs(jump + motor_rate(after) * c))
     code, doc, out = _check(path, "delta-su2018", "--no-hold-capacity", "--cycle", str(c))
     assert code == 0, out[-2000:]
     rows = {r["joint"]: r for r in doc["limits"]["rows"] if r["quantity"] == "motor torque step"}
@@ -140,6 +148,56 @@ def test_cam_table_steps_against_an_independent_derivation(tmp_path):
         assert rows[name]["peak"] == pytest.approx(step[k, j], rel=1e-6), name
         assert rows[name]["t_peak_s"] == pytest.approx(te[k], abs=1e-9), name
         assert rows[name]["limit"] == pytest.approx(418 * c * _use("delta-su2018"), rel=1e-9)
+
+
+def test_pvt_steps_against_an_independent_derivation(tmp_path):
+    """The motor torque step rows of a PVT table on a 1 ms cycle, derived here: the drive's cubic Hermite per segment
+    from the table's points and velocities (its acceleration at both ends, its constant jerk), at rest before the
+    first point and after the last (same position and velocity, no acceleration, no jerk). Motor torque and its rate
+    on both sides of every point from the independent rigid-body reference; over the cycle that takes a step the
+    torque moves by the step plus the rate × the cycle (either side: the larger). Max over the points per joint =
+    check's row (1e-6 relative) and its time. The step alone (the rule before) is also computed, and is smaller
+    somewhere: the test tells the two apart."""
+    from pickplace_cli.model.profile import load_profile
+    from pickplace_cli.pipelines.check_read import read_checked
+    from pickplace_cli.robots import build_robot
+    from tests.reference import delta_rigid as ref
+    from tests.unit.test_delta_rigid_reference import drives, reference_params
+
+    c = 0.001
+    path, _ = _plan(tmp_path, "delta-su2018", "-f", "pvt", "--time", "fit", "--cycle", str(c))
+    prof = load_profile("delta-su2018")
+    kind, table, _ = read_checked(open(path).read(), path, prof, build_robot(prof.robot))
+    assert kind == "table" and table.kind == "pvt"
+    t, q, v = table.t - table.t[0], table.q, table.qd
+    h = np.diff(t)[:, None]
+    a2 = (3 * (q[1:] - q[:-1]) / h - 2 * v[:-1] - v[1:]) / h  # q(x) = q0 + v0 x + a2 x² + a3 x³ on [0, h]
+    a3 = (2 * (q[:-1] - q[1:]) / h + v[:-1] + v[1:]) / h**2
+    zero = np.zeros((1, 3))
+    acc_before = np.vstack([zero, 2 * a2 + 6 * a3 * h])  # at each point: the segment before it (rest at the first)
+    acc_after = np.vstack([2 * a2, zero])
+    jerk_before = np.vstack([zero, 6 * a3])
+    jerk_after = np.vstack([6 * a3, zero])
+    N, eta, J = drives(prof)[:3]
+    P = reference_params(prof)
+
+    def motor(acc):
+        return ref.reference_torques(P, q, v, acc) / (N * eta) + J * N * acc
+
+    def motor_rate(acc, jerk):
+        return ref.reference_torque_rate(P, q, v, acc, jerk) / (N * eta) + J * N * jerk
+
+    jump = motor(acc_after) - motor(acc_before)
+    moved = np.maximum(np.abs(jump + motor_rate(acc_before, jerk_before) * c),
+                       np.abs(jump + motor_rate(acc_after, jerk_after) * c))
+    assert (moved.max(axis=0) > np.abs(jump).max(axis=0) * (1 + 1e-3)).any()  # the rule before differs here
+    code, doc, out = _check(path, "delta-su2018", "--no-hold-capacity", "--cycle", str(c))
+    assert code == 0, out[-2000:]
+    rows = {r["joint"]: r for r in doc["limits"]["rows"] if r["quantity"] == "motor torque step"}
+    for j, name in enumerate(("q1", "q2", "q3")):
+        k = int(np.argmax(moved[:, j]))
+        assert rows[name]["peak"] == pytest.approx(moved[k, j], rel=1e-6), name
+        assert rows[name]["t_peak_s"] == pytest.approx(t[k], abs=1e-9), name
 
 
 def test_cycle_on_a_file_of_samples_is_named_not_used(tmp_path):
@@ -222,10 +280,14 @@ def test_check_file_refuses_a_bad_cycle(tmp_path, cycle, words):
     assert str(info.value).startswith(words), str(info.value)
 
 
-def test_a_table_that_breaks_a_limit_suggests_no_trajectory_duration(tmp_path):
+def test_a_table_that_breaks_a_limit_suggests_no_trajectory_duration(tmp_path, monkeypatch):
     """A 256-point CODESYS cam table of a given duration breaks a step limit as the drive runs it while the trajectory
-    holds: the closing line says the table is not written and why, and no longer suggests the trajectory's holding
-    duration (--time 0.3333 or --time limits, which fail as tables too)."""
+    holds (here the table is not re-timed: it would run 3.5 × as long): the closing line says the table is not
+    written and why, and does not suggest the trajectory's holding duration (--time 0.3333 or --time limits, which
+    fail as tables too)."""
+    from pickplace_cli.pipelines import controller
+
+    monkeypatch.setattr(controller, "RETIMES", 0)
     out = tmp_path / "sc.st"
     res = runner.invoke(app, ["plan", "-p", "scara-600", *MOVES["scara-600"], "-f", "cam-table-st", "--cam-object",
                               "codesys", "--tolerance", "1e-4", "--time", "0.5", "-o", str(out)])

@@ -136,35 +136,47 @@ def worst_use_of_polynomials(phys: Physics, kind: str, table, cycle: float, capa
         if capacity:
             note("tool speed", np.linalg.norm(v, axis=1).max() / phys.prof.capacity.velocity)
             note("tool acceleration", np.linalg.norm(a, axis=1).max() / phys.prof.capacity.acceleration)
-        if kind == "pvt":  # the torque each side of every point
+        if kind == "pvt":  # the torque and its rate each side of every point
             ends = torque_along(phys, c, np.array([0.0, h]))[0]
-            if left_end is None:
-                rest = np.array([0.0])
-                q0, qd0 = poly(c, rest, 0), poly(c, rest, 1)
-                p = phys.tool(q0)
-                still = phys.motor_torque(q0, qd0, np.zeros_like(q0), p, np.zeros_like(p))[0]
-                left_end = np.abs(ends[0] - still)
-                note_steps(phys, use, left_end, cycle)
+            if left_end is None:  # from rest: the same position and velocity, no acceleration
+                q0, qd0 = poly(c, np.array([0.0]), 0), poly(c, np.array([0.0]), 1)
+                still, still_rate = rest_torque(phys, q0, qd0)
+                note_steps(phys, use, ends[0] - still, still_rate, rate[0], cycle)
+                left_end = ends[0]
             else:
-                note_steps(phys, use, np.abs(ends[0] - right_end), cycle)
-            right_end = ends[1]
+                note_steps(phys, use, ends[0] - right_end, right_rate, rate[0], cycle)
+            right_end, right_rate = ends[1], rate[-1]
     if kind == "pvt":
         c = coef[-1]
         h = table.t[-1] - table.t[-2]
         x = np.array([h])
         q1, qd1 = poly(c, x, 0), poly(c, x, 1)
-        p = phys.tool(q1)
-        still = phys.motor_torque(q1, qd1, np.zeros_like(q1), p, np.zeros_like(p))[0]
-        note_steps(phys, use, np.abs(right_end - still), cycle)
+        still, still_rate = rest_torque(phys, q1, qd1)
+        note_steps(phys, use, still - right_end, right_rate, still_rate, cycle)
     return use
 
 
-def note_steps(phys: Physics, use: dict, step: np.ndarray, cycle: float) -> None:
+def rest_torque(phys: Physics, q: np.ndarray, qd: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The motor torque (n,) of a motion at (q, q̇) without acceleration, and its rate along q + q̇·t (central
+    difference, step H)."""
+    def at(dt: float) -> np.ndarray:
+        s = q + qd * dt
+        p = phys.tool(s)
+        return phys.motor_torque(s, qd, np.zeros_like(s), p, np.zeros_like(p))[0]
+
+    return at(0.0), (at(H) - at(-H)) / (2 * H)
+
+
+def note_steps(phys: Physics, use: dict, step: np.ndarray, before: np.ndarray, after: np.ndarray,
+               cycle: float) -> None:
+    """The drive takes the signed ``step`` within one cycle while the motion goes on: over that cycle the torque
+    moves by the step plus the rate (``before`` or ``after`` the point, the larger) × the cycle."""
     for i, s in enumerate(step):
         rate = phys.limit(i, "torque_rate")
         if rate is not None:
             key = f"q{i + 1} motor torque step"
-            use[key] = max(use.get(key, 0.0), float(s) / (rate * cycle))
+            moved = max(abs(s + before[i] * cycle), abs(s + after[i] * cycle))
+            use[key] = max(use.get(key, 0.0), float(moved) / (rate * cycle))
 
 
 def worst_use_of_setpoints(phys: Physics, table, cycle: float, capacity: bool) -> dict:
