@@ -65,7 +65,7 @@ def check(
     ),
     report: Optional[str] = typer.Option(None, "--report", help="Also write the limit report as JSON to this file.", rich_help_panel=Panel.OUTPUT),
     report_only: bool = typer.Option(False, "--report-only", help="Exit 0 even when a limit is exceeded.", rich_help_panel=Panel.OUTPUT),
-    quiet: bool = typer.Option(False, "--quiet", "-q", help="Only violations and errors on stderr.", rich_help_panel=Panel.OUTPUT),
+    quiet: bool = typer.Option(False, "--quiet", "-q", help="Only violations, warnings and errors on stderr.", rich_help_panel=Panel.OUTPUT),
 ) -> None:
     """Check an existing joint trajectory against a profile's limits (exit 3 if a limit is exceeded).
 
@@ -133,10 +133,11 @@ def check(
         with atomic_output(report) as stream:
             if several:
                 doc = {"profile": prof.name, "moves": [
-                    {"move": c.move, "lines": [c.first_line, c.last_line], "limits": c.report.as_dict()} for c in checks
+                    {"move": c.move, "lines": [c.first_line, c.last_line], "step_cycle_s": c.cycle,
+                     "limits": c.report.as_dict()} for c in checks
                 ]}
-            else:
-                doc = {"profile": prof.name, "limits": checks[0].report.as_dict()}
+            else:  # step_cycle_s: the controller cycle a table's steps were held over (null: not a pvt or cam-table)
+                doc = {"profile": prof.name, "step_cycle_s": checks[0].cycle, "limits": checks[0].report.as_dict()}
             json.dump(doc, stream, indent=2, default=float)
             stream.write("\n")
     for c in checks:

@@ -58,8 +58,9 @@ def constants_block(lines: list[str], dialect: str) -> str:
 
 
 def st_real(x: float) -> str:
-    """An IEC 61131-3 real literal for ``x`` that reads back as the same double (digits '.' digits [E±n])."""
-    x = float(x)
+    """An IEC 61131-3 real literal for ``x`` that reads back as the same double (digits '.' digits [E±n]); a negative
+    zero is written 0.0 (the same value)."""
+    x = float(x) + 0.0  # -0.0 + 0.0 = 0.0
     if x != x or x in (float("inf"), float("-inf")):
         raise ExportError(f"table value {x!r}: Structured Text has no literal for a non-finite number")
     mant, _, exp = repr(x).partition("e")

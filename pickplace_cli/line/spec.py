@@ -16,9 +16,10 @@ import math
 from pathlib import Path
 from typing import Annotated, Any, Literal, Optional, Union
 
-from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError, model_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from ..model.errors import ProfileError
+from ..model.numbers import Int, Num  # a flag or a number in quotes is refused, as in a profile
 
 #: a line file is a few kilobytes; larger ones are refused before they are parsed [bytes]
 LINE_MAX_BYTES = 1 << 20
@@ -31,15 +32,6 @@ MIN_BELT_SPEED, MAX_BELT_SPEED = 1e-3, 100.0
 MAX_SEED = 2**64 - 1
 
 
-def _no_flag(value: Any) -> Any:
-    """YAML reads true/false/yes/no/on/off as flags; a number field must not take one as 1.0/0.0."""
-    if isinstance(value, bool):
-        raise ValueError("must be a number, not a flag (YAML reads true/false/yes/no/on/off as one)")
-    return value
-
-
-Num = Annotated[float, BeforeValidator(_no_flag)]
-Int = Annotated[int, BeforeValidator(_no_flag)]
 Xyz = tuple[Num, Num, Num]
 
 
@@ -166,7 +158,7 @@ class RobotSpec(_Model):
         default=None, description="Duration rule of every move: limits (every limit of the profile: the motors and the "
                                   "Cartesian capacity), auto (the capacity alone), fit (the joint and motor limits "
                                   "alone), or seconds (default: limits)")
-    limit_use: Optional[float] = Field(
+    limit_use: Optional[Num] = Field(
         default=None, gt=0, le=1, description="Headroom: every timed limit planned to at most this fraction of its "
                                               "rating, in (0, 1] (default: the profile's planning.limit_use)")
     gripper: Gripper = Field(default_factory=Gripper, description="Gripper close and open times in s, each added "

@@ -10,7 +10,8 @@ first leg, at its home point.
 
 **MCAP** (ROS 2 CDR, the message definitions of :mod:`~pickplace_cli.export.mcap`), per robot NAME:
 
-* ``/NAME/joint_states`` — sensor_msgs/JointState: position q, velocity q̇, effort = joint torque;
+* ``/NAME/joint_states`` — sensor_msgs/JointState: position q, velocity q̇, effort = joint torque (SI), the joints
+  named as the profile's ``controller.joints`` names its drives (as ``plan``'s MCAP; without it q1 … qn);
 * ``/NAME/motor_states`` — sensor_msgs/JointState (with drives): velocity = motor speed [rad/s], effort = motor
   torque [N·m];
 * ``/NAME/tool_pose`` — geometry_msgs/PoseStamped in the frame ``line`` (along, across, height).
@@ -107,8 +108,12 @@ def robot_samples(run, t: np.ndarray) -> RobotSamples:
         q[i], tq[i], mt[i], tool[i] = hold
         qd[i] = 0.0
         ms[i] = 0.0
+    from ..export.drive import drive_map
+
+    drive = drive_map(r.profile)  # the joints named as the drives name them (profile controller.joints), as plan's
     return RobotSamples(r.name, t, q, qd, tq, ms if model.has_drives else None, mt if model.has_drives else None,
-                        tool, list(r.joint_names), list(model.robot.joint_units))
+                        tool, list(drive.names) if drive is not None else list(r.joint_names),
+                        list(model.robot.joint_units))
 
 
 def _hold_state(r, point, angle: float = 0.0) -> tuple:

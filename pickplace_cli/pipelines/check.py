@@ -232,7 +232,9 @@ def check_file(path: str | Path, profile: Profile, smoothing: float | str = 0.0,
         Refuse (TaskError) a file whose derivative columns disagree with its positions, instead of judging it from
         its positions.
     warn : callable, optional
-        Told (one line) when a file's derivative columns are not used because they disagree with its positions.
+        Told (one line each, starting "warning: ") when a file's derivative columns are not used because they
+        disagree with its positions, when ``cycle`` is given for a file that is not a PVT or cam-table, and when a
+        move starts or ends moving.
     hold_capacity : bool
         Whether the profile's Cartesian capacity (the tool's |v| [m/s], |a| [m/s²], |j| [m/s³]) is held: True, an
         exceeded capacity fails the check (as ``plan`` under its default rule); False, its rows are reported as
@@ -294,7 +296,7 @@ def check_file(path: str | Path, profile: Profile, smoothing: float | str = 0.0,
     not_held = "" if hold_capacity else "--no-hold-capacity"
     kind, what, source = read_checked(text, source, profile, robot)  # joints, drive units, a table (check_read)
     if cycle is not None and warn is not None and (kind != "table" or what.kind == "cam"):
-        warn(f"--cycle {cycle:g} s: not used: {source} is not a pvt or cam-table table (its motion has no step a "
+        warn(f"warning: --cycle {cycle:g} s: not used: {source} is not a pvt or cam-table table (its motion has no step a "
              "controller cycle bounds)")
     if warn is not None:
         for move, t, qd in _end_speeds(kind, what):
@@ -342,7 +344,7 @@ def _warn_moving_ends(warn, source: str, move, t: np.ndarray, qd: np.ndarray, na
         j = int(np.argmax(share))
         if share[j] > MOVING_END:
             which = f"move {move}: " if move is not None else ""
-            warn(f"{source}: {which}the motion {when} moving ({names[j]} at {100 * share[j]:.0f} % of its peak speed "
+            warn(f"warning: {source}: {which}the motion {when} moving ({names[j]} at {100 * share[j]:.0f} % of its peak speed "
                  f"at t = {t[at]:.6g} s): it is judged as the file holds it, and what the drive does "
                  f"{'before' if at == 0 else 'after'} is not checked (a file cut short? a conveyor move {when} at the "
                  "belt's speed)")

@@ -216,3 +216,12 @@ def test_mcap_has_every_robots_topics(line_file, tmp_path):
                       "/r2/joint_states", "/r2/motor_states", "/r2/tool_pose"]
     counts = {summary.channels[k].topic: v for k, v in summary.statistics.channel_message_counts.items()}
     assert len(set(counts.values())) == 1  # one clock for every robot and topic
+    # the joints are named as the profile's controller.joints names its drives, as plan's MCAP names them
+    from mcap_ros2.decoder import DecoderFactory
+
+    from pickplace_cli.model.profile import load_profile
+
+    drives = [j.name for j in load_profile("delta-su2018").controller.joints]
+    reader = make_reader(out.open("rb"), decoder_factories=[DecoderFactory()])
+    _, channel, _, msg = next(reader.iter_decoded_messages(topics=["/r1/joint_states"]))
+    assert list(msg.name) == drives == ["A1", "A2", "A3"]

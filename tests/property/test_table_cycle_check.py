@@ -204,8 +204,28 @@ def test_cycle_on_a_file_of_samples_is_named_not_used(tmp_path):
     """--cycle on a file of samples (no drive table): a one-line warning that it is not used; the verdict as
     without it."""
     path, _ = _plan(tmp_path, "delta-su2018", "-q")
-    code, _, out = _check(path, "delta-su2018", "--cycle", "0.004", "-q")
-    assert code == 0 and "--cycle 0.004 s: not used" in out
+    code, doc, out = _check(path, "delta-su2018", "--cycle", "0.004", "-q")
+    assert code == 0 and "pickplace: warning: --cycle 0.004 s: not used" in out
+    assert doc["step_cycle_s"] is None  # a file of samples has no step a cycle bounds
+
+
+@pytest.mark.parametrize("args, cycle", [(("-f", "pvt"), None), (("-f", "cam-table"), None), (("-f", "pvt"), "0.002"),
+                                         (("-f", "cam-table", "--round-trip"), "0.002")])
+def test_the_report_names_the_cycle_the_steps_were_held_over(tmp_path, args, cycle):
+    """check --report gives the controller cycle a table's steps were held over (step_cycle_s; a round trip's table
+    is one table): --cycle when given, else what plan takes without it, as the step rows' limit (torque rate ×
+    cycle)."""
+    path, _ = _plan(tmp_path, "delta-su2018", "-q", *args)
+    code, doc, out = _check(path, "delta-su2018", *(("--cycle", cycle) if cycle else ()))
+    assert code == 0, out[-2000:]
+    for m in [doc]:
+        step = m["step_cycle_s"]
+        if cycle is not None:
+            assert step == float(cycle)
+        else:
+            assert step == pytest.approx(0.001, rel=0.01)  # about the 1 kHz planning rate's period
+        rows = [r for r in m["limits"]["rows"] if r["quantity"] == "motor torque step"]
+        assert rows and all(r["limit"] == pytest.approx(418 * step * _use("delta-su2018"), rel=1e-9) for r in rows)
 
 
 @pytest.mark.parametrize("value, words", [("abc", "--cycle 'abc': must be a number of seconds"),
@@ -233,6 +253,7 @@ def test_a_file_cut_short_says_it_ends_moving(tmp_path, args, keep):
     warned = [ln for ln in res.output.splitlines() if "the motion ends moving" in ln]
     assert len(warned) == (1 if keep is not None else 0), res.output
     if keep is not None:
+        assert warned[0].startswith("pickplace: warning: ")
         assert "% of its peak speed" in warned[0] and "a file cut short?" in warned[0]
         assert res.exit_code == (3 if "pvt" in args else 0), res.output
     else:
@@ -295,3 +316,11 @@ def test_a_table_that_breaks_a_limit_suggests_no_trajectory_duration(tmp_path, m
     last = [ln for ln in res.output.splitlines() if ln.startswith("pickplace: ")][-1]
     assert last.startswith("pickplace: table not written: the table breaks a limit as the drive interpolates it")
     assert "--time 0.3333" not in res.output and "--time limits holds" not in res.output
+
+
+def test_the_report_of_several_moves_has_a_cycle_per_move(tmp_path):
+    """A file of several moves (a round trip's samples): each move's entry carries step_cycle_s, null (no steps)."""
+    path, _ = _plan(tmp_path, "delta-su2018", "-q", "--round-trip")
+    code, doc, out = _check(path, "delta-su2018")
+    assert code == 0, out[-2000:]
+    assert len(doc["moves"]) == 2 and all(m["step_cycle_s"] is None for m in doc["moves"])

@@ -297,6 +297,7 @@ def test_st_header_and_determinism(shipped):
 def test_st_real_literals():
     assert [st_real(x) for x in (1.0, 0.5, 1e-5, 40.0, 1e22, 0.1 + 0.2)] == [
         "1.0", "0.5", "1.0E-05", "40.0", "1.0E+22", "0.30000000000000004"]
+    assert [st_real(x) for x in (-0.0, 0.0, -1.5, -1e-300)] == ["0.0", "0.0", "-1.5", "-1.0E-300"]  # no "-0.0"
     with pytest.raises(ExportError):
         st_real(float("inf"))
     with pytest.raises(ExportError, match="prefix"):

@@ -43,6 +43,9 @@ def test_a_valid_file_and_its_defaults():
     (("speed: 0.5", "speeed: 0.5"), "l.yaml:1: unknown key 'belt.speeed'"),
     (("speed: 0.5", "speed: -0.5"), "l.yaml:1: belt.speed = -0.5: Input should be greater than or equal to 0.001"),
     (("speed: 0.5", "speed: yes"), "belt.speed = true: must be a number, not a flag"),
+    (("speed: 0.5", 'speed: "0.5"'), "belt.speed = '0.5': must be a number, not text (write the number without "
+                                     "quotes)"),
+    (("speed: 0.5", 'speed: "fast"'), "belt.speed = 'fast': must be a number"),
     (("window: [0.4, 0.8]", "window: [0.8, 0.4]"), "robots.0: window = [0.8, 0.4] m: needs start < end"),
     (("place: {points: [[0.6, 0.35, 0.0]]}", "place: {points: [[0.6, 0.35, 0.0]], belt: {point: [0, 0, 0], velocity: [0.1, 0]}}"),
      "robots.0.place: give exactly one of points, tray, belt (got points, belt)"),
