@@ -12,6 +12,23 @@ import numpy as np
 REFINE_ROUNDS = 24
 #: times the table may be re-timed (slowed) before it counts as not holding
 RETIMES = 6
+#: the most controller cycles (or sample periods, without a cycle) a drive's table ``plan`` writes may span: it is
+#: judged on every cycle, again after each round of points added (20,000 cycles: about 5 s; 90,000: 150 s and 6 GB)
+MAX_TABLE_CYCLES = 20_000
+
+
+def bounded_table(kind: str, duration: float, step: float, cycle: float | None) -> None:
+    """TaskError (exit 1, one line) when a ``kind`` table of ``duration`` [s] on ``step`` [s] (the controller
+    ``cycle``, else the sample period) spans more than :data:`MAX_TABLE_CYCLES` cycles."""
+    from ..model.errors import TaskError
+
+    n = duration / step
+    if n > MAX_TABLE_CYCLES:
+        on = f"a controller cycle of {cycle:g} s (--cycle)" if cycle is not None else \
+            f"a sample period of {step:g} s (--rate; no --cycle)"
+        raise TaskError(f"-f {kind}: a table of {duration:.6g} s on {on} is {n:,.0f} cycles; plan judges a drive's "
+                        f"table on every cycle, at most {MAX_TABLE_CYCLES:,}: give the controller's cycle in s with "
+                        "--cycle SECONDS (1 ms = 0.001), or a lower --rate")
 
 
 @dataclass(frozen=True)
@@ -252,6 +269,7 @@ def judged_table(kind: str, grid: np.ndarray, timeline: Motion, tolerance: float
     robot, specs, margin, box = motion_model_static(profile)[:4]
     grid = np.asarray(grid, float)
     step = float(cycle) if cycle is not None else float(np.median(np.diff(grid)))
+    bounded_table(kind, timeline.duration, step, cycle)
 
     def judge_on(g, read):
         def judge(table):
@@ -271,6 +289,7 @@ def judged_table(kind: str, grid: np.ndarray, timeline: Motion, tolerance: float
             # exactly that period (a drive reading it at the sample period off its points ran a sharp law's
             # acceleration 3.5 % past the limit between them)
             line, g = stretched(timeline, k, cycle if cycle is not None or kind != "cam-table" else step, step)
+            bounded_table(kind, line.duration, step, cycle)
         # an equidistant table is read every cycle: whole cycles of the duration (without a cycle, whole steps of
         # about the sample period)
         read = line.duration / max(1, round(line.duration / step)) if kind == "cam-table" else step

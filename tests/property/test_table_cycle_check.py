@@ -324,3 +324,20 @@ def test_the_report_of_several_moves_has_a_cycle_per_move(tmp_path):
     code, doc, out = _check(path, "delta-su2018")
     assert code == 0, out[-2000:]
     assert len(doc["moves"]) == 2 and all(m["step_cycle_s"] is None for m in doc["moves"])
+
+
+@pytest.mark.parametrize("args, words", [
+    (("-f", "pvt", "--cycle", "0.000001"), "-f pvt: a table of 0.179957 s on a controller cycle of 1e-06 s (--cycle) "
+                                           "is 179,957 cycles"),
+    (("-f", "cam-table", "--cycle", "0.000002"), "-f cam-table: a table of 0.179958 s on a controller cycle of 2e-06 s"),
+    (("-f", "cam", "--rate", "1000000"), "-f cam: a table of 0.179956 s on a sample period of 1e-06 s (--rate; no "
+                                         "--cycle)")])
+def test_a_table_of_too_many_cycles_is_one_line(tmp_path, args, words):
+    """A drive's table is judged on every cycle (again after each round of points): one of more than 20,000 cycles
+    (a microsecond cycle, or a MHz rate without a cycle) is refused at once, one line, exit 1, nothing written (it
+    took minutes and gigabytes)."""
+    out = tmp_path / "t.csv"
+    res = runner.invoke(app, ["plan", *MOVES["delta-su2018"], *args, "-q", "-o", str(out)])
+    assert res.exit_code == 1 and not out.exists()
+    (line,) = res.output.splitlines()
+    assert line.startswith("pickplace: error: " + words) and "at most 20,000" in line, line
