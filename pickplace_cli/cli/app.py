@@ -161,6 +161,13 @@ class CamMaster(str, Enum):
     belt = "belt"
 
 
+class TableEnd(str, Enum):
+    """Before and after a drive's table: the drive holds its end points, or the controller goes on at their velocity."""
+
+    hold = "hold"
+    going = "continue"
+
+
 class CamObject(str, Enum):
     """Mirror of pickplace_cli.export.cam_objects.CamVendor, plus none (one table of every joint)."""
 

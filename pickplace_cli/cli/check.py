@@ -7,7 +7,7 @@ from typing import Optional
 
 import typer
 
-from .app import Panel, _handle_errors, app
+from .app import Panel, TableEnd, _handle_errors, app
 from .render import _print_limit_table, _print_verdict
 
 
@@ -63,6 +63,11 @@ def check(
         "warning says so). [default: profile controller.cycle, else the period of profile planning.rate, as plan]",
         rich_help_panel=Panel.CONTROLLER,
     ),
+    table_end: TableEnd = typer.Option(
+        TableEnd.hold, "--table-end", rich_help_panel=Panel.CONTROLLER,
+        help="A drive's table that starts or ends moving (as plan --table-end): hold (the drive holds the end point: "
+        "the velocity step to or from rest within one controller cycle is judged) or continue (the controller goes "
+        "on at the end's velocity, e.g. geared to the belt: not judged past the end). Not used for other files."),
     report: Optional[str] = typer.Option(None, "--report", help="Also write the limit report as JSON to this file.", rich_help_panel=Panel.OUTPUT),
     report_only: bool = typer.Option(False, "--report-only", help="Exit 0 even when a limit is exceeded.", rich_help_panel=Panel.OUTPUT),
     quiet: bool = typer.Option(False, "--quiet", "-q", help="Only violations, warnings and errors on stderr.", rich_help_panel=Panel.OUTPUT),
@@ -127,7 +132,7 @@ def check(
     checks = check_file(trajectory, prof, smooth, limit_use,
                         notify=lambda text: sys.stderr.write(f"pickplace: {text}\n"), strict=strict,
                         warn=lambda text: sys.stderr.write(f"pickplace: {text}\n"), hold_capacity=hold_capacity,
-                        cycle=seconds)
+                        cycle=seconds, table_end=table_end.value)
     several = len(checks) > 1 or checks[0].move is not None
     if report is not None:
         with atomic_output(report) as stream:

@@ -82,6 +82,8 @@ def check_cycle_usage(a, cycle: float | None, fmt) -> None:
         _usage(f"--cam-master applies to the cam formats, not {fmt.value}")
     if a.cam_master.value == "belt" and a.to_belt is None:
         _usage("--cam-master belt: the master is the belt's travel, which needs a conveyor move (--to-belt)")
+    if a.table_end.value != "hold" and not table:
+        _usage(f"--table-end applies to the table formats (pvt, cam, cam-table and their -st forms), not {fmt.value}")
     if a.cam_object.value != "none" and fmt.value not in ("cam-st", "cam-table-st"):
         _usage(f"--cam-object applies to the cam Structured Text formats (cam-st, cam-table-st), not {fmt.value}")
     if a.cam_object.value != "none" and a.st_dialect.value != "strict":
@@ -137,8 +139,9 @@ def judge_table(a, prof, legs: list, track, grid):
         from ..export.pvt_int import as_written
 
         written = partial(as_written, drive=a.drive, joint_units=legs[0].joint.units)
+    ends = a.table_end.value
     judged = judged_table(kind, grid, motion, tolerance, prof, 0.0 if a.round_trip else dwell, a.cycle_s,
-                          retime=retime, capacity=capacity, size=sized, written=written)
+                          retime=retime, capacity=capacity, size=sized, written=written, ends=ends)
     if written is not None:  # the deviation of the integers as written: the table's own plus what rounding adds
         import numpy as np
 
@@ -148,7 +151,7 @@ def judge_table(a, prof, legs: list, track, grid):
             if rounding < tolerance:
                 judged = _rounded_deviation(judged_table(
                     kind, grid, motion, tolerance - rounding, prof, 0.0 if a.round_trip else dwell, a.cycle_s,
-                    retime=retime, capacity=capacity, size=sized, written=written), written, tolerance)
+                    retime=retime, capacity=capacity, size=sized, written=written, ends=ends), written, tolerance)
     code = judged.report.exit_code()
     _print_table_verdict(a, judged, legs + ([track] if track is not None else []), motion.duration, retime, prof)
     return judged, code
@@ -215,20 +218,30 @@ def _print_table_verdict(a, judged, plans: list, planned: float, retime: bool, p
            "cam-table": "linear, each step over one cycle"}[table.kind]
     if failed:
         worst = max(report.violations, key=lambda r: r.utilisation)
+        moving = moving_ends(table) if a.table_end.value == "hold" else []
+        why = (f"the table {'starts' if moving == ['first'] else 'ends' if moving == ['last'] else 'starts and ends'} "
+               f"moving: {moving_cause(moving)}" if moving else
+               f"more points{' and a slower table' if retime else ' (a conveyor move is not re-timed)'} did not make "
+               "it hold; plan a longer --time or a lower --limit-use")
         sys.stderr.write(f"table verdict: LIMITS EXCEEDED as the drive interpolates the table ({how}): {worst.joint} "
-                         f"{worst.quantity} {percent(worst.utilisation)} % of {worst.limit:.4g} {worst.unit}; more "
-                         f"points{' and a slower table' if retime else ' (a conveyor move is not re-timed)'} did not "
-                         "make it hold; plan a longer --time or a lower --limit-use\n")
+                         f"{worst.quantity} {percent(worst.utilisation)} % of {worst.limit:.4g} {worst.unit}; {why}\n")
     elif not a.quiet:
         sys.stderr.write(f"table verdict: all limits hold as the drive interpolates the table ({how})\n")
-    if table.kind in ("pvt", "cam-table") and prof is not None and not a.quiet:
+    moving = moving_ends(table)
+    if moving and a.table_end.value == "continue":  # (said under --quiet too: check needs the option)
+        which = " and ".join(f"{'starts' if e == 'first' else 'ends'}" for e in moving)
+        sys.stderr.write(f"pickplace: warning: the table {which} moving, judged as the controller going on at its "
+                         "end velocity (--table-end continue): what it does past the table is not checked; check the "
+                         "file with pickplace check FILE --table-end continue\n")
+    if (table.kind != "cam" or (moving and a.table_end.value == "hold")) and prof is not None and not failed:
         from ..pipelines.check import table_cycle
 
         default = table_cycle(prof, None, table)
         if abs(default - judged.step) > 1e-9 * judged.step:  # (check's default: the profile's cycle or rate)
-            sys.stderr.write(f"  its steps are judged on a cycle of {judged.step:.9g} s, and check's default here is "
-                             f"{default:.9g} s: check it on the same cycle with pickplace check FILE --cycle "
-                             f"{judged.step:.9g}\n")
+            # said under --quiet too (as a warning): check's default cycle would judge the written file on another
+            sys.stderr.write(f"{'pickplace: warning: the table' if a.quiet else '  its'} steps are judged on a cycle "
+                             f"of {judged.step:.9g} s, and check's default here is {default:.9g} s: check it on the "
+                             f"same cycle with pickplace check FILE --cycle {judged.step:.9g}\n")
 
 
 def _points_line(a, judged) -> str:
@@ -262,10 +275,42 @@ def _points_line(a, judged) -> str:
             f"{judged.tolerance_points}{step}); {dev}\n")
 
 
+def moving_ends(table) -> list[str]:
+    """Which ends of ``table`` move ("first", "last"): a PVT's or cam's velocity there not zero, a cam-table's first or
+    last line's slope above 1 % of its largest (a table from and to rest has a slope of O(h²) there)."""
+    from ..export.interpolate import moving_ends as ends
+
+    import numpy as np
+
+    first, last = ends(table.t, table.q, table.qd if table.kind != "cam-table" else None)
+    if table.kind == "cam-table":
+        v = np.abs(np.diff(table.q, axis=0) / np.diff(table.t)[:, None])
+        top = float(v.max()) if v.size else 0.0
+        first, last = (np.where(np.abs(x) > 0.01 * top, x, 0.0) for x in (first, last))
+    return [name for name, v in (("first", first), ("last", last)) if np.any(v)]
+
+
+#: why a table that starts or ends moving breaks a limit, whatever its duration
+MOVING_TABLE = ("the drive holds the table's {which} point {when} it, a velocity step {way} rest within one controller "
+                "cycle that no duration removes (a conveyor move ends at the belt's speed): plan the whole belt cycle "
+                "(--round-trip), or, where the controller goes on at the table's end velocity (e.g. geared to the "
+                "belt), say so with --table-end continue")
+
+
+def moving_cause(ends: list[str]) -> str:
+    """:data:`MOVING_TABLE` for the ``ends`` that move (:func:`moving_ends`)."""
+    which = " and ".join(ends)
+    when = {"first": "before", "last": "after"}
+    return MOVING_TABLE.format(which=which, when=" and ".join(when[e] for e in ends) if len(ends) == 1 else
+                               "before and after", way="to" if ends == ["last"] else "from" if ends == ["first"] else
+                               "from and to")
+
+
 def table_info(a, judged) -> dict:
     """What the --json summary and --report say of the table: points, tolerance, errors, re-timing and verdict."""
     t = judged.table
     return {"format": a.fmt.value, **t.as_dict(), "master": a.cam_master.value, "cam_object": a.cam_object.value,
+            "moving_ends": moving_ends(t), "table_end": a.table_end.value,
             "tolerance_points": judged.tolerance_points, "duration_s": judged.duration, "stretch": judged.stretch,
             "step_cycle_s": judged.step, "master_step_cycles": judged.step_cycles, "limits_ok": judged.report.ok,
             "violations": [r.as_dict() for r in judged.report.violations],

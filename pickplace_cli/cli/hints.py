@@ -22,9 +22,10 @@ def holding_time(plan, profile, options) -> float | None:
     return math.ceil(found.duration.seconds * 1e4 - 1e-6) / 1e4
 
 
-def not_written(plans: list, profile, options, code: int) -> str:
+def not_written(plans: list, profile, options, code: int, moving: list[str] | None = None) -> str:
     """The one line after a plan whose verdict stops the trajectory: what was not written and the fix that works
-    (``code`` 3: a timed limit; 4: a position past a joint's range, the singularity margin or the workcell box)."""
+    (``code`` 3: a timed limit; 4: a position past a joint's range, the singularity margin or the workcell box).
+    ``moving``: the ends of the drive's table that move (``cli.controller.moving_ends``), when a table was judged."""
     from ..timing import parse_time
 
     options = replace(options, time=parse_time(options.time))
@@ -36,6 +37,10 @@ def not_written(plans: list, profile, options, code: int) -> str:
     if not bad and any(p.report.unresolved for p in plans):  # plan --strict: a peak the samples do not resolve
         return ("trajectory not written (--strict: a peak is not resolved by the written samples): a higher --rate "
                 "resolves it; --write-anyway writes it as it is")
+    if not bad and moving:  # a table that ends (starts) moving: the drive's step to (from) rest, whatever the duration
+        from .controller import moving_cause
+
+        return f"table not written: {moving_cause(moving)}; --write-anyway writes it as it is"
     if not bad:  # the trajectory holds: the drive's table broke a limit (its verdict above), which no trajectory duration
         # computed here is known to fix (a table's steps need not fall steadily as the move slows)
         return ("table not written: the table breaks a limit as the drive interpolates it (its verdict above), while "

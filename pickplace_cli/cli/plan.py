@@ -20,6 +20,7 @@ from .app import (
     app,
     Compression,
     CamMaster,
+    TableEnd,
     CamObject,
     CsvDialectName,
     MAX_SHIFT,
@@ -228,6 +229,12 @@ def plan(
         "--to-belt): the belt's travel [m] since the part's detection.",
         rich_help_panel=Panel.CONTROLLER,
     ),
+    table_end: TableEnd = typer.Option(
+        TableEnd.hold, "--table-end", rich_help_panel=Panel.CONTROLLER,
+        help="pvt, cam, cam-table (and -st): before a table that starts moving and after one that ends moving (a "
+        "conveyor move ends at the belt's speed): hold (the drive holds the end point: the velocity step to or from "
+        "rest, within one controller cycle, is judged) or continue (the controller goes on at the end's velocity, "
+        "e.g. geared to the belt; not judged past the end, which the summary says; check it with the same option)."),
     cam_object: CamObject = typer.Option(
         CamObject.none, "--cam-object", rich_help_panel=Panel.CONTROLLER,
         help="cam-st, cam-table-st: one cam object per joint in the controller's own types, in a PROGRAM "
@@ -445,7 +452,9 @@ def plan(
         if a.output is not None:
             from .hints import not_written
 
-            sys.stderr.write(f"pickplace: {not_written(legs + ([track] if track is not None else []), prof, options, code)}\n")
+            info = getattr(a, "table_info", None) or {}
+            moving = info.get("moving_ends") if info.get("table_end") == "hold" else None
+            sys.stderr.write(f"pickplace: {not_written(legs + ([track] if track is not None else []), prof, options, code, moving)}\n")
         raise typer.Exit(code)
 
 

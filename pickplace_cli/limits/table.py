@@ -112,7 +112,9 @@ def _steps(model, motion, cycle: float) -> tuple[dict[str, np.ndarray], np.ndarr
     t = np.asarray(motion.breaks, float)
     left = motion.all_orders(t, side="left")
     right = motion.all_orders(t, side="right")
-    for side, k in ((left, 0), (right, len(t) - 1)):  # before the start, after the end: at rest
+    for side, k in ((left, 0), (right, len(t) - 1)):  # before the start, after the end: at rest (the end held), or
+        if motion.ends == "hold":  # going on at the end's velocity (--table-end continue)
+            side[1][k] = 0.0
         side[2][k] = 0.0
         side[3][k] = 0.0
     torque, rate, limited = [], [], []
@@ -195,7 +197,7 @@ def check_table(motion, robot, specs, cycle: float, dwell: float, margin=None, b
     rows = report.rows
     if capacity is not None:
         rows = rows + capacity_rows(path, T, capacity, grid)
-    if motion.kind in ("pvt", "cam-table"):
+    if motion.steps:
         rows = rows + step_rows(model, motion, cycle)
     shift = motion.start  # times from the table's own start (t = 0 at its first point)
     rows = tuple(LimitRow(r.joint, r.quantity, r.unit, r.peak, r.limit, r.utilisation,

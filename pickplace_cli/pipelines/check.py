@@ -101,7 +101,8 @@ def table_cycle(profile: Profile, cycle: float | None, table=None) -> float:
     return step
 
 
-def check_table(table, profile: Profile, source: str, not_held: str = "", cycle: float | None = None) -> LimitReport:
+def check_table(table, profile: Profile, source: str, not_held: str = "", cycle: float | None = None,
+                ends: str = "hold") -> LimitReport:
     """The limit report of a PVT, cam or equidistant cam table as the drive interpolates it (:func:`tool_motion`; a
     cam-table read every controller cycle, :func:`table_cycle`): the same dynamics and limit check as ``plan``, and
     its per-cycle step rows where the acceleration steps (PVT, cam-table: the motor torque step against the torque
@@ -111,14 +112,14 @@ def check_table(table, profile: Profile, source: str, not_held: str = "", cycle:
     from .check_read import MAX_POINTS, SEGMENT_POINTS, table_motion, tool_motion
 
     cycle = table_cycle(profile, cycle, table)
-    blend = cycle if table.kind == "cam-table" else None
+    blend = cycle  # a cam-table's lines read every cycle; any table's moving end taken to or from rest in one cycle
     if len(table.t) > MAX_POINTS:
         raise TaskError(f"{source}: {len(table.t):,} points in a {table.kind} table: check reads at most {MAX_POINTS:,}")
     span = float(table.t[-1] - table.t[0])
     if cycle > span:
         raise TaskError(f"cycle = {cycle:g} s: longer than the {table.kind} table it runs ({span:.6g} s, {source}): the "
                         "controller cycle must be shorter than the move (is it in ms? give seconds: 1 ms = 0.001)")
-    if blend is not None and span / blend > MAX_POINTS / 2:
+    if table.kind == "cam-table" and span / blend > MAX_POINTS / 2:
         raise TaskError(f"{source}: a cam-table of {span:.6g} s read every {blend:g} s is "
                         f"{span / blend:,.0f} cycles, each a blend and a line: check reads at most "
                         f"{MAX_POINTS // 2:,} (give the controller's cycle: --cycle SECONDS)")
@@ -133,14 +134,14 @@ def check_table(table, profile: Profile, source: str, not_held: str = "", cycle:
     rebased = replace(table, t=t)
     s = Samples(None, t, table.q, table.lines, 0, int(table.lines[-1]))
     _check_branch(s, robot, robot.forward_kinematics(table.q), source)
-    motion = table_motion(rebased, blend)  # the drive's joint motion, once
+    motion = table_motion(rebased, blend, ends)  # the drive's joint motion, once
     ev, steps = tool_motion(rebased, tool_of, blend, motion)
     T = motion.duration
     how = _HOW[table.kind].format(cycle=cycle)
     note = (f"{s.where(source)}: a {table.kind} table of {len(t)} points over {float(t[-1]):.6g} s; the motion is {how}, "
             "as the drive runs it (each break a step of its derivatives: both sides checked); joint positions checked "
             "as interpolated")
-    if table.kind in ("pvt", "cam-table"):
+    if motion.steps:
         note += (f"; each acceleration step (the ends from and to rest) taken within one controller cycle of "
                  f"{cycle:g} s: its motor torque step, with the torque's change at its rate over that cycle, held to the "
                  f"torque rate × the cycle (check --cycle; plan "
@@ -158,7 +159,7 @@ def check_table(table, profile: Profile, source: str, not_held: str = "", cycle:
         note += f"; {CLOSED_NOTE}"
     bt = np.asarray(motion.breaks, float)
     start = motion.start  # a cam-table's motion starts half a cycle before its first point (the first blend)
-    if blend is None:  # (breaks = the points, from 0)
+    if start == 0.0 and bt[-1] == t[-1]:  # (breaks = the points, from 0: no blend beyond them)
         report, _ = _motion_report(t, tool_of(table.q), robot, profile, 0.0, source, lambda how: (note,),
                                    rebuilt=(ev, steps, how), not_held=not_held, dwell=dwell)
     else:  # the report's times from the motion's start, shifted back to the table's below
@@ -170,7 +171,7 @@ def check_table(table, profile: Profile, source: str, not_held: str = "", cycle:
         report = replace(report, duration=float(t[-1]), rows=tuple(
             r if r.t_peak is None else replace(r, t_peak=r.t_peak + start) for r in report.rows))
     report = _with_accuracy(report, [(report, 1.0)])
-    if table.kind in ("pvt", "cam-table"):
+    if motion.steps:
         from ..limits.motion import MotionModel
         from ..limits.table import step_rows, table_path
 
@@ -211,7 +212,7 @@ def _read_bounded(fh, limit: int) -> bytes:
 
 def check_file(path: str | Path, profile: Profile, smoothing: float | str = 0.0,
                limit_use: float | None = None, notify=None, strict: bool = False, warn=None,
-               hold_capacity: bool = True, cycle: float | None = None) -> list[MoveCheck]:
+               hold_capacity: bool = True, cycle: float | None = None, table_end: str = "hold") -> list[MoveCheck]:
     """Check every move of a trajectory file against a profile's limits.
 
     Parameters
@@ -244,6 +245,10 @@ def check_file(path: str | Path, profile: Profile, smoothing: float | str = 0.0,
         and a PVT or cam-table's acceleration steps are taken within one (the motor torque step plus the torque's
         change at its rate over that cycle held to the torque rate × the cycle). None: the profile's ``controller.cycle``, else the period of its ``planning.rate`` (what
         ``plan`` takes without ``--cycle``).
+    table_end : str
+        Before a table that starts moving and after one that ends moving (``check --table-end``): "hold" (the drive
+        holds its end point: the velocity step from or to rest within one cycle is judged) or "continue" (the
+        controller goes on at the end's velocity: not judged past the end). Not used for a file of samples.
 
     Returns
     -------
@@ -259,6 +264,8 @@ def check_file(path: str | Path, profile: Profile, smoothing: float | str = 0.0,
 
     if not isinstance(path, (str, Path)):
         raise TaskError(f"path = {path!r}: must be a file name (str or pathlib.Path), or '-' for standard input")
+    if table_end not in ("hold", "continue"):
+        raise TaskError(f"table_end = {table_end!r}: must be hold or continue (what the drive does past a table's end)")
     if cycle is not None:  # the CLI's rule and message for --cycle
         from ..timing.cycle import check_cycle
 
@@ -295,16 +302,19 @@ def check_file(path: str | Path, profile: Profile, smoothing: float | str = 0.0,
 
     not_held = "" if hold_capacity else "--no-hold-capacity"
     kind, what, source = read_checked(text, source, profile, robot)  # joints, drive units, a table (check_read)
-    if cycle is not None and warn is not None and (kind != "table" or what.kind == "cam"):
+    # (a cam that starts or ends moving, held there: a step from or to rest)
+    steps = kind == "table" and (what.kind != "cam" or (table_end == "hold" and _table_moves(what)))
+    if cycle is not None and warn is not None and not steps:
         warn(f"warning: --cycle {cycle:g} s: not used: {source} is not a pvt or cam-table table (its motion has no step a "
              "controller cycle bounds)")
     if warn is not None:
         for move, t, qd in _end_speeds(kind, what):
-            _warn_moving_ends(warn, source, move, t, qd, robot.joint_names)
+            _warn_moving_ends(warn, source, move, t, qd, robot.joint_names, table_end if kind == "table" else None)
     if kind == "table":
-        on = table_cycle(profile, cycle, what) if what.kind in ("pvt", "cam-table") else None
+        on = table_cycle(profile, cycle, what) if steps else None
         return [MoveCheck(None, int(what.lines[0]), int(what.lines[-1]),
-                          whole_cycle(check_table(what, profile, source, not_held, cycle).rated(profile.limit_use)),
+                          whole_cycle(check_table(what, profile, source, not_held, cycle, table_end)
+                                      .rated(profile.limit_use)),
                           on)]
     out = []
     for s in (what if kind == "samples" else [what]):
@@ -318,6 +328,13 @@ def check_file(path: str | Path, profile: Profile, smoothing: float | str = 0.0,
 #: short, or a conveyor move (which ends at the belt's speed); a move from and to rest stays far below (its last
 #: interval's mean speed at 100 Hz: a few %)
 MOVING_END = 0.1
+
+
+def _table_moves(table) -> bool:
+    """Whether a PVT or cam ``table`` starts or ends moving (a velocity step from or to rest at its end)."""
+    from ..export.interpolate import moving_ends
+
+    return any(np.any(v) for v in moving_ends(table.t, table.q, table.qd))
 
 
 def _end_speeds(kind: str, what) -> list:
@@ -335,19 +352,31 @@ def _end_speeds(kind: str, what) -> list:
     return out
 
 
-def _warn_moving_ends(warn, source: str, move, t: np.ndarray, qd: np.ndarray, names) -> None:
+def _warn_moving_ends(warn, source: str, move, t: np.ndarray, qd: np.ndarray, names, table: str | None = None) -> None:
     """One warning when the move starts or ends moving (:data:`MOVING_END`): check judges the file as it is, and the
-    stop beyond its end (or the start before it) is not in it."""
+    stop beyond its end (or the start before it) is not in it — but for a drive's table (``table``: "hold"), which
+    the drive holds at its end position before and after: the step from or to rest is judged, within one controller
+    cycle ("continue": the controller goes on at the end's velocity, not judged past it)."""
     peak = np.max(np.abs(qd), axis=0)
     for at, row, when in ((0, qd[0], "starts"), (-1, qd[-1], "ends")):
         share = np.where(peak > 0, np.abs(row) / np.where(peak > 0, peak, 1.0), 0.0)
         j = int(np.argmax(share))
         if share[j] > MOVING_END:
             which = f"move {move}: " if move is not None else ""
-            warn(f"warning: {source}: {which}the motion {when} moving ({names[j]} at {100 * share[j]:.0f} % of its peak speed "
-                 f"at t = {t[at]:.6g} s): it is judged as the file holds it, and what the drive does "
-                 f"{'before' if at == 0 else 'after'} is not checked (a file cut short? a conveyor move {when} at the "
-                 "belt's speed)")
+            said = (f"warning: {source}: {which}the motion {when} moving ({names[j]} at {100 * share[j]:.0f} % of its "
+                    f"peak speed at t = {t[at]:.6g} s)")
+            why = f"(a file cut short? a conveyor move {when} at the belt's speed)"
+            if table == "hold":
+                warn(f"{said}: the drive holds the table's {'first' if at == 0 else 'last'} point "
+                     f"{'before' if at == 0 else 'after'} it, so the step {'from' if at == 0 else 'to'} rest is judged, "
+                     f"taken within one controller cycle {why}; --table-end continue if the controller goes on at the "
+                     "end's velocity")
+            elif table == "continue":
+                warn(f"{said}: judged as the controller going on at the end's velocity {'before' if at == 0 else 'after'} "
+                     "it (--table-end continue): what it does there is not checked")
+            else:
+                warn(f"{said}: it is judged as the file holds it, and what the drive does "
+                     f"{'before' if at == 0 else 'after'} is not checked {why}")
             return
 
 

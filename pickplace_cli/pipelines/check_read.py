@@ -367,12 +367,12 @@ def joint_polynomial(table: Table, blend: float | None = None):
     return lambda x: motion(np.asarray(x, float))
 
 
-def table_motion(table: Table, blend: float | None = None):
-    """The drive's motion of ``table`` (:func:`pickplace_cli.export.interpolate.rebuild`; ``blend`` [s]: a
-    cam-table's controller cycle)."""
+def table_motion(table: Table, blend: float | None = None, ends: str = "hold"):
+    """The drive's motion of ``table`` (:func:`pickplace_cli.export.interpolate.rebuild`; ``blend`` [s]: the
+    controller cycle; ``ends``: "hold" or "continue" past the table's ends)."""
     from ..export.interpolate import rebuild
 
-    return rebuild(table, blend)
+    return rebuild(table, blend, ends)
 
 
 def tool_motion(table: Table, tool_of, blend: float | None = None, motion=None):

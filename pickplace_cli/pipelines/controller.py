@@ -251,7 +251,7 @@ def _sized_table(timeline, table, judge, tolerance, fixed: int, size):
 
 def judged_table(kind: str, grid: np.ndarray, timeline: Motion, tolerance: float, profile, dwell: float,
                  cycle: float | None, retime: bool = True, capacity: bool = False, size=None,
-                 written=None) -> JudgedTable:
+                 written=None, ends: str = "hold") -> JudgedTable:
     """The ``kind`` table of ``timeline`` (:func:`table_of`: its points from ``grid`` [s] within ``tolerance``)
     made to hold every limit of ``profile`` (at its limit use) as the drive rebuilds it
     (:func:`~pickplace_cli.limits.table.check_table`; per-cycle steps bounded over ``cycle`` [s], else over the
@@ -261,7 +261,9 @@ def judged_table(kind: str, grid: np.ndarray, timeline: Motion, tolerance: float
     profile's Cartesian capacity is checked too (when the plan's duration rule holds it). ``size``: for a cam-table,
     (points the tolerance needs) → the count a controller's table type holds (None: any), which the table then has
     (no points added). ``written``: (table) → the table as the file holds it (e.g. rounded to a drive's integer
-    units), which is then what is judged (None: the table itself)."""
+    units), which is then what is judged (None: the table itself). ``ends``: what the drive does before and after the
+    table (:func:`~pickplace_cli.export.interpolate.rebuild`: "hold" its end points, or "continue" at their
+    velocities)."""
     from ..export.interpolate import rebuild
     from ..limits.table import check_table
     from ..planner import motion_model_static
@@ -273,7 +275,7 @@ def judged_table(kind: str, grid: np.ndarray, timeline: Motion, tolerance: float
 
     def judge_on(g, read):
         def judge(table):
-            return check_table(rebuild(written(table) if written is not None else table, read), robot, specs, read, dwell, margin, box, samples=g,
+            return check_table(rebuild(written(table) if written is not None else table, read, ends), robot, specs, read, dwell, margin, box, samples=g,
                                capacity=profile.capacity if capacity else None).rated(profile.limit_use)
         return judge
 

@@ -210,11 +210,18 @@ def test_tolerance_too_small_for_the_data_is_exit_1_and_nothing_written(tmp_path
 
 def test_belt_master_cam_is_belt_travel_with_derivatives_per_metre(tmp_path):
     """A conveyor move's cam over the belt's travel x = speed·(latency + t): the quintic in x, evaluated here, follows
-    the IK of the move (and of its tracking segment) at t = x/speed − latency."""
+    the IK of the move (and of its tracking segment) at t = x/speed − latency. The cam ends moving with the belt:
+    with the drive holding its last point it is refused (the step to rest, exit 3), with --table-end continue (the
+    controller goes on with the belt) it is written."""
     out = tmp_path / "belt.csv"
     args = ("--from", "-0.1525,0,-0.8", "--to", "0.05,0.1,-0.8", "--to-belt", "0.3,0,0", "--latency", "0.05")
     res = run("plan", *args, "-f", "cam", "--cam-master", "belt", "--tolerance", "1e-5", "-o", str(out))
+    assert res.exit_code == 3 and not out.exists(), res.stderr
+    assert "the drive holds the table's last point after it" in res.stderr and "--table-end continue" in res.stderr
+    res = run("plan", *args, "-f", "cam", "--cam-master", "belt", "--tolerance", "1e-5", "-o", str(out),
+              "--table-end", "continue")
     assert res.exit_code == 0, res.stderr
+    assert "judged as the controller going on at its end velocity" in res.stderr
     head, data = read_table(out)
     assert head[0] == "master[m]" and head[2] == "A1_vel[counts/m]" and head[3] == "A1_acc[counts/m^2]"
     x = data[:, 0]
