@@ -239,7 +239,8 @@ def _print_table_verdict(a, judged, plans: list, planned: float, retime: bool, p
         default = table_cycle(prof, None, table)
         if abs(default - judged.step) > 1e-9 * judged.step:  # (check's default: the profile's cycle or rate)
             # said under --quiet too (as a warning): check's default cycle would judge the written file on another
-            sys.stderr.write(f"{'pickplace: warning: the table' if a.quiet else '  its'} steps are judged on a cycle "
+            lead = "pickplace: warning: the table's" if a.quiet else "  its"
+            sys.stderr.write(f"{lead} steps are judged on a cycle "
                              f"of {judged.step:.9g} s, and check's default here is {default:.9g} s: check it on the "
                              f"same cycle with pickplace check FILE --cycle {judged.step:.9g}\n")
 

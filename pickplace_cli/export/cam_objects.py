@@ -106,7 +106,9 @@ def _data(cols, kind: str, vendor: str, unit: str, size: int | None):
     decls, joints = [], []
     first = 1 if (vendor == "twincat" and kind == "cam") else 0
     if not (vendor == "codesys" and kind == "cam-table"):
-        decls.append(_const_array("fMaster", x, f"master [{unit}]", first))
+        from .tables import as_csv
+
+        decls.append(_const_array("fMaster", as_csv(x), f"master [{unit}]", first))
     for name, p, v, a in _joints(cols):
         y = cols.data[:, p]
         u = cols.units[p]

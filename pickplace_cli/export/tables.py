@@ -104,6 +104,12 @@ _PREFIX = {"pvt": "PP_PVT", "cam": "PP_CAM", "cam-table": "PP_CAMTABLE"}
 _ST_NAME = {"t": "fTime", "dt": "fDt", "master": "fMaster"}
 
 
+def as_csv(values: np.ndarray) -> np.ndarray:
+    """``values`` as the CSV writes them (12 significant digits): the time, step and master columns of the Structured
+    Text then hold the CSV's numbers (a step of whole cycles 0.006 s, not its difference's 0.005999999999999998)."""
+    return np.array([float(f"{v:.12g}") for v in np.asarray(values, float)])
+
+
 def _st_name(name: str) -> str:
     if name in _ST_NAME:
         return _ST_NAME[name]
@@ -137,7 +143,7 @@ def format_table_st(table, cols: TableColumns, dialect: str = "strict", header: 
     out += [_comment(f"   {line}\n") for line in header]
     out.append(f"   Dialect: {dialect} ({'IEC 61131-3: a FUNCTION_BLOCK whose outputs hold the arrays' if strict else 'CODESYS/TwinCAT: a global constant list'}).\n*)\n\n")
     decls = [f"    {count} : DINT := {n}; (* points *)\n"]
-    decls += [_array(x, cols.data[:, k], f"{c} [{u}]: {d}")
+    decls += [_array(x, as_csv(cols.data[:, k]) if c in _ST_NAME else cols.data[:, k], f"{c} [{u}]: {d}")
               for k, (x, c, u, d) in enumerate(zip(names, cols.names, cols.units, cols.comments))]
     if strict:
         out.append(f"FUNCTION_BLOCK {_FB[kind]}\nVAR_OUTPUT\n" + "".join(decls) + "END_VAR\n"

@@ -6,6 +6,7 @@ the path of a pydantic error resolved against the document (union branches pydan
 
 from __future__ import annotations
 
+import re
 from typing import Any
 
 from .errors import ProfileError
@@ -15,6 +16,10 @@ from .errors import ProfileError
 PROFILE_MAX_BYTES = 1 << 20
 #: deepest nesting of mappings and sequences a profile may have (the real ones use 5)
 PROFILE_MAX_DEPTH = 32
+
+
+#: a float in exponent form as YAML 1.2 writes it, which YAML 1.1 (PyYAML) reads as text
+EXPONENT_FLOAT = re.compile(r"^[-+]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)[eE][-+]?[0-9]+$")
 
 
 def _safe_loader(text: str, source: str, what: str = "profile"):
@@ -45,6 +50,9 @@ def _safe_loader(text: str, source: str, what: str = "profile"):
             finally:
                 self.depth -= 1
 
+    # a number in exponent form without a dot or an exponent sign (5e-2, 15e-5, 4.18e2, 1E6) is a float in YAML 1.2,
+    # but text to PyYAML's YAML 1.1 rules, which a number field then refused as "a number in quotes"
+    Loader.add_implicit_resolver("tag:yaml.org,2002:float", EXPONENT_FLOAT, list("-+0123456789."))
     return Loader(text)
 
 

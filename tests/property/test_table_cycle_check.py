@@ -341,3 +341,34 @@ def test_a_table_of_too_many_cycles_is_one_line(tmp_path, args, words):
     assert res.exit_code == 1 and not out.exists()
     (line,) = res.output.splitlines()
     assert line.startswith("pickplace: error: " + words) and "at most 20,000" in line, line
+
+
+def test_plan_quiet_still_names_the_cycle_to_check_on(tmp_path):
+    """plan -q on a cycle that is not check's default still says (one warning) which --cycle check needs: without it
+    check judges the file on its default cycle and refuses it."""
+    out = tmp_path / "q4.csv"
+    res = runner.invoke(app, ["plan", *ADEPT, "-f", "cam-table", "--cycle", "0.004", "-q", "-o", str(out)])
+    assert res.exit_code == 0
+    (line,) = res.output.splitlines()
+    assert line.startswith("pickplace: warning: the table's steps are judged on a cycle of 0.004 s") and \
+        line.endswith("pickplace check FILE --cycle 0.004"), line
+
+
+def test_structured_text_times_are_the_csv_times(tmp_path):
+    """A PVT's segment times on a 2 ms cycle are whole cycles: the Structured Text's fTime and fDt hold the CSV's
+    numbers (0.006, not the difference's 0.005999999999999998)."""
+    import re
+
+    move = ("-p", "scara-600", "--from", "0.3,0,-0.1", "--to", "0.4,0,-0.1", "--cycle", "0.002", "-q")
+    st, csv = tmp_path / "t.st", tmp_path / "t.csv"
+    assert runner.invoke(app, ["plan", *move, "-f", "pvt-st", "-o", str(st)]).exit_code == 0
+    assert runner.invoke(app, ["plan", *move, "-f", "pvt", "-o", str(csv)]).exit_code == 0
+    rows = np.loadtxt(csv, delimiter=",", skiprows=1)
+    text = st.read_text()
+    for name, col in (("fTime", 0), ("fDt", 1)):
+        body = re.search(name + r" : ARRAY\[1\.\.\d+\] OF LREAL := \[ \(\*[^*]*\*\)(.*?)\];", text, re.S).group(1)
+        values = [float(v) for v in body.replace("\n", " ").split(",")]
+        assert values == rows[:, col].tolist(), name
+        assert all(len(repr(v)) <= 14 for v in values), name  # no float noise
+    cycles = rows[1:, 1] / 0.002
+    assert np.allclose(cycles, np.round(cycles), rtol=0, atol=1e-9)

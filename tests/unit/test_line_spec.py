@@ -85,3 +85,9 @@ def test_yaml_aliases_and_binary_files_are_refused(tmp_path):
     with pytest.raises(ProfileError) as exc:
         load_line(p)
     assert "binary file" in str(exc.value)
+
+
+def test_numbers_in_exponent_form_are_numbers():
+    """``5e-2`` (a YAML 1.2 number, text to YAML 1.1) is the number 0.05, as in a profile."""
+    line = parse_line(BASE.replace("speed: 0.5", "speed: 5e-1", 1), "l.yaml")
+    assert line.belt.speed == 0.5

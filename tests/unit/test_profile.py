@@ -160,3 +160,19 @@ def test_number_fields_are_strict_in_the_library_too():
         DriveJoint(name="A1", unit="counts", counts_per_rev="1048576")
     with pytest.raises(ValidationError, match="must be a number, not a flag"):
         Controller(cycle=True)
+
+
+def test_numbers_in_exponent_form_are_numbers():
+    """YAML 1.2 reads 4.18e2, 15e-5 and 1E6 as numbers; PyYAML's YAML 1.1 rules read them as text (no dot or no
+    exponent sign), which a number field refused as "a number in quotes". They load as the numbers they are; a
+    number in quotes is still refused."""
+    from pickplace_cli.model.profile import resolve_profile_path
+
+    text = open(resolve_profile_path("delta-su2018")).read()
+    assert "torque_rate: 418.0" in text and "rotor_inertia: 1.5e-4" in text
+    base = parse_profile(text, "d.yaml")
+    same = parse_profile(text.replace("torque_rate: 418.0", "torque_rate: 4.18e2")
+                         .replace("rotor_inertia: 1.5e-4", "rotor_inertia: 15e-5"), "d.yaml")
+    assert same.robot.joint_specs() == base.robot.joint_specs()
+    with pytest.raises(ProfileError, match="must be a number, not text"):
+        parse_profile(text.replace("torque_rate: 418.0", "torque_rate: '4.18e2'"), "d.yaml")
