@@ -22,14 +22,16 @@ def holding_time(plan, profile, options) -> float | None:
     return math.ceil(found.duration.seconds * 1e4 - 1e-6) / 1e4
 
 
-def not_written(plans: list, profile, options, code: int, moving: list[str] | None = None) -> str:
+def not_written(plans: list, profile, options, code: int, table: dict | None = None) -> str:
     """The one line after a plan whose verdict stops the trajectory: what was not written and the fix that works
     (``code`` 3: a timed limit; 4: a position past a joint's range, the singularity margin or the workcell box).
-    ``moving``: the ends of the drive's table that move (``cli.controller.moving_ends``), when a table was judged."""
+    ``table``: what the summary says of a drive's table, when one was judged (``cli.controller.table_info``: its
+    ``moving_ends`` and ``table_end``)."""
     from ..timing import parse_time
 
     options = replace(options, time=parse_time(options.time))
     bad = [r for p in plans for r in p.report.violations]
+    moving = (table or {}).get("moving_ends") if (table or {}).get("table_end") == "hold" else None
     if code == 4 or any(r.kind == "reach" for r in bad):
         return ("trajectory not written: a position is past a joint's range, the singularity margin or the workcell box "
                 "(exit 4), which no duration fixes: lower --height, move the pick or place point, or --fit-workspace "

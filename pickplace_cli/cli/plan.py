@@ -452,9 +452,7 @@ def plan(
         if a.output is not None:
             from .hints import not_written
 
-            info = getattr(a, "table_info", None) or {}
-            moving = info.get("moving_ends") if info.get("table_end") == "hold" else None
-            sys.stderr.write(f"pickplace: {not_written(legs + ([track] if track is not None else []), prof, options, code, moving)}\n")
+            sys.stderr.write(f"pickplace: {not_written(legs + ([track] if track is not None else []), prof, options, code, getattr(a, 'table_info', None))}\n")
         raise typer.Exit(code)
 
 
