@@ -230,9 +230,11 @@ def _print_table_verdict(a, judged, plans: list, planned: float, retime: bool, p
     moving = moving_ends(table)
     if moving and a.table_end.value == "continue":  # (said under --quiet too: check needs the option)
         which = " and ".join(f"{'starts' if e == 'first' else 'ends'}" for e in moving)
+        where = " and ".join(f"{'before' if e == 'first' else 'after'}" for e in moving)
         sys.stderr.write(f"pickplace: warning: the table {which} moving, judged as the controller going on at its "
-                         "end velocity (--table-end continue): what it does past the table is not checked; check the "
-                         "file with pickplace check FILE --table-end continue\n")
+                         f"{'start' if moving == ['first'] else 'end' if moving == ['last'] else 'end'} velocity "
+                         f"(--table-end continue): what it does {where} the table is not checked; check the file with "
+                         "pickplace check FILE --table-end continue\n")
     if (table.kind != "cam" or (moving and a.table_end.value == "hold")) and prof is not None and not failed:
         from ..pipelines.check import table_cycle
 
@@ -293,18 +295,22 @@ def moving_ends(table) -> list[str]:
 
 #: why a table that starts or ends moving breaks a limit, whatever its duration
 MOVING_TABLE = ("the drive holds the table's {which} point {when} it, a velocity step {way} rest within one controller "
-                "cycle that no duration removes (a conveyor move ends at the belt's speed): plan the whole belt cycle "
-                "(--round-trip), or, where the controller goes on at the table's end velocity (e.g. geared to the "
-                "belt), say so with --table-end continue")
+                "cycle that no duration removes ({why}): {fix}where the controller {goes} at the table's {end} "
+                "velocity (e.g. geared to the belt), say so with --table-end continue")
 
 
 def moving_cause(ends: list[str]) -> str:
-    """:data:`MOVING_TABLE` for the ``ends`` that move (:func:`moving_ends`)."""
-    which = " and ".join(ends)
-    when = {"first": "before", "last": "after"}
-    return MOVING_TABLE.format(which=which, when=" and ".join(when[e] for e in ends) if len(ends) == 1 else
-                               "before and after", way="to" if ends == ["last"] else "from" if ends == ["first"] else
-                               "from and to")
+    """:data:`MOVING_TABLE` for the ``ends`` that move (:func:`moving_ends`: "first", "last" or both)."""
+    first, last = "first" in ends, "last" in ends
+    both = first and last
+    return MOVING_TABLE.format(
+        which="first and last" if both else ends[0], when="before and after" if both else "before" if first else "after",
+        way="from and to" if both else "from" if first else "to",
+        why=("a move from the belt starts at the belt's speed" if first else "") + (", and " if both else "")
+        + ("a conveyor move ends at the belt's speed" if last else ""),
+        fix="plan the whole belt cycle (--round-trip), or, " if last and not first else "",
+        goes="comes in and goes on" if both else "comes in" if first else "goes on",
+        end="start and end" if both else "start" if first else "end")
 
 
 def table_info(a, judged) -> dict:

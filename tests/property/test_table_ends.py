@@ -131,3 +131,24 @@ def test_table_end_is_a_table_option_and_a_checked_value(tmp_path):
 
     with pytest.raises(TaskError, match="table_end = 'later': must be hold or continue"):
         check_file(str(tmp_path / "x.csv"), "delta-su2018", table_end="later")
+
+
+def test_a_table_that_starts_moving_names_its_start(tmp_path):
+    """A move from the belt (--from-belt) starts at the belt's speed: held, the step from rest before the first point
+    is judged and the table refused, the line naming the start (not a conveyor move's end, nor --round-trip); with
+    --table-end continue it is written, the warning naming what comes before the table, and check agrees."""
+    move = ("-m", "bspline-vel", "--from", "-0.1525,0,-0.8", "--to", "0.1525,0,-0.8", "--from-belt", "0,0.5,0",
+            "-f", "pvt", "--cycle", "0.001", "-q")
+    out = tmp_path / "fb.csv"
+    res = runner.invoke(app, ["plan", *move, "-o", str(out)])
+    assert res.exit_code == 3 and not out.exists()
+    last = res.output.splitlines()[-1]
+    assert last.startswith("pickplace: table not written: the drive holds the table's first point before it, a "
+                           "velocity step from rest") and "starts at the belt's speed" in last
+    assert "--round-trip" not in last and "--table-end continue" in last
+    res = runner.invoke(app, ["plan", *move, "-o", str(out), "--table-end", "continue"])
+    assert res.exit_code == 0 and "what it does before the table is not checked" in res.output
+    res, _ = _check(out, "--table-end", "continue", "-q")
+    assert res.exit_code == 0
+    res, _ = _check(out, "-q")
+    assert res.exit_code == 3 and "so the step from rest is judged" in res.output
