@@ -142,7 +142,8 @@ def check(
                      "limits": c.report.as_dict()} for c in checks
                 ]}
             else:  # step_cycle_s: the controller cycle a table's steps were held over (null: not a pvt or cam-table)
-                doc = {"profile": prof.name, "step_cycle_s": checks[0].cycle, "limits": checks[0].report.as_dict()}
+                doc = {"profile": prof.name, "step_cycle_s": checks[0].cycle, "table_end": table_end.value,
+                       "limits": checks[0].report.as_dict()}
             json.dump(doc, stream, indent=2, default=float)
             stream.write("\n")
     for c in checks:

@@ -280,7 +280,8 @@ def _points_line(a, judged) -> str:
 
 def moving_ends(table) -> list[str]:
     """Which ends of ``table`` move ("first", "last"): a PVT's or cam's velocity there not zero, a cam-table's first or
-    last line's slope above 1 % of its largest (a table from and to rest has a slope of O(h²) there)."""
+    last line's slope above 10 % of that joint's largest, as ``check`` warns of a file that starts or ends moving (a table from
+    and to rest has a slope of O(h²) there: a few % on a long cycle)."""
     from ..export.interpolate import moving_ends as ends
 
     import numpy as np
@@ -288,8 +289,10 @@ def moving_ends(table) -> list[str]:
     first, last = ends(table.t, table.q, table.qd if table.kind != "cam-table" else None)
     if table.kind == "cam-table":
         v = np.abs(np.diff(table.q, axis=0) / np.diff(table.t)[:, None])
-        top = float(v.max()) if v.size else 0.0
-        first, last = (np.where(np.abs(x) > 0.01 * top, x, 0.0) for x in (first, last))
+        top = v.max(axis=0) if v.size else 0.0  # per joint, as check's warning
+        from ..pipelines.check import MOVING_END
+
+        first, last = (np.where(np.abs(x) > MOVING_END * top, x, 0.0) for x in (first, last))
     return [name for name, v in (("first", first), ("last", last)) if np.any(v)]
 
 
@@ -308,7 +311,7 @@ def moving_cause(ends: list[str]) -> str:
         way="from and to" if both else "from" if first else "to",
         why=("a move from the belt starts at the belt's speed" if first else "") + (", and " if both else "")
         + ("a conveyor move ends at the belt's speed" if last else ""),
-        fix="plan the whole belt cycle (--round-trip), or, " if last and not first else "",
+        fix="plan the whole belt cycle (--to-belt … --round-trip), or, " if last and not first else "",
         goes="comes in and goes on" if both else "comes in" if first else "goes on",
         end="start and end" if both else "start" if first else "end")
 

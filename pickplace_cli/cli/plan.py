@@ -468,6 +468,8 @@ def _single_json(a, legs, cycle, code, forgiven, workspace_fit, rendezvous, trac
         doc["cycle_rounding_cost_s"] = cycle_cost(legs, a.round_trip)
     if getattr(a, "table_info", None) is not None:
         doc["table"] = a.table_info
+        if not a.table_info["limits_ok"] and "all_limits_ok" in doc:  # the table's rows are limits too
+            doc["all_limits_ok"] = False
     return doc
 
 

@@ -11,9 +11,17 @@ FLAG = "must be a number, not a flag (YAML reads true/false/yes/no/on/off as one
 TEXT = "must be a number, not text (write the number without quotes)"
 
 
+class ExponentNumber(str):
+    """A plain YAML scalar such as ``5e-2``, ``4.18e2`` or ``1.0e6``: a number in YAML 1.2, text to PyYAML's YAML 1.1
+    rules (an exponent without a dot or without a sign). The loader keeps it as this text, so a text field (a name
+    ``1e5``) keeps what was written, and a number field reads it as the number (:func:`refuse_non_number`)."""
+
+
 def refuse_non_number(value: Any) -> Any:
-    """``value`` as it is, or ValueError when it is a flag (:data:`FLAG`) or text (:data:`TEXT` for a number in
-    quotes)."""
+    """``value`` as it is (a plain YAML exponent number, :class:`ExponentNumber`, as its float), or ValueError when it
+    is a flag (:data:`FLAG`) or text (:data:`TEXT` for a number in quotes)."""
+    if isinstance(value, ExponentNumber):
+        return float(value)
     if isinstance(value, bool):
         raise ValueError(FLAG)
     if isinstance(value, (str, bytes)):

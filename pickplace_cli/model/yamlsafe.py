@@ -19,6 +19,7 @@ PROFILE_MAX_DEPTH = 32
 
 
 #: a float in exponent form as YAML 1.2 writes it, which YAML 1.1 (PyYAML) reads as text
+EXPONENT_TAG = "tag:pickplace,2026:exponent-number"
 EXPONENT_FLOAT = re.compile(r"^[-+]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)[eE][-+]?[0-9]+$")
 
 
@@ -51,8 +52,12 @@ def _safe_loader(text: str, source: str, what: str = "profile"):
                 self.depth -= 1
 
     # a number in exponent form without a dot or an exponent sign (5e-2, 15e-5, 4.18e2, 1E6) is a float in YAML 1.2,
-    # but text to PyYAML's YAML 1.1 rules, which a number field then refused as "a number in quotes"
-    Loader.add_implicit_resolver("tag:yaml.org,2002:float", EXPONENT_FLOAT, list("-+0123456789."))
+    # but text to PyYAML's YAML 1.1 rules, which a number field then refused as "a number in quotes": kept as text
+    # that a number field reads as the number, and a text field (a name 1e5) as written
+    from .numbers import ExponentNumber
+
+    Loader.add_implicit_resolver(EXPONENT_TAG, EXPONENT_FLOAT, list("-+0123456789."))
+    Loader.add_constructor(EXPONENT_TAG, lambda loader, node: ExponentNumber(loader.construct_scalar(node)))
     return Loader(text)
 
 

@@ -135,7 +135,7 @@ def check_table(table, profile: Profile, source: str, not_held: str = "", cycle:
     s = Samples(None, t, table.q, table.lines, 0, int(table.lines[-1]))
     _check_branch(s, robot, robot.forward_kinematics(table.q), source)
     motion = table_motion(rebased, blend, ends)  # the drive's joint motion, once
-    ev, steps = tool_motion(rebased, tool_of, blend, motion)
+    ev, steps = tool_motion(rebased, tool_of, blend, motion, robot=robot)
     T = motion.duration
     how = _HOW[table.kind].format(cycle=cycle)
     note = (f"{s.where(source)}: a {table.kind} table of {len(t)} points over {float(t[-1]):.6g} s; the motion is {how}, "

@@ -26,9 +26,10 @@ def bounded_table(kind: str, duration: float, step: float, cycle: float | None) 
     if n > MAX_TABLE_CYCLES:
         on = f"a controller cycle of {cycle:g} s (--cycle)" if cycle is not None else \
             f"a sample period of {step:g} s (--rate; no --cycle)"
+        fix = "the controller's cycle in s (1 ms = 0.001)" if cycle is not None else \
+            "the controller's cycle in s with --cycle SECONDS (1 ms = 0.001), or a lower --rate"
         raise TaskError(f"-f {kind}: a table of {duration:.6g} s on {on} is {n:,.0f} cycles; plan judges a drive's "
-                        f"table on every cycle, at most {MAX_TABLE_CYCLES:,}: give the controller's cycle in s with "
-                        "--cycle SECONDS (1 ms = 0.001), or a lower --rate")
+                        f"table on every cycle, at most {MAX_TABLE_CYCLES:,}: give {fix}")
 
 
 @dataclass(frozen=True)

@@ -152,3 +152,26 @@ def test_a_table_that_starts_moving_names_its_start(tmp_path):
     assert res.exit_code == 0
     res, _ = _check(out, "-q")
     assert res.exit_code == 3 and "so the step from rest is judged" in res.output
+
+
+def test_json_of_a_refused_table_says_a_limit_breaks(tmp_path):
+    """--json of a table refused for its step to rest: limits_ok and all_limits_ok false (the table's rows are limits
+    too, though the trajectory holds), exit code 3, the table's violations under table."""
+    out = tmp_path / "j.csv"
+    res = runner.invoke(app, ["plan", *BELT, "-f", "pvt", "--cycle", "0.001", "-o", str(out), "--json", "-q"])
+    assert res.exit_code == 3 and not out.exists()
+    doc = json.loads(res.stdout)
+    assert doc["limits_ok"] is False and doc["all_limits_ok"] is False and doc["exit_code"] == 3
+    assert doc["table"]["limits_ok"] is False and doc["table"]["violations"]
+    assert doc["table"]["moving_ends"] == ["last"] and doc["table"]["table_end"] == "hold"
+
+
+def test_a_cam_table_from_rest_on_a_long_cycle_is_not_called_moving(tmp_path):
+    """A rest-to-rest move as a cam-table on an 8 ms cycle (few points: its first and last lines' slopes are a few %
+    of the largest) is not said to start or end moving."""
+    rep = tmp_path / "r.json"
+    res = runner.invoke(app, ["plan", "--from", "-0.1525,0,-0.8", "--to", "0.1525,0,-0.8", "-f", "cam-table",
+                              "--cycle", "0.008", "--table-end", "continue", "-o", str(tmp_path / "c.csv"),
+                              "--report", str(rep)])
+    assert res.exit_code == 0 and "moving" not in res.output
+    assert json.loads(rep.read_text())["table"]["moving_ends"] == []

@@ -176,3 +176,15 @@ def test_numbers_in_exponent_form_are_numbers():
     assert same.robot.joint_specs() == base.robot.joint_specs()
     with pytest.raises(ProfileError, match="must be a number, not text"):
         parse_profile(text.replace("torque_rate: 418.0", "torque_rate: '4.18e2'"), "d.yaml")
+
+
+def test_text_that_looks_like_an_exponent_number_stays_text():
+    """A name written 1e5 (a number in YAML 1.2's eyes) stays the text it was in a text field."""
+    from pickplace_cli.model.profile import resolve_profile_path
+
+    text = open(resolve_profile_path("delta-su2018")).read()
+    lines = text.splitlines()
+    k = next(i for i, ln in enumerate(lines) if ln.startswith("name:"))
+    lines[k] = "name: 1e5"
+    prof = parse_profile("\n".join(lines) + "\n", "d.yaml")
+    assert prof.name == "1e5" and isinstance(prof.name, str)
