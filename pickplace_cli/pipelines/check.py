@@ -107,7 +107,7 @@ def check_table(table, profile: Profile, source: str, not_held: str = "", cycle:
     cam-table read every controller cycle, :func:`table_cycle`): the same dynamics and limit check as ``plan``, and
     its per-cycle step rows where the acceleration steps (PVT, cam-table: the motor torque step against the torque
     rate × the cycle, :func:`~pickplace_cli.limits.table.step_rows`); every duration-dependent peak to
-    ``CHECK_RESOLUTION`` (the rebuild is exact up to the fit of the tool's motion, far finer); the position rows on
+    ``CHECK_RESOLUTION`` (the tool's motion is solved exactly from the rebuilt joint motion); the position rows on
     the interpolated joint positions themselves."""
     from .check_read import MAX_POINTS, SEGMENT_POINTS, table_motion, tool_motion
 
@@ -135,7 +135,7 @@ def check_table(table, profile: Profile, source: str, not_held: str = "", cycle:
     s = Samples(None, t, table.q, table.lines, 0, int(table.lines[-1]))
     _check_branch(s, robot, robot.forward_kinematics(table.q), source)
     motion = table_motion(rebased, blend, ends)  # the drive's joint motion, once
-    ev, steps = tool_motion(rebased, tool_of, blend, motion, robot=robot)
+    ev, steps = tool_motion(rebased, robot, blend, motion)
     T = motion.duration
     how = _HOW[table.kind].format(cycle=cycle)
     note = (f"{s.where(source)}: a {table.kind} table of {len(t)} points over {float(t[-1]):.6g} s; the motion is {how}, "

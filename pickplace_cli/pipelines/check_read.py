@@ -353,8 +353,7 @@ def read_table(text: str, source: str, kind: str, joint_names: tuple[str, ...], 
     return Table(kind, t, q, qd, qdd, lines_a)
 
 
-#: evaluation points per table segment on which the tool's motion is fitted (a quintic spline through the forward
-#: kinematics of the drive's polynomial: the FK is analytic, the fit's third derivative is exact to ~1e-5 relative)
+#: points per piece of a table's drive motion at which check reads its joint positions (denser at the piece's ends)
 SEGMENT_POINTS = 24
 
 
@@ -375,56 +374,19 @@ def table_motion(table: Table, blend: float | None = None, ends: str = "hold"):
     return rebuild(table, blend, ends)
 
 
-def tool_motion(table: Table, tool_of, blend: float | None = None, motion=None, robot=None):
-    """(evaluate(x, order) → (M, d) the tool's motion [m, m/s, …; the angle in rad], the interior breaks' times [s])
-    of a PVT, cam or cam-table table (``blend``: a cam-table's controller cycle [s]): per piece of the drive's motion
-    (between the points of a PVT or cam; between the ends of the one-cycle blends of a cam-table), the quintic
-    interpolating spline through ``SEGMENT_POINTS`` points of ``tool_of`` (joint positions (M, n) → tool coordinates
-    (M, d)) of the drive's polynomial. The motion's derivatives step at the breaks (a PVT's acceleration, a cam's
-    jerk, a cam-table's acceleration at each blend's ends): the check takes both one-sided values there. ``motion``:
-    the table's :func:`table_motion` when the caller has it already. ``robot``: the tool's motion is instead solved
-    from the drive's joint motion through the robot's own joint mapping
-    (:func:`~pickplace_cli.limits.table.tool_motion`, as ``plan`` judges its tables): exact, where a fit through the
+def tool_motion(table: Table, robot, blend: float | None = None, motion=None):
+    """(evaluate(x, order) → (M, d) the tool's motion [m, m/s, …; with a rotary fourth axis the angle in rad as a
+    fourth column], the interior breaks' times [s]) of a PVT, cam or cam-table table (``blend``: the controller cycle
+    [s]) on ``robot``: solved from the drive's joint motion through the robot's own joint mapping
+    (:func:`~pickplace_cli.limits.table.tool_motion`, as ``plan`` judges its tables) — exact, where a fit through the
     forward kinematics of a piece a few tens of µs long loses its third derivative to rounding (a cam-table on a
-    50 µs cycle read 271 % of the torque rate that held)."""
-    from scipy.interpolate import make_interp_spline
-
-    motion = table_motion(table, blend) if motion is None else motion
-    if robot is not None:
-        return _solved_tool_motion(motion, robot), np.asarray(motion.breaks, float)[1:-1].copy()
-
-    def poly(x):
-        return motion(np.asarray(x, float))
-
-    t = np.asarray(motion.breaks, float)
-    u = 0.5 - 0.5 * np.cos(np.pi * np.arange(SEGMENT_POINTS) / (SEGMENT_POINTS - 1))  # denser at the ends
-    x = (t[:-1, None] + np.diff(t)[:, None] * u).ravel()
-    x = x.reshape(len(t) - 1, SEGMENT_POINTS)
-    x[:, -1] = t[1:]
-    pos = tool_of(poly(x.ravel())).reshape(len(t) - 1, SEGMENT_POINTS, -1)
-    splines = [make_interp_spline(x[i], pos[i], k=5) for i in range(len(t) - 1)]
-
-    def evaluate(xx: np.ndarray, order: int = 0) -> np.ndarray:
-        xx = np.asarray(xx, float)
-        seg = np.clip(np.searchsorted(t, xx, side="right") - 1, 0, len(t) - 2)
-        out = np.empty((len(xx), pos.shape[2]))
-        # each piece's points at once, the pieces in one pass over the sorted times (a mask per piece made a long
-        # table's check quadratic: 10 s of 14 for a 4.7 s cam-table of 27,800 points)
-        order_of = np.argsort(seg, kind="stable")
-        ids, starts = np.unique(seg[order_of], return_index=True)
-        for i, lo, hi in zip(ids, starts, np.append(starts[1:], len(seg))):
-            sel = order_of[lo:hi]
-            out[sel] = splines[i](xx[sel], order)
-        return out
-
-    return evaluate, t[1:-1].copy()
-
-
-def _solved_tool_motion(motion, robot):
-    """evaluate(x, order) → (M, d) of :func:`tool_motion` solved from the joint motion (the last times' solve kept:
-    the orders are asked for one after another at the same times)."""
+    50 µs cycle read 271 % of the torque rate that held). The motion's derivatives step at the breaks (a PVT's
+    acceleration, a cam's jerk, a cam-table's acceleration at each blend's ends): the check takes both one-sided
+    values there. ``motion``: the table's :func:`table_motion` when the caller has it already. The last times'
+    solve is kept: the orders are asked for one after another at the same times."""
     from ..limits.table import tool_motion as solved
 
+    motion = table_motion(table, blend) if motion is None else motion
     rotary = getattr(robot, "rotary", False)
     last: list = [None, None]
 
@@ -435,7 +397,7 @@ def _solved_tool_motion(motion, robot):
         out = last[1]
         return np.column_stack([out[order], out[4][order]]) if rotary else out[order]
 
-    return evaluate
+    return evaluate, np.asarray(motion.breaks, float)[1:-1].copy()
 
 
 #: the most points a table may have for ``check`` (each segment gets its own fit): as many as ``plan`` writes at most
