@@ -218,9 +218,63 @@ def _motion_report(t: np.ndarray, pos: np.ndarray, robot, profile: Profile, smoo
     margin = getattr(profile.robot, "singularity_margin", None)
     model = MotionModel(cpath, robot, limit_specs(profile), margin, profile.workcell.box)
     grid = check_grid(t / T, cpath.breakpoints, jumps=jumps)
+    if steps.size and rebuilt is None:
+        how += "; the change across each step over its sample interval counts as a rate (STEP_RATE)"
     report = check_limits(model, T, parts=model.parts(grid), dwell=profile.planning.dwell if dwell is None else dwell,
                           notes=() if notes is None else notes(how))
-    return report.with_rows(capacity_rows(cpath, T, profile.capacity, not_held, grid=grid)), how
+    report = report.with_rows(capacity_rows(cpath, T, profile.capacity, not_held, grid=grid))
+    if steps.size and rebuilt is None:
+        report = _across_steps(report, model, cpath, t, steps, profile)
+    return report, how
+
+
+#: how a reconstruction's steps are judged (the note's words): the pieces either side of a step found in the data are
+#: fitted apart, so their accelerations and torques need not meet there. A jerk step leaves them continuous (their
+#: difference is the fit's error), but an acceleration step — a torque step — is an unbounded rate that the one-sided
+#: values alone never show. Whatever the motion between the two samples around the step, it changes by that
+#: difference within their interval h, so its rate reaches at least |difference| / h (the mean value theorem): that
+#: bound joins the torque-rate, jerk and capacity-jerk rows
+STEP_RATE = "|change across the step| / its sample interval"
+
+
+def _across_steps(report: LimitReport, model: MotionModel, cpath, t: np.ndarray, steps: np.ndarray,
+                  profile: Profile) -> LimitReport:
+    """``report`` with each rate row (motor torque rate, joint jerk, capacity jerk) at least the change of its
+    quantity (motor torque, joint acceleration, tool acceleration) across every step at ``steps`` [s] of the
+    reconstruction over the sample interval of ``t`` that holds it (:data:`STEP_RATE`)."""
+    from .grid import interior_jumps, jump_sides
+    from .report import LimitRow
+
+    T = float(t[-1])
+    sides = jump_sides(cpath.breakpoints, cpath.jumps)  # (every interior jump's left sides, then its right sides)
+    n = len(sides) // 2
+    if not n:
+        return report
+    steps = interior_jumps(cpath.breakpoints, cpath.jumps) * T  # the steps inside the move, as the sides are
+    k = np.clip(np.searchsorted(t, steps), 1, len(t) - 1)
+    h = (t[k] - t[k - 1])[:, None]
+    pr = model.parts(sides, derivatives=False, singularity=False)
+    torque = pr.Am / T**2 + pr.Gm
+    rates = {"motor torque rate": np.abs(torque[n:] - torque[:n]) / h,
+             "jerk": np.abs(pr.qdd1[n:] - pr.qdd1[:n]) / T**2 / h}
+    acc = cpath.all_orders(sides)[2][:, :3] / T**2
+    tool = np.linalg.norm(acc[n:] - acc[:n], axis=1) / h[:, 0]
+    names = list(model.robot.joint_names)
+    rows = []
+    for r in report.rows:
+        if r.quantity in rates and r.joint in names:
+            col = rates[r.quantity][:, names.index(r.joint)]
+        elif r.joint == "tool" and r.quantity == "capacity jerk":
+            col = tool
+        else:
+            rows.append(r)
+            continue
+        i = int(np.argmax(col))
+        if col[i] > r.peak:
+            r = LimitRow(r.joint, r.quantity, r.unit, float(col[i]), r.limit, float(col[i]) / r.limit,
+                         float(steps[i]), float(col[i]) <= r.limit, r.kind, r.bound, r.target, r.accuracy, r.not_held)
+        rows.append(r)
+    return replace(report, rows=tuple(rows))
 
 
 def _half(n: int) -> np.ndarray:
