@@ -219,60 +219,138 @@ def _motion_report(t: np.ndarray, pos: np.ndarray, robot, profile: Profile, smoo
     model = MotionModel(cpath, robot, limit_specs(profile), margin, profile.workcell.box)
     grid = check_grid(t / T, cpath.breakpoints, jumps=jumps)
     if steps.size and rebuilt is None:
-        how += "; the change across each step over its sample interval counts as a rate (STEP_RATE)"
+        how += "; the change across each step over its sample interval counts as a rate"
     report = check_limits(model, T, parts=model.parts(grid), dwell=profile.planning.dwell if dwell is None else dwell,
                           notes=() if notes is None else notes(how))
     report = report.with_rows(capacity_rows(cpath, T, profile.capacity, not_held, grid=grid))
     if steps.size and rebuilt is None:
-        report = _across_steps(report, model, cpath, t, steps, profile)
+        report = _across_steps(report, model, cpath, t, pos, steps, profile)
     return report, how
 
 
 #: how a reconstruction's steps are judged (the note's words): the pieces either side of a step found in the data are
-#: fitted apart, so their accelerations and torques need not meet there. A jerk step leaves them continuous (their
-#: difference is the fit's error), but an acceleration step — a torque step — is an unbounded rate that the one-sided
-#: values alone never show. Whatever the motion between the two samples around the step, it changes by that
-#: difference within their interval h, so its rate reaches at least |difference| / h (the mean value theorem): that
-#: bound joins the torque-rate, jerk and capacity-jerk rows
-STEP_RATE = "|change across the step| / its sample interval"
+#: fitted apart, so their positions, velocities, accelerations and torques need not meet there. A jerk step leaves them
+#: continuous; a jump of position, a velocity step or an acceleration step (a torque step) does not, and neither side
+#: alone shows it. So around every step the samples themselves bound the motion, whatever it does between them (the
+#: mean value theorem for divided differences): over the interval [t_k, t_k+1] that holds the step the speed reaches
+#: |q(t_k+1) − q(t_k)| / (t_k+1 − t_k); over each three samples spanning it the acceleration reaches 2·|q[t_i, t_i+1,
+#: t_i+2]| (that divided difference is the mean of q̈ under a B-spline weight of unit mass), for the joints and the
+#: tool alike; the motor torque reaches its mean under that weight, the torque of the mean acceleration at the middle
+#: sample (gravity and the velocity terms barely change over two intervals); the torque rate reaches the change of
+#: those means between the two windows over their distance, and the one-sided torques' change across the step over
+#: its interval; the jerk likewise from the one-sided accelerations. The positions' rounding (12 digits, or the
+#: file's own resolution: half its smallest step) is taken off each difference first. These bounds join the joints',
+#: the motors' and the capacity's rows
+STEP_RATE = "the change across each step over its sample interval"
 
 
-def _across_steps(report: LimitReport, model: MotionModel, cpath, t: np.ndarray, steps: np.ndarray,
+def _joints_at(model: MotionModel, pos: np.ndarray, tau: np.ndarray) -> np.ndarray:
+    """The joint positions of the tool's positions ``pos`` (N, 3) [m] (a 4th column: the tool angle [rad]) at ``tau``."""
+    z = np.zeros((len(pos), 3))
+    motion: tuple = (pos[:, :3], z, z, z)
+    if pos.shape[1] == 4:
+        motion += (np.stack([pos[:, 3], np.zeros(len(pos)), np.zeros(len(pos)), np.zeros(len(pos))]),)
+    return model.parts(tau, derivatives=False, singularity=False, motion=motion).q
+
+
+def _noise(x: np.ndarray) -> np.ndarray:
+    """Per column of samples ``x`` (N, d): how far rounding may move a value, the larger of 1e-12 of the column's
+    largest magnitude (12 significant digits) and half its smallest nonzero step (a file in counts or microns)."""
+    d = np.abs(np.diff(x, axis=0))
+    d = np.where(d > 0, d, np.inf)
+    small = np.min(d, axis=0, initial=np.inf)
+    return np.maximum(1e-12 * np.max(np.abs(x), axis=0), np.where(np.isfinite(small), small / 2, 0.0))
+
+
+def _across_steps(report: LimitReport, model: MotionModel, cpath, t: np.ndarray, pos: np.ndarray, steps: np.ndarray,
                   profile: Profile) -> LimitReport:
-    """``report`` with each rate row (motor torque rate, joint jerk, capacity jerk) at least the change of its
-    quantity (motor torque, joint acceleration, tool acceleration) across every step at ``steps`` [s] of the
-    reconstruction over the sample interval of ``t`` that holds it (:data:`STEP_RATE`)."""
+    """``report`` with each row of a speed, acceleration, torque, torque rate or jerk (joints, motors, the tool's
+    capacity) at least its bound around every interior step of the reconstruction ``cpath`` of the samples at ``t``
+    [s] of the tool's positions ``pos`` (N, 3) [m] (and angle [rad], a 4th column with a rotary axis)
+    (:data:`STEP_RATE`)."""
     from .grid import interior_jumps, jump_sides
     from .report import LimitRow
 
     T = float(t[-1])
+    N = len(t)
     sides = jump_sides(cpath.breakpoints, cpath.jumps)  # (every interior jump's left sides, then its right sides)
     n = len(sides) // 2
-    if not n:
+    if not n or N < 4:
         return report
     steps = interior_jumps(cpath.breakpoints, cpath.jumps) * T  # the steps inside the move, as the sides are
-    k = np.clip(np.searchsorted(t, steps), 1, len(t) - 1)
+    k = np.clip(np.searchsorted(t, steps), 1, N - 1)  # the step lies in [t[k − 1], t[k]]
     h = (t[k] - t[k - 1])[:, None]
     pr = model.parts(sides, derivatives=False, singularity=False)
     torque = pr.Am / T**2 + pr.Gm
-    rates = {"motor torque rate": np.abs(torque[n:] - torque[:n]) / h,
-             "jerk": np.abs(pr.qdd1[n:] - pr.qdd1[:n]) / T**2 / h}
-    acc = cpath.all_orders(sides)[2][:, :3] / T**2
-    tool = np.linalg.norm(acc[n:] - acc[:n], axis=1) / h[:, 0]
+    # the samples from two before the step's interval to two after it, as the file gives them (never a piece's value:
+    # a step found at a sample's own time puts that sample on the other piece), the joints by the inverse kinematics
+    idx = np.clip(k[:, None] + np.arange(-3, 4)[None, :], 0, N - 1)  # (n, 7): k−3 … k+3
+    q_all = _joints_at(model, pos, t / T)
+    tq, q, p = t[idx], q_all[idx], pos[idx][..., :3]  # (n, 7), (n, 7, joints), (n, 7, 3)
+    revolute = np.array([u == "rad" for u in model.robot.joint_units])
+    nq, np_ = _noise(q_all), _noise(pos[:, :3])
+
+    def unwrap(d):
+        d = d.copy()
+        d[..., revolute] = (d[..., revolute] + np.pi) % (2 * np.pi) - np.pi  # (an angle's wrap is no motion)
+        return d
+
+    # speeds over the step's interval [k − 1, k] and the one each side of it (a step found at a sample's time may
+    # belong to either interval that meets there)
+    vq = vp = 0.0
+    for c in (1, 2, 3):
+        dt1 = np.maximum(tq[:, c + 1] - tq[:, c], 1e-300)[:, None]
+        vq = np.maximum(vq, np.maximum(np.abs(unwrap(q[:, c + 1] - q[:, c])) - 2 * nq, 0.0) / dt1)
+        vp = np.maximum(vp, np.maximum(np.linalg.norm(p[:, c + 1] - p[:, c], axis=1) - 2 * np.linalg.norm(np_), 0.0)
+                        / dt1[:, 0])
+    # accelerations: every window of three samples that holds one of those intervals (k−3 … k+3)
+    acc_q, acc_p, means = [], [], []
+    ang = pos[idx][..., 3] if pos.shape[1] == 4 else None  # the tool angle [rad] (a rotary fourth axis)
+    for w in (0, 1, 2, 3, 4):
+        t0, t1, t2 = tq[:, w], tq[:, w + 1], tq[:, w + 2]
+        real = (t1 > t0) & (t2 > t1)  # (a window the move's ends clip has repeated samples: no bound)
+        d01, d12 = np.where(real, t1 - t0, 1.0)[:, None], np.where(real, t2 - t1, 1.0)[:, None]
+        span = d01 + d12
+
+        def second(x, noise):  # 2·x[t0, t1, t2] less the rounding's share, per component
+            a = 2 * ((x[:, w + 2] - x[:, w + 1]) / d12 - (x[:, w + 1] - x[:, w]) / d01) / span
+            return np.where(real[:, None], np.sign(a) * np.maximum(np.abs(a) - 4 * noise / (d01 * d12), 0.0), 0.0)
+
+        acc_q.append(second(np.stack([unwrap(q[:, c] - q[:, w + 1]) for c in range(q.shape[1])], axis=1), nq))
+        ap = second(p, np_)
+        acc_p.append(np.linalg.norm(ap, axis=1))
+        vmid = (p[:, w + 2] - p[:, w]) / span
+        motion: tuple = (p[:, w + 1], vmid * T, ap * T**2, np.zeros_like(ap))
+        if ang is not None:  # the angle's own mean acceleration over the window
+            th = ang[..., None]
+            motion += (np.stack([ang[:, w + 1], (ang[:, w + 2] - ang[:, w])[:, None][:, 0] / span[:, 0] * T,
+                                 second(th, np.array([1e-12]))[:, 0] * T**2, np.zeros(len(ang))]),)
+        mid = model.parts(t1 / T, derivatives=False, singularity=False, motion=motion)
+        means.append((np.where(real[:, None], mid.Am / T**2 + mid.Gm, 0.0), t1))
+    rate = np.max([np.where((c2 > c1)[:, None] & (m1 != 0) & (m2 != 0), np.abs(m2 - m1), 0.0)
+                   / np.maximum(c2 - c1, 1e-300)[:, None] for (m1, c1), (m2, c2) in zip(means[:-1], means[1:])], axis=0)
+    gear = np.array([s.drive.gear_ratio if s.drive is not None else 1.0 for s in model.specs])
+    joints = {"velocity": vq, "motor speed": vq * gear, "acceleration": np.max(np.abs(acc_q), axis=0),
+              "motor torque": np.max([np.abs(m) for m, _ in means], axis=0),
+              "motor torque rate": np.maximum(np.abs(torque[n:] - torque[:n]) / h, rate),
+              "jerk": np.abs(pr.qdd1[n:] - pr.qdd1[:n]) / T**2 / h}
+    acc3 = cpath.all_orders(sides)[2][:, :3] / T**2
+    tool = {"capacity speed": vp, "capacity acceleration": np.max(acc_p, axis=0),
+            "capacity jerk": np.linalg.norm(acc3[n:] - acc3[:n], axis=1) / h[:, 0]}
     names = list(model.robot.joint_names)
     rows = []
     for r in report.rows:
-        if r.quantity in rates and r.joint in names:
-            col = rates[r.quantity][:, names.index(r.joint)]
-        elif r.joint == "tool" and r.quantity == "capacity jerk":
-            col = tool
+        if r.quantity in joints and r.joint in names:
+            col = joints[r.quantity][:, names.index(r.joint)]
+        elif r.joint == "tool" and r.quantity in tool:
+            col = tool[r.quantity]
         else:
             rows.append(r)
             continue
         i = int(np.argmax(col))
-        if col[i] > r.peak:
+        if col[i] > r.peak:  # (accuracy 0: a bound the samples set, not an estimate that converges with the rate)
             r = LimitRow(r.joint, r.quantity, r.unit, float(col[i]), r.limit, float(col[i]) / r.limit,
-                         float(steps[i]), float(col[i]) <= r.limit, r.kind, r.bound, r.target, r.accuracy, r.not_held)
+                         float(steps[i]), float(col[i]) <= r.limit, r.kind, r.bound, r.target, 0.0, r.not_held)
         rows.append(r)
     return replace(report, rows=tuple(rows))
 
@@ -370,7 +448,11 @@ def _with_accuracy(fine: LimitReport, others: list[tuple[LimitReport, float]]) -
     rows = []
     for r in fine.rows:
         cs = [(o[(r.joint, r.quantity)], share) for o, share in other if (r.joint, r.quantity) in o]
-        if r.kind == "limit" and r.bound == "upper" and cs:
+        if r.kind == "limit" and r.bound == "upper" and r.accuracy == 0.0:  # a step's bound (_across_steps)
+            acc = CHECK_RESOLUTION * abs(r.peak)
+            r = LimitRow(r.joint, r.quantity, r.unit, r.peak, r.limit, r.utilisation, r.t_peak, r.peak - acc <= r.allowed,
+                         r.kind, r.bound, r.target, acc, r.not_held)
+        elif r.kind == "limit" and r.bound == "upper" and cs:
             acc = max(max(share * abs(r.peak - c.peak) for c, share in cs), CHECK_RESOLUTION * abs(r.peak))
             ok = r.peak - acc <= r.allowed
             r = LimitRow(r.joint, r.quantity, r.unit, r.peak, r.limit, r.utilisation, r.t_peak, ok, r.kind, r.bound,
