@@ -273,7 +273,8 @@ def _single(line_file, detections, belt_speed, robots, strategy, seed, output, a
         types = line.parts.types
         if source is not None:
             lines = stack.enter_context(_detection_lines(source))
-            items = read_detections(lines, "stdin" if source == "-" else source, None if types is None else list(types))
+            items = read_detections(lines, "stdin" if source == "-" else source, None if types is None else list(types),
+                                    line.belt.width)
         elif until[0] is not None:
             items = _until_items(line, line_file, engine, *until)
         else:
@@ -452,7 +453,8 @@ def _sweep(line_file, detections, belt_speed, robots, strategy, seed, speeds, ro
         resolve_relative(base.parts.detections, line_file) if base.parts.detections else None)
     if src is not None:
         with _detection_lines(src) as lines:
-            dets = list(read_detections(lines, src, None if base.parts.types is None else list(base.parts.types)))
+            dets = list(read_detections(lines, src, None if base.parts.types is None else list(base.parts.types),
+                                        base.belt.width))
         bad = next((d for d in dets if isinstance(d, BadRow)), None)
         if bad is not None:
             raise TaskError(bad.error)
