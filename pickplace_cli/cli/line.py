@@ -74,7 +74,7 @@ def line_cmd(
     """Run a line of robots along one belt: each part is offered to the robots in the strategy's order and taken
     by the first that can meet it in its window (a real plan: rendezvous, tracking, place, every limit checked);
     a part no robot can take is missed, with the reason. Prints a table per robot (picks/min, utilisation, idle,
-    peak limit use, RMS torque over the run) on stderr. Exit codes: 0 ok (missed parts are results); 1 invalid
+    peak motor limit use, RMS torque over the run) on stderr. Exit codes: 0 ok (missed parts are results); 1 invalid
     input (line file, profile, a refused detection row: the other rows are still answered); 2 usage; 3 a motor's
     RMS torque over the run exceeds its rated torque; 4 a window, home or place point outside the workspace, a belt
     no robot can ever keep up with, or --max-miss-rate exceeded.
@@ -94,6 +94,11 @@ def line_cmd(
                         "(0.01 = ± 1 percentage point)")
     if not (1.0 <= until_max <= 1e5):
         raise TaskError(f"until-max = {until_max!r} s: the longest run is from 1 to 1e5 s of simulated time")
+    if strategy is not None and (strategy.strip() == "all" or "," in strategy):
+        _usage(f"--strategy {strategy}: one strategy ({', '.join(_strategies())}); several are compared in a sweep "
+               "with --strategies")
+    if strategy is not None and strategy.strip() not in _strategies():
+        raise TaskError(f"strategy = {strategy!r}: choose from {', '.join(_strategies())}")
     if until is not None and (sweep or detections is not None):
         _usage("--until runs the line file's generator longer; it is for a single run without --detections")
     if sweep:
@@ -145,6 +150,12 @@ def _profiles(line, line_file) -> dict:
             cache[ref] = load_profile(ref)
         out[r.name] = cache[ref]
     return out
+
+
+def _strategies() -> tuple:
+    from ..line.spec import STRATEGIES
+
+    return tuple(STRATEGIES)
 
 
 def _strategy_names(text: str) -> list[str]:
@@ -262,7 +273,8 @@ def _single(line_file, detections, belt_speed, robots, strategy, seed, output, a
         types = line.parts.types
         if source is not None:
             lines = stack.enter_context(_detection_lines(source))
-            items = read_detections(lines, "stdin" if source == "-" else source, None if types is None else list(types))
+            items = read_detections(lines, "stdin" if source == "-" else source, None if types is None else list(types),
+                                    line.belt.width)
         elif until[0] is not None:
             items = _until_items(line, line_file, engine, *until)
         else:
@@ -441,7 +453,8 @@ def _sweep(line_file, detections, belt_speed, robots, strategy, seed, speeds, ro
         resolve_relative(base.parts.detections, line_file) if base.parts.detections else None)
     if src is not None:
         with _detection_lines(src) as lines:
-            dets = list(read_detections(lines, src, None if base.parts.types is None else list(base.parts.types)))
+            dets = list(read_detections(lines, src, None if base.parts.types is None else list(base.parts.types),
+                                        base.belt.width))
         bad = next((d for d in dets if isinstance(d, BadRow)), None)
         if bad is not None:
             raise TaskError(bad.error)

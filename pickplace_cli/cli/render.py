@@ -478,7 +478,8 @@ def _print_comparison(comparison) -> None:
         ("peak joint torque", lambda r: f"{r.joint_torque_peak:.4g} {r.joint_torque_unit}"),
         ("motor torque use %", lambda r: _opt(r.motor_torque_use, "{:.1f}", 100)),
         ("torque rate use %", lambda r: _opt(r.torque_rate_use, "{:.1f}", 100)),
-        ("limits", lambda r: "ok" if r.limits_ok else "EXCEEDED"),
+        ("limits", lambda r: ("ok" if r.limits_ok else "EXCEEDED")
+         + ("; capacity EXCEEDED, not held" if r.exceeded_not_held else "")),
         ("max height above ends [m]", geo("max_height")),
         ("overshoot of h [m]", geo("overshoot")),
         ("backward drift [m]", geo("drift_back")),
@@ -512,3 +513,6 @@ def _print_comparison(comparison) -> None:
             sys.stderr.write(f"{r.method}: {note}\n")
         if r.ok and not r.limits_ok:
             sys.stderr.write(f"{r.method}: a limit is exceeded at T = {r.duration:.4f} s ({r.worst_limit})\n")
+        if r.ok and r.exceeded_not_held:
+            sys.stderr.write(f"{r.method}: exceeded, not held under --time {comparison.time}: "
+                             f"{', '.join(r.exceeded_not_held)} (--time limits holds it)\n")

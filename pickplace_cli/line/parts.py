@@ -91,7 +91,7 @@ def _header(line: str, source: str, types: list[str] | None = None) -> list[str]
 
 
 def _row(cells: list[str], names: list[str], row: int, lineno: int, source: str,
-         types: list[str] | None = None) -> Detection | BadRow:
+         types: list[str] | None = None, half: float | None = None) -> Detection | BadRow:
     from ..model.text import plain_float
 
     where = f"row {row} ({source}:{lineno})"
@@ -118,6 +118,9 @@ def _row(cells: list[str], names: list[str], row: int, lineno: int, source: str,
         if abs(x) > 1e9:
             return BadRow(row, f"{where}: {name} = {cell!r}: must lie within ±1e9 {COLUMNS[name]}", values.get("id", ""))
         values[name] = x
+    if half is not None and abs(values["across"]) > half + 1e-12:
+        return BadRow(row, f"{where}: across = {values['across']:g} m: not on the belt, within ±{half:g} m (belt.width / 2)",
+                      values.get("id", ""))
     kind = values.get("type")
     if types is not None and kind not in types:
         return BadRow(row, f"{where}: type = {kind!r}: not a part type of the line file (parts.types: "
@@ -148,11 +151,12 @@ def bounded_lines(readline, limit: int = MAX_LINE, source: str = "detections") -
 
 
 def read_detections(lines: Iterable[str], source: str = "detections",
-                    types: list[str] | None = None) -> Iterator[Detection | BadRow]:
+                    types: list[str] | None = None, width: float | None = None) -> Iterator[Detection | BadRow]:
     """Detections (or BadRows) from CSV text lines, lazily (a stream is answered row by row). A missing or
     wrong header is a TaskError (nothing can be read); a bad row is a BadRow and reading goes on; more than
     :data:`MAX_PARTS` rows is a TaskError at the row after them. ``types``: the line's part types (None: none; then
-    a ``type`` column is refused, else it is required and a row naming another type is a BadRow)."""
+    a ``type`` column is refused, else it is required and a row naming another type is a BadRow). ``width``: the belt's
+    width [m]; a part farther across than half of it from the centre line is a BadRow (None: not tested)."""
     names = None
     row = 0
     for lineno, line in enumerate(lines, 1):
@@ -176,7 +180,7 @@ def read_detections(lines: Iterable[str], source: str = "detections",
         if row > MAX_PARTS:
             raise TaskError(f"{source}:{lineno}: more than {MAX_PARTS} detections in one run (the most a run keeps: "
                             "about 0.14 MB a part); run the rest as another run")
-        yield _row(text.split(","), names, row, lineno, source, types)
+        yield _row(text.split(","), names, row, lineno, source, types, None if width is None else width / 2)
     if names is None:
         raise TaskError(f"{source}: no header: a detection file starts with t[s],along[m],across[m]")
 

@@ -145,7 +145,7 @@ def print_table(summary, console=None) -> None:
                     f"{summary.missed} missed ({100 * summary.miss_rate:.1f} %): {summary.picks_per_minute:.1f} "
                     f"picks/min; run {summary.span:.2f} s", title_justify="left")
     for col, just in (("robot", "left"), ("picks", "right"), ("picks/min", "right"), ("utilisation", "right"),
-                      ("idle [s]", "right"), ("peak limit use", "left"), ("RMS torque / rated", "left")):
+                      ("idle [s]", "right"), ("peak motor limit use", "left"), ("RMS torque / rated", "left")):
         t.add_column(col, justify=just)
     for r in summary.robots:
         motor = {k: u for k, u in r.peak_use.items() if k[1] in ("motor torque", "motor speed", "motor torque rate")}

@@ -76,7 +76,8 @@ def optimum(task: Task, duration: float, solver: str = "exact", table: str | Non
     * "table" — the table's answer alone (instant, approximate: README).
 
     Where the table does not apply (other η, unequal heights, vertical velocities, outside its range, no
-    table), "exact" and "seeded" are the multi-start alone."""
+    table), "exact" and "seeded" are the multi-start alone. A ``table`` given that cannot be read as a conveyor table
+    (missing, foreign, malformed) is refused (TableError), whatever the solver."""
     settings = settings or VelSettings()
     prob = make_problem(task, duration)
     if solver not in SOLVERS:
@@ -86,6 +87,13 @@ def optimum(task: Task, duration: float, solver: str = "exact", table: str | Non
 
     try:
         tab = load_vel_table(table)
+    except TableError:
+        if solver == "table" or table is not None:  # a table the user named and that cannot be read: refused
+            raise
+        tab = None  # (the shipped table missing: the multi-start alone)
+    try:
+        if tab is None:
+            raise TableError("no conveyor table")
         seeds = tab.seeds(task, duration)
     except TableError as exc:
         if solver == "table":
@@ -126,6 +134,7 @@ def plan_bspline_vel(
     settings: VelSettings | None = None,
     margin: float | None = None,
     _result: VelResult | None = None,
+    _source: str = "exact",
     **named: float,
 ) -> CartesianPath:
     """CartesianPath of the conveyor-tracking B-spline for a move of ``duration`` seconds [Yang2022].
@@ -155,7 +164,7 @@ def plan_bspline_vel(
     prob = make_problem(task, T)
     extra: dict[str, Any] = {}
     res = _result  # an exact solve the caller (PathFactory) already did
-    source = "exact"
+    source = _source  # (a solve the caller did: its words, e.g. whether a table seeded it)
     if res is not None:
         p = res.params
     elif params is not None:
@@ -223,6 +232,7 @@ class PathFactory:
         self._cache: dict[float, CartesianPath] = {}
         self._results: dict[float, VelResult] = {}
         self._switches = 0
+        self._source = "exact"  # the last full solve's words (:func:`optimum`): its table, or why none was used
 
     def task_at(self, duration: float) -> Task:
         """The task planned for ``duration`` [s]: the same for every T here; a conveyor rendezvous
@@ -250,11 +260,11 @@ class PathFactory:
             settings = replace(settings, margin=float(self.params["margin"]))
         if warm is None:  # the first duration, or the final check: the requested solver in full
             solver = self.params.get("solver", "exact") if seeded else "exact"
-            res = optimum(self.task_at(T), T, solver, self.params.get("table"), settings)[1]
+            _, res, self._source = optimum(self.task_at(T), T, solver, self.params.get("table"), settings)
         else:
             res = solve(make_problem(self.task_at(T), T), settings, warm=warm)
         self._results[T] = res
-        return plan_bspline_vel(self.task_at(T), T, _result=res)
+        return plan_bspline_vel(self.task_at(T), T, _result=res, _source=self._source)
 
     def final(self, duration: float) -> tuple[CartesianPath, bool]:
         """(the path at T from the full solve (and the continuation: the better), whether the continuation's
@@ -277,7 +287,7 @@ class PathFactory:
         if agreed:
             both = replace(before, a_min=both.a_min, j_min=both.j_min, F=both.a_min / before.a_max + both.j_min / before.j_max)
         self._results[T] = both  # F with the lowest normalisers either search found
-        path = plan_bspline_vel(self.task_at(T), T, _result=both)
+        path = plan_bspline_vel(self.task_at(T), T, _result=both, _source=self._source)
         self._cache[T] = path
         if agreed or before is None:
             return path, True

@@ -319,8 +319,12 @@ class CompareRow:
     joint_torque_unit: str | None = None
     motor_torque_use: float | None = None  # peak / limit
     torque_rate_use: float | None = None
-    limits_ok: bool | None = None
+    limits_ok: bool | None = None  # every limit the duration rule holds (plan's limits_ok)
     worst_limit: str | None = None
+    #: the rows beyond their limit that the duration rule does not hold (the Cartesian capacity under fit and
+    #: optimal), as "capacity speed 116.5 %"; all_limits_ok counts them (plan's all_limits_ok)
+    exceeded_not_held: tuple[str, ...] = ()
+    all_limits_ok: bool | None = None
     geometry: Geometry | None = None
     continuity: Continuity | None = None
     vibration: Any = None  # ResidualVibration or None
@@ -356,6 +360,8 @@ class CompareRow:
             "motor_torque_use": self.motor_torque_use,
             "torque_rate_use": self.torque_rate_use,
             "limits_ok": self.limits_ok,
+            "all_limits_ok": self.all_limits_ok,
+            "exceeded_not_held": list(self.exceeded_not_held),
             "worst_limit": self.worst_limit,
             "max_height_m": None if g is None else g.max_height,
             "overshoot_m": None if g is None else g.overshoot,
@@ -533,6 +539,9 @@ def compare_row(task, profile, method, params: Mapping[str, Any] | None = None, 
         motor_torque_use=util["motor torque"],
         torque_rate_use=util["motor torque rate"],
         limits_ok=result.report.ok,
+        all_limits_ok=result.report.all_ok,
+        exceeded_not_held=tuple(f"{r.joint} {r.quantity} {percent(r.utilisation)} %" if r.joint != "tool" else
+                                f"{r.quantity} {percent(r.utilisation)} %" for r in result.report.exceeded_not_held),
         worst_limit=None if worst is None else f"{worst.joint} {worst.quantity} {percent(worst.utilisation)} %",
         geometry=path_geometry(path, task, grid, samples[0]),
         continuity=continuity(path, rest_ends=rest, samples=samples, grid=grid),
@@ -595,6 +604,7 @@ def _csv_columns() -> list[tuple[str, Any]]:
         ("motor_torque_use[1]", lambda r: r.motor_torque_use),
         ("torque_rate_use[1]", lambda r: r.torque_rate_use),
         ("limits_ok", lambda r: r.limits_ok),
+        ("all_limits_ok", lambda r: r.all_limits_ok),
         ("max_height[m]", g("max_height")),
         ("overshoot[m]", g("overshoot")),
         ("drift_back[m]", g("drift_back")),

@@ -225,3 +225,19 @@ def test_mcap_has_every_robots_topics(line_file, tmp_path):
     reader = make_reader(out.open("rb"), decoder_factories=[DecoderFactory()])
     _, channel, _, msg = next(reader.iter_decoded_messages(topics=["/r1/joint_states"]))
     assert list(msg.name) == drives == ["A1", "A2", "A3"]
+
+
+@pytest.mark.parametrize("given", ["all", "quota,bands", " quota , skip"])
+def test_several_strategies_outside_a_sweep_are_a_usage_error(line_file, tmp_path, given):
+    """``--strategy`` names the one strategy of a run; several (or ``all``) are a sweep's ``--strategies``: a usage
+    error (exit 2), never the first of them run in silence; nothing is written."""
+    out = tmp_path / "parts.csv"
+    r = run("line", line_file, "--strategy", given, "-q", "-o", out)
+    _one_line(r, 2, "--strategies")
+    assert not out.exists()
+
+
+def test_an_unknown_strategy_names_the_choices(line_file):
+    r = run("line", line_file, "--strategy", "nope", "-q", "-o", "-")
+    text = _one_line(r, 1, "--strategy 'nope'")
+    assert "upstream_first" in text and "(or all)" not in text

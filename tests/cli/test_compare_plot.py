@@ -197,3 +197,39 @@ def test_limit_use_agrees_with_the_limit_report():
     assert max(pct.max() for _, q, pct in curves if q == "motor torque rate") == pytest.approx(100, rel=5e-3)
     for joint, pct in rms:
         assert pct == pytest.approx(100 * rows[(joint, "rms motor torque")].utilisation, rel=1e-9)
+
+
+def test_compare_says_the_capacity_is_exceeded_not_held_under_fit():
+    """Under ``--time fit`` (joint and motor limits alone) the Adept cycle runs past the tool's Cartesian capacity: compare
+    says so as plan does — the table's limits cell, one line on stderr, ``all_limits_ok`` false and the rows in the
+    JSON — while ``limits_ok`` (the rule's own limits) stays true; under ``--time limits`` nothing is listed."""
+    plan_doc = _plan_json("fit")
+    want = {r["quantity"] for r in plan_doc["exceeded_not_held"]}
+    assert want == {"capacity speed", "capacity acceleration"}
+    r = run("compare", *ADEPT, "-m", "bspline", "-t", "fit")
+    assert r.exit_code == 0, r.stderr
+    assert "capacity EXCEEDED, not held" in r.stderr
+    line = next(x for x in r.stderr.splitlines() if x.startswith("bspline: exceeded, not held under --time fit"))
+    for q in want:
+        assert q in line
+    doc = json.loads(run("compare", *ADEPT, "-m", "bspline", "-t", "fit", "-f", "json", "-q").stdout)
+    row = doc["rows"][0]
+    assert row["limits_ok"] is True and row["all_limits_ok"] is False
+    assert {" ".join(x.split()[:2]) for x in row["exceeded_not_held"]} == want
+    # the percentages are plan's (peak over limit)
+    use = {r["quantity"]: 100 * r["peak"] / r["limit"] for r in plan_doc["exceeded_not_held"]}
+    for x in row["exceeded_not_held"]:
+        q = " ".join(x.split()[:2])
+        assert float(x.split()[2]) == pytest.approx(use[q], abs=0.06)
+    rows = list(csv.DictReader(io.StringIO(run("compare", *ADEPT, "-m", "bspline", "-t", "fit", "-f", "csv", "-q").stdout)))
+    assert rows[0]["limits_ok"] == "true" and rows[0]["all_limits_ok"] == "false"
+    held = json.loads(run("compare", *ADEPT, "-m", "bspline", "-f", "json", "-q").stdout)["rows"][0]
+    assert held["all_limits_ok"] is True and held["exceeded_not_held"] == []
+
+
+def _plan_json(rule: str) -> dict:
+    r = subprocess.run([sys.executable, "-m", "pickplace_cli", "plan", *ADEPT, "--time", rule, "--json", "-q", "-o",
+                        "/dev/null"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    doc = json.loads(r.stdout)
+    return doc.get("summary", doc)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -378,9 +380,12 @@ def test_path_factory_continuation_and_final_check():
     f = bv.PathFactory(EXAMPLE)
     p1 = f(0.25)
     p2 = f(0.26)
-    assert p1.parameters["params_source"] == p2.parameters["params_source"] == "exact"
+    # the first (full) solve's words: whether the shipped table seeded it, carried by every path of the factory
+    assert p1.parameters["params_source"] == p2.parameters["params_source"]
+    assert p1.parameters["params_source"].startswith("exact (")
     path, agreed = f.final(0.26)
     assert agreed
+    assert path.parameters["params_source"].startswith("exact (")
     glob = bv.solve(bv.make_problem(EXAMPLE, 0.26))
     assert path.parameters["F"] == pytest.approx(glob.F, abs=1e-9)
     assert f(0.26) is path
@@ -441,3 +446,30 @@ def test_fit_solves_eq38_every_motor_limit_at_the_optimal_shape(delta):
     # the fitted path is the global optimum at T_fit (confirmed by the factory's final global solve)
     glob = bv.solve(bv.make_problem(ADEPT_BELT, T))
     assert r.parameters["F"] == pytest.approx(glob.F, abs=1e-8)
+
+
+@pytest.mark.parametrize("table", ["passwd", "missing", "bspline"])
+def test_a_named_table_that_cannot_be_read_is_refused(tmp_path, table):
+    """A conveyor table the user names (``--table``) that is missing, foreign or of another method is refused in one
+    line (exit 1), never silently replaced by the multi-start; one that only does not apply to the move (another η)
+    is used as far as it can and the plan says why not."""
+    import subprocess
+    import sys
+
+    path = {"passwd": tmp_path / "passwd", "missing": tmp_path / "none.csv",
+            "bspline": Path(__file__).resolve().parents[2] / "tables" / "bspline-eta0.5.csv"}[table]
+    if table == "passwd":
+        path.write_text("root:x:0:0:root:/root:/bin/bash\n")
+    r = subprocess.run([sys.executable, "-m", "pickplace_cli", "plan", "--from", "-0.1525,0,-0.8", "--to",
+                        "0.1525,0,-0.8", "-m", "bspline-vel", "--table", str(path), "-o", str(tmp_path / "o.csv")],
+                       capture_output=True, text=True)
+    assert r.returncode == 1, r.stderr
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("pickplace: error:") and str(path) in lines[0], r.stderr
+    assert not (tmp_path / "o.csv").exists()
+
+
+def test_a_table_that_does_not_apply_says_why():
+    task = Task(EXAMPLE.p_from, EXAMPLE.p_to, EXAMPLE.height, 0.3, v_from=EXAMPLE.v_from, v_to=EXAMPLE.v_to)
+    p = bv.PathFactory(task)(0.25)
+    assert "table not used: eta = 0.3" in p.parameters["params_source"]

@@ -72,3 +72,15 @@ def test_generator_is_seeded_and_has_its_rate_and_spread():
     assert [d.t for d in c] != list(t)
     reg = generate(Generator(rate=4.0, duration=1.0, arrival="regular"), 0.3)
     assert [d.t for d in reg] == [0.0, 0.25, 0.5, 0.75]
+
+
+def test_a_part_off_the_belt_is_a_bad_row():
+    """With the belt's width, a detection farther across than half of it is a bad row naming the value and the
+    bound (the other rows are read on); at the edge it is a part."""
+    rows = list(read_detections(["t,along,across", "0.1,0,0.15", "0.2,0,-0.15", "0.3,0,5", "0.4,0,-0.1500001"],
+                                "d.csv", width=0.3))
+    assert [type(r).__name__ for r in rows] == ["Detection", "Detection", "BadRow", "BadRow"]
+    assert rows[2].error == "row 3 (d.csv:4): across = 5 m: not on the belt, within ±0.15 m (belt.width / 2)"
+    assert "across = -0.15" in rows[3].error
+    # without a width (a reader that knows no belt) nothing is tested
+    assert all(type(r).__name__ == "Detection" for r in read_detections(["t,along,across", "0.3,0,5"], "d.csv"))
