@@ -242,6 +242,10 @@ def _motion_report(t: np.ndarray, pos: np.ndarray, robot, profile: Profile, smoo
 #: file's own resolution: half its smallest step) is taken off each difference first. These bounds join the joints',
 #: the motors' and the capacity's rows
 STEP_RATE = "the change across each step over its sample interval"
+#: a bound around a step replaces its row's reading only when it is this share above it: the torque's bounds take the
+#: torque of a mean acceleration for its mean (within ~1 % where the motion changes fastest, at 50 kHz at the start of
+#: a time-optimal law); the steps they are for (a jump, a kink, a stop) read many times their limit
+STEP_MARGIN = 0.05
 
 
 def _joints_at(model: MotionModel, pos: np.ndarray, tau: np.ndarray) -> np.ndarray:
@@ -348,7 +352,7 @@ def _across_steps(report: LimitReport, model: MotionModel, cpath, t: np.ndarray,
             rows.append(r)
             continue
         i = int(np.argmax(col))
-        if col[i] > r.peak:  # (accuracy 0: a bound the samples set, not an estimate that converges with the rate)
+        if col[i] > (1.0 + STEP_MARGIN) * r.peak:  # (accuracy 0: a bound the samples set, not an estimate)
             r = LimitRow(r.joint, r.quantity, r.unit, float(col[i]), r.limit, float(col[i]) / r.limit,
                          float(steps[i]), float(col[i]) <= r.limit, r.kind, r.bound, r.target, 0.0, r.not_held)
         rows.append(r)
