@@ -390,7 +390,8 @@ def check_samples(s: Samples, profile: Profile, smoothing: float = 0.0, source: 
     whole = f"; {CLOSED_NOTE}" if dwell is not None else ""
 
     def notes(how: str) -> tuple[str, ...]:
-        return (f"{s.where(source)}: {len(t)} samples over {T:.6g} s{rest}; derivatives from {how}; joint positions "
+        start = f" from t = {s.t[0]:.6g} s of the file (peak times count from there)" if s.t[0] != 0 else ""
+        return (f"{s.where(source)}: {len(t)} samples over {T:.6g} s{start}{rest}; derivatives from {how}; joint positions "
                 f"checked as given in the file{whole}",)
 
     if smoothing == "auto":

@@ -70,6 +70,10 @@ def test_round_trip_checked_like_plan(tmp_path, legs, delta):
     f.write_text(_csv(round_trip(there, back, delta.planning.dwell, delta.planning.rate)))
     checks = check_file(f, delta)
     assert [c.move for c in checks] == [1, 2]
+    # the second move starts after the first and its dwell: its peak times count from its own start, as it says
+    start = there.t[-1] + delta.planning.dwell
+    assert f"from t = {start:.6g} s of the file (peak times count from there)" in checks[1].report.notes[0]
+    assert "of the file" not in checks[0].report.notes[0]
     for c, leg in zip(checks, (there, back)):
         # the move's duration is the leg's, not the leg + dwell (12-digit CSV time)
         assert c.report.duration == pytest.approx(leg.report.duration, abs=1e-9)
