@@ -55,10 +55,12 @@ def _plan_batch(source, prof, options, height, eta, fail_fast, writer, output, r
         progress = Progress(console=console(stderr=True), transient=True)
         progress.start()
         bar = progress.add_task(f"planning {len(rows) + len(bad)} moves", total=len(rows))
+    outcomes = _file_outcomes(rows, prof, options, height, eta, fail_fast, name, workers, writer, output, report,
+                              report_only, json_summary)
     try:
-        with sink:
-            for res in _file_outcomes(rows, prof, options, height, eta, fail_fast, name, workers, writer, output,
-                                      report, report_only, json_summary):
+        # (closed at once when answering a row fails, e.g. a reader that went away: the workers stop too)
+        with sink, contextlib.closing(outcomes):
+            for res in outcomes:
                 while pending and pending[0].row < res.row:
                     sink.add(pending.pop(0))
                 if sink.add(res) and fail_fast:

@@ -22,6 +22,15 @@ if TYPE_CHECKING:  # pragma: no cover
 
 #: seconds to wait for the scheduler before giving up
 CONNECT_TIMEOUT = 10.0
+#: in a worker of a pool made with a stop event (:func:`local_pool`): that event, which the parent sets when the answers
+#: of the chunks still running are no longer wanted (their reader went away); None elsewhere
+_STOP = None
+
+
+def stopped() -> bool:
+    """Whether this worker's parent asked its chunks to stop (:func:`local_pool`'s ``stop``): a chunk checks between
+    rows and returns what it has."""
+    return _STOP is not None and _STOP.is_set()
 
 
 def ignore_sigint() -> None:  # pragma: no cover - runs in the worker processes
@@ -63,19 +72,22 @@ def die_with_parent(parent: int) -> None:  # pragma: no cover - runs in the work
         threading.Thread(target=watch, daemon=True, name="parent-watch").start()
 
 
-def worker_init(parent: int) -> None:  # pragma: no cover - runs in the worker processes
+def worker_init(parent: int, stop=None) -> None:  # pragma: no cover - runs in the worker processes
     """The initializer of every local process pool (table builds, ``-j N`` batches and streams, compare):
-    :func:`ignore_sigint` and :func:`die_with_parent`."""
+    :func:`ignore_sigint` and :func:`die_with_parent`; ``stop``: the pool's stop event (:func:`stopped`)."""
+    global _STOP
+    _STOP = stop
     ignore_sigint()
     die_with_parent(parent)
 
 
-def local_pool(workers: int):
+def local_pool(workers: int, stop=None):
     """A ``ProcessPoolExecutor`` of ``workers`` processes whose workers leave Ctrl-C to this process and die with
-    it (:func:`worker_init`), and whose exit after a Ctrl-C prints nothing (:func:`_quiet_wakeup`)."""
+    it (:func:`worker_init`), and whose exit after a Ctrl-C prints nothing (:func:`_quiet_wakeup`). ``stop``: a
+    ``multiprocessing`` event the workers' chunks watch (:func:`stopped`)."""
     from concurrent.futures import ProcessPoolExecutor
 
-    pool = ProcessPoolExecutor(max_workers=workers, initializer=worker_init, initargs=(os.getpid(),))
+    pool = ProcessPoolExecutor(max_workers=workers, initializer=worker_init, initargs=(os.getpid(), stop))
     _quiet_wakeup(pool)
     return pool
 

@@ -454,9 +454,15 @@ def _plan_chunk(args) -> list[RowResult]:
     """Worker: plan a chunk of rows (no fail-fast inside a chunk; the parent stops in order). With a CSV
     dialect, the rows of every plan that will be written are formatted here too (formatting costs as much
     as planning, so it is worth spreading)."""
+    from ..lookup.executors import stopped
+
     rows, profile, options, height, eta, source, csv_dialect, format_failed = args
     out = []
+    if stopped():  # (a chunk queued before the parent stopped: not started)
+        return out
     for r in plan_rows(rows, profile, options, height, eta, False, source):
+        if stopped():  # the parent no longer wants the answers
+            break
         text = None
         if csv_dialect is not None and r.plan is not None and (r.code == 0 or (format_failed and r.code == 3)):
             from ..export.csv import csv_rows
@@ -489,18 +495,27 @@ def run_chunks_in_order(fn, args: list, workers: int, fail_fast: bool) -> Iterat
     """``fn(a)`` → list of RowResult for every ``a`` of ``args`` on a process pool of ``workers``; yields the
     results in the order of ``args`` (and within each list), stops after the first failing row when
     ``fail_fast`` and cancels the chunks not started yet."""
+    import multiprocessing
+
     from ..lookup.executors import local_pool
 
     # the workers leave Ctrl-C (SIGINT to the terminal's whole process group) to this process: it cancels the chunks
-    # not started and waits for the running ones (one chunk: 25 plans, or 500 verdicts) without a traceback from each
-    with local_pool(workers) as pool:
+    # not started and waits for the running ones (one chunk: 25 plans, or 500 verdicts) without a traceback from each;
+    # a reader that goes away (the generator closed: ``… --json | head -1``) sets ``stop``, and the running and queued
+    # chunks return after their current row
+    stop = multiprocessing.get_context().Event()
+    with local_pool(workers, stop) as pool:
         futures = [pool.submit(fn, a) for a in args]
         try:
             for fut in futures:
                 for res in fut.result():
                     yield res
                     if fail_fast and res.code:
+                        stop.set()
                         return
+        except GeneratorExit:
+            stop.set()
+            raise
         finally:
             for fut in futures:
                 fut.cancel()

@@ -506,9 +506,15 @@ def verdict_rows(
 
 def _verdict_chunk(args) -> list[RowResult]:
     """Worker: :func:`verdict_rows` on a chunk; plans come back as light Verdicts (summary + report)."""
+    from ..lookup.executors import stopped
+
     rows, profile, options, height, eta, source = args
     out = []
+    if stopped():  # (a chunk queued before the parent stopped: not started)
+        return out
     for r in verdict_rows(rows, profile, options, height, eta, False, source):
+        if stopped():  # the parent no longer wants the answers
+            break
         plan = r.plan
         if plan is not None and not isinstance(plan, Verdict):
             plan = Verdict(plan.summary(), plan.report)

@@ -203,3 +203,32 @@ def test_a_utf16_batch_is_named_as_such(tmp_path):
 
     assert utf16_hint(np.arange(40, dtype=np.int32).tobytes()) == ""
     assert utf16_hint("a\0b\0".encode(), csv=False) == " (UTF-16 text? save it as UTF-8)"
+
+
+def _wait_for_stop(args):
+    """A chunk for :func:`run_chunks_in_order`: the first answers at once, the others wait (at most 60 s) until the
+    parent asks the chunks to stop, and leave a file saying they saw it."""
+    import time
+
+    from pickplace_cli.lookup.executors import stopped
+
+    k, folder = args
+    if k == 0:
+        return [k]
+    for _ in range(6000):
+        if stopped():
+            open(f"{folder}/stopped-{k}", "w").close()
+            return [k]
+        time.sleep(0.01)
+    return [k]
+
+
+def test_a_reader_that_goes_away_stops_the_running_chunks(tmp_path):
+    """``plan --batch FILE --json | head -1``: the reader takes one answer and goes; closing the answers' generator
+    sets the pool's stop event, and the chunks still running see it and return (they are not waited for to the end)."""
+    from pickplace_cli.pipelines.batch import run_chunks_in_order
+
+    gen = run_chunks_in_order(_wait_for_stop, [(k, str(tmp_path)) for k in range(3)], 2, False)
+    assert next(gen) == 0
+    gen.close()  # (returns once the pool has shut down: the running chunk saw the stop)
+    assert (tmp_path / "stopped-1").exists()
