@@ -224,7 +224,7 @@ def _motion_report(t: np.ndarray, pos: np.ndarray, robot, profile: Profile, smoo
                           notes=() if notes is None else notes(how))
     report = report.with_rows(capacity_rows(cpath, T, profile.capacity, not_held, grid=grid))
     if steps.size and rebuilt is None:
-        report = _across_steps(report, model, cpath, t, pos, steps, profile)
+        report = _across_steps(report, model, cpath, t, pos)
     return report, how
 
 
@@ -266,8 +266,7 @@ def _noise(x: np.ndarray) -> np.ndarray:
     return np.maximum(1e-12 * np.max(np.abs(x), axis=0), np.where(np.isfinite(small), small / 2, 0.0))
 
 
-def _across_steps(report: LimitReport, model: MotionModel, cpath, t: np.ndarray, pos: np.ndarray, steps: np.ndarray,
-                  profile: Profile) -> LimitReport:
+def _across_steps(report: LimitReport, model: MotionModel, cpath, t: np.ndarray, pos: np.ndarray) -> LimitReport:
     """``report`` with each row of a speed, acceleration, torque, torque rate or jerk (joints, motors, the tool's
     capacity) at least its bound around every interior step of the reconstruction ``cpath`` of the samples at ``t``
     [s] of the tool's positions ``pos`` (N, 3) [m] (and angle [rad], a 4th column with a rotary axis)
@@ -327,15 +326,16 @@ def _across_steps(report: LimitReport, model: MotionModel, cpath, t: np.ndarray,
         motion: tuple = (p[:, w + 1], vmid * T, ap * T**2, np.zeros_like(ap))
         if ang is not None:  # the angle's own mean acceleration over the window
             th = ang[..., None]
-            motion += (np.stack([ang[:, w + 1], (ang[:, w + 2] - ang[:, w])[:, None][:, 0] / span[:, 0] * T,
+            motion += (np.stack([ang[:, w + 1], (ang[:, w + 2] - ang[:, w]) / span[:, 0] * T,
                                  second(th, np.array([1e-12]))[:, 0] * T**2, np.zeros(len(ang))]),)
         mid = model.parts(t1 / T, derivatives=False, singularity=False, motion=motion)
-        means.append((np.where(real[:, None], mid.Am / T**2 + mid.Gm, 0.0), t1))
-    rate = np.max([np.where((c2 > c1)[:, None] & (m1 != 0) & (m2 != 0), np.abs(m2 - m1), 0.0)
-                   / np.maximum(c2 - c1, 1e-300)[:, None] for (m1, c1), (m2, c2) in zip(means[:-1], means[1:])], axis=0)
+        means.append((np.where(real[:, None], mid.Am / T**2 + mid.Gm, 0.0), t1, real))
+    # (two windows' means: both real, one sample apart)
+    rate = np.max([np.where((r1 & r2 & (c2 > c1))[:, None], np.abs(m2 - m1), 0.0) / np.maximum(c2 - c1, 1e-300)[:, None]
+                   for (m1, c1, r1), (m2, c2, r2) in zip(means[:-1], means[1:])], axis=0)
     gear = np.array([s.drive.gear_ratio if s.drive is not None else 1.0 for s in model.specs])
     joints = {"velocity": vq, "motor speed": vq * gear, "acceleration": np.max(np.abs(acc_q), axis=0),
-              "motor torque": np.max([np.abs(m) for m, _ in means], axis=0),
+              "motor torque": np.max([np.abs(m) for m, _, _ in means], axis=0),
               "motor torque rate": np.maximum(np.abs(torque[n:] - torque[:n]) / h, rate),
               "jerk": np.abs(pr.qdd1[n:] - pr.qdd1[:n]) / T**2 / h}
     acc3 = cpath.all_orders(sides)[2][:, :3] / T**2
