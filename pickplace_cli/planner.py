@@ -68,8 +68,10 @@ class PlanOptions:
     turn_during : str
         When the tool turns: ``transfer`` (lift-off to set-down) or ``whole`` (the whole move).
     read_written : str
-        ``fit`` and ``optimal``: read the samples as a CSV holds them through ``check``'s reconstruction, and slow the law until
-        ``check`` reads them within every limit (:mod:`pickplace_cli.timing.written`): ``"tool"`` (the file has the
+        ``fit`` and ``optimal`` (every rule when the move has fewer than ``WRITTEN_FEW`` samples or the file holds the
+        joint positions alone: :func:`~pickplace_cli.timing.written.reads_written`): read the samples as a CSV holds them through ``check``'s
+        reconstruction, and slow the law until ``check`` reads them within every limit (a given duration: judged)
+        (:mod:`pickplace_cli.timing.written`): ``"tool"`` (the file has the
         tool's x … jz, as this tool writes it by default), ``"positions"`` (the joint positions alone, e.g. ``plan
         --columns t,q1,q2,q3`` or a drive's positions), ``""`` (not read: a drive's table, judged as the drive
         interpolates it instead).
@@ -427,13 +429,17 @@ def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions(), *,
         stop()
         duration, model, path, samples, report, rounding = _cycle_stage(options.cycle, profile, model, path, factory,
                                                                         duration, report)
-    rules = ("optimal", "fit", "limits", "auto") if options.strict else ("optimal", "fit")
-    if options.time in rules and options.read_written and factory is None and report.ok:
-        stop()  # a law at its limits, as check reads its samples
-        duration, model, path, samples, report, rounding = _written_stage(model, path, duration, samples, report,
-                                                                          rounding, rate, options, profile, uniform)
+    from .timing.written import as_read, reads_written
+
+    read_past: tuple = ()
+    if reads_written(options, len(samples.t)) and factory is None and report.ok:
+        stop()  # a law at its limits (or a file too sparse to show its motion), as check reads its samples
+        duration, model, path, samples, report, rounding, read_past = _written_stage(
+            model, path, duration, samples, report, rounding, rate, options, profile, uniform)
     # the Cartesian capacity's rows always: judged when the rule holds it, else reported as not held
     report = report.with_rows(capacity_rows(path, duration.seconds, profile.capacity, capacity_not_held(options)))
+    if read_past:  # still past a limit as read (or, strict, not resolved): the plan says so, with the reading's peak
+        report = as_read(report, read_past)
     if options.strict:
         report = replace(report, strict=True)
     planned = _assemble(task, profile, path, duration, model, samples, report.rated(profile.limit_use))
@@ -468,8 +474,7 @@ def _written_stage(model: MotionModel, path, duration: Duration, samples, report
     (:func:`pickplace_cli.timing.written.hold_as_written`); a time-optimal law slowed past the uniform law's fit is
     replaced by the uniform law (``uniform``: its model and path) when that is shorter as written. The exact check runs
     again at the new duration, and a reading that still exceeds a limit marks that row exceeded.
-    → (duration, model, path, samples, report, rounding)."""
-    from .limits.report import LimitRow
+    → (duration, model, path, samples, report, rounding, the reading's rows still past their limit: :func:`~pickplace_cli.timing.written.as_read`)."""
     from .timing.written import hold_as_written
 
     cycle = options.cycle
@@ -486,7 +491,8 @@ def _written_stage(model: MotionModel, path, duration: Duration, samples, report
 
         return hold_as_written(T0, (s0, outputs(s0, T0)) if s0 is not None else sample(T0), sample, profile,
                                capacity_not_held(options), cycle, rate,
-                               positions_only=options.read_written == "positions", strict=options.strict)
+                               positions_only=options.read_written == "positions", strict=options.strict,
+                               stretch=isinstance(options.time, str))
 
     T0 = duration.seconds
     w = held(model, path, T0, samples)
@@ -506,18 +512,9 @@ def _written_stage(model: MotionModel, path, duration: Duration, samples, report
         raise TaskError(f"--strict: {w.refused} at T = {w.T:.6g} s (the law slowed × {w.k:.4g}): check --strict "
                         "refuses such a file; write at a higher --rate, or leave the tool's columns out (--columns)")
     if w.k == 1.0 and not switched and not w.past:  # read within every limit as planned (or not read: too few samples)
-        return replace(duration, written=w.note), model, path, samples, report, rounding
+        return replace(duration, written=w.note), model, path, samples, report, rounding, ()
     samples = w.state[0]
     report = check_limits(model, w.T, parts=samples.parts, dwell=dwell, notes=report.notes + ((w.note,) if w.note else ()))
-    read = {(r.joint, r.quantity): r for r in w.past}
-    if read:  # still past a limit as read (or, strict, not resolved): the plan says so, with the reading's peak
-        from .limits.samples import CHECK_RESOLUTION
-
-        report = replace(report, rows=tuple(
-            LimitRow(r.joint, r.quantity, r.unit, read[k].peak, r.limit, read[k].peak / r.limit, read[k].t_peak,
-                     read[k].peak * (1.0 - CHECK_RESOLUTION) <= r.allowed, r.kind, r.bound, r.target,
-                     read[k].accuracy, r.not_held)
-            if (k := (r.joint, r.quantity)) in read else r for r in report.rows))
     if rounding is not None:
         cycles = int(round(w.T / cycle))
         added = cycles - rounding.cycles
@@ -526,7 +523,7 @@ def _written_stage(model: MotionModel, path, duration: Duration, samples, report
                            note="; ".join(n for n in (rounding.note, said) if n))
     binding = duration.binding if w.k == 1.0 else f"the written samples as {'check --strict' if options.strict else 'check'} reads them"
     return (replace(duration, seconds=w.T, written_stretch=w.T / T0, written=w.note, binding=binding), model, path,
-            samples, report, rounding)
+            samples, report, rounding, tuple(w.past))
 
 
 class _FinalCheck:

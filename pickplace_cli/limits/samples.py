@@ -22,7 +22,7 @@ from ..model.errors import TaskError
 from .check import _range_row, capacity_rows, check_limits
 from .grid import check_grid
 from .motion import MotionModel
-from .report import LimitReport
+from .report import RESOLVED, LimitReport
 from ..model.headroom import limit_specs
 from ..model.profile import Profile
 from ..robots import build_robot
@@ -444,7 +444,10 @@ def check_samples(s: Samples, profile: Profile, smoothing: float = 0.0, source: 
 def _with_accuracy(fine: LimitReport, others: list[tuple[LimitReport, float]]) -> LimitReport:
     """``fine``'s duration-dependent rows with accuracy = the largest share × |its peak − the same row's peak| over
     ``others`` ((report, share): other estimates from the same data), at least ``CHECK_RESOLUTION`` of the peak, and
-    the verdict that the data supports: exceeded only when the peak less its accuracy is beyond the allowed value."""
+    the verdict that the data supports: exceeded only when the peak less its accuracy is beyond the allowed value —
+    the accuracy counted up to ``RESOLVED`` of the allowed value: a peak the samples do not resolve is judged by its
+    best estimate (the reading from all samples) with that margin, not given the benefit of an accuracy of 100 % or
+    more (a torque rate read 219 % ± 166 % of its limit is exceeded, not "within its limit")."""
     from .report import LimitRow
 
     if not others:
@@ -459,7 +462,7 @@ def _with_accuracy(fine: LimitReport, others: list[tuple[LimitReport, float]]) -
                          r.kind, r.bound, r.target, acc, r.not_held)
         elif r.kind == "limit" and r.bound == "upper" and cs:
             acc = max(max(share * abs(r.peak - c.peak) for c, share in cs), CHECK_RESOLUTION * abs(r.peak))
-            ok = r.peak - acc <= r.allowed
+            ok = r.peak - min(acc, RESOLVED * abs(r.allowed)) <= r.allowed
             r = LimitRow(r.joint, r.quantity, r.unit, r.peak, r.limit, r.utilisation, r.t_peak, ok, r.kind, r.bound,
                          r.target, acc, r.not_held)
         rows.append(r)

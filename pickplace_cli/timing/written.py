@@ -17,7 +17,9 @@ runs again at the new duration. The law's shape is unchanged: only its duration 
 whole cycles). A time-optimal law slowed past the uniform law of ``--time fit`` is replaced by that law when it is the
 shorter as written (``planner._written_stage``). ``--time fit``, whose uniform law rides a motor limit too, is read
 the same way (at 50 Hz ``check`` read the Adept cycle's file 70 % past the torque rate); so are the joint positions
-alone when the file has no tool columns (``positions_only``).
+alone when the file has no tool columns (``positions_only``). Every other rule is read the same way when the move has
+few samples or the file holds the joint positions alone (:func:`reads_written`): a given duration is then judged
+by the reading, not slowed (``stretch``).
 """
 
 from __future__ import annotations
@@ -148,14 +150,15 @@ def _columns_off(out, positions_only: bool) -> list:
 
 def hold_as_written(T0: float, state: Any, sample: Callable[[float], tuple[Any, tuple]], profile, not_held: str,
                     cycle: float | None = None, rate: float | None = None, positions_only: bool = False,
-                    strict: bool = False) -> Written:
+                    strict: bool = False, stretch: bool = True) -> Written:
     """Stretch the law at duration ``T0`` [s] until ``check`` reads its samples within every limit (module
     docstring). ``state``: what ``sample`` returned at ``T0``; ``sample(T)`` → (state, (t, tool, q)) at duration T
     (the written samples). ``cycle`` [s]: durations in whole cycles. ``rate`` [Hz]: named in the note.
     ``positions_only``: the file holds the joint positions alone (:func:`read_as_written`). ``strict``: until
     ``check --strict`` accepts them too: every peak resolved by the samples (within its limit at its stated
     accuracy, or known to 1 %), and the tool's derivative columns agreeing with its positions (``Written.refused``
-    says why not when the slowing gives up)."""
+    says why not when the slowing gives up). ``stretch`` False: read at ``T0`` only (a duration the user gave), the
+    rows read past their limit returned in ``Written.past``."""
     T, k = T0, 1.0
     t, tool, q = state[1]
     if len(t) < MIN_SAMPLES:  # check refuses such a file whatever it holds (a move needs 6 samples)
@@ -175,7 +178,7 @@ def hold_as_written(T0: float, state: Any, sample: Callable[[float], tuple[Any, 
         return TT / T0, TT, st, read_as_written(*st[1], profile, not_held, positions_only, strict)
 
     k_lo = 1.0  # the largest stretch read past a limit
-    for attempt in range(RETIMES):
+    for attempt in range(RETIMES if stretch else 0):
         failing = fails(read, state)
         if not failing or any(r.kind != "limit" for r in read.violations):
             break
@@ -232,3 +235,40 @@ def hold_as_written(T0: float, state: Any, sample: Callable[[float], tuple[Any, 
                    "less" if k > 1.01 and positions_only else
                    "; a faster --rate, or a drive's table (-f pvt, cam), needs less" if k > 1.01 else ""))
     return Written(T, k, state, read, note, past, refused)
+
+
+#: a move written in fewer samples than this is read back as ``check`` reads it whatever its duration rule: with ~50
+#: samples or fewer the reconstruction through them misread a peak of a plan within its limits by more than 1 % (random
+#: moves of the shipped profiles, five methods, 60-1 000 Hz, ``bench/bench_written_sparse.py``: the most samples of a
+#: misread file was 41)
+WRITTEN_FEW = 100
+
+
+def reads_written(options, samples: int) -> bool:
+    """Whether the plan reads its written samples as ``check`` does (``planner._written_stage``; ``options``: its
+    PlanOptions): a law at its limits (``fit``, ``optimal``), every rule with ``strict``, and every rule (a given
+    duration too, which is then judged,
+    not slowed) when the file holds the joint positions alone (their reconstruction misreads a peak by up to a few
+    per cent at 1 kHz) or fewer than ``WRITTEN_FEW`` samples; never a drive's table (``read_written`` "")."""
+    if not options.read_written:
+        return False
+    if options.time in ("optimal", "fit") or (options.strict and options.time in ("limits", "auto")):
+        return True
+    return options.read_written == "positions" or samples < WRITTEN_FEW
+
+
+def as_read(report, past: tuple):
+    """``report`` with each row of ``past`` (the written samples' reading, rows still past their limit as ``check``
+    reads them) in place of its own: the reading's peak, time and accuracy, exceeded when that peak less ``check``'s
+    finest accuracy is beyond the allowed value (the Cartesian capacity's rows too, added after the written stage)."""
+    from dataclasses import replace
+
+    from ..limits.report import LimitRow
+    from ..limits.samples import CHECK_RESOLUTION
+
+    read = {(r.joint, r.quantity): r for r in past}
+    return replace(report, rows=tuple(
+        LimitRow(r.joint, r.quantity, r.unit, read[k].peak, r.limit, read[k].peak / r.limit, read[k].t_peak,
+                 read[k].peak * (1.0 - CHECK_RESOLUTION) <= r.allowed, r.kind, r.bound, r.target,
+                 read[k].accuracy, r.not_held)
+        if (k := (r.joint, r.quantity)) in read else r for r in report.rows))

@@ -118,6 +118,8 @@ def test_plan_writes_what_check_accepts_and_faster_fails(tmp_path, prof_name, me
 #: * superposition optimal on the Delta at 5 kHz (the SQP's 60-coefficient quintic law): 104.7 % read at a jerk step of
 #:   the method (t = 38.4 ms, found: split there) with law knots on both sides within a few samples; a larger
 #:   smoothing term on the law (SQP_SMOOTH 1e-2) still reads 102.9 %.
+#: * bspline optimal on the SCARA at 1 kHz: q2's torque rate read 101.2 % ± 1.8 % (not resolved; a reading beyond
+#:   its limit by more than 1 % of it is exceeded whatever its accuracy).
 #: Such a file may be refused although plan wrote it for its tool columns (never accepted when it breaks a limit):
 #: write the tool columns (plan's default CSV) or sample faster; a plan for positions alone
 #: (``--columns t,q1,…``: ``read_written="positions"``) reads them as check will and is accepted
@@ -125,7 +127,7 @@ def test_plan_writes_what_check_accepts_and_faster_fails(tmp_path, prof_name, me
 #: reconstruction's error between samples, which positions alone do not give.
 KNOWN_HIGH = {("superposition", "optimal", 1000.0), ("superposition", "optimal", 5000.0), ("lame", "optimal", 1000.0),
               ("piecewise-poly", "optimal", 1000.0),
-              ("ph", "optimal", 1000.0), ("bspline", "fit", 1000.0)}
+              ("ph", "optimal", 1000.0), ("bspline", "fit", 1000.0), ("bspline", "optimal", 1000.0)}
 #: plan's own file (tool columns) is not listed: a time-optimal law is slowed until check reads its written samples
 #: within every limit (``timing/written.py``; the lame optimal move at 1 kHz here read q2's torque rate 100.11 %, a law
 #: knot 0.23 ms from a sample inside a 1 ms interval, before plan read its own samples)
