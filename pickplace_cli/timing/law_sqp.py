@@ -306,6 +306,7 @@ def solve_sqp(rows: _Rows, x: np.ndarray, lo: float, hi: float, smooth: float = 
         keep_lin |= s_lin < SQP_ACTIVE
         keep_dyn |= s_dyn < SQP_ACTIVE
         for _ in range(4):  # a row the step breaks joins, and the step is solved again
+            solved_lin, solved_dyn = keep_lin.copy(), keep_dyn.copy()  # the rows of this QP (its multipliers' order)
             Bg, Ay = rows.Bg[keep_dyn], rows.Ay[keep_dyn]
             b0 = Bg.dot(x)
             s0 = b0**-0.5
@@ -332,7 +333,8 @@ def solve_sqp(rows: _Rows, x: np.ndarray, lo: float, hi: float, smooth: float = 
             keep_lin |= new_lin | (~keep_lin & (s_lin_n < SQP_ACTIVE))
             keep_dyn |= new_dyn | (~keep_dyn & (s_dyn_n < SQP_ACTIVE))
         lam_all = np.asarray(info["lam"], float)
-        m_lin, m_dyn = int(keep_lin.sum()), int(keep_dyn.sum())
+        # the last QP's rows: after a fourth solve whose step broke more rows, those joined keep_* unsolved
+        m_lin, m_dyn = int(solved_lin.sum()), int(solved_dyn.sum())
         lam = np.maximum(lam_all[n + m_lin + 2 * m_dyn: n + m_lin + 2 * m_dyn + len(g)], 0.0)
         mu = 10.0 * max(1.0, float(np.max(lam_all[n:], initial=0.0)))
 

@@ -221,3 +221,20 @@ def test_warm_started_qps_equal_cold_ones(monkeypatch):
         cold = daqp.solve(*args[:5], np.zeros(len(args[3]), np.int32), **kw)
         assert cold[2] >= 0
         np.testing.assert_allclose(dx, np.asarray(cold[0]), rtol=0, atol=1e-9 * max(1.0, np.abs(dx).max()))
+
+
+def test_a_step_that_keeps_breaking_rows_keeps_the_last_qps_multipliers(monkeypatch):
+    """When a step breaks rows not in its QP four times over, the rows the fourth step broke join the kept set
+    unsolved: the RMS rows' multipliers are then read at the last QP's own places (they were read past its end, an
+    empty array, and the next step's curvature raised a ValueError). A shape of the Adept cycle's search with a
+    lighter smoothing weight and 120 coefficients goes through that path: the plan holds its limits
+    and its law is within 1 % of the shipped weight's."""
+    prof = load_profile("delta-su2018")
+    shape = {"k1": 0.19576214901973832, "k2": 0.99, "arch": 0.0078003010517307195, "k3": 0.3057721575999257,
+             "k4": 0.1549223738236164, "mid": 0.506465058319115}
+    opts = PlanOptions(time="optimal", law_coefficients=120, method_params=shape)
+    shipped = plan(ADEPT, prof, opts)
+    monkeypatch.setattr(law_sqp, "SQP_SMOOTH", 1e-3)
+    lighter = plan(ADEPT, prof, opts)  # (raised ValueError: operands could not be broadcast together)
+    assert lighter.report.ok
+    assert lighter.duration.t_optimal == pytest.approx(shipped.duration.t_optimal, rel=1e-2)
