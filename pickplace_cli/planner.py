@@ -75,6 +75,9 @@ class PlanOptions:
         tool's x … jz, as this tool writes it by default), ``"positions"`` (the joint positions alone, e.g. ``plan
         --columns t,q1,q2,q3`` or a drive's positions), ``""`` (not read: a drive's table, judged as the drive
         interpolates it instead).
+    law_smoothing : float or None
+        ``optimal``: the SQP law's smoothing weight [-] (``timing.law_sqp``); None: the shipped rule, and with ``shape``
+        the law without the term too, the shorter as written kept (``timing.shape_plan``).
     strict : bool
         Read the written samples (``read_written``) as ``check --strict`` does, under the rules ``limits`` and ``auto``
         too: the law is slowed until every peak is resolved by them (within its limit at the reading's stated accuracy,
@@ -102,6 +105,7 @@ class PlanOptions:
     turn: str = "shortest"  # a rotary fourth axis: the way round to the task's end angle (curves.rotation.TurnRule)
     turn_during: str = "transfer"  # … and when the tool turns: between lift-off and set-down, or the whole move
     read_written: str = "tool"  # fit, optimal: the written samples read as check reads them (timing/written.py)
+    law_smoothing: float | None = None  # optimal: the SQP law's smoothing weight (None: the shipped rule)
     strict: bool = False  # … as check --strict reads them: every peak resolved (also under limits and auto)
 
 
@@ -328,6 +332,11 @@ def _library_inputs(task, profile, options) -> tuple:
             rate = math.nan
         if not (math.isfinite(rate) and 0 < rate <= 1e6):
             raise TaskError(f"rate = {options.rate!r} Hz: the output rate must be a finite number in (0, 1e6] Hz")
+    if options.law_smoothing is not None:
+        w = options.law_smoothing
+        if isinstance(w, bool) or not isinstance(w, (int, float)) or not (math.isfinite(w) and w >= 0):
+            raise TaskError(f"law_smoothing = {w!r}: the time law's smoothing weight must be a finite number >= 0 "
+                            "(or None: the shipped one)")
     return task, profile, options
 
 
@@ -401,6 +410,15 @@ def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions(), *,
     shape = None
     if options.shape:
         task, options, shape = _optimised_shape(task, profile, options)
+        if options.time == "optimal" and options.law_smoothing is None and options.read_written:
+            from .timing.shape_plan import shortest_as_written
+
+            return shortest_as_written(lambda o: _planned(task, profile, o, shape, rate, stop), options)
+    return _planned(task, profile, options, shape, rate, stop)
+
+
+def _planned(task: Task, profile: Profile, options: PlanOptions, shape, rate: float, stop) -> Plan:
+    """:func:`plan` from the path on (the task resolved, its shape chosen, the rate known)."""
     path, factory, first = _path_stage(task, profile, options, shape)
     stop()
     model = motion_model(path, profile)
@@ -614,7 +632,8 @@ def _duration_stage(task: Task, profile: Profile, options: PlanOptions, path, fa
 
         duration, law_path, law_note = choose_optimal(path, profile, model, dwell, model_of,
                                                       hold_capacity=options.hold_capacity,
-                                                      coefficients=options.law_coefficients, check=check)
+                                                      coefficients=options.law_coefficients, check=check,
+                                                      smooth=options.law_smoothing)
         if law_path is not model.path:  # the composed path: evaluated anew
             model = model_of(law_path)
         return duration, law_path, model, (law_note,)

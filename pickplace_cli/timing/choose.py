@@ -178,12 +178,13 @@ _DEGREE = {3: "cubic", 5: "quintic"}
 
 
 def choose_optimal(path: CartesianPath, profile, model, dwell: float, model_of,
-                   hold_capacity: bool = False, coefficients: int | None = None, check=None) -> tuple[Duration, CartesianPath, str]:
+                   hold_capacity: bool = False, coefficients: int | None = None, check=None,
+                   smooth: float | None = None) -> tuple[Duration, CartesianPath, str]:
     """``--time optimal``: the fit of the uniform law, then the optimised non-uniform law on the same path
     (:mod:`pickplace_cli.timing.optimal`), whose duration is fitted again by the continuous check on the
     composed path. Returns (Duration, the path to sample — the composed one, or ``path`` itself when the law
     is not faster than uniform scaling —, a note for the user). ``check``: both fits' exact check
-    (:func:`fit_duration`)."""
+    (:func:`fit_duration`). ``smooth``: the SQP law's smoothing weight (None: the shipped one)."""
     from ..model.errors import PickplaceError
     from .bound import torque_bound
     from .optimal import optimal_law
@@ -197,7 +198,8 @@ def choose_optimal(path: CartesianPath, profile, model, dwell: float, model_of,
         fit = replace(fit, t_bound=torque_bound(model))
     except ValueError:  # no motor torque or speed limit, or one exceeded at rest: no bound to show
         pass
-    law = optimal_law(model, dwell, fit.seconds, coefficients, capacity=profile.capacity if hold_capacity else None)
+    law = optimal_law(model, dwell, fit.seconds, coefficients, capacity=profile.capacity if hold_capacity else None,
+                      smooth=smooth)
     # a refined law and the law it was refined from are both fitted and the shorter is kept: never longer than the
     # first law, whatever the optimisers' estimates said
     fitted, why, refined = [], "", ""

@@ -143,10 +143,11 @@ LAW_SOLVER = "sqp"
 LAW_SQP_COEFFICIENTS = 60
 
 
-def _sqp_law(model, dwell: float, t_fit: float, coefficients: int, capacity) -> LawResult | None:
+def _sqp_law(model, dwell: float, t_fit: float, coefficients: int, capacity,
+             smooth: float | None = None) -> LawResult | None:
     """The law of ``coefficients`` uniform knots by the structured SQP (:mod:`~pickplace_cli.timing.law_sqp`, with its
-    smoothing term ``SQP_SMOOTH``) from the uniform law; None when its answer breaks a row of its own (last) grid by
-    more than 1e-6 of the limit (the caller falls back to SLSQP)."""
+    smoothing term: weight ``smooth``, None the shipped ``law_sqp.smoothing``) from the uniform law; None when its
+    answer breaks a row of its own (last) grid by more than 1e-6 of the limit (the caller falls back to SLSQP)."""
     from . import law_sqp
 
     knots = _knots(coefficients, law_sqp.SQP_DEGREE)
@@ -155,7 +156,7 @@ def _sqp_law(model, dwell: float, t_fit: float, coefficients: int, capacity) -> 
                                             law_sqp.check_grid(model.path)]))
     x, t_est, solves, message, worst, _ = law_sqp.solve_law(model, dwell, t_fit, knots, capacity, data,
                                                             np.ones(coefficients), *LAW_BOUNDS, points,
-                                                            smooth=law_sqp.smoothing(t_fit))
+                                                            smooth=law_sqp.smoothing(t_fit) if smooth is None else smooth)
     if not (np.all(np.isfinite(x)) and worst <= 1e-6):
         return None
     b = _law_spline(knots, x / t_fit**2)
@@ -165,7 +166,7 @@ def _sqp_law(model, dwell: float, t_fit: float, coefficients: int, capacity) -> 
 @single_blas_thread
 def optimal_law(model, dwell: float, t_fit: float, coefficients: int | None = None,
                 capacity=None, start: np.ndarray | None = None, direct: bool = False,
-                solver: str | None = None) -> LawResult:
+                solver: str | None = None, smooth: float | None = None) -> LawResult:
     """Minimise the duration of ``model``'s path over time laws b(τ) (module docstring), warm-started at the
     uniform law of duration ``t_fit`` [s]. ``capacity``: also hold the profile's Cartesian |v|, |a| (and |j|
     when set) — optional, off by default. ``start``: the law's coefficients to start from (relative to the
@@ -185,11 +186,12 @@ def optimal_law(model, dwell: float, t_fit: float, coefficients: int | None = No
     ``LAW_COEFFICIENTS``) uniform knots solved from ``start`` or the uniform law (the benchmarks' independent
     solves). ``solver``: "sqp" or "slsqp" (None: ``LAW_SOLVER``). With the SQP (and neither ``start`` nor
     ``direct``), the law has N (default ``LAW_SQP_COEFFICIENTS``) uniform knots and is solved from the uniform law;
-    SLSQP as above when ``daqp`` is missing or the SQP's answer breaks its own grid."""
+    SLSQP as above when ``daqp`` is missing or the SQP's answer breaks its own grid. ``smooth``: the SQP's smoothing
+    weight (None: ``law_sqp.smoothing``)."""
     from . import law_sqp
 
     if (solver or LAW_SOLVER) == "sqp" and start is None and not direct and law_sqp.available():
-        found = _sqp_law(model, dwell, t_fit, coefficients or LAW_SQP_COEFFICIENTS, capacity)
+        found = _sqp_law(model, dwell, t_fit, coefficients or LAW_SQP_COEFFICIENTS, capacity, smooth)
         if found is not None:
             return found
     if start is None and not direct and (coefficients is None or coefficients > LAW_COEFFICIENTS):

@@ -67,6 +67,35 @@ def test_optimised_shape_against_the_free_path_minimum():
     assert 0.98 * ref.T <= T <= 1.04 * ref.T
 
 
+@pytest.mark.slow
+def test_shape_with_the_capacity_against_the_free_path_minimum(tmp_path):
+    """With the capacity held, ``--optimize shape --time optimal --shape-law-evals 30 --law-coefficients 120`` keeps
+    the chosen shape's law without the smoothing term (shorter as written than with it: 0.13012 s against
+    0.13021 s, read back as ``check --strict`` reads it), and its 1 kHz file is accepted by ``check --strict`` with
+    every peak resolved. Against the free-path minimum (16 intervals per phase, 15 s; the transcription converges from
+    above: 0.128628 s at 32, about 0.1285-0.1286 s extrapolated, ``bench/bench_free_path_convergence.py``) it is not
+    below the reference (which would mean a limit misjudged on one side) and within 1.5 % of it (measured
+    1.0107 ×; the issue's 1 % is not reached)."""
+    from pickplace_cli.export.csv import write_csv
+    from pickplace_cli.pipelines.check import check_file
+
+    prof = load_profile("delta-su2018")
+    p0, p1 = np.array(ADEPT.p_from), np.array(ADEPT.p_to)
+    ref = F.solve_free_path(p0, p1, ADEPT.height, F.limits_from_profile(prof, capacity=True),
+                            D.params_from_robot(_robot(prof)), n_phase=16, t_guess=0.12,
+                            guess=F._default_guess(p0, p1, max(p0[2], p1[2]) + ADEPT.height, 0.1, 0.02))
+    assert ref.status == "solved" and ref.dense_utilisation <= 1.001
+    got = plan(ADEPT, prof, PlanOptions(time="optimal", shape=True, hold_capacity=True, shape_law_evals=30,
+                                        law_coefficients=120))
+    assert got.report.ok and "without the smoothing term: shorter as written" in got.duration.law
+    assert ref.T <= got.duration.seconds <= 1.015 * ref.T
+    f = tmp_path / "shape.csv"
+    with open(f, "w") as out:
+        write_csv(got, out)
+    rep = check_file(f, prof, strict=True)[0].report
+    assert rep.ok and not rep.unresolved and rep.exit_code() == 0
+
+
 def _robot(prof):
     from pickplace_cli.planner import motion_model_static
 

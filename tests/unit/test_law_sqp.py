@@ -238,3 +238,16 @@ def test_a_step_that_keeps_breaking_rows_keeps_the_last_qps_multipliers(monkeypa
     lighter = plan(ADEPT, prof, opts)  # (raised ValueError: operands could not be broadcast together)
     assert lighter.report.ok
     assert lighter.duration.t_optimal == pytest.approx(shipped.duration.t_optimal, rel=1e-2)
+
+
+def test_the_smoothing_weight_reaches_the_law_and_costs_duration():
+    """``PlanOptions.law_smoothing`` is the SQP's weight: T(w) of the law that minimises T + w·T₀·‖Δ³x‖² cannot fall
+    as w grows (for w₁ < w₂ each optimum is no worse than the other's law on its own objective, which orders T), so
+    the law without the term is the shortest, the shipped weight (3e-3 here: T_fit < 0.2 s) in between and a heavy
+    one (3e-2) the longest; the shipped rule (None) is the 3e-3 law bit for bit."""
+    prof = load_profile("delta-su2018")
+    T = {w: plan(ADEPT, prof, PlanOptions(time="optimal", law_smoothing=w)).duration.t_optimal
+         for w in (None, 0.0, law_sqp.SQP_SMOOTH, 3e-2)}
+    assert T[None] == T[law_sqp.SQP_SMOOTH]
+    assert T[0.0] <= T[law_sqp.SQP_SMOOTH] * (1 + 1e-5) and T[law_sqp.SQP_SMOOTH] <= T[3e-2] * (1 + 1e-5)
+    assert T[0.0] < T[3e-2]
