@@ -141,13 +141,16 @@ def noise_level(t: np.ndarray, p: np.ndarray) -> float:
     return float((1.4826 * np.median(np.abs(d6), axis=0) / np.sqrt(924.0)).max())
 
 
-def hermite(t: np.ndarray, p: np.ndarray, v: np.ndarray, a: np.ndarray, j: np.ndarray):
+def hermite(t: np.ndarray, p: np.ndarray, v: np.ndarray, a: np.ndarray, j: np.ndarray, overshoot: bool = True,
+            whole: np.ndarray | None = None):
     """(evaluate(x, nu) → (len(x), d), the times [s] of the jerk steps found) for samples at ``t`` (N,) s of positions,
     velocities, accelerations and jerks (each (N, d), m and its derivatives): the septic Hermite interpolant, C³ and
     exact at every sample (:meth:`scipy.interpolate.BPoly.from_derivatives`). An interval across which the jerk steps
     (its jump |j(k+1) − j(k)| more than ``STEP_RATIO`` times its neighbours' and the median's: a smooth motion's
     jumps vary slowly, ~h·snap) is not interpolated across the step: its two sides are the cubics of the samples'
-    own jerk, from each end, joined where their accelerations meet (the motion is C² across the step)."""
+    own jerk, from each end, joined where their accelerations meet (the motion is C² across the step). ``overshoot``
+    False: only the jumps are steps, not the intervals whose interpolant's jerk overshoots (:func:`overshooting`);
+    ``whole``: intervals (indices) left whole whatever their overshoot."""
     from scipy.interpolate import PPoly
 
     t = np.asarray(t, float)
@@ -160,8 +163,10 @@ def hermite(t: np.ndarray, p: np.ndarray, v: np.ndarray, a: np.ndarray, j: np.nd
     left = np.concatenate([[0.0], dj[:-1]])
     right = np.concatenate([dj[1:], [0.0]])
     level = max(float(np.median(dj)), 1e-300)
-    ks = np.union1d(np.flatnonzero(dj > STEP_RATIO * np.maximum(np.maximum(left, right), level)),
-                    _overshooting(pp, t, np.asarray(j, float)))
+    ks = np.flatnonzero(dj > STEP_RATIO * np.maximum(np.maximum(left, right), level))
+    if overshoot:
+        ks = np.union1d(ks, np.setdiff1d(overshooting(pp, t, np.asarray(j, float), ks),
+                                         np.zeros(0, int) if whole is None else whole))
     if not ks.size:
         return (lambda x, nu=0: pp(np.asarray(x, float), nu)), np.zeros(0)
     x = list(t)
@@ -210,12 +215,31 @@ def septic_coefficients(t: np.ndarray, data: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(c[:, ::-1].transpose(1, 0, 2))
 
 
-def _overshooting(pp, t: np.ndarray, j: np.ndarray) -> np.ndarray:
+def overshoot_only(t: np.ndarray, p: np.ndarray, v: np.ndarray, a: np.ndarray, j: np.ndarray) -> np.ndarray:
+    """The intervals :func:`hermite` splits only because its interpolant's jerk overshoots there (no jump of the
+    samples' jerk): a jerk step near a sample, or a real extreme of the jerk the samples under-resolve. Both are
+    possible from the samples alone, so a reader takes both readings (``limits.samples``)."""
+    t = np.asarray(t, float)
+    if len(t) < 8:
+        return np.zeros(0, int)
+    from scipy.interpolate import PPoly
+
+    pp = PPoly(septic_coefficients(t, np.stack([p, v, a, j], axis=1)), t)
+    dj = np.linalg.norm(np.diff(np.asarray(j, float), axis=0), axis=1)
+    left = np.concatenate([[0.0], dj[:-1]])
+    right = np.concatenate([dj[1:], [0.0]])
+    level = max(float(np.median(dj)), 1e-300)
+    jumps = np.flatnonzero(dj > STEP_RATIO * np.maximum(np.maximum(left, right), level))
+    return overshooting(pp, t, np.asarray(j, float), jumps)
+
+
+def overshooting(pp, t: np.ndarray, j: np.ndarray, jumps: np.ndarray | None = None) -> np.ndarray:
     """The intervals where the Hermite interpolant's jerk leaves the range of the two samples' own jerks by more
     than a smooth motion can: a smooth extreme between two samples bulges by about |Δ²j|/8 (the jerk's second
     difference over three samples), so an interval whose bulge is more than 4 × that of the samples on either
     side (each side's three samples away from the interval, untouched by a step inside it) and more than 0.1 % of
-    the largest jerk holds a jerk step the jump test may miss (a step near a sample, or next to another)."""
+    the largest jerk holds a jerk step the jump test may miss (a step near a sample, or next to another). ``jumps``:
+    intervals already found to hold a step (left out of the answer)."""
     n = len(t)
     if n < 8:
         return np.zeros(0, int)
@@ -233,7 +257,7 @@ def _overshooting(pp, t: np.ndarray, j: np.ndarray) -> np.ndarray:
                                                                                             np.maximum(left, right))))
     scale = 1e-3 * float(np.abs(j).max())
     flag = np.any((bulge > 4.0 * smooth / 8.0) & (bulge > scale), axis=1)
-    return np.flatnonzero(flag)
+    return np.setdiff1d(np.flatnonzero(flag), np.zeros(0, int) if jumps is None else jumps)
 
 
 def _taylor(row: np.ndarray, d: float) -> np.ndarray:

@@ -116,3 +116,26 @@ def test_a_dense_file_of_the_default_rule_is_not_read_back():
     prof = load_profile("gantry")
     pl = plan(GANTRY, prof, PlanOptions(method="superposition", rate=1000.0))
     assert len(pl.t) >= 100 and not pl.duration.written
+
+
+@pytest.mark.parametrize("rate", [250.0, 500.0])
+def test_a_torque_rate_peak_in_a_moves_last_interval_is_read(tmp_path, rate):
+    """The Adept cycle at 0.128 s (motor limits alone: the capacity raised out of the way) breaks q1's torque rate,
+    peaking 2.6 ms before the move's end; written at 250 or 500 Hz with the tool's columns, the septic Hermite's jerk
+    overshoots in the last intervals, which the check had split as a jerk step and read 99.8 % ± 0.1 % ("all limits
+    hold"). It now takes the higher of the split and the unsplit readings there. The independent figure: first
+    differences of the motor torque column of the same move written at 50 kHz."""
+    base = load_profile("delta-su2018")
+    prof = base.model_copy(update={"capacity": base.capacity.model_copy(update={"velocity": 50.0,
+                                                                              "acceleration": 1000.0})})
+    task = Task([-0.1525, 0.0, -0.8], [0.1525, 0.0, -0.8], height=0.025, eta=0.5)
+    fine = plan(task, prof, PlanOptions(time=0.128, rate=50_000.0))
+    tau = np.asarray(fine.joint.motor_torque)[:, 0]
+    truth = float(np.max(np.abs(np.diff(tau) / np.diff(fine.t))))
+    limit = prof.robot.joints.drive.torque_rate
+    assert truth > 1.05 * limit
+    coarse = plan(task, prof, PlanOptions(time=0.128, rate=rate))
+    rep = _check_text(tmp_path, coarse, prof)
+    row = next(r for r in rep.rows if r.joint == "q1" and r.quantity == "motor torque rate")
+    assert not row.ok and not rep.ok and rep.exit_code() == 3
+    assert row.peak == pytest.approx(truth, rel=0.01)
