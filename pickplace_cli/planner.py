@@ -251,57 +251,6 @@ def check_ends_reachable(task: Task, profile: Profile, T: float | None = None) -
             raise UnreachableError(f"{name} = {xyz} m: outside the workspace of profile {profile.name} ({why}){when}") from None
 
 
-def _optimised_shape(task: Task, profile: Profile, options: PlanOptions) -> tuple[Task, PlanOptions, dict]:
-    """``--optimize shape``: the task with the chosen η, the options with the chosen k1, k2
-    (:func:`pickplace_cli.timing.shape.optimise_shape`), and what the search found for the path parameters
-    (``shape``: the chosen shape, its screened duration, the table's shape and its exact fit duration)."""
-    from .model.errors import PickplaceError, UsageError
-    from .timing import shape as shape_module
-    from .timing.shape import optimise_shape
-
-    if Method(options.method) is not Method.bspline:
-        raise UsageError(f"--optimize shape: method {Method(options.method).value} has no shape parameters to choose; "
-                         "it chooses k1, k2, η of --method bspline")
-    if options.time not in ("fit", "optimal", "limits"):
-        raise UsageError(f"--optimize shape minimises the fitted duration: use it with time limits, fit or optimal "
-                         f"(not {options.time})")
-    hold = options.hold_capacity or options.time == "limits"
-    chosen = ("k1", "k2", "arch", "k3", "k4", "mid", "eta_down", "mid_x")  # the family's shape parameters
-    given = {k for k, v in options.method_params.items() if v is not None and k in chosen}
-    if given:
-        raise UsageError(f"--optimize shape chooses k1, k2, the arch and k3, k4, mid itself and searches Li's placement "
-                         f"of the via points (eta_down = η, mid_x = 1/2): drop --{'/--'.join(sorted(given))}")
-    base = {k: v for k, v in options.method_params.items() if v is not None and k not in chosen}
-
-    def model_of(p):
-        return motion_model(turned(p, task, options.turn_during), profile)
-
-    table_shape, t_table, ref = None, None, None
-    try:
-        ref = plan_path(task, Method.bspline, **base)
-    except PickplaceError:  # outside the table: search without it
-        pass
-    if ref is not None:
-        table_shape = (float(ref.parameters["k1"]), float(ref.parameters["k2"]), float(task.eta))
-        # the table shape's fit; a profile with no duration-dependent limit is the same error as --time fit's
-        t_table = choose_duration(ref, profile.capacity, "limits" if options.time == "limits" else "fit",
-                                  model=model_of(ref), dwell=profile.planning.dwell, hold_capacity=hold).seconds
-    found = optimise_shape(task, profile, model_of, eta_fixed=task.eta if options.hold_eta else None,
-                           table_shape=table_shape, capacity=profile.capacity if hold else None)
-    if options.time == "optimal":  # the screen ranks by the uniform law: the law judges the winner and the table's
-        found = shape_module.judge_by_law(task, profile, found, model_of, hold,
-                                           options.shape_law_evals or shape_module.LAW_POLISH_EVALS)
-    shaped = replace(task, eta=found.eta)
-    info = {"k1": found.k1, "k2": found.k2, "eta": found.eta, "arch": found.arch, "k3": found.k3, "k4": found.k4,
-            "mid": found.mid, "screened_fit_s": found.t_screen,
-            "shapes_screened": found.evaluations, "note": found.note,
-            "table": None if table_shape is None else {"k1": table_shape[0], "k2": table_shape[1],
-                                                        "eta": table_shape[2], "fit_s": t_table}}
-    arch = {"arch": found.arch} if found.arch else {}  # 0 and None: Li's path, planned as without them
-    arch.update({} if found.k3 is None else {"k3": found.k3, "k4": found.k4, "mid": found.mid})
-    return shaped, replace(options, method_params={**base, "k1": found.k1, "k2": found.k2, **arch}, shape=False), info
-
-
 def _library_inputs(task, profile, options) -> tuple:
     """A library caller's arguments as the CLI gives them, or one TaskError naming the field, value and rule (never
     a bare ValueError or AttributeError): a profile by name or file (:func:`load_profile`), a known method, a finite
@@ -409,7 +358,9 @@ def plan(task: Task, profile: Profile, options: PlanOptions = PlanOptions(), *,
         rate = 1.0 / options.cycle  # one sample per cycle
     shape = None
     if options.shape:
-        task, options, shape = _optimised_shape(task, profile, options)
+        from .timing.shape_plan import optimised_shape
+
+        task, options, shape = optimised_shape(task, profile, options, motion_model)
         if options.time == "optimal" and options.law_smoothing is None and options.read_written:
             from .timing.shape_plan import shortest_as_written
 
@@ -584,6 +535,8 @@ def _path_stage(task: Task, profile: Profile, options: PlanOptions, shape: dict 
     try:
         if depends_on_duration(options.method):  # the path is planned for a duration (e.g. conveyor tracking)
             _refuse_retiming(options)
+            if first_spec == "auto":
+                _refuse_ends_past_capacity(task, profile)
             factory = turned_factory(path_factory(task, options.method, **options.method_params), task,
                                      options.turn_during)
             first, path = choose_duration_for(factory, profile.capacity, first_spec)
@@ -595,6 +548,19 @@ def _path_stage(task: Task, profile: Profile, options: PlanOptions, shape: dict 
     if shape is not None:
         path = replace(path, parameters={**path.parameters, "k_source": "--optimize shape", "shape": shape})
     return path, None, choose_duration(path, profile.capacity, first_spec)
+
+
+def _refuse_ends_past_capacity(task: Task, profile: Profile) -> None:
+    """TaskError: an end velocity faster than the capacity's [v] (the duration is searched from the capacity's
+    Eq. 26 bound, which no duration meets when the move must end at that speed)."""
+    from .model.errors import TaskError
+
+    for name, v in (("v_from", task.v_from), ("v_to", task.v_to)):
+        speed = float(np.linalg.norm(v))
+        if speed > profile.capacity.velocity:
+            raise TaskError(f"{name} = ({', '.join(f'{x:g}' for x in v)}) m/s: its speed {speed:g} m/s is above the "
+                            f"profile's capacity.velocity {profile.capacity.velocity:g} m/s; no duration can meet it "
+                            "(a belt that fast needs a faster capacity, or the move cannot track it)")
 
 
 def _refuse_retiming(options: PlanOptions) -> None:

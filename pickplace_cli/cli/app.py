@@ -373,6 +373,19 @@ def named_by_option(message: str, command: Callable) -> str:
     return message
 
 
+def _stdout_broken() -> bool:
+    """Whether standard output is a pipe whose reader has gone (its write end polls POLLERR); True when that cannot be
+    told (no poll, no descriptor)."""
+    try:
+        import select
+
+        poller = select.poll()
+        poller.register(sys.__stdout__.fileno(), select.POLLOUT)
+        return any(ev & (select.POLLERR | select.POLLHUP | select.POLLNVAL) for _, ev in poller.poll(0))
+    except (AttributeError, OSError, ValueError):
+        return True
+
+
 def _handle_errors(fn: Callable) -> Callable:
     """Turn the library's typed errors into one line on stderr and the documented exit code; SIGTERM stops the
     command with exit 143 (:func:`_on_sigterm`)."""
@@ -413,11 +426,13 @@ def _handle_errors(fn: Callable) -> Callable:
             # (-o, --report) is left unwritten: a script that checks $? must not take it for written; and the
             # verdict decided so far (a limit exceeded: 3) is still the exit code
             unwritten = sorted(PROMISED)
+            which = ("standard output was" if _stdout_broken() else
+                     "a pipe it wrote to (a FIFO given as an output, not standard output) was")
             try:
                 sys.stdout = None  # type: ignore[assignment]
                 if unwritten:
-                    _err(f"{', '.join(unwritten)}: not written: standard output was closed by its reader (broken "
-                         "pipe) before the command finished")
+                    _err(f"{', '.join(unwritten)}: not written: {which} closed by its reader (broken pipe) before the "
+                         "command finished")
             finally:
                 raise typer.Exit(max(_EXIT_SO_FAR[0], 1 if unwritten else 0)) from None
         except OSError as exc:  # an I/O failure no layer above named (the writers name their output themselves)

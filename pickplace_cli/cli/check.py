@@ -165,8 +165,9 @@ def check(
                          "its verdict depends on the cycle; give the one the drive runs it at with --cycle SECONDS "
                          "(plan's table summary names it when it differs)\n")
     elif hold_capacity and bad and all(r.quantity.startswith("capacity") for r in bad):
-        sys.stderr.write("pickplace: hint: only the Cartesian capacity is exceeded; a file planned with --time fit or "
-                         "optimal holds the joint and motor limits alone: check it with --no-hold-capacity\n")
+        sys.stderr.write("pickplace: hint: only the Cartesian capacity is exceeded; if the file was planned with --time "
+                         "fit or optimal (which hold the joint and motor limits alone, not the capacity), check it with "
+                         "--no-hold-capacity; under plan's default rule the capacity is held, and this excess is real\n")
     elif on_cycle is not None and any(r.quantity == "motor torque step" for r in bad):
         sys.stderr.write(f"pickplace: hint: each step is held to the torque rate over one controller cycle of "
                          f"{on_cycle:g} s (--cycle): the drive must take it within one cycle\n")

@@ -211,9 +211,11 @@ def _print_table_verdict(a, judged, plans: list, planned: float, retime: bool, p
                              f"{r.limit:.4g}{beside}{'' if r.ok else '  EXCEEDED'}\n")
         if judged.stretch != 1.0 and not failed:
             cycles = ", on whole cycles" if a.cycle_s is not None else ""
+            cycle = duty_cycle(a, judged)
             sys.stderr.write(f"  re-timed: the table runs {judged.duration:.6g} s where the trajectory runs "
                              f"{planned:.6g} s (every move x{judged.stretch:.6g}{cycles}) so that every limit holds as "
-                             "the drive interpolates it\n")
+                             f"the drive interpolates it; the table's cycle {cycle:.4f} s, {60.0 / cycle:.1f} picks/min "
+                             "(the verdict's cycle is the trajectory's)\n")
     how = {"pvt": "cubic Hermite", "cam": "5th-order segments",
            "cam-table": "linear, each step over one cycle"}[table.kind]
     if failed:
@@ -316,12 +318,19 @@ def moving_cause(ends: list[str]) -> str:
         end="start and end" if both else "start" if first else "end")
 
 
+def duty_cycle(a, judged) -> float:
+    """The duty cycle [s] of the table as written: the table itself for a round trip (its dwells inside), else
+    move, dwell, the move back as long, dwell."""
+    return judged.duration if a.round_trip else 2.0 * (judged.duration + judged.report.dwell)
+
+
 def table_info(a, judged) -> dict:
     """What the --json summary and --report say of the table: points, tolerance, errors, re-timing and verdict."""
     t = judged.table
     return {"format": a.fmt.value, **t.as_dict(), "master": a.cam_master.value, "cam_object": a.cam_object.value,
             "moving_ends": moving_ends(t), "table_end": a.table_end.value,
             "tolerance_points": judged.tolerance_points, "duration_s": judged.duration, "stretch": judged.stretch,
+            "cycle_s": duty_cycle(a, judged), "picks_per_minute": 60.0 / duty_cycle(a, judged),
             "step_cycle_s": judged.step, "master_step_cycles": judged.step_cycles, "limits_ok": judged.report.ok,
             "violations": [r.as_dict() for r in judged.report.violations],
             "rows": [r.as_dict() for r in judged.report.rows]}

@@ -360,6 +360,49 @@ def _across_steps(report: LimitReport, model: MotionModel, cpath, t: np.ndarray,
     return replace(report, rows=tuple(rows))
 
 
+#: a CSV's numbers carry 12 significant digits: each is off by up to this share of its magnitude
+ROUNDING = 5e-13
+#: the reconstruction's jerk from that rounding is about ROUNDING_GAIN · δ / h³ (δ the positions' rounding [m], h the
+#: sample interval; measured ~7.5 for the septic Hermite of the Adept cycle at 200 kHz: its q1 torque rate read
+#: 587 N·m/s, the motion's 167 N·m/s)
+ROUNDING_GAIN = 10.0
+#: … and may be at most this share of the motion's own jerk: a file so dense that it would be more is read every
+#: k-th sample (at 200 kHz the rounding alone read q1's torque rate of the Adept cycle at 140 % of the limit where
+#: the motion reaches 40 %)
+ROUNDING_SHARE = 1e-3
+
+
+def reading_stride(t: np.ndarray, pos: np.ndarray, tool: np.ndarray | None = None) -> int:
+    """Every how many samples the motion is read (1: every one): the smallest k for which the rounding of the file's
+    12 digits (``ROUNDING``) puts at most ``ROUNDING_SHARE`` of the motion's jerk into the reconstruction's
+    (``ROUNDING_GAIN``·δ/(k·h)³, h the median interval). The motion's jerk: the tool's jerk columns when given, else
+    third differences of the tool positions ``pos`` (N, 3+) [m] taken ~200 samples apart."""
+    n = len(t)
+    if n < 50:
+        return 1
+    h = float(np.median(np.diff(t)))
+    if not h > 0:
+        return 1
+    p = np.asarray(pos, float)[:, :3]
+    delta = ROUNDING * max(1.0, float(np.max(np.abs(p))))
+    if tool is not None:
+        jerk = float(np.max(np.linalg.norm(tool[:, 9:12], axis=1)))
+    else:
+        c = max(1, n // 200)
+        q = p[::c]
+        jerk = float(np.max(np.linalg.norm(np.diff(q, 3, axis=0), axis=1), initial=0.0)) / (c * h) ** 3
+    if not jerk > 0:
+        return 1
+    need = (ROUNDING_GAIN * delta / (ROUNDING_SHARE * jerk)) ** (1.0 / 3.0)
+    return max(1, min(int(np.ceil(need / h - 1e-9)), n // 50))
+
+
+def strided(n: int, k: int) -> np.ndarray:
+    """Every k-th of n samples, the last one always kept."""
+    idx = np.arange(0, n, k)
+    return idx if idx[-1] == n - 1 else np.append(idx, n - 1)
+
+
 def _half(n: int) -> np.ndarray:
     """Every other sample of n, the last one always kept."""
     idx = np.arange(0, n, 2)
@@ -392,7 +435,7 @@ def check_samples(s: Samples, profile: Profile, smoothing: float = 0.0, source: 
 
     def notes(how: str) -> tuple[str, ...]:
         start = f" from t = {s.t[0]:.6g} s of the file (peak times count from there)" if s.t[0] != 0 else ""
-        return (f"{s.where(source)}: {len(t)} samples over {T:.6g} s{start}{rest}; derivatives from {how}; joint positions "
+        return (f"{s.where(source)}: {len(s.t)} samples over {T:.6g} s{start}{rest}; derivatives from {how}; joint positions "
                 f"checked as given in the file{whole}",)
 
     if smoothing == "auto":
@@ -416,6 +459,12 @@ def check_samples(s: Samples, profile: Profile, smoothing: float = 0.0, source: 
             tool = None
     if getattr(robot, "rotary", False):  # the tool angle θ = FK of the fourth axis, one more column
         pos = np.column_stack([pos, robot.tool_angle(s.q)])
+    k = reading_stride(t, pos, tool)
+    if k > 1:  # so dense that the 12 digits' rounding would be read as jerk: every k-th sample
+        keep = strided(len(t), k)
+        rest += (f"; the motion read from one sample in {k} ({len(keep)} of {len(t)}: at this rate the rounding of "
+                 "the file's 12 digits would dominate their third derivative)")
+        t, pos, tool = t[keep], pos[keep], None if tool is None else tool[keep]  # (the positions: every sample, below)
     report = _read_motion(t, pos, robot, profile, smoothing, source, notes, tool, not_held, dwell)
     others = []
     half = _half(len(t))
@@ -439,7 +488,8 @@ def check_samples(s: Samples, profile: Profile, smoothing: float = 0.0, source: 
             lo, hi = spec.limits.position
             kmax, kmin = int(np.argmax(s.q[:, j])), int(np.argmin(s.q[:, j]))
             given[name] = _range_row((name, "position", unit, "reach", float(lo), float(hi)),
-                                     float(s.q[kmax, j]), float(s.q[kmin, j]), float(t[kmax]), float(t[kmin]))
+                                     float(s.q[kmax, j]), float(s.q[kmin, j]), float(s.t[kmax] - s.t[0]),
+                                     float(s.t[kmin] - s.t[0]))
     rows = tuple(given.get(r.joint, r) if r.quantity == "position" else r for r in report.rows)
     return replace(report, rows=rows)
 

@@ -526,7 +526,13 @@ def read_checked(text: str, source: str, profile, robot):
         raise TaskError(f"{source}:{head.line}: no header line (the tsv dialect writes none): check needs a header "
                         f"naming t and the joints q1 … qn" + (f" or the profile's drives {', '.join(drive.names)}"
                                                                if drive is not None else ""))
+    if head is not None:
+        _refuse_twice_named(head, source)
     kind = file_kind(head, robot.joint_names, drive.names if drive is not None else None) if head else "joints"
+    if kind == "joints" and head is not None and drive is not None and set(drive.names) <= set(head.names):
+        moves = read_moves(text, source, robot.joint_names, robot.joint_units)
+        _drives_agree(moves, read_moves(text, source, drive.names, drive.labels), drive, source, robot.joint_names)
+        return "samples", moves, source
     if kind == "joints":
         names = set(head.names) if head is not None else set()
         if head is not None and drive is not None and not names & set(robot.joint_names):
@@ -543,6 +549,45 @@ def read_checked(text: str, source: str, profile, robot):
     if kind == "cam-table" and len(table.t) < 2:
         raise TaskError(f"{source}: {len(table.t)} point in a cam-table; a table needs at least 2")
     return "table", table, source
+
+
+def _refuse_twice_named(head: Header, source: str) -> None:
+    """TaskError for a header that names a column twice (``q1[rad]`` and ``q1[rad]``, or ``q1[rad]`` and
+    ``q1[deg]``): which one the motion is would be a guess."""
+    seen: dict[str, int] = {}
+    for i, name in enumerate(head.names):
+        if not name:
+            continue
+        if name in seen:
+            raise TaskError(f"{source}:{head.line}: column {name!r} is named twice (columns {seen[name] + 1} and {i + 1}: "
+                            f"{head.cells[seen[name]]!r}, {head.cells[i]!r}); check reads each quantity from one "
+                            "column: drop or rename one")
+        seen[name] = i
+
+
+#: a drive column agrees with its joint's when they differ by at most half the drive's last digit (half a count for
+#: counts) plus this share of the joint's value (the 12 digits of the file)
+DRIVE_AGREE = 1e-9
+
+
+def _drives_agree(moves: list, drives: list, drive, source: str, joint_names: tuple[str, ...]) -> None:
+    """TaskError when a file that holds both the model's joints and the profile's drives (``plan --columns
+    t,q?,drive``) has a drive column that is not its joint converted by ``controller.joints`` (q = d / (sign · k) +
+    offset): the joints are what ``check`` judges, the drive runs its own column."""
+    for m, d in zip(moves, drives):
+        got = drive.joint_position(d.q)
+        for j, name in enumerate(drive.names):
+            col = d.q[:, j]
+            digit = 1.0 if np.all(col == np.round(col)) else 10.0 ** (np.floor(np.log10(max(np.max(np.abs(col)), 1e-300))) - 11)
+            tol = 0.5 * digit / abs(drive.scale[j]) + DRIVE_AGREE * max(1.0, float(np.max(np.abs(m.q[:, j]))))
+            off = np.abs(got[:, j] - m.q[:, j])
+            if np.max(off) > tol:
+                k = int(np.argmax(off))
+                raise TaskError(f"{source}:{m.lines[k]}: {name} = {col[k]:.12g} {drive.labels[j]} is not "
+                                f"{joint_names[j]} = {m.q[k, j]:.12g} converted by "
+                                f"the profile's controller.joints (it gives {got[k, j]:.12g}; off by {off[k]:.3g}, "
+                                f"allowed {tol:.3g}): check judges the joints, the drive runs its own column: write one "
+                                "of them, or the same motion in both")
 
 
 def _is_number(cell: str) -> bool:

@@ -66,7 +66,7 @@ def read_as_written(t: np.ndarray, tool: np.ndarray, q: np.ndarray, profile, not
     joint positions alone, which ``check`` reads through the quintic spline of their tool positions. ``strict``: also
     every other sample, as ``check`` reads them for the peaks' stated accuracy (``LimitRow.accuracy``: what
     ``check --strict`` judges a peak's resolution by)."""
-    from ..limits.samples import _motion_report, _read_motion, derivative_problems
+    from ..limits.samples import _motion_report, _read_motion, derivative_problems, reading_stride, strided
     from ..robots import build_robot
 
     data = written_values(np.column_stack([t, tool, q]))
@@ -77,6 +77,10 @@ def read_as_written(t: np.ndarray, tool: np.ndarray, q: np.ndarray, profile, not
         tool = None
     if getattr(robot, "rotary", False):
         pos = np.column_stack([pos, robot.tool_angle(q)])
+    k = reading_stride(t, pos, tool)
+    if k > 1:  # so dense that the 12 digits' rounding would be read as jerk: one sample in k, as check reads it
+        keep = strided(len(t), k)
+        t, pos, tool = t[keep], pos[keep], None if tool is None else tool[keep]
     report = _read_motion(t, pos, robot, profile, 0.0, "the written samples", None, tool, not_held=not_held)
     if strict:  # the peaks' accuracy, as check_samples states it
         from ..limits.samples import HERMITE_DIVISOR, _half, _with_accuracy

@@ -217,3 +217,20 @@ def test_a_reader_that_goes_away_keeps_the_verdict_and_ignores_devices(tmp_path,
     assert p.returncode == code, p.stderr
     assert "Traceback" not in p.stderr and "not written: standard output" not in p.stderr
     assert os.listdir(tmp_path) == []
+
+
+def test_a_broken_pipe_says_whether_standard_output_was_closed(tmp_path):
+    """The broken-pipe message names standard output only when it is standard output whose reader left (a FIFO given
+    to --report or -o breaks too): its write end polls POLLERR then, not when it is a file or a live pipe."""
+    code = "import sys; from pickplace_cli.cli.app import _stdout_broken; sys.stderr.write(str(_stdout_broken()))"
+    r, w = os.pipe()
+    os.close(r)  # the reader is gone before the child starts
+    try:
+        gone = subprocess.run([sys.executable, "-c", code], stdout=w, stderr=subprocess.PIPE, text=True, timeout=120)
+    finally:
+        os.close(w)
+    with open(tmp_path / "out.txt", "w") as f:
+        to_file = subprocess.run([sys.executable, "-c", code], stdout=f, stderr=subprocess.PIPE, text=True, timeout=120)
+    live = subprocess.run([sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                          timeout=120)
+    assert (gone.stderr, to_file.stderr, live.stderr) == ("True", "False", "False")

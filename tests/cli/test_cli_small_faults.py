@@ -106,3 +106,14 @@ def test_a_5000_digit_cell_of_a_batch_is_one_short_error(tmp_path):
     assert r.exit_code == 1
     assert "from_x = '" + "1" * 60 + "' … (5,000 characters): must be finite" in r.output
     assert max(len(line) for line in r.output.splitlines()) < 300
+
+
+@pytest.mark.parametrize("option", ["--v-to", "--v-from"])
+def test_an_end_faster_than_the_capacity_names_its_option(tmp_path, option):
+    """An end velocity of 100 m/s against the Delta's capacity.velocity of 5 m/s: no duration can meet it. One line
+    naming the option, its value and the capacity, exit 1 (it said "-t/--time auto: no duration up to 1e4 s satisfies
+    the limits", exit 3, a rule the user never gave)."""
+    r = _run("plan", *ADEPT, option, "0,100,0", "-o", str(tmp_path / "v.csv"))
+    assert r.exit_code == 1, r.output
+    assert f"{option} (0, 100, 0) m/s: its speed 100 m/s is above the profile's capacity.velocity 5 m/s" in r.output
+    assert not (tmp_path / "v.csv").exists()

@@ -311,3 +311,37 @@ def test_other_json_is_one_line(text, words):
     prof = load_profile("delta-su2018")
     with pytest.raises(TaskError, match=words):
         cr.read_checked(text, "x.json", prof, build_robot(prof.robot))
+
+
+@pytest.mark.parametrize("second", ["q1[rad]", "q1[deg]"])
+def test_a_column_named_twice_is_refused(tmp_path, second):
+    """Two columns of one name: which is the motion would be a guess (read by position, swapping them flipped exit 0
+    to exit 4): one line naming both cells, exit 1."""
+    prof = load_profile("delta-su2018")
+    rows = [f"{k * 1e-3:g},0.1,0.2,0.3,{0.1 + k * 1e-3:g}" for k in range(10)]
+    f = tmp_path / "twice.csv"
+    f.write_text(f"t[s],q1[rad],q2[rad],q3[rad],{second}\n" + "\n".join(rows) + "\n")
+    with pytest.raises(TaskError, match=r"column 'q1' is named twice \(columns 2 and 5"):
+        check_file(f, prof)
+
+
+def test_drive_columns_beside_the_joints_must_be_the_same_motion(tmp_path):
+    """``plan --columns t,q?,drive`` writes both; a drive column that is not its joint × k (counts, rounded to whole
+    counts) is refused, one line naming both values; the file as written (whole counts) is read."""
+    prof = load_profile("delta-su2018")
+    t = np.linspace(0.0, 0.2, 41)
+    q = np.column_stack([0.3 + 0.1 * np.sin(10 * t), 0.2 + 0.05 * t, 0.25 - 0.05 * t])
+    counts = np.round(q * K_COUNTS)
+    def text(c):
+        head = "t[s],q1[rad],q2[rad],q3[rad],A1[counts],A2[counts],A3[counts]\n"
+        return head + "".join(f"{a:.12g},{b[0]:.12g},{b[1]:.12g},{b[2]:.12g},{d[0]:.0f},{d[1]:.0f},{d[2]:.0f}\n"
+                              for a, b, d in zip(t, q, c))
+    ok = tmp_path / "both.csv"
+    ok.write_text(text(counts))
+    assert check_file(ok, prof)
+    bad = counts.copy()
+    bad[20, 0] += 5000  # 5000 counts ≈ 0.0012 rad off q1 at line 22
+    f = tmp_path / "off.csv"
+    f.write_text(text(bad))
+    with pytest.raises(TaskError, match=r"off\.csv:22: A1 = .* counts is not q1 = .* converted by the profile"):
+        check_file(f, prof)

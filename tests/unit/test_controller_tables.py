@@ -244,3 +244,22 @@ def test_belt_master_cam_is_belt_travel_with_derivatives_per_metre(tmp_path):
                  robot.inverse_kinematics(track.cartesian(np.clip(t - T, 0, track.cartesian.duration))))
     err = np.abs(interpolate("cam", x, p, v, acc, at) - q).max()
     assert err <= 1e-5 + SLACK, err
+
+
+def test_a_retimed_tables_duty_cycle_is_the_tables():
+    """``plan --time optimal -f cam`` on the Adept cycle is re-timed (the quintics' jerk at the points misses the
+    law's): the table's ``cycle_s`` is 2·(its duration + the 0.1 s dwell) and its picks/min 60 / that, below the
+    trajectory's by the stretch; the summary line says both."""
+    import json
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as tmp:
+        res = run("plan", *ADEPT, "--time", "optimal", "-f", "cam", "-o", f"{tmp}/t.cam.csv", "--json")
+    assert res.exit_code == 0, res.stderr
+    doc = json.loads(res.stdout)
+    info = doc["table"]
+    assert info["stretch"] > 1.0
+    assert info["cycle_s"] == pytest.approx(2 * (info["duration_s"] + 0.1), rel=1e-12)
+    assert info["picks_per_minute"] == pytest.approx(60.0 / info["cycle_s"], rel=1e-12)
+    assert info["picks_per_minute"] < doc["picks_per_minute"]
+    assert f"the table's cycle {info['cycle_s']:.4f} s, {info['picks_per_minute']:.1f} picks/min" in res.stderr

@@ -1,0 +1,64 @@
+"""A file so dense that the rounding of its 12 digits would dominate the reconstruction's third derivative is read
+from one sample in k (``limits.samples.reading_stride``): at 200 kHz the Adept cycle's q1 torque rate read 140 % of its
+limit from the rounding alone (the motion: 40 %), and ``plan --strict`` refused the move."""
+
+from __future__ import annotations
+
+import io
+
+import numpy as np
+import pytest
+
+from pickplace_cli.export.csv import write_csv
+from pickplace_cli.limits import samples as S
+from pickplace_cli.model.profile import load_profile
+from pickplace_cli.model.task import Task
+from pickplace_cli.pipelines.check import check_file
+from pickplace_cli.planner import PlanOptions, plan
+
+ADEPT = Task([-0.1525, 0.0, -0.8], [0.1525, 0.0, -0.8], height=0.025, eta=0.5)
+
+
+def test_the_stride_by_hand():
+    """x = J·t³/6 (jerk J) over 1 s with |x| ≤ 1: k = ⌈(G·δ/(share·J))^(1/3) / h⌉, δ = ROUNDING·1."""
+    J = 6.0
+    for rate in (1e3, 2e4, 2e5):
+        t = np.arange(0.0, 1.0 + 0.5 / rate, 1.0 / rate)
+        pos = np.column_stack([J * t**3 / 6.0, np.zeros_like(t), np.zeros_like(t)])
+        need = (S.ROUNDING_GAIN * S.ROUNDING / (S.ROUNDING_SHARE * J)) ** (1.0 / 3.0)
+        want = max(1, int(np.ceil(need * rate - 1e-9)))
+        assert S.reading_stride(t, pos) == want
+        tool = np.column_stack([pos, np.zeros((len(t), 6)), np.tile([J, 0.0, 0.0], (len(t), 1))])
+        assert S.reading_stride(t, pos, tool) == want
+    assert S.reading_stride(np.arange(0.0, 1.0, 1e-3), np.zeros((1000, 3))) == 1  # no motion: nothing to drown
+
+
+@pytest.mark.parametrize("columns", ["tool", "positions"])
+def test_a_200_khz_file_reads_the_motion_not_its_rounding(tmp_path, columns):
+    """The Adept cycle at 200 kHz: check's q1 torque rate within 0.2 % of the plan's continuous check (the motion's
+    exact peak, 40 % of the limit), and that of the same move's 1 kHz file; the note names the stride."""
+    prof = load_profile("delta-su2018")
+    dense = plan(ADEPT, prof, PlanOptions(rate=200_000.0, read_written="positions" if columns == "positions" else "tool"))
+    exact = next(r.peak for r in dense.report.rows if r.joint == "q1" and r.quantity == "motor torque rate")
+    buf = io.StringIO()
+    write_csv(dense, buf)
+    text = buf.getvalue()
+    if columns == "positions":
+        lines = text.splitlines()
+        head = lines[0].split(",")
+        keep = [i for i, h in enumerate(head) if h.split("[")[0] in ("t", "q1", "q2", "q3")]
+        text = "\n".join(",".join(ln.split(",")[i] for i in keep) for ln in lines) + "\n"
+    f = tmp_path / "dense.csv"
+    f.write_text(text)
+    rep = check_file(f, prof)[0].report
+    row = next(r for r in rep.rows if r.joint == "q1" and r.quantity == "motor torque rate")
+    assert rep.ok and rep.exit_code() == 0
+    assert row.peak == pytest.approx(exact, rel=2e-3) and row.resolved
+    assert any("read from one sample in" in n for n in rep.notes)
+
+
+def test_plan_strict_at_200_khz_holds_the_move():
+    """``plan --strict`` reads its 200 kHz samples the same way: the move at 40 % of its torque rate is written."""
+    prof = load_profile("delta-su2018")
+    pl = plan(ADEPT, prof, PlanOptions(rate=200_000.0, strict=True))
+    assert pl.report.ok and pl.report.exit_code() == 0
