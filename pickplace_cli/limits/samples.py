@@ -370,13 +370,17 @@ ROUNDING_GAIN = 10.0
 #: k-th sample (at 200 kHz the rounding alone read q1's torque rate of the Adept cycle at 140 % of the limit where
 #: the motion reaches 40 %)
 ROUNDING_SHARE = 1e-3
+#: … unless a sample left out is off the quintic spline through the others by more than this share of the positions'
+#: magnitude (a spike or a jump between the samples read, which must be read): then every sample is read
+ROUNDING_SPARED = 1e-9
 
 
 def reading_stride(t: np.ndarray, pos: np.ndarray, tool: np.ndarray | None = None) -> int:
     """Every how many samples the motion is read (1: every one): the smallest k for which the rounding of the file's
     12 digits (``ROUNDING``) puts at most ``ROUNDING_SHARE`` of the motion's jerk into the reconstruction's
     (``ROUNDING_GAIN``·δ/(k·h)³, h the median interval). The motion's jerk: the tool's jerk columns when given, else
-    third differences of the tool positions ``pos`` (N, 3+) [m] taken ~200 samples apart."""
+    third differences of the tool positions ``pos`` (N, 3+) [m] taken ~200 samples apart. 1 when a sample left out is
+    off the quintic spline through the others (``ROUNDING_SPARED``)."""
     n = len(t)
     if n < 50:
         return 1
@@ -394,7 +398,15 @@ def reading_stride(t: np.ndarray, pos: np.ndarray, tool: np.ndarray | None = Non
     if not jerk > 0:
         return 1
     need = (ROUNDING_GAIN * delta / (ROUNDING_SHARE * jerk)) ** (1.0 / 3.0)
-    return max(1, min(int(np.ceil(need / h - 1e-9)), n // 50))
+    k = max(1, min(int(np.ceil(need / h - 1e-9)), n // 50))
+    if k > 1:  # the samples left out must lie on the motion the others give: a spike or step between them is read
+        from scipy.interpolate import make_interp_spline
+
+        keep = strided(n, k)
+        between = make_interp_spline(t[keep], p[keep], k=5)(t)
+        if float(np.max(np.abs(between - p))) > ROUNDING_SPARED * max(1.0, float(np.max(np.abs(p)))):
+            return 1
+    return k
 
 
 def strided(n: int, k: int) -> np.ndarray:

@@ -62,3 +62,23 @@ def test_plan_strict_at_200_khz_holds_the_move():
     prof = load_profile("delta-su2018")
     pl = plan(ADEPT, prof, PlanOptions(rate=200_000.0, strict=True))
     assert pl.report.ok and pl.report.exit_code() == 0
+
+
+def test_a_spike_between_the_samples_read_is_not_left_out(tmp_path):
+    """A 2 µrad spike on one sample of a 50 kHz positions-only file, on a sample the stride would leave out: the
+    samples left out must lie on the quintic spline through the others (to 1e-9 of the positions), so every sample is
+    read, and the spike's torque rate (orders beyond the limit) is exceeded."""
+    prof = load_profile("delta-su2018")
+    dense = plan(ADEPT, prof, PlanOptions(rate=50_000.0, read_written="positions"))
+    q = np.asarray(dense.joint.q).copy()
+    i = 4501
+    q[i, 0] += 2e-6
+    rows = "".join(f"{a:.12g},{b[0]:.12g},{b[1]:.12g},{b[2]:.12g}\n" for a, b in zip(dense.t, q))
+    f = tmp_path / "spike.csv"
+    f.write_text("t[s],q1[rad],q2[rad],q3[rad]\n" + rows)
+    t = np.asarray(dense.t)
+    pos = np.asarray(dense.p)
+    assert i % S.reading_stride(t, pos) != 0  # the stride of the clean file would leave the spike out
+    rep = check_file(f, prof)[0].report
+    assert not rep.ok and rep.exit_code() == 3
+    assert not any("read from one sample in" in n for n in rep.notes)
