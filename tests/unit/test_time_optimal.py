@@ -48,9 +48,12 @@ def test_optimal_written_output_holds_every_limit_independently(adept):
     (+0.5 % for the reference's own error), and the binding rows within 0.5 % of their limits."""
     prof, fit, opt = adept
     T = opt.duration.seconds
-    # the retimed path at a fine rate: plan optimal again (deterministic: the same law and duration)
+    # the retimed path at a fine rate: plan optimal again (deterministic: the same law; its 50 kHz file, read from one
+    # sample in 5 as check reads so dense a file, may be slowed a little more than the 1 kHz one for its reading)
     fine = plan(ADEPT, prof, PlanOptions(time="optimal", rate=50_000.0))
-    assert fine.duration.seconds == pytest.approx(T, rel=1e-9)
+    assert fine.duration.t_optimal == pytest.approx(opt.duration.t_optimal, rel=1e-9)
+    assert T <= fine.duration.seconds <= T * 1.001
+    T = fine.duration.seconds
     cols = _written(fine)
     t = cols["t"]
     path = fine.cartesian.path
