@@ -164,6 +164,10 @@ def check(
         sys.stderr.write(f"pickplace: hint: the table is judged on a controller cycle of {on_cycle:.9g} s ({given}): "
                          "its verdict depends on the cycle; give the one the drive runs it at with --cycle SECONDS "
                          "(plan's table summary names it when it differs)\n")
+    elif bad and smooth == 0 and any("carry noise" in n for c in checks for n in c.report.notes):
+        sys.stderr.write("pickplace: hint: the positions carry noise (whole encoder counts, a few decimals, a "
+                         "measurement) that their derivatives amplify: a peak read past its limit may be the noise's; "
+                         "check with --smoothing auto\n")
     elif hold_capacity and bad and all(r.quantity.startswith("capacity") for r in bad):
         sys.stderr.write("pickplace: hint: only the Cartesian capacity is exceeded; if the file was planned with --time "
                          "fit or optimal (which hold the joint and motor limits alone, not the capacity), check it with "

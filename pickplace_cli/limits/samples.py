@@ -370,9 +370,11 @@ ROUNDING_GAIN = 10.0
 #: k-th sample (at 200 kHz the rounding alone read q1's torque rate of the Adept cycle at 140 % of the limit where
 #: the motion reaches 40 %)
 ROUNDING_SHARE = 1e-3
-#: … unless a sample left out is off the quintic spline through the others by more than this share of the positions'
-#: magnitude (a spike or a jump between the samples read, which must be read): then every sample is read
-ROUNDING_SPARED = 1e-9
+#: … unless a sample left out is off the quintic spline through the others by more than this many times the rounding
+#: δ (a feature between the samples read, however small, carries a jerk beyond the rounding's: a 1 nm bump 10 µs wide
+#: on the Adept cycle at 200 kHz is a torque rate of 72 × the limit): then every sample is read. Smooth data leave
+#: out samples within ~2δ of the spline (its own error at the stride is orders below δ)
+ROUNDING_SPARED = 10.0
 
 
 def reading_stride(t: np.ndarray, pos: np.ndarray, tool: np.ndarray | None = None) -> int:
@@ -404,7 +406,7 @@ def reading_stride(t: np.ndarray, pos: np.ndarray, tool: np.ndarray | None = Non
 
         keep = strided(n, k)
         between = make_interp_spline(t[keep], p[keep], k=5)(t)
-        if float(np.max(np.abs(between - p))) > ROUNDING_SPARED * max(1.0, float(np.max(np.abs(p)))):
+        if float(np.max(np.abs(between - p))) > ROUNDING_SPARED * delta:
             return 1
     return k
 
@@ -477,6 +479,10 @@ def check_samples(s: Samples, profile: Profile, smoothing: float = 0.0, source: 
         rest += (f"; the motion read from one sample in {k} ({len(keep)} of {len(t)}: at this rate the rounding of "
                  "the file's 12 digits would dominate their third derivative)")
         t, pos, tool = t[keep], pos[keep], None if tool is None else tool[keep]  # (the positions: every sample, below)
+    sigma = noisy(t, pos, tool) if not smoothing else 0.0
+    if sigma:
+        rest += (f"; the positions carry noise of σ = {sigma:.2g} m (whole counts or a few decimals?), which their "
+                 "third derivative amplifies: --smoothing auto reads through it")
     report = _read_motion(t, pos, robot, profile, smoothing, source, notes, tool, not_held, dwell)
     others = []
     half = _half(len(t))
@@ -491,7 +497,7 @@ def check_samples(s: Samples, profile: Profile, smoothing: float = 0.0, source: 
                                       None if tool is None else tool[half], dwell=dwell)[0], share))
     if smoothing:  # what the smoothing takes away is as uncertain as the rest: the interpolated data's peaks
         others.append((_motion_report(t, pos, robot, profile, 0.0, source, dwell=dwell)[0], 1.0))
-    report = _with_accuracy(report, others)
+    report = _with_accuracy(report, others, noise=bool(sigma))
     # the position ranges on the file's own values (the model's inverse kinematics wraps revolute joints)
     specs = limit_specs(profile)
     given = {}
@@ -545,13 +551,38 @@ def _read_motion(t: np.ndarray, pos: np.ndarray, robot, profile: Profile, smooth
     return replace(report, rows=tuple(rows))
 
 
-def _with_accuracy(fine: LimitReport, others: list[tuple[LimitReport, float]]) -> LimitReport:
+#: positions whose noise (:func:`~pickplace_cli.curves.sampled.noise_level`, white: the same at every other sample,
+#: where a smooth motion's sixth differences grow 64-fold) would put more than ``ROUNDING_SHARE`` of the motion's jerk
+#: into the reconstruction's (``ROUNDING_GAIN``·σ/h³) are noisy: whole encoder counts or a few decimals at 1-4 kHz
+NOISE_SAME = 4.0
+
+
+def noisy(t: np.ndarray, pos: np.ndarray, tool: np.ndarray | None = None) -> float:
+    """The white noise σ [m] of the tool positions ``pos`` when it matters for their third derivative (module
+    constants above), else 0."""
+    from ..curves.sampled import noise_level
+
+    n = len(t)
+    if n < 50 or tool is not None:  # (a file with the tool's columns reads its jerks, not differences of positions)
+        return 0.0
+    p = np.asarray(pos, float)[:, :3]
+    s1, s2 = noise_level(t, p), noise_level(t[::2], p[::2])
+    if not (s1 > 0 and s2 < NOISE_SAME * s1):
+        return 0.0
+    h = float(np.median(np.diff(t)))
+    c = max(1, n // 200)
+    jerk = float(np.max(np.linalg.norm(np.diff(p[::c], 3, axis=0), axis=1), initial=0.0)) / (c * h) ** 3
+    return s1 if ROUNDING_GAIN * s1 / h**3 > ROUNDING_SHARE * jerk else 0.0
+
+
+def _with_accuracy(fine: LimitReport, others: list[tuple[LimitReport, float]], noise: bool = False) -> LimitReport:
     """``fine``'s duration-dependent rows with accuracy = the largest share × |its peak − the same row's peak| over
     ``others`` ((report, share): other estimates from the same data), at least ``CHECK_RESOLUTION`` of the peak, and
     the verdict that the data supports: exceeded only when the peak less its accuracy is beyond the allowed value —
     the accuracy counted up to ``RESOLVED`` of the allowed value: a peak the samples do not resolve is judged by its
     best estimate (the reading from all samples) with that margin, not given the benefit of an accuracy of 100 % or
-    more (a torque rate read 219 % ± 166 % of its limit is exceeded, not "within its limit")."""
+    more (a torque rate read 219 % ± 166 % of its limit is exceeded, not "within its limit"). ``noise``: the positions
+    are noisy (:func:`noisy`): their reading is no best estimate, and the whole accuracy counts (not resolved)."""
     from .report import LimitRow
 
     if not others:
@@ -566,7 +597,7 @@ def _with_accuracy(fine: LimitReport, others: list[tuple[LimitReport, float]]) -
                          r.kind, r.bound, r.target, acc, r.not_held)
         elif r.kind == "limit" and r.bound == "upper" and cs:
             acc = max(max(share * abs(r.peak - c.peak) for c, share in cs), CHECK_RESOLUTION * abs(r.peak))
-            ok = r.peak - min(acc, RESOLVED * abs(r.allowed)) <= r.allowed
+            ok = r.peak - (acc if noise else min(acc, RESOLVED * abs(r.allowed))) <= r.allowed
             r = LimitRow(r.joint, r.quantity, r.unit, r.peak, r.limit, r.utilisation, r.t_peak, ok, r.kind, r.bound,
                          r.target, acc, r.not_held)
         rows.append(r)

@@ -98,9 +98,9 @@ def violation_text(r) -> str:
     head = "limit exceeded"
     if r.not_held:  # reported, not judged: the rule leaves this limit out (the Cartesian capacity under fit)
         head = f"limit exceeded, not held under {r.not_held}"
-    # a reading the samples do not resolve (check): judged by the reading itself, less 1 % of the limit at most
+    # a reading the samples do not resolve (check): its accuracy said beside the excess
     vague = "" if r.accuracy is None or r.resolved else (
-        f"; not resolved by the samples (± {percent(r.accuracy / abs(r.limit))} %), so judged by the reading itself")
+        f"; not resolved by the samples (± {percent(r.accuracy / abs(r.limit))} %)")
     if r.target < 1.0:  # headroom: the allowed use of the rating
         return (
             f"{head}: {r.joint} {r.quantity} = {r.peak:.4g} {r.unit}{when}; {percent(r.utilisation)} % of the "

@@ -565,9 +565,21 @@ def _refuse_twice_named(head: Header, source: str) -> None:
         seen[name] = i
 
 
-#: a drive column agrees with its joint's when they differ by at most half the drive's last digit (half a count for
-#: counts) plus this share of the joint's value (the 12 digits of the file)
+#: a drive column agrees with its joint's when they differ by at most half of each column's last digit (half a count
+#: for counts, half a µm for mm to 3 decimals, …: :func:`_last_digit`) plus this share of the joint's value
 DRIVE_AGREE = 1e-9
+
+
+def _last_digit(col: np.ndarray) -> float:
+    """The step of a column's last written digit: the largest 10⁻ᵈ (d = 0 … 12) whose multiples all its values are,
+    else the 12th significant digit of its largest value."""
+    col = np.asarray(col, float)
+    big = max(float(np.max(np.abs(col))), 1e-300)
+    for d in range(13):
+        step = 10.0 ** -d
+        if np.all(np.abs(col / step - np.round(col / step)) <= 1e-6):
+            return step
+    return 10.0 ** (np.floor(np.log10(big)) - 11)
 
 
 def _drives_agree(moves: list, drives: list, drive, source: str, joint_names: tuple[str, ...]) -> None:
@@ -578,8 +590,8 @@ def _drives_agree(moves: list, drives: list, drive, source: str, joint_names: tu
         got = drive.joint_position(d.q)
         for j, name in enumerate(drive.names):
             col = d.q[:, j]
-            digit = 1.0 if np.all(col == np.round(col)) else 10.0 ** (np.floor(np.log10(max(np.max(np.abs(col)), 1e-300))) - 11)
-            tol = 0.5 * digit / abs(drive.scale[j]) + DRIVE_AGREE * max(1.0, float(np.max(np.abs(m.q[:, j]))))
+            tol = (0.5 * _last_digit(col) / abs(drive.scale[j]) + 0.5 * _last_digit(m.q[:, j])
+                   + DRIVE_AGREE * max(1.0, float(np.max(np.abs(m.q[:, j])))))
             off = np.abs(got[:, j] - m.q[:, j])
             if np.max(off) > tol:
                 k = int(np.argmax(off))

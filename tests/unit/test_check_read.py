@@ -345,3 +345,28 @@ def test_drive_columns_beside_the_joints_must_be_the_same_motion(tmp_path):
     f.write_text(text(bad))
     with pytest.raises(TaskError, match=r"off\.csv:22: A1 = .* counts is not q1 = .* converted by the profile"):
         check_file(f, prof)
+
+
+@pytest.mark.parametrize("decimals", [3, 6])
+def test_drive_and_joint_columns_rounded_like_a_logger_agree(tmp_path, decimals):
+    """The gantry's axes in mm to 3 decimals (half a µm of rounding) beside joints in m to 12 digits, and joints to 6
+    decimals beside axes to 3: each column's own last digit is allowed (it refused 5e-7 m "allowed 1e-9"); a
+    drive column 10 µm off is still refused."""
+    prof = load_profile("gantry")
+    t = np.linspace(0.0, 0.2, 41)
+    q = np.column_stack([0.1 + 0.3 * np.sin(5 * t), -0.2 + 0.1 * t + 0.01 * np.sin(7 * t), -0.5 + 0.05 * np.cos(3 * t)])
+    qs = np.round(q, decimals) if decimals == 6 else q
+    mm = np.round(q * 1000.0, 3)
+
+    def text(d):
+        head = "t[s],q1[m],q2[m],q3[m],AxisX[mm],AxisY[mm],AxisZ[mm]\n"
+        return head + "".join(f"{a:.12g},{b[0]:.12g},{b[1]:.12g},{b[2]:.12g},{c[0]:.3f},{c[1]:.3f},{c[2]:.3f}\n"
+                              for a, b, c in zip(t, qs, d))
+    f = tmp_path / "g.csv"
+    f.write_text(text(mm))
+    assert check_file(f, prof)
+    off = mm.copy()
+    off[10, 1] += 0.01
+    f.write_text(text(off))
+    with pytest.raises(TaskError, match="AxisY = .* mm is not q2 = "):
+        check_file(f, prof)

@@ -139,3 +139,31 @@ def test_a_torque_rate_peak_in_a_moves_last_interval_is_read(tmp_path, rate):
     row = next(r for r in rep.rows if r.joint == "q1" and r.quantity == "motor torque rate")
     assert not row.ok and not rep.ok and rep.exit_code() == 3
     assert row.peak == pytest.approx(truth, rel=0.01)
+
+
+def test_positions_in_whole_counts_are_noise_not_a_best_estimate(tmp_path):
+    """The Adept cycle's joint positions at 4 kHz rounded to whole encoder counts (25 · 2²⁰ / 2π per rad): white
+    quantisation noise of σ_q = step/√12 on each joint, which the reconstruction's third derivative amplifies. The
+    check finds it (σ of the tool positions within 0.2-5 × σ_q × 0.5 m, the arm's lever), says so, and judges the
+    rows with their whole accuracy (not by the reading alone); the same file unrounded (12 digits) carries none."""
+    from pickplace_cli.limits import samples as S
+    from pickplace_cli.robots import build_robot
+
+    prof = load_profile("delta-su2018")
+    k = 25.0 * 2**20 / (2 * np.pi)
+    pl = plan(Task([-0.1525, 0.0, -0.8], [0.1525, 0.0, -0.8], height=0.025, eta=0.5), prof, PlanOptions(rate=4000.0))
+    q = np.asarray(pl.joint.q)
+    robot = build_robot(prof.robot)
+    t = np.asarray(pl.t)
+    assert S.noisy(t, robot.forward_kinematics(q)) == 0.0
+    qr = np.round(q * k) / k
+    sigma = S.noisy(t, robot.forward_kinematics(qr))
+    assert 0.2 * 0.5 / (k * np.sqrt(12)) < sigma < 5 * 0.5 / (k * np.sqrt(12))
+    f = tmp_path / "counts.csv"
+    f.write_text("t[s],q1[rad],q2[rad],q3[rad]\n" + "".join(f"{a:.12g},{b[0]:.12g},{b[1]:.12g},{b[2]:.12g}\n"
+                                                           for a, b in zip(t, qr)))
+    rep = check_file(f, prof)[0].report
+    assert any("carry noise" in n for n in rep.notes)
+    for r in rep.rows:  # the verdict of each row: the peak less its whole accuracy
+        if r.accuracy is not None and r.kind == "limit" and r.bound == "upper" and not r.not_held:
+            assert r.ok == (r.peak - r.accuracy <= r.allowed)
