@@ -157,13 +157,9 @@ def hermite(t: np.ndarray, p: np.ndarray, v: np.ndarray, a: np.ndarray, j: np.nd
     data = np.stack([p, v, a, j], axis=1)  # (N, 4, d)
     pp = PPoly(septic_coefficients(t, data), t)
     n = len(t)
-    dj = np.linalg.norm(np.diff(np.asarray(j, float), axis=0), axis=1)  # (N − 1,)
     if n < 4:
         return (lambda x, nu=0: pp(np.asarray(x, float), nu)), np.zeros(0)
-    left = np.concatenate([[0.0], dj[:-1]])
-    right = np.concatenate([dj[1:], [0.0]])
-    level = max(float(np.median(dj)), 1e-300)
-    ks = np.flatnonzero(dj > STEP_RATIO * np.maximum(np.maximum(left, right), level))
+    ks = _jerk_jumps(j)
     if overshoot:
         ks = np.union1d(ks, np.setdiff1d(overshooting(pp, t, np.asarray(j, float), ks),
                                          np.zeros(0, int) if whole is None else whole))
@@ -225,12 +221,17 @@ def overshoot_only(t: np.ndarray, p: np.ndarray, v: np.ndarray, a: np.ndarray, j
     from scipy.interpolate import PPoly
 
     pp = PPoly(septic_coefficients(t, np.stack([p, v, a, j], axis=1)), t)
-    dj = np.linalg.norm(np.diff(np.asarray(j, float), axis=0), axis=1)
+    return overshooting(pp, t, np.asarray(j, float), _jerk_jumps(j))
+
+
+def _jerk_jumps(j: np.ndarray) -> np.ndarray:
+    """The intervals across which the samples' jerk ``j`` (N, d) jumps: |j(k+1) − j(k)| more than ``STEP_RATIO``
+    times its neighbours' and the median's (a smooth motion's jumps vary slowly, ~h·snap)."""
+    dj = np.linalg.norm(np.diff(np.asarray(j, float), axis=0), axis=1)  # (N − 1,)
     left = np.concatenate([[0.0], dj[:-1]])
     right = np.concatenate([dj[1:], [0.0]])
     level = max(float(np.median(dj)), 1e-300)
-    jumps = np.flatnonzero(dj > STEP_RATIO * np.maximum(np.maximum(left, right), level))
-    return overshooting(pp, t, np.asarray(j, float), jumps)
+    return np.flatnonzero(dj > STEP_RATIO * np.maximum(np.maximum(left, right), level))
 
 
 def overshooting(pp, t: np.ndarray, j: np.ndarray, jumps: np.ndarray | None = None) -> np.ndarray:

@@ -332,10 +332,9 @@ def test_drive_columns_beside_the_joints_must_be_the_same_motion(tmp_path):
     t = np.linspace(0.0, 0.2, 41)
     q = np.column_stack([0.3 + 0.1 * np.sin(10 * t), 0.2 + 0.05 * t, 0.25 - 0.05 * t])
     counts = np.round(q * K_COUNTS)
+
     def text(c):
-        head = "t[s],q1[rad],q2[rad],q3[rad],A1[counts],A2[counts],A3[counts]\n"
-        return head + "".join(f"{a:.12g},{b[0]:.12g},{b[1]:.12g},{b[2]:.12g},{d[0]:.0f},{d[1]:.0f},{d[2]:.0f}\n"
-                              for a, b, d in zip(t, q, c))
+        return _joints_and_drives("t[s],q1[rad],q2[rad],q3[rad],A1[counts],A2[counts],A3[counts]", t, q, c, 0)
     ok = tmp_path / "both.csv"
     ok.write_text(text(counts))
     assert check_file(ok, prof)
@@ -359,9 +358,7 @@ def test_drive_and_joint_columns_rounded_like_a_logger_agree(tmp_path, decimals)
     mm = np.round(q * 1000.0, 3)
 
     def text(d):
-        head = "t[s],q1[m],q2[m],q3[m],AxisX[mm],AxisY[mm],AxisZ[mm]\n"
-        return head + "".join(f"{a:.12g},{b[0]:.12g},{b[1]:.12g},{b[2]:.12g},{c[0]:.3f},{c[1]:.3f},{c[2]:.3f}\n"
-                              for a, b, c in zip(t, qs, d))
+        return _joints_and_drives("t[s],q1[m],q2[m],q3[m],AxisX[mm],AxisY[mm],AxisZ[mm]", t, qs, d, 3)
     f = tmp_path / "g.csv"
     f.write_text(text(mm))
     assert check_file(f, prof)
@@ -370,3 +367,9 @@ def test_drive_and_joint_columns_rounded_like_a_logger_agree(tmp_path, decimals)
     f.write_text(text(off))
     with pytest.raises(TaskError, match="AxisY = .* mm is not q2 = "):
         check_file(f, prof)
+
+
+def _joints_and_drives(head: str, t: np.ndarray, q: np.ndarray, d: np.ndarray, decimals: int) -> str:
+    """A CSV of t, the joints (12 digits) and the drives (``decimals`` decimals) under ``head``."""
+    return head + "\n" + "".join(f"{a:.12g}," + ",".join(f"{x:.12g}" for x in b) + ","
+                                 + ",".join(f"{x:.{decimals}f}" for x in c) + "\n" for a, b, c in zip(t, q, d))
