@@ -251,3 +251,66 @@ def test_the_smoothing_weight_reaches_the_law_and_costs_duration():
     assert T[None] == T[law_sqp.SQP_SMOOTH]
     assert T[0.0] <= T[law_sqp.SQP_SMOOTH] * (1 + 1e-5) and T[law_sqp.SQP_SMOOTH] <= T[3e-2] * (1 + 1e-5)
     assert T[0.0] < T[3e-2]
+
+
+def test_banded_gram_equals_the_dense_products():
+    """``_Rows.gram`` (the Hessians' B0ᵀ·diag(d)·B0 sums, built from the bands) against the dense products of the
+    rows' own dense basis matrices, for random weights: to 1e-13 of the largest entry."""
+    prof, fit, model = _setup("delta-su2018", ADEPT)
+    rows, *_ = _rows(prof, fit, model)
+    rng = np.random.default_rng(11)
+    d0, d01, d1 = rng.normal(size=(3, len(rows.tau)))
+    B0, B1 = rows.B0, rows.B1
+    cross = (B0.T * d01) @ B1
+    dense = (B0.T * d0) @ B0 + cross + cross.T + (B1.T * d1) @ B1
+    top = np.abs(dense).max()
+    np.testing.assert_allclose(rows.gram(d0, d01, d1), dense, rtol=0, atol=1e-13 * top)
+    np.testing.assert_allclose(rows.gram(d0), (B0.T * d0) @ B0, rtol=0, atol=1e-13 * np.abs((B0.T * d0) @ B0).max())
+
+
+def test_an_active_set_carried_to_a_finer_grid_names_the_same_rows():
+    """``_Active.carried``: rows flagged active on a grid are flagged on a finer grid holding its points; read back
+    by their content (each row's band of coefficients is a function of its τ and its limit alone), the flagged rows
+    of the finer grid are exactly the flagged rows of the first — none lost, none added."""
+    prof, fit, model = _setup("delta-su2018", ADEPT)
+    rows, knots, tau, data = _rows(prof, fit, model)
+    finer_tau = np.union1d(tau, np.random.default_rng(5).uniform(0, 1, 57))
+    finer = law_sqp._Rows(model, finer_tau, knots, fit.duration.seconds, prof.planning.dwell, None, data)
+    rng = np.random.default_rng(2)
+    act = law_sqp._Active(rows)
+    act.lin, act.up, act.down = (rng.random(len(rows.A)) < 0.1, rng.random(len(rows.Ay)) < 0.1,
+                                 rng.random(len(rows.Ay)) < 0.1)
+    act.box = rng.integers(-1, 2, rows.n).astype(np.int8)
+    out = act.carried(rows, finer)
+
+    def content(band, flags):
+        return sorted((int(c), *np.round(v / np.abs(v).max(initial=1e-300), 12)) for c, v in zip(band.c[flags], band.v[flags]))
+
+    assert content(finer.A, out.lin) == content(rows.A, act.lin)
+    assert content(finer.Ay, out.up) == content(rows.Ay, act.up)
+    assert content(finer.Ay, out.down) == content(rows.Ay, act.down)
+    assert out.lin.sum() == act.lin.sum() and out.up.sum() == act.up.sum()
+    np.testing.assert_array_equal(out.box, act.box)
+    # a grid that does not hold the first's points: no warm start rather than a wrong one
+    other = law_sqp._Rows(model, np.linspace(0, 1, 101), knots, fit.duration.seconds, prof.planning.dwell, None, data)
+    assert not act.carried(rows, other).lin.any()
+
+
+def test_loose_rounds_end_at_the_tight_tolerance(monkeypatch):
+    """Rounds whose grid the check may still grow converge to ``SQP_ROUND_TOL`` only; the law returned is converged on
+    its last grid to ``SQP_TOL``: solving on from it on that grid (to 1 % of ``SQP_TOL``) moves its duration by less
+    than 3 × ``SQP_TOL``. Rounds made very loose (1e-2) so that a law left at a round's tolerance would show (~1e-3)."""
+    monkeypatch.setattr(law_sqp, "SQP_ROUND_TOL", 1e-2)
+    for name, task in (("delta-su2018", ADEPT), SCARA, GANTRY):
+        prof, fit, model = _setup(name, task)
+        n, t_fit, dwell = O.LAW_SQP_COEFFICIENTS, fit.duration.seconds, prof.planning.dwell
+        knots = O._knots(n, law_sqp.SQP_DEGREE)
+        points = max(O.LAW_GRID, law_sqp.SQP_POINTS_PER_KNOT * (n - law_sqp.SQP_DEGREE) + 1)
+        data = O._GridData(model, np.concatenate([law_sqp.solve_grid(model.path, points, knots),
+                                                  law_sqp.check_grid(model.path)]))
+        x, t_est, _, _, worst, grid = law_sqp.solve_law(model, dwell, t_fit, knots, None, data, np.ones(n),
+                                                        *O.LAW_BOUNDS, points, smooth=law_sqp.smoothing(t_fit))
+        assert worst <= 1e-6
+        rows = law_sqp._Rows(model, grid, knots, t_fit, dwell, None, data)
+        on = law_sqp.solve_sqp(rows, x, *O.LAW_BOUNDS, law_sqp.smoothing(t_fit), tol=law_sqp.SQP_TOL / 100)[0]
+        assert abs(rows.duration(on) / t_est - 1) < 3 * law_sqp.SQP_TOL, name
