@@ -32,16 +32,22 @@ POINTS = 500
 _CAP = 1e12
 
 
-def path_constraints(model, tau: np.ndarray, speed: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray,
-                                                                              np.ndarray]:
+def path_constraints(model, tau: np.ndarray, speed: bool = True, data=None) -> tuple[np.ndarray, np.ndarray,
+                                                                                       np.ndarray, np.ndarray]:
     """The rows A·a + B·b + C ≤ g at every τ (each (len(τ), R)): both sides of every joint's peak motor torque
-    and, with ``speed``, its motor speed squared."""
-    from .optimal import _inertia_along
+    and, with ``speed``, its motor speed squared. ``data``: the model's terms already evaluated on a union of grids
+    (the time law's :class:`~pickplace_cli.timing.law_rows._GridData`), taken from there (the same values: each term
+    is computed point by point)."""
+    from .law_rows import _inertia_along
 
-    path = model.path
-    pr = model.parts(tau, derivatives=False, singularity=False)  # torques and speeds only
-    p, p1 = path.all_orders(tau)[:2]
-    m = _inertia_along(model, tau, p, p1)
+    if data is not None:
+        pr = data.take(tau)
+        m = pr.m
+    else:
+        path = model.path
+        pr = model.parts(tau, derivatives=False, singularity=False)  # torques and speeds only
+        p, p1 = path.all_orders(tau)[:2]
+        m = _inertia_along(model, tau, p, p1)
     A, B, C, g = [], [], [], []
     for i, spec in enumerate(model.specs):
         drv = spec.drive
@@ -143,8 +149,9 @@ def bound_grid(points: int = POINTS) -> np.ndarray:
     return 0.5 * (1.0 - np.cos(np.pi * np.linspace(0.0, 1.0, points + 1)))
 
 
-def torque_bound(model, speed: bool = True, points: int = POINTS) -> float:
-    """The bound T [s] of ``model``'s path: peak motor torque (and, with ``speed``, motor speed) alone."""
+def torque_bound(model, speed: bool = True, points: int = POINTS, data=None) -> float:
+    """The bound T [s] of ``model``'s path: peak motor torque (and, with ``speed``, motor speed) alone. ``data``: the
+    model's terms on a union of grids holding :func:`bound_grid` (:func:`path_constraints`)."""
     tau = bound_grid(points)
-    A, B, C, g = path_constraints(model, tau, speed)
+    A, B, C, g = path_constraints(model, tau, speed, data)
     return law_duration(topp(A, B, C, g, tau), tau)

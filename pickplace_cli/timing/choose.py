@@ -194,12 +194,17 @@ def choose_optimal(path: CartesianPath, profile, model, dwell: float, model_of,
                               check=check)
     except TaskError as exc:  # the message names the rule the user asked for
         raise TaskError(str(exc).replace("time = fit:", "time = optimal:", 1)) from None
+    from . import law_sqp
+    from .optimal import LAW_SOLVER, sqp_data
+
+    # the model's terms on the SQP's grids and the bound's, evaluated once for both
+    data = sqp_data(model, coefficients) if LAW_SOLVER == "sqp" and law_sqp.available() else None
     try:
-        fit = replace(fit, t_bound=torque_bound(model))
+        fit = replace(fit, t_bound=torque_bound(model, data=data))
     except ValueError:  # no motor torque or speed limit, or one exceeded at rest: no bound to show
         pass
     law = optimal_law(model, dwell, fit.seconds, coefficients, capacity=profile.capacity if hold_capacity else None,
-                      smooth=smooth)
+                      smooth=smooth, data=data)
     # a refined law and the law it was refined from are both fitted and the shorter is kept: never longer than the
     # first law, whatever the optimisers' estimates said
     fitted, why, refined = [], "", ""

@@ -143,8 +143,22 @@ LAW_SOLVER = "sqp"
 LAW_SQP_COEFFICIENTS = 60
 
 
+def sqp_data(model, coefficients: int | None = None) -> _GridData:
+    """The model's terms on every grid the SQP's law of ``coefficients`` (None: ``LAW_SQP_COEFFICIENTS``) is solved
+    and checked on, and on the torque bound's (:func:`~pickplace_cli.timing.bound.bound_grid`): one evaluation of the
+    model for both (its cost is mostly per call)."""
+    from . import law_sqp
+    from .bound import bound_grid
+
+    n = coefficients or LAW_SQP_COEFFICIENTS
+    knots = _knots(n, law_sqp.SQP_DEGREE)
+    points = max(LAW_GRID, law_sqp.SQP_POINTS_PER_KNOT * (n - law_sqp.SQP_DEGREE) + 1)
+    return _GridData(model, np.concatenate([law_sqp.solve_grid(model.path, points, knots),
+                                            law_sqp.check_grid(model.path), bound_grid()]))
+
+
 def _sqp_law(model, dwell: float, t_fit: float, coefficients: int, capacity,
-             smooth: float | None = None) -> LawResult | None:
+             smooth: float | None = None, data: _GridData | None = None) -> LawResult | None:
     """The law of ``coefficients`` uniform knots by the structured SQP (:mod:`~pickplace_cli.timing.law_sqp`, with its
     smoothing term: weight ``smooth``, None the shipped ``law_sqp.smoothing``) from the uniform law; None when its
     answer breaks a row of its own (last) grid by more than 1e-6 of the limit (the caller falls back to SLSQP)."""
@@ -152,8 +166,8 @@ def _sqp_law(model, dwell: float, t_fit: float, coefficients: int, capacity,
 
     knots = _knots(coefficients, law_sqp.SQP_DEGREE)
     points = max(LAW_GRID, law_sqp.SQP_POINTS_PER_KNOT * (coefficients - law_sqp.SQP_DEGREE) + 1)
-    data = _GridData(model, np.concatenate([law_sqp.solve_grid(model.path, points, knots),
-                                            law_sqp.check_grid(model.path)]))
+    data = data or _GridData(model, np.concatenate([law_sqp.solve_grid(model.path, points, knots),
+                                                    law_sqp.check_grid(model.path)]))
     x, t_est, solves, message, worst, _ = law_sqp.solve_law(model, dwell, t_fit, knots, capacity, data,
                                                             np.ones(coefficients), *LAW_BOUNDS, points,
                                                             smooth=law_sqp.smoothing(t_fit) if smooth is None else smooth)
@@ -166,7 +180,7 @@ def _sqp_law(model, dwell: float, t_fit: float, coefficients: int, capacity,
 @single_blas_thread
 def optimal_law(model, dwell: float, t_fit: float, coefficients: int | None = None,
                 capacity=None, start: np.ndarray | None = None, direct: bool = False,
-                solver: str | None = None, smooth: float | None = None) -> LawResult:
+                solver: str | None = None, smooth: float | None = None, data: _GridData | None = None) -> LawResult:
     """Minimise the duration of ``model``'s path over time laws b(τ) (module docstring), warm-started at the
     uniform law of duration ``t_fit`` [s]. ``capacity``: also hold the profile's Cartesian |v|, |a| (and |j|
     when set) — optional, off by default. ``start``: the law's coefficients to start from (relative to the
@@ -187,11 +201,11 @@ def optimal_law(model, dwell: float, t_fit: float, coefficients: int | None = No
     solves). ``solver``: "sqp" or "slsqp" (None: ``LAW_SOLVER``). With the SQP (and neither ``start`` nor
     ``direct``), the law has N (default ``LAW_SQP_COEFFICIENTS``) uniform knots and is solved from the uniform law;
     SLSQP as above when ``daqp`` is missing or the SQP's answer breaks its own grid. ``smooth``: the SQP's smoothing
-    weight (None: ``law_sqp.smoothing``)."""
+    weight (None: ``law_sqp.smoothing``). ``data``: the SQP's model terms already evaluated (:func:`sqp_data`)."""
     from . import law_sqp
 
     if (solver or LAW_SOLVER) == "sqp" and start is None and not direct and law_sqp.available():
-        found = _sqp_law(model, dwell, t_fit, coefficients or LAW_SQP_COEFFICIENTS, capacity, smooth)
+        found = _sqp_law(model, dwell, t_fit, coefficients or LAW_SQP_COEFFICIENTS, capacity, smooth, data)
         if found is not None:
             return found
     if start is None and not direct and (coefficients is None or coefficients > LAW_COEFFICIENTS):

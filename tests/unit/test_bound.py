@@ -57,3 +57,21 @@ def test_bound_is_below_every_law_that_holds_the_limits(profile, method):
     d = res.duration
     assert d.t_bound is not None and 0 < d.t_bound < d.seconds <= d.t_fit * (1 + 1e-9)
     assert res.summary()["torque_bound_s"] == d.t_bound
+
+
+@pytest.mark.parametrize("name, task", [("delta-su2018", Task([-0.1525, 0, -0.8], [0.1525, 0, -0.8], 0.025, 0.5)),
+                                        ("scara-600", Task([0.3, 0.2, -0.1], [0.45, -0.15, -0.12], 0.03, 0.5)),
+                                        ("delta-4axis", Task([-0.1, 0.05, -0.8], [0.12, -0.05, -0.78], 0.03, 0.5))])
+def test_the_bound_from_the_laws_grid_data_is_the_same(name, task):
+    """``--time optimal`` takes the bound's model terms from the time law's grid data (one model evaluation for
+    both): the bound is the one evaluated on its own, to the bit (each term is computed point by point)."""
+    from pickplace_cli.planner import PlanOptions, motion_model, plan
+    from pickplace_cli.timing.optimal import sqp_data
+    from tests.property.test_limit_truth import _profile
+
+    prof = _profile(name)
+    fit = plan(task, prof, PlanOptions(time="fit"))
+    model = motion_model(fit.cartesian.path, prof)
+    assert torque_bound(model, data=sqp_data(model)) == torque_bound(model)
+    opt = plan(task, prof, PlanOptions(time="optimal"))
+    assert opt.duration.t_bound == torque_bound(model)
