@@ -401,10 +401,10 @@ def _planned(task: Task, profile: Profile, options: PlanOptions, shape, rate: fl
     from .timing.written import as_read, reads_written
 
     read_past: tuple = ()
-    if reads_written(options, len(samples.t)) and factory is None and report.ok:
+    if reads_written(options, len(samples.t)) and report.ok:
         stop()  # a law at its limits (or a file too sparse to show its motion), as check reads its samples
         duration, model, path, samples, report, rounding, read_past = _written_stage(
-            model, path, duration, samples, report, rounding, rate, options, profile, uniform)
+            model, path, duration, samples, report, rounding, rate, options, profile, uniform, factory)
     # the Cartesian capacity's rows always: judged when the rule holds it, else reported as not held
     report = report.with_rows(capacity_rows(path, duration.seconds, profile.capacity, capacity_not_held(options)))
     if read_past:  # still past a limit as read (or, strict, not resolved): the plan says so, with the reading's peak
@@ -438,11 +438,12 @@ def _cycle_stage(cycle: float, profile: Profile, model: MotionModel, path, facto
 
 
 def _written_stage(model: MotionModel, path, duration: Duration, samples, report: LimitReport, rounding, rate: float,
-                   options: PlanOptions, profile: Profile, uniform: tuple):
+                   options: PlanOptions, profile: Profile, uniform: tuple, factory=None):
     """A law at its limits (``fit``, ``optimal``) slowed until ``check`` reads its written samples within every limit
     (:func:`pickplace_cli.timing.written.hold_as_written`); a time-optimal law slowed past the uniform law's fit is
     replaced by the uniform law (``uniform``: its model and path) when that is shorter as written. The exact check runs
-    again at the new duration, and a reading that still exceeds a limit marks that row exceeded.
+    again at the new duration, and a reading that still exceeds a limit marks that row exceeded. ``factory``: a path
+    planned for its duration (``bspline-vel``) is planned again for each longer one.
     → (duration, model, path, samples, report, rounding, the reading's rows still past their limit: :func:`~pickplace_cli.timing.written.as_read`)."""
     from .timing.written import hold_as_written
 
@@ -455,10 +456,14 @@ def _written_stage(model: MotionModel, path, duration: Duration, samples, report
 
     def held(m, p, T0: float, s0):
         def sample(T: float):
-            s = _sample(m, p, T, rate, cycle)
-            return s, outputs(s, T)
+            mm, pp = m, p
+            if factory is not None and T != T0:  # the path planned for this duration (its model with it)
+                pp = factory(T)
+                mm = motion_model(pp, profile)
+            s = _sample(mm, pp, T, rate, cycle)
+            return s, outputs(s, T), mm, pp
 
-        return hold_as_written(T0, (s0, outputs(s0, T0)) if s0 is not None else sample(T0), sample, profile,
+        return hold_as_written(T0, (s0, outputs(s0, T0), m, p) if s0 is not None else sample(T0), sample, profile,
                                capacity_not_held(options), cycle, rate,
                                positions_only=options.read_written == "positions", strict=options.strict,
                                stretch=isinstance(options.time, str))
@@ -482,7 +487,7 @@ def _written_stage(model: MotionModel, path, duration: Duration, samples, report
                         "refuses such a file; write at a higher --rate, or leave the tool's columns out (--columns)")
     if w.k == 1.0 and not switched and not w.past:  # read within every limit as planned (or not read: too few samples)
         return replace(duration, written=w.note), model, path, samples, report, rounding, ()
-    samples = w.state[0]
+    samples, _, model, path = w.state  # (a path planned for its duration: the one planned for w.T)
     report = check_limits(model, w.T, parts=samples.parts, dwell=dwell, notes=report.notes + ((w.note,) if w.note else ()))
     if rounding is not None:
         cycles = int(round(w.T / cycle))

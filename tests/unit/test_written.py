@@ -362,3 +362,25 @@ def test_strict_says_what_it_read_and_refuses_what_check_cannot_read(tmp_path):
     assert r.exit_code == 0, r.stderr
     r = CliRunner().invoke(app, ["check", out, "-p", "scara-600", "--strict", "-q"])
     assert r.exit_code == 0, r.stderr
+
+
+def test_a_path_planned_for_its_duration_is_read_back_and_replanned(tmp_path):
+    """``bspline-vel`` (a pick from a moving belt) plans its path for its duration. At 40 Hz check read the default
+    plan's file at 149 % of the capacity acceleration and refused it (exit 3) while plan said every limit held: the
+    written samples were not read back for such a path. They are now, and each longer duration's path is planned
+    again rather than the path slowed: the slowed file still leaves the pick at the belt's velocity (a path slowed
+    in time would leave it at v/k; read from the CSV's first row), check accepts it, and a given duration the
+    reading exceeds is judged (exit 3)."""
+    prof = load_profile("delta-su2018")
+    task = Task([-0.15, 0.0, -0.8], [0.15, 0.0, -0.8], height=0.025, eta=0.5, v_from=[0.3, 0.0, 0.0])
+    pl = plan(task, prof, PlanOptions(method="bspline-vel", rate=40.0))
+    assert pl.report.ok and pl.duration.written_stretch > 1.01, pl.duration.written
+    assert "slowed" in pl.duration.written
+    buf = io.StringIO()
+    write_csv(pl, buf)
+    rows = np.genfromtxt(io.StringIO(buf.getvalue()), delimiter=",", names=True)
+    assert rows["vxms"][0] == pytest.approx(0.3, abs=1e-9) and abs(rows["vzms"][0]) < 1e-9
+    assert rows["ts"][-1] == pytest.approx(pl.duration.seconds, rel=1e-12)
+    assert _file_ok(tmp_path, pl, prof, hold=True)
+    given = plan(task, prof, PlanOptions(method="bspline-vel", rate=40.0, time=pl.duration.t_auto))
+    assert given.report.exit_code() == 3 and "not written as within its limits" in given.duration.written
