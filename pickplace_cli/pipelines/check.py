@@ -325,8 +325,8 @@ def check_file(path: str | Path, profile: Profile, smoothing: float | str = 0.0,
 
 
 #: a move whose joint speed at its first or last sample is above this share of its peak [-] "ends moving": a file cut
-#: short, or a conveyor move (which ends at the belt's speed); a move from and to rest stays far below (its last
-#: interval's mean speed at 100 Hz: a few %)
+#: short, or a conveyor move (which ends at the belt's speed); a move from and to rest stays far below (a sampled
+#: file's end speed is extrapolated from its first or last two intervals: :func:`_end_speeds`)
 MOVING_END = 0.1
 
 
@@ -339,7 +339,11 @@ def _table_moves(table) -> bool:
 
 def _end_speeds(kind: str, what) -> list:
     """[(move, times (N,) [s], joint speeds (N, n) [per s])] of each move (a table: its points' velocities, a PVT's or
-    cam's own, a cam-table's slopes; samples: the slope of each interval, at its end)."""
+    cam's own, a cam-table's slopes; samples: the slope of each interval, at its end, and at the first and last
+    sample the slope there of the parabola through the first or last three samples — a move from rest has a
+    first interval's mean speed of 10-30 % of its peak at 50-80 Hz, which is no speed at its start: the parabola's
+    slope there is ≤ 0 for any start from rest (q ∝ tⁿ, n ≥ 2), and the speed itself to O(h²) for a file that starts
+    moving; a parabola that turns back there counts as at rest)."""
     if kind == "table":
         if what.qd is not None:
             return [(None, what.t, what.qd)]
@@ -347,8 +351,18 @@ def _end_speeds(kind: str, what) -> list:
         return [(None, what.t[1:], slope)] if len(slope) else []
     out = []
     for s in what:
-        if len(s.t) >= 2:
-            out.append((s.move, s.t[1:], np.diff(s.q, axis=0) / np.diff(s.t)[:, None]))
+        if len(s.t) < 2:
+            continue
+        h = np.diff(s.t)
+        slope = np.diff(s.q, axis=0) / h[:, None]
+        if len(slope) < 2:
+            out.append((s.move, s.t[1:], slope))
+            continue
+        v0 = slope[0] - (slope[1] - slope[0]) * (h[0] / (h[0] + h[1]))
+        v1 = slope[-1] + (slope[-1] - slope[-2]) * (h[-1] / (h[-1] + h[-2]))
+        v0 = np.where(v0 * slope[0] > 0, v0, 0.0)
+        v1 = np.where(v1 * slope[-1] > 0, v1, 0.0)
+        out.append((s.move, np.concatenate([s.t[:1], s.t[1:], s.t[-1:]]), np.vstack([v0, slope, v1])))
     return out
 
 

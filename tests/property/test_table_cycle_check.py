@@ -23,7 +23,8 @@ runner = CliRunner()
 ADEPT = ("--from", "-0.1525,0,-0.8", "--to", "0.1525,0,-0.8")
 MOVES = {"delta-su2018": ADEPT,
          "delta-4axis": ("--from", "-0.1525,0,-0.8,0", "--to", "0.1525,0,-0.8,1.5"),
-         "scara-600": ("--from", "0.3,-0.15,-0.1", "--to", "0.4,0.15,-0.1")}
+         "scara-600": ("--from", "0.3,-0.15,-0.1", "--to", "0.4,0.15,-0.1"),
+         "gantry": ("--from", "-0.3,-0.2,-0.5", "--to", "0.3,0.3,-0.45")}
 
 
 def _plan(tmp_path, prof: str, *args: str) -> tuple[str, str]:
@@ -372,3 +373,24 @@ def test_structured_text_times_are_the_csv_times(tmp_path):
         assert all(len(repr(v)) <= 14 for v in values), name  # no float noise
     cycles = rows[1:, 1] / 0.002
     assert np.allclose(cycles, np.round(cycles), rtol=0, atol=1e-9)
+
+
+@pytest.mark.parametrize("prof", ["delta-su2018", "gantry"])
+def test_a_low_rate_file_from_rest_to_rest_does_not_say_it_starts_moving(tmp_path, prof):
+    """At 50 Hz a move from rest covers 12-28 % of a joint's peak speed in its first interval (the gantry's short z
+    axis): the interval's mean speed is no speed at its start. check said the motion starts moving (a file cut
+    short?); the end speeds are now the slopes at the end samples of the parabolas through the first and last three
+    samples. The same file cut off at 80 % of its samples (a joint at 28-63 % of its peak speed there, read from the
+    file's own qd columns, an independent record of the motion) still says it ends moving."""
+    path, _ = _plan(tmp_path, prof, "--rate", "50", "-q")
+    res = runner.invoke(app, ["check", path, "-p", prof, "-q"])
+    assert "moving (" not in res.output, res.output
+    lines = open(path).read().splitlines()
+    keep = int(0.8 * (len(lines) - 1))
+    head = lines[0].split(",")
+    cols = [i for i, h in enumerate(head) if h.startswith("qd") and not h.startswith("qdd")]
+    qd = np.array([[float(x) for x in ln.split(",")] for ln in lines[1:keep + 1]])[:, cols]
+    assert np.max(np.abs(qd[-1]) / np.abs(qd).max(axis=0)) > 0.25  # the cut file really ends at speed
+    open(path, "w").write("\n".join(lines[:keep + 1]) + "\n")
+    res = runner.invoke(app, ["check", path, "-p", prof, "-q"])
+    assert "the motion ends moving" in res.output and "motion starts moving" not in res.output, res.output
