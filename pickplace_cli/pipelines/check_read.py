@@ -13,7 +13,8 @@ and whether a file's derivative columns agree with its positions.
   Hermite end correction, exact for a quintic):
   velocity within ``AGREE[1]`` and acceleration within ``AGREE[2]`` of the interval's change on every interval, jerk
   within ``AGREE[3]`` on at least half of them (the jerk of a planned motion steps: on an interval across a step the
-  rule is off by up to half the step). Otherwise the file is judged from its positions.
+  rule is off by up to half the step), and a velocity or acceleration column not off by one factor everywhere
+  (``SCALE_TOL``: a re-timed file's columns). Otherwise the file is judged from its positions.
 """
 
 from __future__ import annotations

@@ -142,14 +142,15 @@ class _Columns:
 def _columns_off(out, positions_only: bool) -> list:
     """[(_Columns, how far: the worst misfit over its allowance)] when the written tool columns of ``out`` (t, tool,
     q) disagree with their positions as ``check --strict`` tests them; [] when they agree (or are not written)."""
-    from ..limits.samples import AGREE, derivative_problems
+    from ..limits.samples import AGREE, SCALE_TOL, derivative_problems
 
     if positions_only:
         return []
     t, tool = out[0], out[1]
     data = written_values(np.column_stack([t, tool]))
     problems = derivative_problems(data[:, 0] - data[0, 0], data[:, 1:13])
-    return [(_Columns(problems), max(m / AGREE[k] for k, m in problems))] if problems else []
+    return ([(_Columns(problems), max(m / AGREE[k] if m >= 0 else abs(-m - 1.0) / SCALE_TOL for k, m in problems))]
+            if problems else [])
 
 
 def hold_as_written(T0: float, state: Any, sample: Callable[[float], tuple[Any, tuple]], profile, not_held: str,
