@@ -197,7 +197,7 @@ def plan(
         "[default: 0, the screened search alone]",
         rich_help_panel=Panel.METHOD,
     ),
-    rate: Optional[float] = typer.Option(None, "--rate", help="Samples per second in Hz; a move of fewer than 100 samples (or a file of the joint positions alone) is read back as check reads it and slowed until it passes. [default: profile]", rich_help_panel=Panel.METHOD),
+    rate: Optional[float] = typer.Option(None, "--rate", help="Samples per second in Hz; a move of fewer than 100 samples (or a file of the joint positions alone) is read back as check reads it and slowed until it passes; fewer than 6 samples: refused (exit 1), but for a drive's table. [default: profile]", rich_help_panel=Panel.METHOD),
     cycle: Optional[str] = typer.Option(
         None, "--cycle", metavar="SECONDS|off", help="The controller's cycle in s (e.g. 0.001): the duration and the "
         "dwell are rounded up to whole cycles, the limits checked again on the rounded move (a cycle more when it "
