@@ -409,32 +409,10 @@ def _planned(task: Task, profile: Profile, options: PlanOptions, shape, rate: fl
     report = report.with_rows(capacity_rows(path, duration.seconds, profile.capacity, capacity_not_held(options)))
     if read_past:  # still past a limit as read (or, strict, not resolved): the plan says so, with the reading's peak
         report = as_read(report, read_past)
-    if report.ok:  # (a move past a limit is not written as within them: its verdict is the answer)
-        _refuse_unreadable(samples, duration.seconds, rate, options)
     if options.strict:
         report = replace(report, strict=True)
     planned = _assemble(task, profile, path, duration, model, samples, report.rated(profile.limit_use))
     return planned if rounding is None else replace(planned, cycle=rounding)
-
-
-def _refuse_unreadable(samples, T: float, rate: float, options: PlanOptions) -> None:
-    """TaskError when a move written as samples (``options.read_written``: a CSV or MCAP trajectory, not a drive's
-    table) has fewer samples than ``check`` reads a move from: the file could not be checked."""
-    from .model.errors import TaskError
-    from .timing.written import MIN_SAMPLES
-
-    n = len(samples.t)
-    if not options.read_written or n >= MIN_SAMPLES:
-        return
-    need = (MIN_SAMPLES - 1) / T
-    if options.cycle is not None:
-        raise TaskError(f"cycle = {options.cycle:g} s: {n} samples (one per cycle) for a {T:.4g} s move, fewer than the "
-                        f"{MIN_SAMPLES} check reads a move from (a quintic spline): the file could not be checked; a "
-                        f"cycle of {1.0 / need:.3g} s or less, or a drive's table (-f pvt, cam)")
-    given = "rate" if options.rate is not None else "the profile's planning.rate"
-    raise TaskError(f"{given} = {rate:g} Hz: {n} samples for a {T:.4g} s move, fewer than the {MIN_SAMPLES} check reads "
-                    f"a move from (a quintic spline): the file could not be checked; --rate {np.ceil(need * 1.001):g} Hz "
-                    "or more, or a drive's table (-f pvt, cam)")
 
 
 def _cycle_stage(cycle: float, profile: Profile, model: MotionModel, path, factory, duration: Duration,

@@ -389,7 +389,7 @@ def plan(
     from ..model.headroom import apply_limit_use
 
     prof = apply_limit_use(load_profile(profile), limit_use)  # --limit-use, else the profile's planning.limit_use
-    from .units import check_option_units, warn_few_samples
+    from .units import check_option_units, refuse_unreadable, warn_few_samples
 
     check_option_units(a, prof)  # --from/--to/--height in mm refused, --time in ms warned (cli/units.py)
     params = _method_params(a)
@@ -436,6 +436,7 @@ def plan(
         back = Task(task.p_to, task.p_from, task.height, task.eta, theta_from=legs[0].task.theta_to,
                     theta_to=task.theta_from)
         legs.append(_run_plan(back, prof, replace(options, turn=TurnName.as_given.value)))
+    refuse_unreadable(legs, options, rate, a.cycle_s, '--cycle' if cycle is not None else "the profile's controller.cycle")
     warn_few_samples(legs, rate, a.cycle_s, '--cycle' if cycle is not None else "the profile's controller.cycle")
     code, cycle = _render_legs(a, prof, legs, rendezvous, track)
     forgiven = write_anyway and code == 3  # a timed limit only: a position past its range is never written

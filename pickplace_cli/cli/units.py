@@ -52,6 +52,33 @@ def check_option_units(a, prof) -> None:
                          f"--time {seconds / 1000:g} (the duration is in s)\n")
 
 
+def refuse_unreadable(legs, options, rate, cycle: float | None = None, named: str = "--cycle") -> None:
+    """TaskError (exit 1) when a move within its limits would be written as samples (a CSV or MCAP trajectory, not a
+    drive's table: ``options.read_written``) in fewer than the samples ``check`` reads a move from: plan would say
+    every limit holds of a file check refuses. The message names the rate (or the cycle) and the least that works.
+    (The library's :func:`~pickplace_cli.planner.plan` returns such a plan: it writes no file.)"""
+    import math
+
+    from ..model.errors import TaskError
+    from ..timing.written import MIN_SAMPLES
+
+    if not options.read_written:
+        return
+    for leg in legs:
+        n, T = len(leg.t), float(leg.report.duration)
+        if n >= MIN_SAMPLES or not leg.report.ok:  # (a move past a limit: its verdict is the answer, nothing is written)
+            continue
+        why = (f"fewer than the {MIN_SAMPLES} check reads a move from (a quintic spline): the file could not be "
+               "checked")
+        if cycle is not None:
+            raise TaskError(f"{named} {cycle:g} s: {n} samples (one per cycle) for a {T:.4g} s move, {why}; a cycle of "
+                            f"{T / (MIN_SAMPLES - 1):.3g} s or less, or a drive's table (-f pvt, cam)")
+        need = f"{math.ceil((MIN_SAMPLES - 1) / T * 1.001):g}"
+        given = f"--rate {rate:g} Hz" if rate is not None else "the profile's planning.rate"
+        raise TaskError(f"{given}: {n} samples for a {T:.4g} s move, {why}; --rate {need} Hz or more, or a drive's "
+                        "table (-f pvt, cam)")
+
+
 def warn_few_samples(legs, rate, cycle: float | None = None, named: str = "--cycle") -> None:
     """A warning when a planned move has fewer than :data:`FEW_SAMPLES` samples (module docstring); on a controller
     ``cycle`` [s] the samples are one per cycle, and the warning names the cycle (``named``: where it was given)."""

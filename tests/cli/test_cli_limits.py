@@ -168,9 +168,17 @@ def test_vertical_move_message():
 
 
 def test_tiny_rate_keeps_both_ends():
+    """A rate far below one sample per move keeps both ends (the library's plan: the CLI refuses to write a move in
+    fewer samples than check reads, naming the rate)."""
+    from pickplace_cli.model.profile import load_profile
+    from pickplace_cli.model.task import Task
+    from pickplace_cli.planner import PlanOptions, plan
+
+    pl = plan(Task([-0.1525, 0, -0.8], [0.1525, 0, -0.8], 0.025, 0.5), load_profile("delta-su2018"),
+              PlanOptions(rate=1e-9, time=0.25))
+    assert list(pl.t) == [0.0, 0.25]
     r = run("plan", *ADEPT, "--rate", "1e-9", "-q", "--time", "0.25")
-    rows = r.stdout.strip().splitlines()[1:]
-    assert [float(x.split(",")[0]) for x in rows] == [0.0, 0.25]
+    assert r.exit_code == 1 and "--rate 1e-09 Hz: 2 samples for a 0.25 s move" in r.stderr and not r.stdout
 
 
 def test_wildly_infeasible_move_prints_readable_percentages_and_whole_rows():

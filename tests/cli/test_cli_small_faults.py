@@ -38,11 +38,13 @@ def test_a_short_move_without_rate_does_not_suggest_a_rate(tmp_path):
     r = _run("plan", *ADEPT, "--time", "0.0018", "-q", "--write-anyway", "-o", str(tmp_path / "t.csv"))
     assert "pickplace: warning: a 0.0018 s move: 3 samples at the profile's planning.rate" in r.output
     assert "--rate" not in r.output and "kHz" not in r.output
-    r = _run("plan", *ADEPT, "--rate", "10", "-q", "-o", str(tmp_path / "t.csv"))  # a rate given: the unit hint
-    assert "--rate 10 Hz: 3 samples for a 0.18 s move" in r.output and "kHz meant? --rate 10000" in r.output
+    r = _run("plan", *ADEPT, "--rate", "10", "-q", "-o", str(tmp_path / "t.csv"))  # a rate given: it is named
+    assert "--rate 10 Hz: 3 samples for a 0.18 s move" in r.output and "--rate 28 Hz or more" in r.output
     r = _run("plan", *ADEPT, "--cycle", "0.25", "-q", "-o", str(tmp_path / "t.csv"))  # a cycle: the cycle is named
     assert "--cycle 0.25 s: 2 samples (one per cycle) for a 0.25 s move" in r.output, r.output
-    assert "planning.rate" not in r.output and "milliseconds meant? 0.00025 s" in r.output
+    assert "planning.rate" not in r.output and "a cycle of 0.05 s or less" in r.output
+    r = _run("plan", *ADEPT, "--rate", "30", "-q", "-o", str(tmp_path / "t.csv"))  # enough to check: the unit hint
+    assert "--rate 30 Hz: 9 samples for a" in r.output and "kHz meant? --rate 30000" in r.output
 
 
 def test_profile_show_prints_the_workcell_and_the_controller():

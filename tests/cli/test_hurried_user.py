@@ -282,12 +282,16 @@ def test_a_real_far_point_is_not_called_millimetres(tmp_path):
 
 
 def test_a_rate_that_gives_a_handful_of_samples_is_a_warning(tmp_path):
-    """`--rate 10` for the 0.18 s Adept move: 3 samples (the CSV has them: reference), a warning naming kHz."""
-    r = run("plan", *ADEPT, "-q", "--rate", "10", "-o", str(tmp_path / "t.csv"))
+    """`--rate 30` for the 0.18 s Adept move: a handful of samples (the CSV has them: reference), a warning naming
+    kHz; `--rate 10` (3 samples, fewer than check reads a move from) is refused, naming the least rate, no file."""
+    r = run("plan", *ADEPT, "-q", "--rate", "30", "-o", str(tmp_path / "t.csv"))
     assert r.exit_code == 0
     n = len((tmp_path / "t.csv").read_text().splitlines()) - 1
-    assert n == 3
-    assert f"pickplace: warning: --rate 10 Hz: {n} samples for a 0.18 s move" in r.stderr
+    assert 6 <= n < 20
+    assert f"pickplace: warning: --rate 30 Hz: {n} samples for a " in r.stderr and "kHz meant?" in r.stderr
+    r = run("plan", *ADEPT, "-q", "--rate", "10", "-o", str(tmp_path / "u.csv"))
+    assert r.exit_code == 1 and not (tmp_path / "u.csv").exists()
+    assert "pickplace: error: --rate 10 Hz: 3 samples for a 0.18 s move" in r.stderr
 
 
 def _edited(tmp_path: Path, old: str, new: str, name: str = "delta-su2018") -> Path:
