@@ -210,7 +210,13 @@ def optimise_shape(task, profile, model_of, eta_fixed: float | None = None,
             model = model_of(path)
             tau = _extra_points(path.breakpoints, path.jumps, SHAPE_SAMPLES)
             found = _worst_utilisation(model, dwell, tau)
-            if found is None:
+            if found is None and capacity is not None:  # no joint or motor limit times the move: the capacity does
+                excess = _static_excess(model, model.parts(tau, derivatives=False))
+                val = max(x for x in auto_duration(path, capacity)[:3] if x is not None)
+                last_t[0] = val
+                if excess > 0:
+                    val += INFEASIBLE * (1.0 + round(excess, 6))
+            elif found is None:
                 val = np.inf
             else:
                 excess = _static_excess(model, found[1])

@@ -47,7 +47,7 @@ def optimised_shape(task, profile, options, motion_model) -> tuple:
     (:func:`pickplace_cli.timing.shape.optimise_shape`), and what the search found for the path parameters
     (``shape``: the chosen shape, its screened duration, the table's shape and its exact fit duration); ``options``
     a PlanOptions, ``motion_model(path, profile)`` the planner's model of a path."""
-    from ..model.errors import PickplaceError, UsageError
+    from ..model.errors import PickplaceError, TaskError, UsageError
     from ..paths import Method, plan_path
     from ..paths.turn import turned
     from . import choose_duration
@@ -79,8 +79,11 @@ def optimised_shape(task, profile, options, motion_model) -> tuple:
     if ref is not None:
         table_shape = (float(ref.parameters["k1"]), float(ref.parameters["k2"]), float(task.eta))
         # the table shape's fit; a profile with no duration-dependent limit is the same error as --time fit's
-        t_table = choose_duration(ref, profile.capacity, "limits" if options.time == "limits" else "fit",
-                                  model=model_of(ref), dwell=profile.planning.dwell, hold_capacity=hold).seconds
+        try:
+            t_table = choose_duration(ref, profile.capacity, "limits" if options.time == "limits" else "fit",
+                                      model=model_of(ref), dwell=profile.planning.dwell, hold_capacity=hold).seconds
+        except TaskError as exc:  # the message names the rule the user asked for, and the option
+            raise TaskError("--optimize shape: " + str(exc).replace("time = fit:", f"time = {options.time}:", 1)) from None
     found = optimise_shape(task, profile, model_of, eta_fixed=task.eta if options.hold_eta else None,
                            table_shape=table_shape, capacity=profile.capacity if hold else None)
     if options.time == "optimal":  # the screen ranks by the uniform law: the law judges the winner and the table's
