@@ -7,8 +7,9 @@ Where the rebuilt acceleration steps (PVT at every point; a linear cam table at 
 each point) the torque rate is unbounded for an instant: the drive takes the step within one controller cycle, in
 which the motion goes on changing, so what the torque rate allows in one cycle bounds the step and the change
 around it together — |Δ motor torque + motor torque rate · cycle| ≤ torque rate limit · cycle (and
-|Δq̈ + q⃛ · cycle| ≤ jerk · cycle for a joint with a jerk limit), with the rate of either side of the step — and is
-reported as its own rows (``motor torque step`` and ``acceleration step``), the ends of the motion counted as steps
+|Δq̈ + q⃛ · cycle| ≤ jerk · cycle for a joint with a jerk limit), with the rate of either side of the step, and
+the exact change over every window of one cycle that holds the step (:func:`_windows`: the curvature over the cycle
+too) — and is reported as its own rows (``motor torque step`` and ``acceleration step``), the ends of the motion counted as steps
 from and to rest.
 """
 
@@ -131,10 +132,38 @@ def _steps(model, motion, cycle: float) -> tuple[dict[str, np.ndarray], np.ndarr
         return np.maximum(np.abs(step + before * cycle), np.abs(step + after * cycle))
 
     dtau = torque[1] - torque[0]
-    dtorque = {name: over_cycle(dtau[:, i], rate[0][:, i], rate[1][:, i])
+    # the same change over every window of one cycle that holds the break (the break at its end, its start or between),
+    # exact: the step and the motion's own change on either side, curvature included (the linear rule above misses
+    # it: 0.85 % on a 4-axis Delta's PVT at a 2 ms cycle, reading 99.6 % where the window's change is 100.45 %)
+    w_tau, w_acc = _windows(model, motion, t, cycle)
+    dtorque = {name: np.maximum(over_cycle(dtau[:, i], rate[0][:, i], rate[1][:, i]), w_tau[:, i])
                for i, name in ((names.index(n), n) for n in limited)}
-    dacc = over_cycle(right[2] - left[2], left[3], right[3])
+    dacc = np.maximum(over_cycle(right[2] - left[2], left[3], right[3]), w_acc)
     return dtorque, dacc, t - motion.start
+
+
+#: windows per break of :func:`_windows` (their starts spread over the cycle before it)
+STEP_WINDOWS = 20
+
+
+def _windows(model, motion, t: np.ndarray, cycle: float) -> tuple[np.ndarray, np.ndarray]:
+    """The largest |τ(s + cycle) − τ(s)| (signed motor torque, (B, n) [N·m]) and |q̈(s + cycle) − q̈(s)| ((B, n)) over
+    the windows [s, s + cycle] that hold each break t_b (s from t_b − cycle to t_b, ``STEP_WINDOWS`` + 1 of them; the
+    window that starts at the break starts on the piece before it, the one that ends there ends on the piece after
+    it; outside the motion its end values are held, as the drive holds them)."""
+    frac = np.linspace(0.0, 1.0, STEP_WINDOWS + 1)
+    S = (t[:, None] - cycle * frac[None, :]).ravel()
+    E = S + cycle
+    out = []
+    for x, side in ((S, "left"), (E, "right")):
+        q, qd, qdd, qddd = motion.all_orders(x, side=side)
+        parts = model.parts(np.zeros(len(x)), derivatives=True, singularity=False,
+                            motion=tool_motion(model.robot, q, qd, qdd, qddd))
+        out.append((parts.Am + parts.Gm, qdd))
+    shape = (len(t), STEP_WINDOWS + 1, -1)
+    w_tau = np.abs((out[1][0] - out[0][0]).reshape(shape)).max(axis=1)
+    w_acc = np.abs((out[1][1] - out[0][1]).reshape(shape)).max(axis=1)
+    return w_tau, w_acc
 
 
 def step_rows(model, motion, cycle: float) -> tuple[LimitRow, ...]:
