@@ -211,8 +211,9 @@ def plan(
         None, "--tolerance", help="pvt, cam, cam-table: the largest deviation in rad (revolute joint) or m (linear) of "
         "the controller's interpolation of the table from the planned trajectory; the table has the fewest points that "
         "hold it and, as the drive interpolates it, every limit (more points, else a slower table; exit 3 when it "
-        "cannot; PVT steps bounded by the torque rate over one cycle). The achieved error is reported. At most 0.001 "
-        "(1 mrad or 1 mm). [default: 1e-6]",
+        "cannot; PVT steps bounded by the torque rate over one cycle). The achieved error is reported. A cam-table on a "
+        "controller cycle has a point every cycle, and between two the drive runs a straight line: its deviation is the "
+        "cycle's, reported beside the tolerance, not refused. At most 0.001 (1 mrad or 1 mm). [default: 1e-6]",
         rich_help_panel=Panel.CONTROLLER,
     ),
     st_dialect: StDialect = typer.Option(

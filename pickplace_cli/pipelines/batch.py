@@ -504,9 +504,9 @@ def run_chunks_in_order(fn, args: list, workers: int, fail_fast: bool) -> Iterat
     from ..lookup.executors import local_pool
 
     # the workers leave Ctrl-C (SIGINT to the terminal's whole process group) to this process: it cancels the chunks
-    # not started and waits for the running ones (one chunk: 25 plans, or 500 verdicts) without a traceback from each;
-    # a reader that goes away (the generator closed: ``… --json | head -1``) sets ``stop``, and the running and queued
-    # chunks return after their current row
+    # not started and sets ``stop``, and the running ones return after their current row, without a traceback from
+    # each (it waited for each running chunk to the end: 7 s for 25 time-optimal plans on 4 workers of 2 cores); a
+    # reader that goes away (the generator closed: ``… --json | head -1``) sets ``stop`` too
     stop = multiprocessing.get_context().Event()
     with local_pool(workers, stop) as pool:
         futures = [pool.submit(fn, a) for a in args]
@@ -517,7 +517,7 @@ def run_chunks_in_order(fn, args: list, workers: int, fail_fast: bool) -> Iterat
                     if fail_fast and res.code:
                         stop.set()
                         return
-        except GeneratorExit:
+        except (GeneratorExit, KeyboardInterrupt):
             stop.set()
             raise
         finally:
