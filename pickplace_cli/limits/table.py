@@ -148,22 +148,40 @@ STEP_WINDOWS = 20
 
 def _windows(model, motion, t: np.ndarray, cycle: float) -> tuple[np.ndarray, np.ndarray]:
     """The largest |τ(s + cycle) − τ(s)| (signed motor torque, (B, n) [N·m]) and |q̈(s + cycle) − q̈(s)| ((B, n)) over
-    the windows [s, s + cycle] that hold each break t_b (s from t_b − cycle to t_b, ``STEP_WINDOWS`` + 1 of them; the
-    window that starts at the break starts on the piece before it, the one that ends there ends on the piece after
-    it; outside the motion its end values are held, as the drive holds them)."""
+    the windows [s, s + cycle] that hold each break t_b (s from t_b − cycle to t_b, ``STEP_WINDOWS`` + 1 of them). A
+    window holds its own break's step and no other: the one that starts at t_b starts on the piece before it, the one
+    that ends there ends on the piece after it, and an end that falls on another break (a linear table's blends are
+    one cycle apart) stays on the window's side of it. Outside the motion its end values are held, as the drive
+    holds them."""
     frac = np.linspace(0.0, 1.0, STEP_WINDOWS + 1)
-    S = (t[:, None] - cycle * frac[None, :]).ravel()
+    S = t[:, None] - cycle * frac[None, :]
     E = S + cycle
-    out = []
-    for x, side in ((S, "left"), (E, "right")):
+    # an end a rounding away from a break is on it (t_b + cycle is the next break of a linear table, to the last bit
+    # or not): the side rules above then decide its piece
+    for X in (S, E):
+        k = np.clip(np.searchsorted(t, X), 1, len(t) - 1)
+        near = np.where(np.abs(X - t[k - 1]) < np.abs(X - t[k]), t[k - 1], t[k])
+        snap = np.abs(X - near) <= 1e-9 * cycle
+        X[snap] = near[snap]
+
+    def torque_acc(x: np.ndarray, side: str) -> tuple[np.ndarray, np.ndarray]:
         q, qd, qdd, qddd = motion.all_orders(x, side=side)
+        # past an end (and at it, on the far side): at rest, or going on at the end's velocity (as :func:`_steps`)
+        out = (x >= t[-1]) if side == "right" else (x <= t[0])
+        if out.any():
+            qdd[out], qddd[out] = 0.0, 0.0
+            if motion.ends == "hold":
+                qd[out] = 0.0
         parts = model.parts(np.zeros(len(x)), derivatives=True, singularity=False,
                             motion=tool_motion(model.robot, q, qd, qdd, qddd))
-        out.append((parts.Am + parts.Gm, qdd))
-    shape = (len(t), STEP_WINDOWS + 1, -1)
-    w_tau = np.abs((out[1][0] - out[0][0]).reshape(shape)).max(axis=1)
-    w_acc = np.abs((out[1][1] - out[0][1]).reshape(shape)).max(axis=1)
-    return w_tau, w_acc
+        return parts.Am + parts.Gm, qdd
+
+    n = len(model.robot.joint_names)
+    tau_s, acc_s = (a.reshape(len(t), len(frac), n) for a in torque_acc(S.ravel(), "right"))
+    tau_e, acc_e = (a.reshape(len(t), len(frac), n) for a in torque_acc(E.ravel(), "left"))
+    tau_s[:, 0], acc_s[:, 0] = torque_acc(S[:, 0], "left")  # the window that starts at the break: before its step
+    tau_e[:, -1], acc_e[:, -1] = torque_acc(E[:, -1], "right")  # the one that ends there: after it
+    return np.abs(tau_e - tau_s).max(axis=1), np.abs(acc_e - acc_s).max(axis=1)
 
 
 def step_rows(model, motion, cycle: float) -> tuple[LimitRow, ...]:

@@ -66,6 +66,17 @@ def _static_excess(model, parts) -> float:
     return worst
 
 
+def _capacity_screen(model, path, tau: np.ndarray, capacity) -> float:
+    """A shape's screened duration [s] on a profile whose only duration limit is the Cartesian capacity: Eq. 26's
+    auto duration of the path's peaks, ranked below every feasible shape when it breaks a duration-independent limit
+    (``INFEASIBLE``)."""
+    from . import auto_duration
+
+    excess = _static_excess(model, model.parts(tau, derivatives=False))
+    val = max(x for x in auto_duration(path, capacity)[:3] if x is not None)
+    return val + INFEASIBLE * (1.0 + round(excess, 6)) if excess > 0 else val
+
+
 def _AXIS(n: int) -> np.ndarray:
     """Grid values of k1 and k2: the lower end of the range (the optimum often lies there) and n − 1 points
     spread over [0.15, 0.85]."""
@@ -210,14 +221,8 @@ def optimise_shape(task, profile, model_of, eta_fixed: float | None = None,
             model = model_of(path)
             tau = _extra_points(path.breakpoints, path.jumps, SHAPE_SAMPLES)
             found = _worst_utilisation(model, dwell, tau)
-            if found is None and capacity is not None:  # no joint or motor limit times the move: the capacity does
-                excess = _static_excess(model, model.parts(tau, derivatives=False))
-                val = max(x for x in auto_duration(path, capacity)[:3] if x is not None)
-                last_t[0] = val
-                if excess > 0:
-                    val += INFEASIBLE * (1.0 + round(excess, 6))
-            elif found is None:
-                val = np.inf
+            if found is None:  # no joint or motor limit times the move: the capacity does, when it is held
+                val = np.inf if capacity is None else _capacity_screen(model, path, tau, capacity)
             else:
                 excess = _static_excess(model, found[1])
                 val = _log_secant_root(found[0], last_t[0])

@@ -102,7 +102,8 @@ def test_cam_table_steps_against_an_independent_derivation(tmp_path):
     a_k to a_{k+1}, at the first blend's start from 0 and at the last one's end to 0. Motor torque from the
     independent rigid-body reference (Lagrange, complex step) as τ/(N·η) + J_rotor·N·q̈, its rate on either side
     by the reference's own difference along the blend's motion; the change over the cycle that takes a step is
-    the step plus that rate × the cycle, the larger of the two sides. Max over the edges per joint = check's row
+    the step plus that rate × the cycle, the larger of the two sides, or, where larger, the exact change over a
+    window of one cycle that holds the edge (each end u into its blend). Max over the edges per joint = check's row
     (1e-6 relative) and its time."""
     from pickplace_cli.model.profile import load_profile
     from pickplace_cli.pipelines.check_read import read_checked
@@ -140,6 +141,20 @@ def test_cam_table_steps_against_an_independent_derivation(tmp_path):
     # step plus the rate × the cycle, the cycle before the edge or after it (the larger)
     jump = motor(after) - motor(before)
     step = np.maximum(np.abs(jump + motor_rate(before) * c), np.abs(jump + motor_rate(after) * c))
+    # and exactly, the change over every window of one cycle that holds an edge: its start lies u into blend k, its
+    # end u into blend k + 1 (u from 0 to c: the blends are one cycle long), the rest before the first blend and
+    # after the last as blends of no motion; the row is the larger of the two
+    z = np.zeros((1, 3))
+    qs, vs, acs = np.vstack([qe[:1], qe[:-1], qe[-1:]]), np.vstack([z, ve[:-1], z]), np.vstack([z, a, z])
+
+    def motor_at(qq, vv, aa):
+        return ref.reference_torques(P, qq, vv, aa) / (N * eta) + J * N * aa
+
+    window = np.zeros_like(step)
+    for u in np.linspace(0.0, c, 21):
+        tq = motor_at(qs + vs * u + acs * u * u / 2, vs + acs * u, acs)
+        window = np.maximum(window, np.abs(tq[1:] - tq[:-1]))
+    step = np.maximum(step, window)
     code, doc, out = _check(path, "delta-su2018", "--no-hold-capacity", "--cycle", str(c))
     assert code == 0, out[-2000:]
     rows = {r["joint"]: r for r in doc["limits"]["rows"] if r["quantity"] == "motor torque step"}

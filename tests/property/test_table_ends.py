@@ -63,7 +63,8 @@ def test_the_step_to_rest_against_an_independent_derivation(tmp_path):
     point (q_N, v_N) the drive decelerates to rest within one cycle c (a blend at −v_N/c, outside the table), so the
     motor torque steps at the blend's start (from the Hermite's end: acceleration a_N, jerk 6·a₃) and at its end (at
     q_N + v_N·c/2, to rest). Each step plus the rate on either side × c, from the independent rigid-body reference,
-    is check's q2 row (the largest of all: 1e-6 relative) and its time."""
+    or, where larger, the exact change over a window of one cycle that holds the step, is check's q2 row (the
+    largest of all: 1e-6 relative) and its time."""
     from pickplace_cli.model.profile import load_profile
     from pickplace_cli.pipelines.check_read import read_checked
     from pickplace_cli.robots import build_robot
@@ -100,6 +101,18 @@ def test_the_step_to_rest_against_an_independent_derivation(tmp_path):
     qe = q[-1] + v[-1] * c / 2
     step2 = motor(qe, zero, zero) - motor(qe, zero, a_blend)
     moved2 = np.maximum(np.abs(step2 + rate(qe, zero, a_blend, zero) * c), np.abs(step2))
+    # exactly, over every window of one cycle that holds a break (the larger of the two is the row): across the blend's
+    # start, from x = h − c·f into the last Hermite segment to c·(1 − f) into the blend; across its end, from
+    # c·(1 − f) into the blend to the rest after it
+    def hermite(x):
+        return (q[-2] + v[-2] * x + a2 * x * x + a3 * x**3, v[-2] + 2 * a2 * x + 3 * a3 * x * x, 2 * a2 + 6 * a3 * x)
+
+    def blend(s):
+        return q[-1] + v[-1] * s + a_blend * s * s / 2, v[-1] + a_blend * s, a_blend + zero
+
+    for f in np.linspace(0.0, 1.0, 21):
+        moved1 = np.maximum(moved1, np.abs(motor(*blend(c * (1 - f))) - motor(*hermite(h - c * f))))
+        moved2 = np.maximum(moved2, np.abs(motor(qe, zero, zero) - motor(*blend(c * (1 - f)))))
     res, doc = _check(out, "-q")
     assert res.exit_code == 3
     rows = {r["joint"]: r for r in doc["limits"]["rows"] if r["quantity"] == "motor torque step"}
