@@ -132,9 +132,8 @@ def derivative_problems(t: np.ndarray, tool: np.ndarray) -> list[tuple[int, floa
         keep[_jerk_jumps(j)] = False  # (the rule's own misfit across a jerk step is up to half the step)
         for k, (lo, hi, hi2) in ((1, (p, v, a)), (2, (v, a, j))):
             s, sig = _scale_fit(lo, hi, hi2, h, keep)
-            if k not in fits or fits[k] <= AGREE[k]:
-                if abs(s - 1.0) > SCALE_TOL and sig > SCALE_SIG:
-                    out.append((k, -s))
+            if fits[k] <= AGREE[k] and abs(s - 1.0) > SCALE_TOL and sig > SCALE_SIG:
+                out.append((k, -s))
     return sorted(out)
 
 

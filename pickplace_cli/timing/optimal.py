@@ -143,18 +143,24 @@ LAW_SOLVER = "sqp"
 LAW_SQP_COEFFICIENTS = 60
 
 
-def sqp_data(model, coefficients: int | None = None) -> _GridData:
+def _sqp_grid(coefficients: int) -> tuple[np.ndarray, int]:
+    """(knots, points of the first solve grid) of the SQP's law of ``coefficients`` uniform knots."""
+    from . import law_sqp
+
+    knots = _knots(coefficients, law_sqp.SQP_DEGREE)
+    return knots, max(LAW_GRID, law_sqp.SQP_POINTS_PER_KNOT * (coefficients - law_sqp.SQP_DEGREE) + 1)
+
+
+def sqp_data(model, coefficients: int | None = None, bound: bool = True) -> _GridData:
     """The model's terms on every grid the SQP's law of ``coefficients`` (None: ``LAW_SQP_COEFFICIENTS``) is solved
-    and checked on, and on the torque bound's (:func:`~pickplace_cli.timing.bound.bound_grid`): one evaluation of the
-    model for both (its cost is mostly per call)."""
+    and checked on, and (``bound``) on the torque bound's (:func:`~pickplace_cli.timing.bound.bound_grid`): one
+    evaluation of the model for both (its cost is mostly per call)."""
     from . import law_sqp
     from .bound import bound_grid
 
-    n = coefficients or LAW_SQP_COEFFICIENTS
-    knots = _knots(n, law_sqp.SQP_DEGREE)
-    points = max(LAW_GRID, law_sqp.SQP_POINTS_PER_KNOT * (n - law_sqp.SQP_DEGREE) + 1)
-    return _GridData(model, np.concatenate([law_sqp.solve_grid(model.path, points, knots),
-                                            law_sqp.check_grid(model.path), bound_grid()]))
+    knots, points = _sqp_grid(coefficients or LAW_SQP_COEFFICIENTS)
+    grids = [law_sqp.solve_grid(model.path, points, knots), law_sqp.check_grid(model.path)]
+    return _GridData(model, np.concatenate(grids + ([bound_grid()] if bound else [])))
 
 
 def _sqp_law(model, dwell: float, t_fit: float, coefficients: int, capacity,
@@ -164,10 +170,8 @@ def _sqp_law(model, dwell: float, t_fit: float, coefficients: int, capacity,
     answer breaks a row of its own (last) grid by more than 1e-6 of the limit (the caller falls back to SLSQP)."""
     from . import law_sqp
 
-    knots = _knots(coefficients, law_sqp.SQP_DEGREE)
-    points = max(LAW_GRID, law_sqp.SQP_POINTS_PER_KNOT * (coefficients - law_sqp.SQP_DEGREE) + 1)
-    data = data or _GridData(model, np.concatenate([law_sqp.solve_grid(model.path, points, knots),
-                                                    law_sqp.check_grid(model.path)]))
+    knots, points = _sqp_grid(coefficients)
+    data = data or sqp_data(model, coefficients, bound=False)
     x, t_est, solves, message, worst, _ = law_sqp.solve_law(model, dwell, t_fit, knots, capacity, data,
                                                             np.ones(coefficients), *LAW_BOUNDS, points,
                                                             smooth=law_sqp.smoothing(t_fit) if smooth is None else smooth)
